@@ -1,0 +1,23 @@
+// Basic properties of triangle meshes: closedness, orientation, area, enclosed volume.
+#pragma once
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+/// Edge-based topology of a triangle mesh.
+struct MeshTopology {
+  bool closed = false;            ///< every edge has exactly two incident triangles
+  bool consistently_oriented = false;  ///< every interior edge is used once in each direction
+  long boundary_edges = 0;        ///< edges with one incident triangle
+  long nonmanifold_edges = 0;     ///< edges with more than two incident triangles
+  long euler_characteristic = 0;  ///< V - E + F over referenced vertices
+};
+
+MeshTopology mesh_topology(const Mesh& mesh);
+/// Total triangle area.
+double surface_area(const Mesh& mesh);
+/// Signed enclosed volume (divergence theorem): positive for a closed, outward-oriented mesh.
+double signed_volume(const Mesh& mesh);
+
+}  // namespace sdfcontour

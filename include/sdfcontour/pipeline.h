@@ -1,0 +1,56 @@
+// The whole contouring pipeline, stage by stage, for the command line and the tests.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/contact_points.h"
+#include "sdfcontour/gradients.h"
+#include "sdfcontour/npy.h"
+
+namespace sdfcontour {
+
+enum class Method { Gcp, Gtcp, Mc, MtRt, MtDt };
+
+/// "gcp", "gtcp", "mc", "mt-rt", "mt-dt" <-> Method; parse_method throws Error for other names.
+Method parse_method(const std::string& name);
+std::string method_name(Method method);
+
+/// Where GCP's per-sample gradients come from.
+enum class GradientSource { Regular, Delaunay, Knn };
+
+struct ContourOptions {
+  Method method = Method::Gcp;
+  bool want_mesh = true;    ///< produce the method's mesh
+  bool want_points = false; ///< produce contact points (GCP's, or GTCP's for method gtcp)
+  GradientSource gradient_source = GradientSource::Regular;
+  int knn = 18;             ///< k for GradientSource::Knn
+  GradientOptions gradient;
+  ContactPointOptions contact;
+  bool parallel = true;     ///< parallel triangulation (other stages follow TBB's thread limit)
+  /// Called with a short message as each stage starts; empty for silence.
+  std::function<void(const std::string&)> progress;
+};
+
+struct StageTime {
+  std::string name;
+  double seconds = 0;
+};
+
+struct ContourResult {
+  std::optional<Mesh> mesh;
+  std::optional<ContactPoints> contact_points;
+  int samples = 0;
+  int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
+  std::vector<StageTime> stages;
+};
+
+/// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
+/// it may be null for other methods. Throws Error for an input the method cannot use (no sign
+/// change, MC without a grid, GTCP without an exact SDF, GCP's mesh before Poisson exists).
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape, const ContourOptions& options);
+
+}  // namespace sdfcontour

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Fresh machine to a mesh: install packages, build, contour a built-in torus.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+bash scripts/build.sh
+mkdir -p out
+./build/sdfcontour contour builtin:torus@64 -o out/torus_mt-rt.ply --method mt-rt \
+  --points out/torus_gcp_points.ply --stats out/torus_stats.json

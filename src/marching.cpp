@@ -1,0 +1,263 @@
+#include "sdfcontour/marching.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace sdfcontour {
+
+namespace {
+
+Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) { return m.row(i).transpose(); }
+
+// Crossing point on the segment from a (value fa) to b (value fb), fa and fb of opposite sign.
+Eigen::Vector3d crossing(const Eigen::Vector3d& a, double fa, const Eigen::Vector3d& b, double fb) {
+  const double t = fa / (fa - fb);
+  return a + t * (b - a);
+}
+
+bool inside(double v) { return v < 0; }
+
+std::uint64_t edge_key(int a, int b) {
+  return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
+}
+
+// Parity of a permutation of 4 distinct values (true if odd).
+bool odd_permutation(const std::array<int, 4>& p) {
+  int inversions = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) inversions += p[std::size_t(i)] > p[std::size_t(j)];
+  return inversions & 1;
+}
+
+}  // namespace
+
+Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& values, const TetMatrix& tets) {
+  const Eigen::Index m = tets.rows();
+  // 1. One vertex per sign-changing edge, numbered in sorted edge order.
+  std::vector<std::uint64_t> edges;
+  for (Eigen::Index t = 0; t < m; ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        if (inside(values[tets(t, a)]) != inside(values[tets(t, b)])) edges.push_back(edge_key(tets(t, a), tets(t, b)));
+  tbb::parallel_sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  Mesh mesh;
+  mesh.vertices.resize(Eigen::Index(edges.size()), 3);
+  tbb::parallel_for(std::size_t(0), edges.size(), [&](std::size_t e) {
+    const int a = int(edges[e] >> 32), b = int(edges[e] & 0xffffffffu);
+    mesh.vertices.row(Eigen::Index(e)) = crossing(row(points, a), values[a], row(points, b), values[b]).transpose();
+  });
+  auto vertex_of = [&](int a, int b) {
+    return int(std::lower_bound(edges.begin(), edges.end(), edge_key(a, b)) - edges.begin());
+  };
+
+  // 2. Up to two triangles per tet, written at offsets from a prefix sum so the order is fixed.
+  std::vector<int> count(std::size_t(m) + 1, 0);
+  for (Eigen::Index t = 0; t < m; ++t) {
+    int negatives = 0;
+    for (int k = 0; k < 4; ++k) negatives += inside(values[tets(t, k)]);
+    count[std::size_t(t) + 1] = negatives == 2 ? 2 : (negatives == 1 || negatives == 3) ? 1 : 0;
+  }
+  for (Eigen::Index t = 0; t < m; ++t) count[std::size_t(t) + 1] += count[std::size_t(t)];
+  mesh.triangles.resize(count.back(), 3);
+  tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index t) {
+    int at = count[std::size_t(t)];
+    if (count[std::size_t(t) + 1] == at) return;
+    std::array<int, 4> v{tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
+    std::array<int, 4> neg{}, pos{};
+    int nn = 0, np = 0;
+    for (int k = 0; k < 4; ++k) (inside(values[v[std::size_t(k)]]) ? neg[std::size_t(nn++)] : pos[std::size_t(np++)]) = k;
+    // Reorder the tet by an even permutation (orientation kept) and emit faces that point from
+    // the inside vertices towards the outside ones.
+    if (nn == 2) {
+      std::array<int, 4> perm{neg[0], neg[1], pos[0], pos[1]};
+      if (odd_permutation(perm)) std::swap(perm[2], perm[3]);
+      const int a0 = v[std::size_t(perm[0])], a1 = v[std::size_t(perm[1])], b0 = v[std::size_t(perm[2])],
+                b1 = v[std::size_t(perm[3])];
+      const int q[4] = {vertex_of(a0, b0), vertex_of(a0, b1), vertex_of(a1, b1), vertex_of(a1, b0)};
+      // Split along the shorter diagonal.
+      const double d02 = (mesh.vertices.row(q[0]) - mesh.vertices.row(q[2])).squaredNorm();
+      const double d13 = (mesh.vertices.row(q[1]) - mesh.vertices.row(q[3])).squaredNorm();
+      if (d02 <= d13) {
+        mesh.triangles.row(at++) << q[0], q[1], q[2];
+        mesh.triangles.row(at++) << q[0], q[2], q[3];
+      } else {
+        mesh.triangles.row(at++) << q[1], q[2], q[3];
+        mesh.triangles.row(at++) << q[1], q[3], q[0];
+      }
+      return;
+    }
+    const bool lone_inside = nn == 1;
+    const int k = lone_inside ? neg[0] : pos[0];
+    std::array<int, 4> perm{k, 0, 0, 0};
+    for (int o = 0, s = 1; o < 4; ++o)
+      if (o != k) perm[std::size_t(s++)] = o;
+    if (odd_permutation(perm)) std::swap(perm[2], perm[3]);
+    const int apex = v[std::size_t(perm[0])];
+    int e1 = vertex_of(apex, v[std::size_t(perm[1])]), e2 = vertex_of(apex, v[std::size_t(perm[2])]),
+        e3 = vertex_of(apex, v[std::size_t(perm[3])]);
+    // (e1, e2, e3) faces away from the apex: right when the apex is the lone inside vertex.
+    if (!lone_inside) std::swap(e2, e3);
+    mesh.triangles.row(at) << e1, e2, e3;
+  });
+  return mesh;
+}
+
+namespace {
+
+// Cube corners are numbered by bits (x=1, y=2, z=4). A cube edge is (its corner with the axis bit
+// clear, axis); local edge id = axis * 4 + rank of that corner among the four.
+struct CubeTables {
+  int edge_id[8][3];  // edge_id[low corner][axis], -1 if the corner has that bit set
+  // For each of the 6 faces (axis a, side s): its 4 corners counter-clockwise seen from outside.
+  int face_corner[6][4];
+  CubeTables() {
+    for (auto& r : edge_id) r[0] = r[1] = r[2] = -1;
+    for (int a = 0; a < 3; ++a) {
+      int rank = 0;
+      for (int c = 0; c < 8; ++c)
+        if (!(c >> a & 1)) edge_id[c][a] = a * 4 + rank++;
+    }
+    for (int a = 0; a < 3; ++a)
+      for (int s = 0; s < 2; ++s) {
+        const int u = (a + 1) % 3, v = (a + 2) % 3;
+        // (0,0) (1,0) (1,1) (0,1) in (u, v) is counter-clockwise about +a.
+        const int uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        for (int q = 0; q < 4; ++q) {
+          const int from = s ? q : (4 - q) % 4;  // reversed on the -a side
+          face_corner[a * 2 + s][q] = (s << a) | (uv[from][0] << u) | (uv[from][1] << v);
+        }
+      }
+  }
+  int edge_between(int c0, int c1) const {
+    const int diff = c0 ^ c1;
+    const int axis = diff == 1 ? 0 : diff == 2 ? 1 : 2;
+    return edge_id[std::min(c0, c1)][axis];
+  }
+};
+
+const CubeTables& cube_tables() {
+  static const CubeTables tables;
+  return tables;
+}
+
+}  // namespace
+
+Mesh marching_cubes(const Grid& grid) {
+  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  const CubeTables& T = cube_tables();
+  const auto& f = grid.values;
+  // 1. A vertex on every sign-changing grid edge: vertex_id[3 * point + axis].
+  std::vector<int> vertex_id(grid.size() * 3, -1);
+  std::vector<int> slab_count(std::size_t(nx) + 1, 0);
+  auto for_edges_in_slab = [&](int i, auto&& visit) {
+    for (int j = 0; j < ny; ++j)
+      for (int k = 0; k < nz; ++k) {
+        const std::size_t p = grid.index(i, j, k);
+        const int step[3] = {i + 1 < nx, j + 1 < ny, k + 1 < nz};
+        const std::size_t q[3] = {p + std::size_t(ny) * nz, p + std::size_t(nz), p + 1};
+        for (int a = 0; a < 3; ++a)
+          if (step[a] && inside(f[Eigen::Index(p)]) != inside(f[Eigen::Index(q[a])])) visit(p, a, q[a]);
+      }
+  };
+  tbb::parallel_for(0, nx, [&](int i) {
+    int c = 0;
+    for_edges_in_slab(i, [&](std::size_t, int, std::size_t) { ++c; });
+    slab_count[std::size_t(i) + 1] = c;
+  });
+  for (int i = 0; i < nx; ++i) slab_count[std::size_t(i) + 1] += slab_count[std::size_t(i)];
+  Mesh mesh;
+  mesh.vertices.resize(slab_count.back(), 3);
+  const Eigen::Vector3d h = grid.spacing();
+  auto position = [&](std::size_t p) {
+    const int k = int(p % std::size_t(nz)), j = int((p / std::size_t(nz)) % std::size_t(ny)),
+              i = int(p / (std::size_t(nz) * ny));
+    return Eigen::Vector3d(grid.bounds.min + Eigen::Vector3d(i * h[0], j * h[1], k * h[2]));
+  };
+  tbb::parallel_for(0, nx, [&](int i) {
+    int next = slab_count[std::size_t(i)];
+    for_edges_in_slab(i, [&](std::size_t p, int a, std::size_t q) {
+      vertex_id[3 * p + std::size_t(a)] = next;
+      mesh.vertices.row(next++) =
+          crossing(position(p), f[Eigen::Index(p)], position(q), f[Eigen::Index(q)]).transpose();
+    });
+  });
+
+  // 2. Polygons per cube, traced around its faces; triangles collected per slab, in order.
+  std::vector<std::vector<std::array<int, 3>>> slab_triangles(std::size_t(std::max(nx - 1, 0)));
+  tbb::parallel_for(0, nx - 1, [&](int i) {
+    auto& out = slab_triangles[std::size_t(i)];
+    for (int j = 0; j + 1 < ny; ++j)
+      for (int k = 0; k + 1 < nz; ++k) {
+        double value[8];
+        std::size_t corner_point[8];
+        int mask = 0;
+        for (int c = 0; c < 8; ++c) {
+          corner_point[c] = grid.index(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1));
+          value[c] = f[Eigen::Index(corner_point[c])];
+          mask |= inside(value[c]) << c;
+        }
+        if (mask == 0 || mask == 255) continue;
+        // next_edge[e] = the edge where the segment starting at edge e's crossing ends.
+        int next_edge[12];
+        std::fill(std::begin(next_edge), std::end(next_edge), -1);
+        for (int face = 0; face < 6; ++face) {
+          const int* c = T.face_corner[face];
+          int starts[2], ends[2], ns = 0, ne = 0, order[4], crossings = 0;
+          for (int q = 0; q < 4; ++q) {
+            const int c0 = c[q], c1 = c[(q + 1) % 4];
+            if (inside(value[c0]) == inside(value[c1])) continue;
+            order[crossings++] = T.edge_between(c0, c1);
+            if (inside(value[c1])) starts[ns++] = crossings - 1;  // outside -> inside
+            else ends[ne++] = crossings - 1;
+          }
+          if (crossings == 2) {
+            next_edge[order[starts[0]]] = order[ends[0]];
+          } else if (crossings == 4) {
+            // Asymptotic decider on the face's bilinear interpolant, evaluated in the face's
+            // own (u, v) corner order so that both cubes sharing it decide alike.
+            const int a = face / 2, u = (a + 1) % 3, v = (a + 2) % 3, side = (face & 1) << a;
+            const double f00 = value[side], f10 = value[side | 1 << u], f11 = value[side | 1 << u | 1 << v],
+                         f01 = value[side | 1 << v];
+            const double saddle = (f00 * f11 - f10 * f01) / (f00 + f11 - f10 - f01);
+            const bool insides_connected = inside(saddle);
+            for (int s = 0; s < 2; ++s) {
+              const int at = starts[s];
+              next_edge[order[at]] = order[insides_connected ? (at + 3) % 4 : (at + 1) % 4];
+            }
+          }
+        }
+        auto global_vertex = [&](int e) {
+          const int a = e / 4;
+          int rank = e % 4, low = 0;
+          for (int c = 0; c < 8; ++c)
+            if (!(c >> a & 1) && rank-- == 0) { low = c; break; }
+          return vertex_id[3 * corner_point[low] + std::size_t(a)];
+        };
+        bool visited[12] = {};
+        for (int e0 = 0; e0 < 12; ++e0) {
+          if (next_edge[e0] < 0 || visited[e0]) continue;
+          int polygon[12], size = 0;
+          for (int e = e0; !visited[e]; e = next_edge[e]) {
+            visited[e] = true;
+            polygon[size++] = global_vertex(e);
+          }
+          for (int q = 1; q + 1 < size; ++q) out.push_back({polygon[0], polygon[q], polygon[q + 1]});
+        }
+      }
+  });
+  std::size_t total = 0;
+  for (const auto& s : slab_triangles) total += s.size();
+  mesh.triangles.resize(Eigen::Index(total), 3);
+  Eigen::Index at = 0;
+  for (const auto& s : slab_triangles)
+    for (const auto& t : s) mesh.triangles.row(at++) << t[0], t[1], t[2];
+  return mesh;
+}
+
+}  // namespace sdfcontour

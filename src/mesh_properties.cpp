@@ -1,0 +1,60 @@
+#include "sdfcontour/mesh_properties.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace sdfcontour {
+
+MeshTopology mesh_topology(const Mesh& mesh) {
+  // Directed edges as (min, max, direction) sorted, then counted per undirected edge.
+  std::vector<std::uint64_t> directed;
+  directed.reserve(std::size_t(mesh.triangles.rows()) * 3);
+  std::vector<char> used(std::size_t(mesh.vertices.rows()), 0);
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t a = std::uint64_t(mesh.triangles(f, k)), b = std::uint64_t(mesh.triangles(f, (k + 1) % 3));
+      used[a] = 1;
+      directed.push_back((std::min(a, b) << 33) | (std::max(a, b) << 1) | (a < b ? 0 : 1));
+    }
+  std::sort(directed.begin(), directed.end());
+  MeshTopology t;
+  long edges = 0;
+  bool oriented = true;
+  for (std::size_t s = 0; s < directed.size();) {
+    std::size_t e = s;
+    int forward = 0, backward = 0;
+    while (e < directed.size() && (directed[e] >> 1) == (directed[s] >> 1)) (directed[e++] & 1 ? backward : forward)++;
+    ++edges;
+    const int count = forward + backward;
+    if (count == 1) ++t.boundary_edges;
+    if (count > 2) ++t.nonmanifold_edges;
+    if (forward > 1 || backward > 1) oriented = false;
+    s = e;
+  }
+  t.closed = t.boundary_edges == 0 && t.nonmanifold_edges == 0;
+  t.consistently_oriented = oriented;
+  const long vertices = long(std::count(used.begin(), used.end(), 1));
+  t.euler_characteristic = vertices - edges + long(mesh.triangles.rows());
+  return t;
+}
+
+static Eigen::Vector3d vertex(const Mesh& m, Eigen::Index f, int k) {
+  return m.vertices.row(m.triangles(f, k)).transpose();
+}
+
+double surface_area(const Mesh& mesh) {
+  double area = 0;
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+    area += 0.5 * (vertex(mesh, f, 1) - vertex(mesh, f, 0)).cross(vertex(mesh, f, 2) - vertex(mesh, f, 0)).norm();
+  return area;
+}
+
+double signed_volume(const Mesh& mesh) {
+  double volume = 0;
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+    volume += vertex(mesh, f, 0).dot(vertex(mesh, f, 1).cross(vertex(mesh, f, 2))) / 6.0;
+  return volume;
+}
+
+}  // namespace sdfcontour

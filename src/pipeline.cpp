@@ -1,0 +1,128 @@
+#include "sdfcontour/pipeline.h"
+
+#include <chrono>
+
+#include "sdfcontour/marching.h"
+
+namespace sdfcontour {
+
+Method parse_method(const std::string& name) {
+  if (name == "gcp") return Method::Gcp;
+  if (name == "gtcp") return Method::Gtcp;
+  if (name == "mc") return Method::Mc;
+  if (name == "mt-rt") return Method::MtRt;
+  if (name == "mt-dt") return Method::MtDt;
+  throw Error("unknown method '" + name + "' (known: gcp, gtcp, mc, mt-rt, mt-dt)");
+}
+
+std::string method_name(Method method) {
+  switch (method) {
+    case Method::Gcp: return "gcp";
+    case Method::Gtcp: return "gtcp";
+    case Method::Mc: return "mc";
+    case Method::MtRt: return "mt-rt";
+    case Method::MtDt: return "mt-dt";
+  }
+  return "?";
+}
+
+namespace {
+
+// Times each stage and reports its start through the progress callback.
+class Stages {
+ public:
+  Stages(ContourResult& result, const ContourOptions& options) : result_(result), options_(options) {}
+  template <class F>
+  auto run(const std::string& name, const std::string& message, F&& work) {
+    if (options_.progress) options_.progress(message);
+    const auto start = std::chrono::steady_clock::now();
+    auto finish = [&] {
+      result_.stages.push_back(
+          {name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
+    };
+    if constexpr (std::is_void_v<decltype(work())>) {
+      work();
+      finish();
+    } else {
+      auto value = work();
+      finish();
+      return value;
+    }
+  }
+
+ private:
+  ContourResult& result_;
+  const ContourOptions& options_;
+};
+
+}  // namespace
+
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape, const ContourOptions& options) {
+  const Samples& s = input.samples;
+  validate_samples(s);
+  require_sign_change(s.values);
+  const Method method = options.method;
+  if (method == Method::Mc && !input.is_grid) throw Error("method mc needs a grid input, not scattered samples");
+  if (method == Method::Gtcp && !shape)
+    throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
+  if (method == Method::Gcp && options.want_mesh)
+    throw Error("method gcp's mesh needs the screened Poisson solver, which is not built yet; "
+                "write its contact points with --points");
+  if (method == Method::Gtcp && options.want_mesh)
+    throw Error("method gtcp's mesh needs the screened Poisson solver, which is not built yet; "
+                "write its contact points with --points");
+
+  ContourResult result;
+  result.samples = int(s.points.rows());
+  Stages stages(result, options);
+  const std::string n = std::to_string(s.points.rows());
+
+  if (method == Method::Mc && options.want_mesh)
+    result.mesh = stages.run("marching", "marching cubes on " + n + " samples", [&] { return marching_cubes(input.grid); });
+
+  if (method == Method::Gtcp && options.want_points)
+    result.contact_points = stages.run("contact_points", "exact contact points of " + n + " samples",
+                                       [&] { return exact_contact_points(s.points, *shape); });
+
+  // --points with any method but gtcp gives GCP contact points.
+  const bool need_gcp = options.want_points && method != Method::Gtcp;
+  const bool need_regular = need_gcp || (method == Method::MtRt && options.want_mesh);
+  const bool need_delaunay = (method == Method::MtDt && options.want_mesh) ||
+                             (need_gcp && options.gradient_source == GradientSource::Delaunay);
+  TriangulationOptions topt;
+  topt.parallel = options.parallel;
+  std::optional<Triangulation> regular, delaunay;
+  if (need_regular) {
+    topt.kind = TriangulationKind::Regular;
+    regular = stages.run("triangulation", "regular triangulation of " + n + " samples",
+                         [&] { return triangulate(s.points, s.values, topt); });
+    result.hidden = regular->hidden_count;
+  }
+  if (need_delaunay) {
+    topt.kind = TriangulationKind::Delaunay;
+    delaunay = stages.run("delaunay_triangulation", "Delaunay triangulation of " + n + " samples",
+                          [&] { return triangulate(s.points, s.values, topt); });
+  }
+  if (need_gcp) {
+    const PointMatrix gradients = stages.run("gradients", "gradients at " + n + " samples", [&] {
+      switch (options.gradient_source) {
+        case GradientSource::Knn: return knn_gradients(s.points, s.values, options.knn);
+        case GradientSource::Delaunay: return vertex_gradients(s.points, s.values, *delaunay, options.gradient);
+        case GradientSource::Regular: break;
+      }
+      return vertex_gradients(s.points, s.values, *regular, options.gradient);
+    });
+    result.contact_points = stages.run("contact_points", "contact points and filter", [&] {
+      return gradient_contact_points(s.points, s.values, gradients, *regular, options.contact);
+    });
+  }
+  if (method == Method::MtRt && options.want_mesh)
+    result.mesh = stages.run("marching", "marching tetrahedra on " + std::to_string(regular->tets.rows()) + " tets",
+                             [&] { return marching_tetrahedra(s.points, s.values, regular->tets); });
+  if (method == Method::MtDt && options.want_mesh)
+    result.mesh = stages.run("marching", "marching tetrahedra on " + std::to_string(delaunay->tets.rows()) + " tets",
+                             [&] { return marching_tetrahedra(s.points, s.values, delaunay->tets); });
+  return result;
+}
+
+}  // namespace sdfcontour

@@ -1,0 +1,152 @@
+#include "sdfcontour/triangulation.h"
+
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Regular_triangulation_3.h>
+#include <CGAL/Spatial_lock_grid_3.h>
+#include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <utility>
+
+namespace sdfcontour {
+
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Lock = CGAL::Spatial_lock_grid_3<CGAL::Tag_priority_blocking>;
+
+template <class Concurrency>
+struct RegularTypes {
+  using Vb = CGAL::Triangulation_vertex_base_with_info_3<int, Kernel,
+                                                         CGAL::Regular_triangulation_vertex_base_3<Kernel>>;
+  using Cb = CGAL::Regular_triangulation_cell_base_3<Kernel, CGAL::Triangulation_cell_base_3<Kernel>,
+                                                     CGAL::Discard_hidden_points>;
+  using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb, Concurrency>;
+  using Tr = CGAL::Regular_triangulation_3<
+      Kernel, Tds, std::conditional_t<std::is_same_v<Concurrency, CGAL::Parallel_tag>, Lock, CGAL::Default>>;
+};
+
+template <class Concurrency>
+struct DelaunayTypes {
+  using Vb = CGAL::Triangulation_vertex_base_with_info_3<int, Kernel>;
+  using Cb = CGAL::Delaunay_triangulation_cell_base_3<Kernel>;
+  using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb, Concurrency>;
+  using Tr = CGAL::Delaunay_triangulation_3<
+      Kernel, Tds, CGAL::Default,
+      std::conditional_t<std::is_same_v<Concurrency, CGAL::Parallel_tag>, Lock, CGAL::Default>>;
+};
+
+// Rotates a positively oriented tet by an even permutation so that its smallest index comes
+// first and its second smallest second, which keeps the orientation and makes the row canonical.
+std::array<int, 4> canonical_tet(std::array<int, 4> t) {
+  const int m = int(std::min_element(t.begin(), t.end()) - t.begin());
+  // Even permutations moving position m to 0.
+  static const int moves[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
+  std::array<int, 4> r{t[moves[m][0]], t[moves[m][1]], t[moves[m][2]], t[moves[m][3]]};
+  // Cyclic rotations of the last three are even too.
+  while (!(r[1] < r[2] && r[1] < r[3])) std::rotate(r.begin() + 1, r.begin() + 2, r.end());
+  return r;
+}
+
+template <class Tr, bool Parallel, class Site>
+Triangulation run(const std::vector<std::pair<Site, int>>& sites, const CGAL::Bbox_3& box, int n) {
+  std::unique_ptr<Lock> lock;
+  std::unique_ptr<Tr> tr;
+  if constexpr (Parallel) {
+    lock = std::make_unique<Lock>(box, 50);
+    tr = std::make_unique<Tr>(lock.get());
+  } else {
+    tr = std::make_unique<Tr>();
+  }
+  tr->insert(sites.begin(), sites.end());
+  if (tr->dimension() < 3)
+    throw Error("all samples are " + std::string(tr->dimension() <= 0 ? "coincident"
+                                                  : tr->dimension() == 1 ? "collinear" : "coplanar") +
+                ": no 3D triangulation exists");
+
+  Triangulation out;
+  out.hidden.assign(std::size_t(n), 1);
+  for (auto v = tr->finite_vertices_begin(); v != tr->finite_vertices_end(); ++v)
+    out.hidden[std::size_t(v->info())] = 0;
+  out.hidden_count = int(std::count(out.hidden.begin(), out.hidden.end(), 1));
+
+  std::vector<std::array<int, 4>> tets;
+  tets.reserve(tr->number_of_finite_cells());
+  for (auto c = tr->finite_cells_begin(); c != tr->finite_cells_end(); ++c)
+    tets.push_back(canonical_tet({c->vertex(0)->info(), c->vertex(1)->info(), c->vertex(2)->info(),
+                                  c->vertex(3)->info()}));
+  tr.reset();
+  tbb::parallel_sort(tets.begin(), tets.end());
+  out.tets.resize(Eigen::Index(tets.size()), 4);
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) out.tets(Eigen::Index(t), k) = tets[t][std::size_t(k)];
+  build_adjacency(out, n);
+  return out;
+}
+
+}  // namespace
+
+void build_adjacency(Triangulation& tri, int n) {
+  const Eigen::Index m = tri.tets.rows();
+  // Incident tets: counting sort by vertex, filled in tet order so each row is ascending.
+  tri.incident_offsets.assign(std::size_t(n) + 1, 0);
+  for (Eigen::Index t = 0; t < m; ++t)
+    for (int k = 0; k < 4; ++k) ++tri.incident_offsets[std::size_t(tri.tets(t, k)) + 1];
+  for (int i = 0; i < n; ++i) tri.incident_offsets[std::size_t(i) + 1] += tri.incident_offsets[std::size_t(i)];
+  tri.incident_tets.resize(std::size_t(tri.incident_offsets.back()));
+  {
+    std::vector<int> fill(tri.incident_offsets.begin(), tri.incident_offsets.end() - 1);
+    for (Eigen::Index t = 0; t < m; ++t)
+      for (int k = 0; k < 4; ++k) tri.incident_tets[std::size_t(fill[std::size_t(tri.tets(t, k))]++)] = int(t);
+  }
+  // Neighbours: the other vertices of the incident tets, deduplicated.
+  std::vector<std::vector<int>> lists(static_cast<std::size_t>(n));
+  tri.neighbour_offsets.assign(std::size_t(n) + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    auto& list = lists[std::size_t(i)];
+    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1]; ++o)
+      for (int k = 0; k < 4; ++k) {
+        const int v = tri.tets(tri.incident_tets[std::size_t(o)], k);
+        if (v != i) list.push_back(v);
+      }
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    tri.neighbour_offsets[std::size_t(i) + 1] = tri.neighbour_offsets[std::size_t(i)] + int(list.size());
+  }
+  tri.neighbour_indices.resize(std::size_t(tri.neighbour_offsets.back()));
+  for (int i = 0; i < n; ++i)
+    std::copy(lists[std::size_t(i)].begin(), lists[std::size_t(i)].end(),
+              tri.neighbour_indices.begin() + tri.neighbour_offsets[std::size_t(i)]);
+}
+
+Triangulation triangulate(const PointMatrix& points, const Eigen::VectorXd& values,
+                          const TriangulationOptions& options) {
+  const int n = int(points.rows());
+  if (n < 4) throw Error("need at least 4 samples to triangulate, got " + std::to_string(n));
+  CGAL::Bbox_3 box;
+  for (int i = 0; i < n; ++i) box += CGAL::Bbox_3(points(i, 0), points(i, 1), points(i, 2), points(i, 0),
+                                                  points(i, 1), points(i, 2));
+  // The lock grid needs a box with volume; pad flat boxes (coplanar input is rejected later).
+  const double pad = 1e-9 + 1e-9 * std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(), box.zmax() - box.zmin()});
+  box = CGAL::Bbox_3(box.xmin() - pad, box.ymin() - pad, box.zmin() - pad, box.xmax() + pad, box.ymax() + pad,
+                     box.zmax() + pad);
+  if (options.kind == TriangulationKind::Regular) {
+    std::vector<std::pair<Kernel::Weighted_point_3, int>> sites(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i)
+      sites[std::size_t(i)] = {Kernel::Weighted_point_3(Kernel::Point_3(points(i, 0), points(i, 1), points(i, 2)),
+                                                        values[i] * values[i]),
+                               i};
+    if (options.parallel) return run<RegularTypes<CGAL::Parallel_tag>::Tr, true>(sites, box, n);
+    return run<RegularTypes<CGAL::Sequential_tag>::Tr, false>(sites, box, n);
+  }
+  std::vector<std::pair<Kernel::Point_3, int>> sites(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) sites[std::size_t(i)] = {Kernel::Point_3(points(i, 0), points(i, 1), points(i, 2)), i};
+  if (options.parallel) return run<DelaunayTypes<CGAL::Parallel_tag>::Tr, true>(sites, box, n);
+  return run<DelaunayTypes<CGAL::Sequential_tag>::Tr, false>(sites, box, n);
+}
+
+}  // namespace sdfcontour
