@@ -116,6 +116,7 @@ struct CubeTables {
   int edge_id[8][3];  // edge_id[low corner][axis], -1 if the corner has that bit set
   // For each of the 6 faces (axis a, side s): its 4 corners counter-clockwise seen from outside.
   int face_corner[6][4];
+  int edge_faces[12];  // bit (axis * 2 + side) for each of the two faces an edge lies on
   CubeTables() {
     for (auto& r : edge_id) r[0] = r[1] = r[2] = -1;
     for (int a = 0; a < 3; ++a) {
@@ -123,6 +124,14 @@ struct CubeTables {
       for (int c = 0; c < 8; ++c)
         if (!(c >> a & 1)) edge_id[c][a] = a * 4 + rank++;
     }
+    for (int c = 0; c < 8; ++c)
+      for (int a = 0; a < 3; ++a) {
+        if (edge_id[c][a] < 0) continue;
+        int mask = 0;
+        for (int b = 0; b < 3; ++b)
+          if (b != a) mask |= 1 << (b * 2 + (c >> b & 1));
+        edge_faces[edge_id[c][a]] = mask;
+      }
     for (int a = 0; a < 3; ++a)
       for (int s = 0; s < 2; ++s) {
         const int u = (a + 1) % 3, v = (a + 2) % 3;
@@ -144,6 +153,44 @@ struct CubeTables {
 const CubeTables& cube_tables() {
   static const CubeTables tables;
   return tables;
+}
+
+// Triangles of one slab of cubes; a vertex id -k-1 names the slab's k-th centroid vertex.
+struct SlabOutput {
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<Eigen::Vector3d> centroids;
+};
+
+// Triangulates a cube's polygon (vertex ids, and the cube edges they lie on) as a fan. A fan
+// diagonal must not join two vertices on one cube face: the neighbouring cube could use the same
+// chord, and the mesh would stop being manifold there. Among the apexes whose diagonals avoid
+// that, the one with the shortest diagonals (sum of squares) wins; if there is none, the fan
+// starts from a new vertex at the polygon's centroid.
+void triangulate_polygon(const int* polygon, const int* edges, int size, const CubeTables& T,
+                         const PointMatrix& vertices, SlabOutput& out) {
+  int best_apex = -1;
+  double best_length = 0;
+  for (int a = 0; a < size && size > 3; ++a) {
+    bool valid = true;
+    double length = 0;
+    for (int q = 2; q + 1 < size && valid; ++q) {
+      const int j = (a + q) % size;
+      valid = !(T.edge_faces[edges[a]] & T.edge_faces[edges[j]]);
+      length += (vertices.row(polygon[j]) - vertices.row(polygon[a])).squaredNorm();
+    }
+    if (valid && (best_apex < 0 || length < best_length)) best_apex = a, best_length = length;
+  }
+  if (size == 3) best_apex = 0;
+  if (best_apex >= 0) {
+    for (int q = 1; q + 1 < size; ++q)
+      out.triangles.push_back({polygon[best_apex], polygon[(best_apex + q) % size], polygon[(best_apex + q + 1) % size]});
+    return;
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int q = 0; q < size; ++q) centroid += vertices.row(polygon[q]).transpose();
+  out.centroids.push_back(centroid / size);
+  const int c = -int(out.centroids.size());
+  for (int q = 0; q < size; ++q) out.triangles.push_back({c, polygon[q], polygon[(q + 1) % size]});
 }
 
 }  // namespace
@@ -189,9 +236,9 @@ Mesh marching_cubes(const Grid& grid) {
   });
 
   // 2. Polygons per cube, traced around its faces; triangles collected per slab, in order.
-  std::vector<std::vector<std::array<int, 3>>> slab_triangles(std::size_t(std::max(nx - 1, 0)));
+  std::vector<SlabOutput> slab_output(static_cast<std::size_t>(std::max(nx - 1, 0)));
   tbb::parallel_for(0, nx - 1, [&](int i) {
-    auto& out = slab_triangles[std::size_t(i)];
+    SlabOutput& slab = slab_output[std::size_t(i)];
     for (int j = 0; j + 1 < ny; ++j)
       for (int k = 0; k + 1 < nz; ++k) {
         double value[8];
@@ -242,21 +289,31 @@ Mesh marching_cubes(const Grid& grid) {
         bool visited[12] = {};
         for (int e0 = 0; e0 < 12; ++e0) {
           if (next_edge[e0] < 0 || visited[e0]) continue;
-          int polygon[12], size = 0;
+          int polygon[12], edges_of[12], size = 0;
           for (int e = e0; !visited[e]; e = next_edge[e]) {
             visited[e] = true;
+            edges_of[size] = e;
             polygon[size++] = global_vertex(e);
           }
-          for (int q = 1; q + 1 < size; ++q) out.push_back({polygon[0], polygon[q], polygon[q + 1]});
+          triangulate_polygon(polygon, edges_of, size, T, mesh.vertices, slab);
         }
       }
   });
-  std::size_t total = 0;
-  for (const auto& s : slab_triangles) total += s.size();
+  // Concatenate the slabs in order; centroid vertices (negative ids) go after the edge vertices.
+  std::size_t total = 0, extra = 0;
+  for (const auto& s : slab_output) total += s.triangles.size(), extra += s.centroids.size();
+  const Eigen::Index edge_vertices = mesh.vertices.rows();
+  mesh.vertices.conservativeResize(edge_vertices + Eigen::Index(extra), 3);
   mesh.triangles.resize(Eigen::Index(total), 3);
-  Eigen::Index at = 0;
-  for (const auto& s : slab_triangles)
-    for (const auto& t : s) mesh.triangles.row(at++) << t[0], t[1], t[2];
+  Eigen::Index at = 0, next_centroid = edge_vertices;
+  for (const auto& s : slab_output) {
+    for (const auto& c : s.centroids) mesh.vertices.row(next_centroid++) = c.transpose();
+    const Eigen::Index base = next_centroid - Eigen::Index(s.centroids.size());
+    for (const auto& t : s.triangles) {
+      for (int k = 0; k < 3; ++k) mesh.triangles(at, k) = t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
+      ++at;
+    }
+  }
   return mesh;
 }
 

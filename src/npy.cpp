@@ -92,6 +92,9 @@ NpyArray read_npy(const std::string& path) {
     throw Error("'" + path + "' is truncated: shape " + shape_text + " needs " +
                 std::to_string(count * item) + " bytes of data, the file has " +
                 std::to_string(available));
+  if (available > count * item)
+    throw Error("'" + path + "' is corrupt: " + std::to_string(available - count * item) +
+                " bytes follow the data of shape " + shape_text);
   array.data.resize(count);
   const char* p = bytes.data() + data_start;
   for (std::size_t i = 0; i < count; ++i) {

@@ -1,0 +1,156 @@
+#include "sdfcontour/contact_points.h"
+#include "sdfcontour/gradients.h"
+#include "sdfcontour/statistics.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+using Eigen::Vector3d;
+
+namespace {
+
+struct Fixture {
+  std::unique_ptr<AnalyticShape> shape;
+  Grid grid;
+  Samples samples;
+  Triangulation regular;
+};
+
+Fixture make_fixture(const std::string& name, int n) {
+  Fixture f;
+  f.shape = make_builtin_shape(name);
+  f.grid = sample_grid(*f.shape, n, Bounds{});
+  f.samples = f.grid.to_samples();
+  f.regular = triangulate(f.samples.points, f.samples.values, {});
+  return f;
+}
+
+std::vector<double> abs_values(const ContactPoints& cp, const AnalyticShape& shape) {
+  std::vector<double> v;
+  for (Eigen::Index i = 0; i < cp.points.rows(); ++i) v.push_back(std::abs(shape.distance(cp.points.row(i).transpose())));
+  return v;
+}
+
+// The reference filter: c is discarded if it lies strictly inside any other sample's sphere.
+bool inside_any_sphere(const PointMatrix& p, const Eigen::VectorXd& v, int i, const Vector3d& c) {
+  for (Eigen::Index j = 0; j < p.rows(); ++j)
+    if (j != i && (c - Vector3d(p.row(j))).squaredNorm() < v[j] * v[j]) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(ContactPoints, GroundTruthPointsLieOnTheSurface) {
+  for (const std::string name : {"sphere", "box"}) {
+    const auto shape = make_builtin_shape(name);
+    const Samples s = sample_grid(*shape, 32, Bounds{}).to_samples();
+    const ContactPoints cp = exact_contact_points(s.points, *shape);
+    ASSERT_EQ(cp.size(), 32 * 32 * 32);
+    for (double v : abs_values(cp, *shape)) ASSERT_LT(v, 1e-9) << name;
+    for (Eigen::Index i = 0; i < cp.normals.rows(); ++i) ASSERT_NEAR(cp.normals.row(i).norm(), 1.0, 1e-12);
+  }
+}
+
+TEST(ContactPoints, GradientPointsAreCloseToTheSurface) {
+  for (const std::string name : {"sphere", "box"}) {
+    const Fixture f = make_fixture(name, 32);
+    const double h = f.grid.spacing().maxCoeff();
+    for (auto w : {GradientWeighting::Uniform, GradientWeighting::Volume, GradientWeighting::James}) {
+      const PointMatrix g = vertex_gradients(f.samples.points, f.samples.values, f.regular, {w, 1.0});
+      const ContactPoints cp = gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, {});
+      const std::vector<double> err = abs_values(cp, *f.shape);
+      const double median = quantile(err, 0.5) / h;
+      std::cout << name << " 32^3 weighting " << int(w) << ": kept " << cp.size() << " of " << f.samples.points.rows()
+                << " (hidden " << cp.hidden << ", discarded " << cp.discarded << "), median |phi(c)| " << median
+                << " h, p95 " << quantile(err, 0.95) / h << " h\n";
+      EXPECT_EQ(cp.size() + cp.hidden + cp.discarded + cp.zero_gradient, int(f.samples.points.rows()));
+      EXPECT_GT(cp.size(), 1000);
+      if (name == "sphere") {
+        EXPECT_LT(median, 0.01);
+      }
+    }
+  }
+}
+
+TEST(ContactPoints, NeighbourFilterEqualsBruteForce) {
+  // Realistic candidates (approximate gradients of random SDF samples) and arbitrary ones
+  // (random directions), both tested with the strict filter.
+  for (int trial = 0; trial < 2; ++trial) {
+    const auto shape = make_builtin_shape(trial == 0 ? "csg" : "torus");
+    const Samples s = sample_random(*shape, 1500, Bounds{}, 40 + trial);
+    const Triangulation tri = triangulate(s.points, s.values, {});
+    PointMatrix g = vertex_gradients(s.points, s.values, tri, {});
+    if (trial == 1) g = test::random_points(1500, 77);
+    ContactPointOptions strict;
+    strict.tie_tolerance = 0;
+    const ContactPoints cp = gradient_contact_points(s.points, s.values, g, tri, strict);
+    std::vector<char> kept(1500, 0);
+    for (int i : cp.samples) kept[std::size_t(i)] = 1;
+    int compared = 0;
+    for (int i = 0; i < 1500; ++i) {
+      if (tri.hidden[std::size_t(i)]) continue;
+      const Vector3d n = Vector3d(g.row(i)).normalized();
+      const Vector3d c = Vector3d(s.points.row(i)) - s.values[i] * n;
+      EXPECT_EQ(bool(kept[std::size_t(i)]), !inside_any_sphere(s.points, s.values, i, c)) << "sample " << i;
+      ++compared;
+    }
+    EXPECT_GT(compared, 1000);
+    EXPECT_GT(cp.discarded, 0);
+    EXPECT_GT(cp.size(), 0);
+  }
+}
+
+// With exact gradients every contact point is on the surface, hence outside every sphere; but
+// samples on one normal line share a contact point exactly on each other's spheres, and
+// round-off alone then discards some of them under the strict test. The tolerance keeps them.
+TEST(ContactPoints, TieToleranceKeepsExactTies) {
+  for (const std::string name : {"box", "plate", "sphere"}) {
+    const Fixture f = make_fixture(name, 32);
+    PointMatrix exact(f.samples.points.rows(), 3);
+    for (Eigen::Index i = 0; i < exact.rows(); ++i) exact.row(i) = f.shape->gradient(f.samples.points.row(i).transpose()).transpose();
+    ContactPointOptions strict, tolerant;
+    strict.tie_tolerance = 0;
+    tolerant.tie_tolerance = 1e-6;
+    const ContactPoints s = gradient_contact_points(f.samples.points, f.samples.values, exact, f.regular, strict);
+    const ContactPoints t = gradient_contact_points(f.samples.points, f.samples.values, exact, f.regular, tolerant);
+    std::cout << name << ": exact gradients, strict test discards " << s.discarded << ", tolerant test discards "
+              << t.discarded << " (visible samples " << f.samples.points.rows() - f.regular.hidden_count << ")\n";
+    EXPECT_EQ(t.discarded, 0) << name;
+    EXPECT_GE(s.discarded, t.discarded);
+    if (name == "box") {
+      EXPECT_GT(s.discarded, 0);
+    }
+  }
+}
+
+TEST(ContactPoints, ZeroValuesAndZeroGradients) {
+  PointMatrix p(5, 3);
+  p << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1;
+  Eigen::VectorXd v(5);
+  v << 0.0, 0.5, -0.5, 0.5, 1.0;
+  const Triangulation tri = triangulate(p, v, {TriangulationKind::Delaunay, true});
+  PointMatrix g(5, 3);
+  g << 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1;
+  ContactPointOptions o;
+  const ContactPoints cp = gradient_contact_points(p, v, g, tri, o);
+  EXPECT_EQ(cp.zero_gradient, 1);  // sample 1
+  ASSERT_TRUE(cp.points.allFinite());
+  ASSERT_TRUE(cp.normals.allFinite());
+  ASSERT_FALSE(cp.samples.empty());
+  EXPECT_EQ(cp.samples[0], 0);  // value 0: its contact point is the sample itself
+  EXPECT_EQ(Vector3d(cp.points.row(0)), Vector3d::Zero());
+}
+
+TEST(ContactPoints, TetGradientFallbackRescuesPoints) {
+  const Fixture f = make_fixture("torus", 24);
+  const PointMatrix g = vertex_gradients(f.samples.points, f.samples.values, f.regular, {GradientWeighting::Uniform});
+  ContactPointOptions plain, fn;
+  fn.try_tet_gradients = true;
+  const ContactPoints a = gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, plain);
+  const ContactPoints b = gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, fn);
+  std::cout << "+FN on torus 24^3: kept " << a.size() << " -> " << b.size() << "\n";
+  EXPECT_GT(b.rescued, 0);
+  EXPECT_EQ(b.size(), a.size() + b.rescued);
+  for (Eigen::Index k = 0; k < b.points.rows(); ++k)
+    EXPECT_FALSE(inside_neighbour_sphere(f.samples.points, f.samples.values, f.regular, b.samples[std::size_t(k)],
+                                         b.points.row(k).transpose(), fn.tie_tolerance));
+}

@@ -1,0 +1,111 @@
+#include <fstream>
+
+#include "sdfcontour/npy.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+// Writes a .npy by hand: `descr` and `fortran` go into the header verbatim, `payload` after it.
+void write_raw_npy(const std::string& path, const std::string& descr, const std::string& fortran,
+                   const std::string& shape, const std::string& payload) {
+  std::string header = "{'descr': '" + descr + "', 'fortran_order': " + fortran + ", 'shape': " + shape + ", }";
+  header.append((64 - (10 + header.size() + 1) % 64) % 64, ' ');
+  header += '\n';
+  std::ofstream out(path, std::ios::binary);
+  out.write("\x93NUMPY\x01\x00", 8);
+  const char len[2] = {char(header.size() & 0xff), char(header.size() >> 8)};
+  out.write(len, 2);
+  out << header << payload;
+}
+
+std::string floats_bytes(const std::vector<float>& v) {
+  return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float));
+}
+
+}  // namespace
+
+TEST(Npy, RoundTripFloat64) {
+  const auto dir = test::temp_dir("npy_roundtrip");
+  const std::string path = (dir / "a.npy").string();
+  std::vector<double> data(2 * 3 * 4);
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = 0.25 * double(i) - 1.5;
+  write_npy(path, {2, 3, 4}, data);
+  const NpyArray a = read_npy(path);
+  EXPECT_EQ(a.shape, (std::vector<std::size_t>{2, 3, 4}));
+  EXPECT_EQ(a.data, data);
+}
+
+TEST(Npy, ReadsFloat32AndGridLayout) {
+  const auto dir = test::temp_dir("npy_f4");
+  const std::string path = (dir / "g.npy").string();
+  std::vector<float> v(2 * 3 * 4);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = float(i) - 5.0f;
+  write_raw_npy(path, "<f4", "False", "(2, 3, 4)", floats_bytes(v));
+  const SdfInput in = sdf_input_from_array(read_npy(path), Bounds{});
+  ASSERT_TRUE(in.is_grid);
+  // a[i,j,k] is at min + (i*hx, j*hy, k*hz) with h = 2/(n-1).
+  const Grid& g = in.grid;
+  EXPECT_DOUBLE_EQ(g.values[Eigen::Index(g.index(1, 2, 3))], double(v[(1 * 3 + 2) * 4 + 3]));
+  const Eigen::Vector3d p = g.point(1, 2, 3);
+  EXPECT_DOUBLE_EQ(p.x(), 1.0);
+  EXPECT_DOUBLE_EQ(p.y(), 1.0);
+  EXPECT_DOUBLE_EQ(p.z(), 1.0);
+  EXPECT_DOUBLE_EQ(g.point(0, 1, 1).y(), 0.0);
+  EXPECT_DOUBLE_EQ(g.point(0, 1, 1).z(), -1.0 + 2.0 / 3.0);
+}
+
+TEST(Npy, ScatteredSamples) {
+  const auto dir = test::temp_dir("npy_scattered");
+  const std::string path = (dir / "s.npy").string();
+  write_npy(path, {4, 4}, {0, 0, 0, -1, 1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1});
+  const SdfInput in = sdf_input_from_array(read_npy(path), Bounds{});
+  ASSERT_FALSE(in.is_grid);
+  EXPECT_EQ(in.samples.points.rows(), 4);
+  EXPECT_EQ(in.samples.points(2, 1), 1.0);
+  EXPECT_EQ(in.samples.values[0], -1.0);
+}
+
+TEST(Npy, RejectsBadFiles) {
+  const auto dir = test::temp_dir("npy_bad");
+  auto expect_error = [&](const std::string& name, const std::string& needle) {
+    try {
+      sdf_input_from_array(read_npy((dir / name).string()), Bounds{});
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << name << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "multi-line message";
+    }
+  };
+  std::vector<float> eight(8, 1.0f);
+  write_raw_npy((dir / "fortran.npy").string(), "<f4", "True", "(2, 2, 2)", floats_bytes(eight));
+  write_raw_npy((dir / "int.npy").string(), "<i8", "False", "(2, 2, 2)", std::string(64, '\0'));
+  write_raw_npy((dir / "big_endian.npy").string(), ">f8", "False", "(2, 2, 2)", std::string(64, '\0'));
+  write_raw_npy((dir / "truncated.npy").string(), "<f4", "False", "(4, 4, 4)", floats_bytes(eight));
+  write_raw_npy((dir / "shape.npy").string(), "<f4", "False", "(4, 2)", floats_bytes(eight));
+  write_raw_npy((dir / "few.npy").string(), "<f4", "False", "(2, 4)", floats_bytes(eight));
+  write_raw_npy((dir / "trailing.npy").string(), "<f4", "False", "(2, 2)", floats_bytes(eight));
+  write_raw_npy((dir / "empty.npy").string(), "<f4", "False", "(0, 0, 0)", "");
+  write_raw_npy((dir / "flat.npy").string(), "<f4", "False", "(1, 2, 4)", floats_bytes(eight));
+  std::vector<float> nan = eight;
+  nan[3] = std::numeric_limits<float>::quiet_NaN();
+  write_raw_npy((dir / "nan.npy").string(), "<f4", "False", "(2, 2, 2)", floats_bytes(nan));
+  std::vector<float> inf = eight;
+  inf[5] = std::numeric_limits<float>::infinity();
+  write_raw_npy((dir / "inf.npy").string(), "<f4", "False", "(2, 2, 2)", floats_bytes(inf));
+  std::ofstream((dir / "junk.npy").string()) << "this is not numpy";
+  expect_error("fortran.npy", "Fortran order");
+  expect_error("int.npy", "dtype");
+  expect_error("big_endian.npy", "dtype");
+  expect_error("truncated.npy", "truncated");
+  expect_error("shape.npy", "neither a grid");
+  expect_error("few.npy", "at least 4 samples");
+  expect_error("trailing.npy", "corrupt");
+  expect_error("empty.npy", "at least 2");
+  expect_error("flat.npy", "at least 2");
+  expect_error("nan.npy", "NaN");
+  expect_error("inf.npy", "NaN or infinite");
+  expect_error("junk.npy", "not a .npy file");
+  expect_error("missing.npy", "cannot read");
+}
