@@ -1,1 +1,127 @@
+"""Command-line behaviour of `sdfcontour`: every bad input gets one clear error line and a
+non-zero exit with no output file left behind; good input gives the same bytes whatever the
+thread count.
 
+Usage: test_cli.py PATH_TO_SDFCONTOUR
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+CLI = sys.argv[1]
+passed = failed = 0
+
+
+def run(*args):
+    return subprocess.run([CLI, *args], capture_output=True, text=True, timeout=300)
+
+
+def check(name, condition, detail=""):
+    global passed, failed
+    if condition:
+        passed += 1
+    else:
+        failed += 1
+        print(f"FAIL {name}: {detail}")
+
+
+def expect_error(name, args, needle, out_files=()):
+    r = run(*args)
+    lines = r.stderr.strip().splitlines()
+    errors = [line for line in lines if line.startswith("sdfcontour: error:")]
+    check(name + " exit code", r.returncode != 0, f"exit {r.returncode}")
+    check(name + " one error line, last", len(errors) == 1 and lines[-1] == errors[0], repr(r.stderr))
+    check(name + " message", bool(lines) and lines[-1].startswith("sdfcontour: error:") and needle in lines[-1],
+          repr(r.stderr))
+    for f in out_files:
+        check(name + " no output", not os.path.exists(f), f)
+        leftovers = [p for p in os.listdir(os.path.dirname(f)) if ".tmp-" in p]
+        check(name + " no temporary files", not leftovers, leftovers)
+
+
+with tempfile.TemporaryDirectory() as d:
+    p = lambda name: os.path.join(d, name)
+    out = p("out.ply")
+    x = np.linspace(-1, 1, 8)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.5
+    np.save(p("good.npy"), sphere)
+
+    # Unreadable, truncated and corrupt files.
+    expect_error("missing file", ["contour", p("nope.npy"), "-o", out, "--method", "mc"], "cannot read", [out])
+    os.mkdir(p("adir.npy"))
+    expect_error("directory", ["contour", p("adir.npy"), "-o", out, "--method", "mc"], "cannot read", [out])
+    raw = open(p("good.npy"), "rb").read()
+    open(p("truncated.npy"), "wb").write(raw[: len(raw) // 2])
+    expect_error("truncated npy", ["contour", p("truncated.npy"), "-o", out, "--method", "mc"], "truncated", [out])
+    open(p("corrupt.npy"), "wb").write(b"\x00" * 200)
+    expect_error("corrupt npy", ["contour", p("corrupt.npy"), "-o", out, "--method", "mc"], "not a .npy", [out])
+    # Wrong shape or dtype.
+    np.save(p("shape.npy"), np.zeros((10, 3)))
+    expect_error("wrong shape", ["contour", p("shape.npy"), "-o", out, "--method", "mt-dt"], "neither a grid", [out])
+    np.save(p("int.npy"), np.zeros((4, 4, 4), dtype=np.int64))
+    expect_error("wrong dtype", ["contour", p("int.npy"), "-o", out, "--method", "mc"], "dtype", [out])
+    np.save(p("fortran.npy"), np.asfortranarray(sphere))
+    expect_error("fortran order", ["contour", p("fortran.npy"), "-o", out, "--method", "mc"], "Fortran", [out])
+    # NaN and infinite values.
+    bad = sphere.copy()
+    bad[3, 3, 3] = np.nan
+    np.save(p("nan.npy"), bad)
+    expect_error("nan", ["contour", p("nan.npy"), "-o", out, "--method", "mc"], "NaN", [out])
+    bad[3, 3, 3] = np.inf
+    np.save(p("inf.npy"), bad.astype(np.float32))
+    expect_error("inf", ["contour", p("inf.npy"), "-o", out, "--method", "mc"], "infinite", [out])
+    # Too few samples, coplanar samples, no surface.
+    np.save(p("three.npy"), np.array([[0, 0, 0, -1], [1, 0, 0, 1], [0, 1, 0, 1.0]]))
+    expect_error("three samples", ["contour", p("three.npy"), "-o", out, "--method", "mt-dt"], "at least 4", [out])
+    flat = np.random.default_rng(1).uniform(-1, 1, (50, 4))
+    flat[:, 2] = 0.25
+    np.save(p("flat.npy"), flat)
+    expect_error("coplanar", ["contour", p("flat.npy"), "-o", out, "--method", "mt-rt"], "coplanar", [out])
+    np.save(p("positive.npy"), np.abs(sphere) + 0.1)
+    expect_error("no sign change", ["contour", p("positive.npy"), "-o", out, "--method", "mc"], "no surface", [out])
+    np.save(p("empty.npy"), np.zeros((0, 0, 0)))
+    expect_error("empty grid", ["contour", p("empty.npy"), "-o", out, "--method", "mc"], "at least 2", [out])
+    # Bad options.
+    expect_error("bounds min >= max", ["contour", p("good.npy"), "-o", out, "--method", "mc", "--bounds", "1,-1"],
+                 "min must be less than max", [out])
+    expect_error("unknown method", ["contour", p("good.npy"), "-o", out, "--method", "marching"], "unknown method", [out])
+    expect_error("unknown builtin", ["contour", "builtin:teapot@32", "-o", out, "--method", "mc"], "teapot", [out])
+    expect_error("mc on scattered", ["contour", "builtin:sphere@random:500", "-o", out, "--method", "mc"], "grid", [out])
+    expect_error("unwritable output", ["contour", p("good.npy"), "-o", p("no/such/dir/out.ply"), "--method", "mc"],
+                 "cannot write")
+
+    # Good input: same bytes with 1 and 2 threads, for every mesh method and the contact points.
+    for method, source in [("mc", "builtin:csg@32"), ("mt-rt", "builtin:torus@28"), ("mt-dt", "builtin:box@random:20000")]:
+        outputs = []
+        for threads in ("1", "2"):
+            mesh, pts, stats = p(f"{method}{threads}.ply"), p(f"{method}{threads}_cp.ply"), p(f"{method}{threads}.json")
+            r = run("contour", source, "-o", mesh, "--points", pts, "--method", method, "--threads", threads,
+                    "--stats", stats, "--quiet")
+            check(f"{method} runs", r.returncode == 0, r.stderr)
+            check(f"{method} quiet", r.stderr == "", r.stderr)
+            outputs.append((open(mesh, "rb").read(), open(pts, "rb").read()))
+            s = json.load(open(stats))
+            header = outputs[-1][0][:400].decode("latin-1")
+            check(f"{method} ply header", f"element vertex {s['mesh']['vertices']}" in header, header)
+            check(f"{method} binary ply", "binary_little_endian" in header, header)
+        check(f"{method} deterministic mesh", outputs[0][0] == outputs[1][0])
+        check(f"{method} deterministic points", outputs[0][1] == outputs[1][1])
+
+    # Scattered samples from a file, OBJ output, ASCII contact points.
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-1, 1, (4000, 3))
+    np.save(p("scattered.npy"), np.hstack([pts, (np.linalg.norm(pts, axis=1) - 0.6)[:, None]]))
+    r = run("contour", p("scattered.npy"), "-o", p("s.obj"), "--method", "mt-dt", "--points", p("s_cp.ply"), "--ascii")
+    check("scattered obj", r.returncode == 0 and open(p("s.obj")).read().startswith("#"), r.stderr)
+    cp = np.loadtxt(p("s_cp.ply"), skiprows=12)
+    check("ascii points", cp.shape[1] == 6 and np.allclose(np.linalg.norm(cp[:, 3:], axis=1), 1), cp.shape)
+    check("scattered points near sphere", np.median(np.abs(np.linalg.norm(cp[:, :3], axis=1) - 0.6)) < 0.01)
+    check("progress on stderr", "[sdfcontour]" in r.stderr, r.stderr)
+
+print(f"{passed} passed, {failed} failed")
+sys.exit(1 if failed else 0)
