@@ -101,7 +101,7 @@ struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
                                       weights = "james";
   int knn = 18, threads = 0;
-  double james_epsilon = 1.0, tie_tolerance = 1e-6;
+  double james_epsilon = GradientOptions{}.james_epsilon, tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, quiet = false, ascii = false, serial_triangulation = false;
   std::uint64_t seed = 0;
 };
