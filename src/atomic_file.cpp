@@ -13,7 +13,8 @@ namespace sdfcontour {
 AtomicFile::AtomicFile(const std::string& path) : path_(path) {
   // The pid and a random suffix keep concurrent writers of the same target apart.
   std::random_device rd;
-  temporary_path_ = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(rd() % 100000);
+  temporary_path_ =
+      path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(rd() % 100000);
   stream_.open(temporary_path_, std::ios::binary | std::ios::trunc);
   if (!stream_) throw Error("cannot write '" + path + "': " + std::strerror(errno));
 }

@@ -1,11 +1,10 @@
 #include "sdfcontour/builtin_shapes.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <Eigen/Geometry>
 
 namespace sdfcontour {
 
@@ -134,8 +133,9 @@ class TwoSphereUnion : public AnalyticShape {
     }
     Vector3d radial = p - crease_centre_;
     radial -= radial.dot(axis_) * axis_;
-    const Vector3d q = crease_centre_ + crease_radius_ * (radial.norm() > 0 ? Vector3d(radial.normalized())
-                                                                            : axis_.unitOrthogonal());
+    const Vector3d q =
+        crease_centre_ + crease_radius_ * (radial.norm() > 0 ? Vector3d(radial.normalized())
+                                                             : axis_.unitOrthogonal());
     if ((p - q).norm() < best) best = (p - q).norm(), best_point = q;
     return {-best, best_point};
   }
@@ -159,21 +159,24 @@ std::unique_ptr<AnalyticShape> make_builtin_shape(const std::string& name) {
   if (name == "plate") return std::make_unique<Box>(Vector3d(0.7, 0.5, 0.06));
   if (name == "shell") return std::make_unique<Shell>(0.55, 0.65);
   if (name == "csg")
-    return std::make_unique<TwoSphereUnion>(Vector3d(-0.3, -0.05, 0.02), 0.5, Vector3d(0.35, 0.1, -0.03),
-                                            0.42);
+    return std::make_unique<TwoSphereUnion>(Vector3d(-0.3, -0.05, 0.02), 0.5,
+                                            Vector3d(0.35, 0.1, -0.03), 0.42);
   std::string known;
   for (const auto& n : builtin_shape_names()) known += (known.empty() ? "" : ", ") + n;
   throw Error("unknown built-in shape '" + name + "' (known: " + known + ")");
 }
 
-bool is_builtin_spec(const std::string& text) { return text.rfind("builtin:", 0) == 0; }
+bool is_builtin_spec(const std::string& text) {
+  return text.rfind("builtin:", 0) == 0;
+}
 
 BuiltinSpec parse_builtin_spec(const std::string& text) {
   if (!is_builtin_spec(text)) throw Error("'" + text + "' is not a built-in specification");
   const std::string body = text.substr(8);
   const auto at = body.find('@');
   if (at == std::string::npos)
-    throw Error("built-in '" + text + "' needs a resolution: builtin:NAME@N or builtin:NAME@random:COUNT");
+    throw Error("built-in '" + text +
+                "' needs a resolution: builtin:NAME@N or builtin:NAME@random:COUNT");
   BuiltinSpec spec;
   spec.name = body.substr(0, at);
   make_builtin_shape(spec.name);  // rejects unknown names
@@ -208,7 +211,8 @@ Grid sample_grid(const AnalyticShape& shape, int n, const Bounds& bounds) {
   grid.values.resize(Eigen::Index(grid.size()));
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k) grid.values[Eigen::Index(grid.index(i, j, k))] = shape.distance(grid.point(i, j, k));
+      for (int k = 0; k < n; ++k)
+        grid.values[Eigen::Index(grid.index(i, j, k))] = shape.distance(grid.point(i, j, k));
   return grid;
 }
 

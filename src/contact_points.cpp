@@ -10,7 +10,9 @@ namespace sdfcontour {
 
 namespace {
 
-Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) { return m.row(i).transpose(); }
+Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) {
+  return m.row(i).transpose();
+}
 
 // Gradients shorter than this have no usable direction.
 constexpr double kTinyGradient = 1e-300;
@@ -20,9 +22,11 @@ enum class Outcome : char { Hidden, ZeroGradient, Discarded, Kept, Rescued };
 }  // namespace
 
 bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& values,
-                             const Triangulation& tri, int i, const Eigen::Vector3d& c, double tau) {
+                             const Triangulation& tri, int i, const Eigen::Vector3d& c,
+                             double tau) {
   const Eigen::Vector3d p = row(points, i);
-  for (int o = tri.neighbour_offsets[std::size_t(i)]; o < tri.neighbour_offsets[std::size_t(i) + 1]; ++o) {
+  for (int o = tri.neighbour_offsets[std::size_t(i)]; o < tri.neighbour_offsets[std::size_t(i) + 1];
+       ++o) {
     const int j = tri.neighbour_indices[std::size_t(o)];
     const Eigen::Vector3d q = row(points, j);
     const double radius = std::abs(values[j]) - (tau > 0 ? tau * (q - p).norm() : 0.0);
@@ -50,7 +54,8 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
     auto candidate = [&](const Eigen::Vector3d& g) {
       const Eigen::Vector3d unit = g / g.norm();
       const Eigen::Vector3d point = p - values[i] * unit;
-      if (inside_neighbour_sphere(points, values, tri, int(i), point, options.tie_tolerance)) return false;
+      if (inside_neighbour_sphere(points, values, tri, int(i), point, options.tie_tolerance))
+        return false;
       c.row(i) = point.transpose();
       normal.row(i) = unit.transpose();
       return true;
@@ -62,7 +67,8 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
       out = candidate(g) ? Outcome::Kept : Outcome::Discarded;
     }
     if (out == Outcome::Kept || !options.try_tet_gradients) return;
-    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1]; ++o) {
+    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
+         ++o) {
       const Eigen::Vector3d gt = row(tet_g, tri.incident_tets[std::size_t(o)]);
       if (gt.norm() > kTinyGradient && candidate(gt)) {
         out = Outcome::Rescued;
@@ -75,11 +81,22 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
   std::vector<int> kept;
   for (Eigen::Index i = 0; i < n; ++i) {
     switch (outcome[std::size_t(i)]) {
-      case Outcome::Hidden: ++result.hidden; break;
-      case Outcome::ZeroGradient: ++result.zero_gradient; break;
-      case Outcome::Discarded: ++result.discarded; break;
-      case Outcome::Rescued: ++result.rescued; kept.push_back(int(i)); break;
-      case Outcome::Kept: kept.push_back(int(i)); break;
+      case Outcome::Hidden:
+        ++result.hidden;
+        break;
+      case Outcome::ZeroGradient:
+        ++result.zero_gradient;
+        break;
+      case Outcome::Discarded:
+        ++result.discarded;
+        break;
+      case Outcome::Rescued:
+        ++result.rescued;
+        kept.push_back(int(i));
+        break;
+      case Outcome::Kept:
+        kept.push_back(int(i));
+        break;
     }
   }
   result.samples = kept;

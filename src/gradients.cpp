@@ -17,12 +17,14 @@ namespace {
 // Tets whose volume is below this fraction of (longest edge)^3 are too flat for a gradient.
 constexpr double kFlatTetRatio = 1e-12;
 
-Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) { return m.row(i).transpose(); }
+Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) {
+  return m.row(i).transpose();
+}
 
 }  // namespace
 
-PointMatrix tet_gradients(const PointMatrix& points, const Eigen::VectorXd& values, const TetMatrix& tets,
-                          std::vector<char>* degenerate) {
+PointMatrix tet_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
+                          const TetMatrix& tets, std::vector<char>* degenerate) {
   const Eigen::Index m = tets.rows();
   PointMatrix g(m, 3);
   if (degenerate) degenerate->assign(std::size_t(m), 0);
@@ -59,7 +61,8 @@ Eigen::VectorXd tet_volumes(const PointMatrix& points, const TetMatrix& tets) {
   return v;
 }
 
-Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centroids, double epsilon) {
+Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centroids,
+                              double epsilon) {
   const Eigen::Index k = centroids.rows();
   Eigen::Matrix3d A = epsilon * Eigen::Matrix3d::Identity();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -86,8 +89,10 @@ PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& v
   PointMatrix g = PointMatrix::Zero(n, 3);
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     std::vector<int> ts;
-    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1]; ++o)
-      if (!degenerate[std::size_t(tri.incident_tets[std::size_t(o)])]) ts.push_back(tri.incident_tets[std::size_t(o)]);
+    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
+         ++o)
+      if (!degenerate[std::size_t(tri.incident_tets[std::size_t(o)])])
+        ts.push_back(tri.incident_tets[std::size_t(o)]);
     if (ts.empty()) return;
     Eigen::VectorXd w(Eigen::Index(ts.size()));
     if (options.weighting == GradientWeighting::Uniform) {
@@ -97,7 +102,8 @@ PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& v
         const int t = ts[a];
         const Eigen::Vector3d p0 = row(points, tri.tets(t, 0));
         w[Eigen::Index(a)] = std::abs((row(points, tri.tets(t, 1)) - p0)
-                                          .dot((row(points, tri.tets(t, 2)) - p0).cross(row(points, tri.tets(t, 3)) - p0))) /
+                                          .dot((row(points, tri.tets(t, 2)) - p0)
+                                                   .cross(row(points, tri.tets(t, 3)) - p0))) /
                              6.0;
       }
     } else {
@@ -125,7 +131,8 @@ PointMatrix knn_gradients(const PointMatrix& points, const Eigen::VectorXd& valu
   using Point = K::Point_3;
   const Eigen::Index n = points.rows();
   std::vector<Point> pts(static_cast<std::size_t>(n));
-  for (Eigen::Index i = 0; i < n; ++i) pts[std::size_t(i)] = Point(points(i, 0), points(i, 1), points(i, 2));
+  for (Eigen::Index i = 0; i < n; ++i)
+    pts[std::size_t(i)] = Point(points(i, 0), points(i, 1), points(i, 2));
   using Map = CGAL::Pointer_property_map<Point>::type;
   using Traits = CGAL::Search_traits_adapter<std::size_t, Map, CGAL::Search_traits_3<K>>;
   using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;

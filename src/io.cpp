@@ -3,8 +3,8 @@
 #include <CGAL/IO/OBJ.h>
 #include <CGAL/IO/OFF.h>
 #include <CGAL/IO/PLY.h>
-#include <CGAL/IO/read_ply_points.h>
 #include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/IO/read_ply_points.h>
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
@@ -27,23 +27,27 @@ std::string extension(const std::string& path) {
   const auto dot = path.find_last_of('.');
   if (dot == std::string::npos || path.find_first_of('/', dot) != std::string::npos) return "";
   std::string ext = path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
   return ext;
 }
 
 void write_ply(std::ostream& out, const PointMatrix& vertices, const PointMatrix* normals,
                const TriangleMatrix* triangles, PlyFormat format) {
-  out << "ply\nformat " << (format == PlyFormat::Binary ? "binary_little_endian" : "ascii") << " 1.0\n"
+  out << "ply\nformat " << (format == PlyFormat::Binary ? "binary_little_endian" : "ascii")
+      << " 1.0\n"
       << "comment written by sdfcontour\n"
       << "element vertex " << vertices.rows() << "\n"
       << "property double x\nproperty double y\nproperty double z\n";
   if (normals) out << "property double nx\nproperty double ny\nproperty double nz\n";
-  if (triangles) out << "element face " << triangles->rows() << "\nproperty list uchar int vertex_indices\n";
+  if (triangles)
+    out << "element face " << triangles->rows() << "\nproperty list uchar int vertex_indices\n";
   out << "end_header\n";
   if (format == PlyFormat::Binary) {
     for (Eigen::Index i = 0; i < vertices.rows(); ++i) {
       out.write(reinterpret_cast<const char*>(vertices.row(i).data()), 3 * sizeof(double));
-      if (normals) out.write(reinterpret_cast<const char*>(normals->row(i).data()), 3 * sizeof(double));
+      if (normals)
+        out.write(reinterpret_cast<const char*>(normals->row(i).data()), 3 * sizeof(double));
     }
     if (triangles)
       for (Eigen::Index f = 0; f < triangles->rows(); ++f) {
@@ -55,12 +59,14 @@ void write_ply(std::ostream& out, const PointMatrix& vertices, const PointMatrix
     out << std::setprecision(17);
     for (Eigen::Index i = 0; i < vertices.rows(); ++i) {
       out << vertices(i, 0) << ' ' << vertices(i, 1) << ' ' << vertices(i, 2);
-      if (normals) out << ' ' << (*normals)(i, 0) << ' ' << (*normals)(i, 1) << ' ' << (*normals)(i, 2);
+      if (normals)
+        out << ' ' << (*normals)(i, 0) << ' ' << (*normals)(i, 1) << ' ' << (*normals)(i, 2);
       out << '\n';
     }
     if (triangles)
       for (Eigen::Index f = 0; f < triangles->rows(); ++f)
-        out << "3 " << (*triangles)(f, 0) << ' ' << (*triangles)(f, 1) << ' ' << (*triangles)(f, 2) << '\n';
+        out << "3 " << (*triangles)(f, 0) << ' ' << (*triangles)(f, 1) << ' ' << (*triangles)(f, 2)
+            << '\n';
   }
 }
 
@@ -77,10 +83,11 @@ void write_mesh(const std::string& path, const Mesh& mesh, PlyFormat ply_format)
     auto& out = file.stream();
     out << "# written by sdfcontour\n" << std::setprecision(17);
     for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
-      out << "v " << mesh.vertices(i, 0) << ' ' << mesh.vertices(i, 1) << ' ' << mesh.vertices(i, 2) << '\n';
-    for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
-      out << "f " << mesh.triangles(f, 0) + 1 << ' ' << mesh.triangles(f, 1) + 1 << ' ' << mesh.triangles(f, 2) + 1
+      out << "v " << mesh.vertices(i, 0) << ' ' << mesh.vertices(i, 1) << ' ' << mesh.vertices(i, 2)
           << '\n';
+    for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+      out << "f " << mesh.triangles(f, 0) + 1 << ' ' << mesh.triangles(f, 1) + 1 << ' '
+          << mesh.triangles(f, 2) + 1 << '\n';
   }
   file.commit();
 }
@@ -107,14 +114,17 @@ Mesh read_mesh(const std::string& path) {
   mesh.vertices.resize(Eigen::Index(points.size()), 3);
   for (std::size_t i = 0; i < points.size(); ++i) {
     mesh.vertices.row(Eigen::Index(i)) << points[i].x(), points[i].y(), points[i].z();
-    if (!std::isfinite(points[i].x()) || !std::isfinite(points[i].y()) || !std::isfinite(points[i].z()))
+    if (!std::isfinite(points[i].x()) || !std::isfinite(points[i].y()) ||
+        !std::isfinite(points[i].z()))
       throw Error("'" + path + "' has a vertex with a NaN or infinite coordinate");
   }
   std::vector<std::array<int, 3>> triangles;
   for (const auto& poly : polygons) {
     for (std::size_t v : poly)
-      if (v >= points.size()) throw Error("'" + path + "' has a face with an out-of-range vertex index");
-    for (std::size_t q = 1; q + 1 < poly.size(); ++q) triangles.push_back({int(poly[0]), int(poly[q]), int(poly[q + 1])});
+      if (v >= points.size())
+        throw Error("'" + path + "' has a face with an out-of-range vertex index");
+    for (std::size_t q = 1; q + 1 < poly.size(); ++q)
+      triangles.push_back({int(poly[0]), int(poly[q]), int(poly[q + 1])});
   }
   if (triangles.empty()) throw Error("'" + path + "' has no faces");
   mesh.triangles.resize(Eigen::Index(triangles.size()), 3);
@@ -123,8 +133,10 @@ Mesh read_mesh(const std::string& path) {
   return mesh;
 }
 
-void write_oriented_points(const std::string& path, const OrientedPoints& points, PlyFormat ply_format) {
-  if (extension(path) != "ply") throw Error("cannot write points to '" + path + "': use a .ply extension");
+void write_oriented_points(const std::string& path, const OrientedPoints& points,
+                           PlyFormat ply_format) {
+  if (extension(path) != "ply")
+    throw Error("cannot write points to '" + path + "': use a .ply extension");
   AtomicFile file(path);
   write_ply(file.stream(), points.points, &points.normals, nullptr, ply_format);
   file.commit();

@@ -12,7 +12,9 @@ namespace sdfcontour {
 
 namespace {
 
-Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) { return m.row(i).transpose(); }
+Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) {
+  return m.row(i).transpose();
+}
 
 // Crossing point on the segment from a (value fa) to b (value fb), fa and fb of opposite sign.
 Eigen::Vector3d crossing(const Eigen::Vector3d& a, double fa, const Eigen::Vector3d& b, double fb) {
@@ -20,7 +22,9 @@ Eigen::Vector3d crossing(const Eigen::Vector3d& a, double fa, const Eigen::Vecto
   return a + t * (b - a);
 }
 
-bool inside(double v) { return v < 0; }
+bool inside(double v) {
+  return v < 0;
+}
 
 std::uint64_t edge_key(int a, int b) {
   return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
@@ -36,21 +40,24 @@ bool odd_permutation(const std::array<int, 4>& p) {
 
 }  // namespace
 
-Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& values, const TetMatrix& tets) {
+Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& values,
+                         const TetMatrix& tets) {
   const Eigen::Index m = tets.rows();
   // 1. One vertex per sign-changing edge, numbered in sorted edge order.
   std::vector<std::uint64_t> edges;
   for (Eigen::Index t = 0; t < m; ++t)
     for (int a = 0; a < 4; ++a)
       for (int b = a + 1; b < 4; ++b)
-        if (inside(values[tets(t, a)]) != inside(values[tets(t, b)])) edges.push_back(edge_key(tets(t, a), tets(t, b)));
+        if (inside(values[tets(t, a)]) != inside(values[tets(t, b)]))
+          edges.push_back(edge_key(tets(t, a), tets(t, b)));
   tbb::parallel_sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   Mesh mesh;
   mesh.vertices.resize(Eigen::Index(edges.size()), 3);
   tbb::parallel_for(std::size_t(0), edges.size(), [&](std::size_t e) {
     const int a = int(edges[e] >> 32), b = int(edges[e] & 0xffffffffu);
-    mesh.vertices.row(Eigen::Index(e)) = crossing(row(points, a), values[a], row(points, b), values[b]).transpose();
+    mesh.vertices.row(Eigen::Index(e)) =
+        crossing(row(points, a), values[a], row(points, b), values[b]).transpose();
   });
   auto vertex_of = [&](int a, int b) {
     return int(std::lower_bound(edges.begin(), edges.end(), edge_key(a, b)) - edges.begin());
@@ -71,14 +78,15 @@ Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& value
     std::array<int, 4> v{tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
     std::array<int, 4> neg{}, pos{};
     int nn = 0, np = 0;
-    for (int k = 0; k < 4; ++k) (inside(values[v[std::size_t(k)]]) ? neg[std::size_t(nn++)] : pos[std::size_t(np++)]) = k;
+    for (int k = 0; k < 4; ++k)
+      (inside(values[v[std::size_t(k)]]) ? neg[std::size_t(nn++)] : pos[std::size_t(np++)]) = k;
     // Reorder the tet by an even permutation (orientation kept) and emit faces that point from
     // the inside vertices towards the outside ones.
     if (nn == 2) {
       std::array<int, 4> perm{neg[0], neg[1], pos[0], pos[1]};
       if (odd_permutation(perm)) std::swap(perm[2], perm[3]);
-      const int a0 = v[std::size_t(perm[0])], a1 = v[std::size_t(perm[1])], b0 = v[std::size_t(perm[2])],
-                b1 = v[std::size_t(perm[3])];
+      const int a0 = v[std::size_t(perm[0])], a1 = v[std::size_t(perm[1])],
+                b0 = v[std::size_t(perm[2])], b1 = v[std::size_t(perm[3])];
       const int q[4] = {vertex_of(a0, b0), vertex_of(a0, b1), vertex_of(a1, b1), vertex_of(a1, b0)};
       // Split along the shorter diagonal.
       const double d02 = (mesh.vertices.row(q[0]) - mesh.vertices.row(q[2])).squaredNorm();
@@ -99,7 +107,8 @@ Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& value
       if (o != k) perm[std::size_t(s++)] = o;
     if (odd_permutation(perm)) std::swap(perm[2], perm[3]);
     const int apex = v[std::size_t(perm[0])];
-    int e1 = vertex_of(apex, v[std::size_t(perm[1])]), e2 = vertex_of(apex, v[std::size_t(perm[2])]),
+    int e1 = vertex_of(apex, v[std::size_t(perm[1])]),
+        e2 = vertex_of(apex, v[std::size_t(perm[2])]),
         e3 = vertex_of(apex, v[std::size_t(perm[3])]);
     // (e1, e2, e3) faces away from the apex: right when the apex is the lone inside vertex.
     if (!lone_inside) std::swap(e2, e3);
@@ -183,7 +192,8 @@ void triangulate_polygon(const int* polygon, const int* edges, int size, const C
   if (size == 3) best_apex = 0;
   if (best_apex >= 0) {
     for (int q = 1; q + 1 < size; ++q)
-      out.triangles.push_back({polygon[best_apex], polygon[(best_apex + q) % size], polygon[(best_apex + q + 1) % size]});
+      out.triangles.push_back({polygon[best_apex], polygon[(best_apex + q) % size],
+                               polygon[(best_apex + q + 1) % size]});
     return;
   }
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -209,7 +219,8 @@ Mesh marching_cubes(const Grid& grid) {
         const int step[3] = {i + 1 < nx, j + 1 < ny, k + 1 < nz};
         const std::size_t q[3] = {p + std::size_t(ny) * nz, p + std::size_t(nz), p + 1};
         for (int a = 0; a < 3; ++a)
-          if (step[a] && inside(f[Eigen::Index(p)]) != inside(f[Eigen::Index(q[a])])) visit(p, a, q[a]);
+          if (step[a] && inside(f[Eigen::Index(p)]) != inside(f[Eigen::Index(q[a])]))
+            visit(p, a, q[a]);
       }
   };
   tbb::parallel_for(0, nx, [&](int i) {
@@ -260,8 +271,10 @@ Mesh marching_cubes(const Grid& grid) {
             const int c0 = c[q], c1 = c[(q + 1) % 4];
             if (inside(value[c0]) == inside(value[c1])) continue;
             order[crossings++] = T.edge_between(c0, c1);
-            if (inside(value[c1])) starts[ns++] = crossings - 1;  // outside -> inside
-            else ends[ne++] = crossings - 1;
+            if (inside(value[c1]))
+              starts[ns++] = crossings - 1;  // outside -> inside
+            else
+              ends[ne++] = crossings - 1;
           }
           if (crossings == 2) {
             next_edge[order[starts[0]]] = order[ends[0]];
@@ -269,8 +282,8 @@ Mesh marching_cubes(const Grid& grid) {
             // Asymptotic decider on the face's bilinear interpolant, evaluated in the face's
             // own (u, v) corner order so that both cubes sharing it decide alike.
             const int a = face / 2, u = (a + 1) % 3, v = (a + 2) % 3, side = (face & 1) << a;
-            const double f00 = value[side], f10 = value[side | 1 << u], f11 = value[side | 1 << u | 1 << v],
-                         f01 = value[side | 1 << v];
+            const double f00 = value[side], f10 = value[side | 1 << u],
+                         f11 = value[side | 1 << u | 1 << v], f01 = value[side | 1 << v];
             const double saddle = (f00 * f11 - f10 * f01) / (f00 + f11 - f10 - f01);
             const bool insides_connected = inside(saddle);
             for (int s = 0; s < 2; ++s) {
@@ -283,7 +296,10 @@ Mesh marching_cubes(const Grid& grid) {
           const int a = e / 4;
           int rank = e % 4, low = 0;
           for (int c = 0; c < 8; ++c)
-            if (!(c >> a & 1) && rank-- == 0) { low = c; break; }
+            if (!(c >> a & 1) && rank-- == 0) {
+              low = c;
+              break;
+            }
           return vertex_id[3 * corner_point[low] + std::size_t(a)];
         };
         bool visited[12] = {};
@@ -310,7 +326,9 @@ Mesh marching_cubes(const Grid& grid) {
     for (const auto& c : s.centroids) mesh.vertices.row(next_centroid++) = c.transpose();
     const Eigen::Index base = next_centroid - Eigen::Index(s.centroids.size());
     for (const auto& t : s.triangles) {
-      for (int k = 0; k < 3; ++k) mesh.triangles(at, k) = t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
+      for (int k = 0; k < 3; ++k)
+        mesh.triangles(at, k) =
+            t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
       ++at;
     }
   }

@@ -13,7 +13,8 @@ MeshTopology mesh_topology(const Mesh& mesh) {
   std::vector<char> used(std::size_t(mesh.vertices.rows()), 0);
   for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const std::uint64_t a = std::uint64_t(mesh.triangles(f, k)), b = std::uint64_t(mesh.triangles(f, (k + 1) % 3));
+      const std::uint64_t a = std::uint64_t(mesh.triangles(f, k)),
+                          b = std::uint64_t(mesh.triangles(f, (k + 1) % 3));
       used[a] = 1;
       directed.push_back((std::min(a, b) << 33) | (std::max(a, b) << 1) | (a < b ? 0 : 1));
     }
@@ -24,7 +25,8 @@ MeshTopology mesh_topology(const Mesh& mesh) {
   for (std::size_t s = 0; s < directed.size();) {
     std::size_t e = s;
     int forward = 0, backward = 0;
-    while (e < directed.size() && (directed[e] >> 1) == (directed[s] >> 1)) (directed[e++] & 1 ? backward : forward)++;
+    while (e < directed.size() && (directed[e] >> 1) == (directed[s] >> 1))
+      (directed[e++] & 1 ? backward : forward)++;
     ++edges;
     const int count = forward + backward;
     if (count == 1) ++t.boundary_edges;
@@ -46,7 +48,9 @@ static Eigen::Vector3d vertex(const Mesh& m, Eigen::Index f, int k) {
 double surface_area(const Mesh& mesh) {
   double area = 0;
   for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
-    area += 0.5 * (vertex(mesh, f, 1) - vertex(mesh, f, 0)).cross(vertex(mesh, f, 2) - vertex(mesh, f, 0)).norm();
+    area += 0.5 * (vertex(mesh, f, 1) - vertex(mesh, f, 0))
+                      .cross(vertex(mesh, f, 2) - vertex(mesh, f, 0))
+                      .norm();
   return area;
 }
 

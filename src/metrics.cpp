@@ -20,7 +20,9 @@ using Iterator = std::vector<Triangle>::const_iterator;
 using Primitive = CGAL::AABB_triangle_primitive<K, Iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 
-K::Point_3 point(const PointMatrix& m, Eigen::Index i) { return {m(i, 0), m(i, 1), m(i, 2)}; }
+K::Point_3 point(const PointMatrix& m, Eigen::Index i) {
+  return {m(i, 0), m(i, 1), m(i, 2)};
+}
 
 }  // namespace
 
@@ -30,7 +32,8 @@ PointMatrix sample_surface(const Mesh& mesh, std::size_t count, std::uint64_t se
   std::vector<double> cumulative(static_cast<std::size_t>(f));
   double total = 0;
   for (Eigen::Index t = 0; t < f; ++t) {
-    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)), b = mesh.vertices.row(mesh.triangles(t, 1)),
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
+                          b = mesh.vertices.row(mesh.triangles(t, 1)),
                           c = mesh.vertices.row(mesh.triangles(t, 2));
     total += 0.5 * (b - a).cross(c - a).norm();
     cumulative[std::size_t(t)] = total;
@@ -41,10 +44,12 @@ PointMatrix sample_surface(const Mesh& mesh, std::size_t count, std::uint64_t se
   for (std::size_t s = 0; s < count; ++s) {
     const double pick = uniform() * total;
     const Eigen::Index t = std::min<Eigen::Index>(
-        f - 1, Eigen::Index(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()));
+        f - 1, Eigen::Index(std::upper_bound(cumulative.begin(), cumulative.end(), pick) -
+                            cumulative.begin()));
     double u = uniform(), v = uniform();
     if (u + v > 1) u = 1 - u, v = 1 - v;  // fold the square onto the triangle
-    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)), b = mesh.vertices.row(mesh.triangles(t, 1)),
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
+                          b = mesh.vertices.row(mesh.triangles(t, 1)),
                           c = mesh.vertices.row(mesh.triangles(t, 2));
     out.row(Eigen::Index(s)) = (a + u * (b - a) + v * (c - a)).transpose();
   }
@@ -55,7 +60,8 @@ Eigen::VectorXd point_mesh_distances(const PointMatrix& points, const Mesh& mesh
   std::vector<Triangle> triangles;
   triangles.reserve(std::size_t(mesh.triangles.rows()));
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
-    triangles.emplace_back(point(mesh.vertices, mesh.triangles(t, 0)), point(mesh.vertices, mesh.triangles(t, 1)),
+    triangles.emplace_back(point(mesh.vertices, mesh.triangles(t, 0)),
+                           point(mesh.vertices, mesh.triangles(t, 1)),
                            point(mesh.vertices, mesh.triangles(t, 2)));
   if (triangles.empty()) throw Error("cannot measure distances to a mesh without triangles");
   Tree tree(triangles.begin(), triangles.end());

@@ -1,11 +1,11 @@
 #include "sdfcontour/npy.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <regex>
 #include <sstream>
 
@@ -17,11 +17,16 @@ namespace {
 
 std::string read_whole_file(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw Error("cannot read '" + path + "': it is a directory");
+  if (std::filesystem::is_directory(path, ec))
+    throw Error("cannot read '" + path + "': it is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot read '" + path + "': " + std::strerror(errno));
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error("cannot read '" + path + "': I/O error");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  std::string bytes(static_cast<std::size_t>(std::max<std::streamoff>(size, 0)), '\0');
+  if (size < 0 || !in.read(bytes.data(), size))
+    throw Error("cannot read '" + path + "': I/O error");
   return bytes;
 }
 
@@ -50,7 +55,8 @@ NpyArray read_npy(const std::string& path) {
   } else if (major == 2 || major == 3) {
     if (bytes.size() < 12) throw Error("'" + path + "' is a truncated .npy file");
     header_len = 0;
-    for (int b = 3; b >= 0; --b) header_len = (header_len << 8) | static_cast<unsigned char>(bytes[8 + b]);
+    for (int b = 3; b >= 0; --b)
+      header_len = (header_len << 8) | static_cast<unsigned char>(bytes[8 + b]);
     header_start = 12;
   } else {
     throw Error("'" + path + "' has unsupported .npy format version " + std::to_string(major));
@@ -65,8 +71,10 @@ NpyArray read_npy(const std::string& path) {
   if (fortran == "True")
     throw Error("'" + path + "' is in Fortran order; save it in C order (numpy.ascontiguousarray)");
   std::size_t item = 0;
-  if (descr == "'<f8'") item = 8;
-  else if (descr == "'<f4'") item = 4;
+  if (descr == "'<f8'")
+    item = 8;
+  else if (descr == "'<f4'")
+    item = 4;
   else
     throw Error("'" + path + "' has dtype " + descr +
                 "; only little-endian float32 ('<f4') and float64 ('<f8') are supported");
@@ -132,22 +140,25 @@ void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
   const char len_bytes[2] = {char(len & 0xff), char(len >> 8)};
   out.write(len_bytes, 2);
   out.write(header.data(), std::streamsize(header.size()));
-  out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size() * sizeof(double)));
+  out.write(reinterpret_cast<const char*>(data.data()),
+            std::streamsize(data.size() * sizeof(double)));
   file.commit();
 }
 
 SdfInput sdf_input_from_array(const NpyArray& array, const Bounds& bounds) {
   SdfInput input;
   std::string shape_text;
-  for (std::size_t d : array.shape) shape_text += (shape_text.empty() ? "" : ", ") + std::to_string(d);
+  for (std::size_t d : array.shape)
+    shape_text += (shape_text.empty() ? "" : ", ") + std::to_string(d);
   shape_text = "(" + shape_text + ")";
   if (array.shape.size() == 3) {
     input.is_grid = true;
     for (int a = 0; a < 3; ++a) input.grid.dims[a] = int(array.shape[a]);
     input.grid.bounds = bounds;
-    input.grid.values = Eigen::Map<const Eigen::VectorXd>(array.data.data(), Eigen::Index(array.data.size()));
+    input.grid.values =
+        Eigen::Map<const Eigen::VectorXd>(array.data.data(), Eigen::Index(array.data.size()));
     validate_grid(input.grid);
-    input.samples = input.grid.to_samples();
+    return input;
   } else if (array.shape.size() == 2 && array.shape[1] == 4) {
     const Eigen::Index n = Eigen::Index(array.shape[0]);
     input.samples.points.resize(n, 3);

@@ -17,11 +17,16 @@ Method parse_method(const std::string& name) {
 
 std::string method_name(Method method) {
   switch (method) {
-    case Method::Gcp: return "gcp";
-    case Method::Gtcp: return "gtcp";
-    case Method::Mc: return "mc";
-    case Method::MtRt: return "mt-rt";
-    case Method::MtDt: return "mt-dt";
+    case Method::Gcp:
+      return "gcp";
+    case Method::Gtcp:
+      return "gtcp";
+    case Method::Mc:
+      return "mc";
+    case Method::MtRt:
+      return "mt-rt";
+    case Method::MtDt:
+      return "mt-dt";
   }
   return "?";
 }
@@ -31,7 +36,8 @@ namespace {
 // Times each stage and reports its start through the progress callback.
 class Stages {
  public:
-  Stages(ContourResult& result, const ContourOptions& options) : result_(result), options_(options) {}
+  Stages(ContourResult& result, const ContourOptions& options)
+      : result_(result), options_(options) {}
   template <class F>
   auto run(const std::string& name, const std::string& message, F&& work) {
     if (options_.progress) options_.progress(message);
@@ -57,32 +63,47 @@ class Stages {
 
 }  // namespace
 
-ContourResult contour(const SdfInput& input, const AnalyticShape* shape, const ContourOptions& options) {
-  const Samples& s = input.samples;
-  validate_samples(s);
-  require_sign_change(s.values);
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
+                      const ContourOptions& options) {
+  if (input.is_grid)
+    validate_grid(input.grid);
+  else
+    validate_samples(input.samples);
+  require_sign_change(input.is_grid ? input.grid.values : input.samples.values);
   const Method method = options.method;
-  if (method == Method::Mc && !input.is_grid) throw Error("method mc needs a grid input, not scattered samples");
+  if (method == Method::Mc && !input.is_grid)
+    throw Error("method mc needs a grid input, not scattered samples");
   if (method == Method::Gtcp && !shape)
     throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
   if (method == Method::Gcp && options.want_mesh)
-    throw Error("method gcp's mesh needs the screened Poisson solver, which is not built yet; "
-                "write its contact points with --points");
+    throw Error(
+        "method gcp's mesh needs the screened Poisson solver, which is not built yet; "
+        "write its contact points with --points");
   if (method == Method::Gtcp && options.want_mesh)
-    throw Error("method gtcp's mesh needs the screened Poisson solver, which is not built yet; "
-                "write its contact points with --points");
+    throw Error(
+        "method gtcp's mesh needs the screened Poisson solver, which is not built yet; "
+        "write its contact points with --points");
 
   ContourResult result;
-  result.samples = int(s.points.rows());
+  result.samples =
+      int(input.is_grid ? input.grid.size() : std::size_t(input.samples.points.rows()));
   Stages stages(result, options);
-  const std::string n = std::to_string(s.points.rows());
+  const std::string n = std::to_string(result.samples);
 
   if (method == Method::Mc && options.want_mesh)
-    result.mesh = stages.run("marching", "marching cubes on " + n + " samples", [&] { return marching_cubes(input.grid); });
+    result.mesh = stages.run("marching", "marching cubes on " + n + " samples",
+                             [&] { return marching_cubes(input.grid); });
+  if (!options.want_points && (method == Method::Mc || !options.want_mesh)) return result;
+
+  // The other stages see every input as scattered samples; a grid's positions are made here.
+  Samples grid_samples;
+  if (input.is_grid) grid_samples = input.grid.to_samples();
+  const Samples& s = input.is_grid ? grid_samples : input.samples;
 
   if (method == Method::Gtcp && options.want_points)
-    result.contact_points = stages.run("contact_points", "exact contact points of " + n + " samples",
-                                       [&] { return exact_contact_points(s.points, *shape); });
+    result.contact_points =
+        stages.run("contact_points", "exact contact points of " + n + " samples",
+                   [&] { return exact_contact_points(s.points, *shape); });
 
   // --points with any method but gtcp gives GCP contact points.
   const bool need_gcp = options.want_points && method != Method::Gtcp;
@@ -106,9 +127,12 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape, const C
   if (need_gcp) {
     const PointMatrix gradients = stages.run("gradients", "gradients at " + n + " samples", [&] {
       switch (options.gradient_source) {
-        case GradientSource::Knn: return knn_gradients(s.points, s.values, options.knn);
-        case GradientSource::Delaunay: return vertex_gradients(s.points, s.values, *delaunay, options.gradient);
-        case GradientSource::Regular: break;
+        case GradientSource::Knn:
+          return knn_gradients(s.points, s.values, options.knn);
+        case GradientSource::Delaunay:
+          return vertex_gradients(s.points, s.values, *delaunay, options.gradient);
+        case GradientSource::Regular:
+          break;
       }
       return vertex_gradients(s.points, s.values, *regular, options.gradient);
     });
@@ -117,11 +141,13 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape, const C
     });
   }
   if (method == Method::MtRt && options.want_mesh)
-    result.mesh = stages.run("marching", "marching tetrahedra on " + std::to_string(regular->tets.rows()) + " tets",
-                             [&] { return marching_tetrahedra(s.points, s.values, regular->tets); });
+    result.mesh = stages.run(
+        "marching", "marching tetrahedra on " + std::to_string(regular->tets.rows()) + " tets",
+        [&] { return marching_tetrahedra(s.points, s.values, regular->tets); });
   if (method == Method::MtDt && options.want_mesh)
-    result.mesh = stages.run("marching", "marching tetrahedra on " + std::to_string(delaunay->tets.rows()) + " tets",
-                             [&] { return marching_tetrahedra(s.points, s.values, delaunay->tets); });
+    result.mesh = stages.run(
+        "marching", "marching tetrahedra on " + std::to_string(delaunay->tets.rows()) + " tets",
+        [&] { return marching_tetrahedra(s.points, s.values, delaunay->tets); });
   return result;
 }
 

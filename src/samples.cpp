@@ -64,8 +64,8 @@ void require_sign_change(const Eigen::VectorXd& values) {
   bool inside = false, outside = false;
   for (Eigen::Index i = 0; i < values.size(); ++i) (values[i] < 0 ? inside : outside) = true;
   if (!(inside && outside))
-    throw Error(std::string("no surface: every value is ") + (inside ? "negative" : "non-negative") +
-                ", so the field has no sign change");
+    throw Error(std::string("no surface: every value is ") +
+                (inside ? "negative" : "non-negative") + ", so the field has no sign change");
 }
 
 }  // namespace sdfcontour

@@ -14,7 +14,8 @@ double quantile(std::vector<double> values, double q) {
   const std::size_t above = std::min(below + 1, values.size() - 1);
   std::nth_element(values.begin(), values.begin() + long(below), values.end());
   const double low = values[below];
-  const double high = above == below ? low : *std::min_element(values.begin() + long(below) + 1, values.end());
+  const double high =
+      above == below ? low : *std::min_element(values.begin() + long(below) + 1, values.end());
   return low + (position - double(below)) * (high - low);
 }
 

@@ -21,13 +21,15 @@ using Lock = CGAL::Spatial_lock_grid_3<CGAL::Tag_priority_blocking>;
 
 template <class Concurrency>
 struct RegularTypes {
-  using Vb = CGAL::Triangulation_vertex_base_with_info_3<int, Kernel,
-                                                         CGAL::Regular_triangulation_vertex_base_3<Kernel>>;
-  using Cb = CGAL::Regular_triangulation_cell_base_3<Kernel, CGAL::Triangulation_cell_base_3<Kernel>,
-                                                     CGAL::Discard_hidden_points>;
+  using Vb = CGAL::Triangulation_vertex_base_with_info_3<
+      int, Kernel, CGAL::Regular_triangulation_vertex_base_3<Kernel>>;
+  using Cb =
+      CGAL::Regular_triangulation_cell_base_3<Kernel, CGAL::Triangulation_cell_base_3<Kernel>,
+                                              CGAL::Discard_hidden_points>;
   using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb, Concurrency>;
   using Tr = CGAL::Regular_triangulation_3<
-      Kernel, Tds, std::conditional_t<std::is_same_v<Concurrency, CGAL::Parallel_tag>, Lock, CGAL::Default>>;
+      Kernel, Tds,
+      std::conditional_t<std::is_same_v<Concurrency, CGAL::Parallel_tag>, Lock, CGAL::Default>>;
 };
 
 template <class Concurrency>
@@ -64,8 +66,10 @@ Triangulation run(const std::vector<std::pair<Site, int>>& sites, const CGAL::Bb
   }
   tr->insert(sites.begin(), sites.end());
   if (tr->dimension() < 3)
-    throw Error("all samples are " + std::string(tr->dimension() <= 0 ? "coincident"
-                                                  : tr->dimension() == 1 ? "collinear" : "coplanar") +
+    throw Error("all samples are " +
+                std::string(tr->dimension() <= 0   ? "coincident"
+                            : tr->dimension() == 1 ? "collinear"
+                                                   : "coplanar") +
                 ": no 3D triangulation exists");
 
   Triangulation out;
@@ -77,8 +81,8 @@ Triangulation run(const std::vector<std::pair<Site, int>>& sites, const CGAL::Bb
   std::vector<std::array<int, 4>> tets;
   tets.reserve(tr->number_of_finite_cells());
   for (auto c = tr->finite_cells_begin(); c != tr->finite_cells_end(); ++c)
-    tets.push_back(canonical_tet({c->vertex(0)->info(), c->vertex(1)->info(), c->vertex(2)->info(),
-                                  c->vertex(3)->info()}));
+    tets.push_back(canonical_tet(
+        {c->vertex(0)->info(), c->vertex(1)->info(), c->vertex(2)->info(), c->vertex(3)->info()}));
   tr.reset();
   tbb::parallel_sort(tets.begin(), tets.end());
   out.tets.resize(Eigen::Index(tets.size()), 4);
@@ -96,26 +100,30 @@ void build_adjacency(Triangulation& tri, int n) {
   tri.incident_offsets.assign(std::size_t(n) + 1, 0);
   for (Eigen::Index t = 0; t < m; ++t)
     for (int k = 0; k < 4; ++k) ++tri.incident_offsets[std::size_t(tri.tets(t, k)) + 1];
-  for (int i = 0; i < n; ++i) tri.incident_offsets[std::size_t(i) + 1] += tri.incident_offsets[std::size_t(i)];
+  for (int i = 0; i < n; ++i)
+    tri.incident_offsets[std::size_t(i) + 1] += tri.incident_offsets[std::size_t(i)];
   tri.incident_tets.resize(std::size_t(tri.incident_offsets.back()));
   {
     std::vector<int> fill(tri.incident_offsets.begin(), tri.incident_offsets.end() - 1);
     for (Eigen::Index t = 0; t < m; ++t)
-      for (int k = 0; k < 4; ++k) tri.incident_tets[std::size_t(fill[std::size_t(tri.tets(t, k))]++)] = int(t);
+      for (int k = 0; k < 4; ++k)
+        tri.incident_tets[std::size_t(fill[std::size_t(tri.tets(t, k))]++)] = int(t);
   }
   // Neighbours: the other vertices of the incident tets, deduplicated.
   std::vector<std::vector<int>> lists(static_cast<std::size_t>(n));
   tri.neighbour_offsets.assign(std::size_t(n) + 1, 0);
   for (int i = 0; i < n; ++i) {
     auto& list = lists[std::size_t(i)];
-    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1]; ++o)
+    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
+         ++o)
       for (int k = 0; k < 4; ++k) {
         const int v = tri.tets(tri.incident_tets[std::size_t(o)], k);
         if (v != i) list.push_back(v);
       }
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
-    tri.neighbour_offsets[std::size_t(i) + 1] = tri.neighbour_offsets[std::size_t(i)] + int(list.size());
+    tri.neighbour_offsets[std::size_t(i) + 1] =
+        tri.neighbour_offsets[std::size_t(i)] + int(list.size());
   }
   tri.neighbour_indices.resize(std::size_t(tri.neighbour_offsets.back()));
   for (int i = 0; i < n; ++i)
@@ -128,23 +136,27 @@ Triangulation triangulate(const PointMatrix& points, const Eigen::VectorXd& valu
   const int n = int(points.rows());
   if (n < 4) throw Error("need at least 4 samples to triangulate, got " + std::to_string(n));
   CGAL::Bbox_3 box;
-  for (int i = 0; i < n; ++i) box += CGAL::Bbox_3(points(i, 0), points(i, 1), points(i, 2), points(i, 0),
-                                                  points(i, 1), points(i, 2));
+  for (int i = 0; i < n; ++i)
+    box += CGAL::Bbox_3(points(i, 0), points(i, 1), points(i, 2), points(i, 0), points(i, 1),
+                        points(i, 2));
   // The lock grid needs a box with volume; pad flat boxes (coplanar input is rejected later).
-  const double pad = 1e-9 + 1e-9 * std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(), box.zmax() - box.zmin()});
-  box = CGAL::Bbox_3(box.xmin() - pad, box.ymin() - pad, box.zmin() - pad, box.xmax() + pad, box.ymax() + pad,
-                     box.zmax() + pad);
+  const double pad = 1e-9 + 1e-9 * std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(),
+                                             box.zmax() - box.zmin()});
+  box = CGAL::Bbox_3(box.xmin() - pad, box.ymin() - pad, box.zmin() - pad, box.xmax() + pad,
+                     box.ymax() + pad, box.zmax() + pad);
   if (options.kind == TriangulationKind::Regular) {
     std::vector<std::pair<Kernel::Weighted_point_3, int>> sites(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i)
-      sites[std::size_t(i)] = {Kernel::Weighted_point_3(Kernel::Point_3(points(i, 0), points(i, 1), points(i, 2)),
-                                                        values[i] * values[i]),
-                               i};
+      sites[std::size_t(i)] = {
+          Kernel::Weighted_point_3(Kernel::Point_3(points(i, 0), points(i, 1), points(i, 2)),
+                                   values[i] * values[i]),
+          i};
     if (options.parallel) return run<RegularTypes<CGAL::Parallel_tag>::Tr, true>(sites, box, n);
     return run<RegularTypes<CGAL::Sequential_tag>::Tr, false>(sites, box, n);
   }
   std::vector<std::pair<Kernel::Point_3, int>> sites(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) sites[std::size_t(i)] = {Kernel::Point_3(points(i, 0), points(i, 1), points(i, 2)), i};
+  for (int i = 0; i < n; ++i)
+    sites[std::size_t(i)] = {Kernel::Point_3(points(i, 0), points(i, 1), points(i, 2)), i};
   if (options.parallel) return run<DelaunayTypes<CGAL::Parallel_tag>::Tr, true>(sites, box, n);
   return run<DelaunayTypes<CGAL::Sequential_tag>::Tr, false>(sites, box, n);
 }

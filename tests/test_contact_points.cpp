@@ -26,7 +26,8 @@ Fixture make_fixture(const std::string& name, int n) {
 
 std::vector<double> abs_values(const ContactPoints& cp, const AnalyticShape& shape) {
   std::vector<double> v;
-  for (Eigen::Index i = 0; i < cp.points.rows(); ++i) v.push_back(std::abs(shape.distance(cp.points.row(i).transpose())));
+  for (Eigen::Index i = 0; i < cp.points.rows(); ++i)
+    v.push_back(std::abs(shape.distance(cp.points.row(i).transpose())));
   return v;
 }
 
@@ -46,7 +47,8 @@ TEST(ContactPoints, GroundTruthPointsLieOnTheSurface) {
     const ContactPoints cp = exact_contact_points(s.points, *shape);
     ASSERT_EQ(cp.size(), 32 * 32 * 32);
     for (double v : abs_values(cp, *shape)) ASSERT_LT(v, 1e-9) << name;
-    for (Eigen::Index i = 0; i < cp.normals.rows(); ++i) ASSERT_NEAR(cp.normals.row(i).norm(), 1.0, 1e-12);
+    for (Eigen::Index i = 0; i < cp.normals.rows(); ++i)
+      ASSERT_NEAR(cp.normals.row(i).norm(), 1.0, 1e-12);
   }
 }
 
@@ -54,15 +56,20 @@ TEST(ContactPoints, GradientPointsAreCloseToTheSurface) {
   for (const std::string name : {"sphere", "box"}) {
     const Fixture f = make_fixture(name, 32);
     const double h = f.grid.spacing().maxCoeff();
-    for (auto w : {GradientWeighting::Uniform, GradientWeighting::Volume, GradientWeighting::James}) {
-      const PointMatrix g = vertex_gradients(f.samples.points, f.samples.values, f.regular, {w, 1.0});
-      const ContactPoints cp = gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, {});
+    for (auto w :
+         {GradientWeighting::Uniform, GradientWeighting::Volume, GradientWeighting::James}) {
+      const PointMatrix g = vertex_gradients(f.samples.points, f.samples.values, f.regular,
+                                             {w, GradientOptions{}.james_epsilon});
+      const ContactPoints cp =
+          gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, {});
       const std::vector<double> err = abs_values(cp, *f.shape);
       const double median = quantile(err, 0.5) / h;
-      std::cout << name << " 32^3 weighting " << int(w) << ": kept " << cp.size() << " of " << f.samples.points.rows()
-                << " (hidden " << cp.hidden << ", discarded " << cp.discarded << "), median |phi(c)| " << median
-                << " h, p95 " << quantile(err, 0.95) / h << " h\n";
-      EXPECT_EQ(cp.size() + cp.hidden + cp.discarded + cp.zero_gradient, int(f.samples.points.rows()));
+      std::cout << name << " 32^3 weighting " << int(w) << ": kept " << cp.size() << " of "
+                << f.samples.points.rows() << " (hidden " << cp.hidden << ", discarded "
+                << cp.discarded << "), median |phi(c)| " << median << " h, p95 "
+                << quantile(err, 0.95) / h << " h\n";
+      EXPECT_EQ(cp.size() + cp.hidden + cp.discarded + cp.zero_gradient,
+                int(f.samples.points.rows()));
       EXPECT_GT(cp.size(), 1000);
       if (name == "sphere") {
         EXPECT_LT(median, 0.01);
@@ -90,7 +97,8 @@ TEST(ContactPoints, NeighbourFilterEqualsBruteForce) {
       if (tri.hidden[std::size_t(i)]) continue;
       const Vector3d n = Vector3d(g.row(i)).normalized();
       const Vector3d c = Vector3d(s.points.row(i)) - s.values[i] * n;
-      EXPECT_EQ(bool(kept[std::size_t(i)]), !inside_any_sphere(s.points, s.values, i, c)) << "sample " << i;
+      EXPECT_EQ(bool(kept[std::size_t(i)]), !inside_any_sphere(s.points, s.values, i, c))
+          << "sample " << i;
       ++compared;
     }
     EXPECT_GT(compared, 1000);
@@ -106,14 +114,18 @@ TEST(ContactPoints, TieToleranceKeepsExactTies) {
   for (const std::string name : {"box", "plate", "sphere"}) {
     const Fixture f = make_fixture(name, 32);
     PointMatrix exact(f.samples.points.rows(), 3);
-    for (Eigen::Index i = 0; i < exact.rows(); ++i) exact.row(i) = f.shape->gradient(f.samples.points.row(i).transpose()).transpose();
+    for (Eigen::Index i = 0; i < exact.rows(); ++i)
+      exact.row(i) = f.shape->gradient(f.samples.points.row(i).transpose()).transpose();
     ContactPointOptions strict, tolerant;
     strict.tie_tolerance = 0;
     tolerant.tie_tolerance = 1e-6;
-    const ContactPoints s = gradient_contact_points(f.samples.points, f.samples.values, exact, f.regular, strict);
-    const ContactPoints t = gradient_contact_points(f.samples.points, f.samples.values, exact, f.regular, tolerant);
-    std::cout << name << ": exact gradients, strict test discards " << s.discarded << ", tolerant test discards "
-              << t.discarded << " (visible samples " << f.samples.points.rows() - f.regular.hidden_count << ")\n";
+    const ContactPoints s =
+        gradient_contact_points(f.samples.points, f.samples.values, exact, f.regular, strict);
+    const ContactPoints t =
+        gradient_contact_points(f.samples.points, f.samples.values, exact, f.regular, tolerant);
+    std::cout << name << ": exact gradients, strict test discards " << s.discarded
+              << ", tolerant test discards " << t.discarded << " (visible samples "
+              << f.samples.points.rows() - f.regular.hidden_count << ")\n";
     EXPECT_EQ(t.discarded, 0) << name;
     EXPECT_GE(s.discarded, t.discarded);
     if (name == "box") {
@@ -142,15 +154,19 @@ TEST(ContactPoints, ZeroValuesAndZeroGradients) {
 
 TEST(ContactPoints, TetGradientFallbackRescuesPoints) {
   const Fixture f = make_fixture("torus", 24);
-  const PointMatrix g = vertex_gradients(f.samples.points, f.samples.values, f.regular, {GradientWeighting::Uniform});
+  const PointMatrix g =
+      vertex_gradients(f.samples.points, f.samples.values, f.regular, {GradientWeighting::Uniform});
   ContactPointOptions plain, fn;
   fn.try_tet_gradients = true;
-  const ContactPoints a = gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, plain);
-  const ContactPoints b = gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, fn);
+  const ContactPoints a =
+      gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, plain);
+  const ContactPoints b =
+      gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, fn);
   std::cout << "+FN on torus 24^3: kept " << a.size() << " -> " << b.size() << "\n";
   EXPECT_GT(b.rescued, 0);
   EXPECT_EQ(b.size(), a.size() + b.rescued);
   for (Eigen::Index k = 0; k < b.points.rows(); ++k)
-    EXPECT_FALSE(inside_neighbour_sphere(f.samples.points, f.samples.values, f.regular, b.samples[std::size_t(k)],
-                                         b.points.row(k).transpose(), fn.tie_tolerance));
+    EXPECT_FALSE(inside_neighbour_sphere(f.samples.points, f.samples.values, f.regular,
+                                         b.samples[std::size_t(k)], b.points.row(k).transpose(),
+                                         fn.tie_tolerance));
 }

@@ -16,7 +16,8 @@ Eigen::VectorXd linear_field(const PointMatrix& p) {
 double worst_relative_error(const PointMatrix& g, const std::vector<char>& hidden) {
   double worst = 0;
   for (Eigen::Index i = 0; i < g.rows(); ++i)
-    if (!hidden[std::size_t(i)]) worst = std::max(worst, (Vector3d(g.row(i)) - kSlope).norm() / kSlope.norm());
+    if (!hidden[std::size_t(i)])
+      worst = std::max(worst, (Vector3d(g.row(i)) - kSlope).norm() / kSlope.norm());
   return worst;
 }
 
@@ -25,7 +26,9 @@ struct Case {
   PointMatrix points;
 };
 
-std::vector<Case> cases() { return {{"grid", test::grid_points(10)}, {"random", test::random_points(600, 5)}}; }
+std::vector<Case> cases() {
+  return {{"grid", test::grid_points(10)}, {"random", test::random_points(600, 5)}};
+}
 
 }  // namespace
 
@@ -34,8 +37,10 @@ TEST(Gradients, ExactOnLinearFieldsForEveryWeighting) {
     const Eigen::VectorXd f = linear_field(c.points);
     for (auto kind : {TriangulationKind::Regular, TriangulationKind::Delaunay}) {
       const Triangulation tri = triangulate(c.points, f, {kind, true});
-      for (auto w : {GradientWeighting::Uniform, GradientWeighting::Volume, GradientWeighting::James}) {
-        SCOPED_TRACE(c.name + (kind == TriangulationKind::Regular ? " regular " : " delaunay ") + std::to_string(int(w)));
+      for (auto w :
+           {GradientWeighting::Uniform, GradientWeighting::Volume, GradientWeighting::James}) {
+        SCOPED_TRACE(c.name + (kind == TriangulationKind::Regular ? " regular " : " delaunay ") +
+                     std::to_string(int(w)));
         const PointMatrix g = vertex_gradients(c.points, f, tri, {w, 1.0});
         EXPECT_LT(worst_relative_error(g, tri.hidden), 1e-9);
       }
@@ -66,14 +71,17 @@ TEST(Gradients, TetGradientsInterpolateTheVertexValues) {
 // eps = 1.
 TEST(Gradients, JamesWeightsHaveLinearPrecision) {
   const PointMatrix p = test::random_points(500, 21);
-  const Triangulation tri = triangulate(p, Eigen::VectorXd::Zero(500), {TriangulationKind::Delaunay, true});
+  const Triangulation tri =
+      triangulate(p, Eigen::VectorXd::Zero(500), {TriangulationKind::Delaunay, true});
   double worst_small_eps = 0, worst_eps_one = 0;
   for (int i = 0; i < 500; ++i) {
-    const int begin = tri.incident_offsets[std::size_t(i)], end = tri.incident_offsets[std::size_t(i) + 1];
+    const int begin = tri.incident_offsets[std::size_t(i)],
+              end = tri.incident_offsets[std::size_t(i) + 1];
     PointMatrix centroids(end - begin, 3);
     for (int o = begin; o < end; ++o) {
       Vector3d c = Vector3d::Zero();
-      for (int k = 0; k < 4; ++k) c += p.row(tri.tets(tri.incident_tets[std::size_t(o)], k)).transpose();
+      for (int k = 0; k < 4; ++k)
+        c += p.row(tri.tets(tri.incident_tets[std::size_t(o)], k)).transpose();
       centroids.row(o - begin) = c.transpose() / 4;
     }
     const Vector3d pi = p.row(i);
@@ -85,7 +93,8 @@ TEST(Gradients, JamesWeightsHaveLinearPrecision) {
         moment += w[t] * (Vector3d(centroids.row(t)) - pi);
         scale += std::abs(w[t]) * (Vector3d(centroids.row(t)) - pi).norm();
       }
-      (eps < 1 ? worst_small_eps : worst_eps_one) = std::max(eps < 1 ? worst_small_eps : worst_eps_one, moment.norm() / scale);
+      (eps < 1 ? worst_small_eps : worst_eps_one) =
+          std::max(eps < 1 ? worst_small_eps : worst_eps_one, moment.norm() / scale);
     }
   }
   EXPECT_LT(worst_small_eps, 1e-6);
@@ -97,7 +106,8 @@ TEST(Gradients, JamesWeightsHaveLinearPrecision) {
 TEST(Gradients, JamesBeatsUniformOnQuadraticFields) {
   const PointMatrix p = test::random_points(3000, 13);
   Eigen::VectorXd f(p.rows());
-  for (Eigen::Index i = 0; i < p.rows(); ++i) f[i] = Vector3d(p.row(i)).squaredNorm() - 0.4;  // grad = 2p
+  for (Eigen::Index i = 0; i < p.rows(); ++i)
+    f[i] = Vector3d(p.row(i)).squaredNorm() - 0.4;  // grad = 2p
   const Triangulation tri = triangulate(p, f, {TriangulationKind::Delaunay, true});
   auto mean_error = [&](GradientWeighting w, double eps) {
     const PointMatrix g = vertex_gradients(p, f, tri, {w, eps});

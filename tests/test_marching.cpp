@@ -33,7 +33,8 @@ std::vector<Expected> shapes() {
 
 void expect_closed_outward(const Mesh& m, const Expected& e, double volume_tolerance) {
   const MeshTopology t = mesh_topology(m);
-  EXPECT_TRUE(t.closed) << t.boundary_edges << " boundary, " << t.nonmanifold_edges << " non-manifold edges";
+  EXPECT_TRUE(t.closed) << t.boundary_edges << " boundary, " << t.nonmanifold_edges
+                        << " non-manifold edges";
   EXPECT_TRUE(t.consistently_oriented);
   EXPECT_EQ(t.euler_characteristic, e.euler);
   const double v = signed_volume(m);
@@ -106,12 +107,13 @@ TEST(Marching, CubesAgreeWithScikitImage) {
       write_npy(grid_path, {std::size_t(n), std::size_t(n), std::size_t(n)},
                 std::vector<double>(g.values.data(), g.values.data() + g.values.size()));
       const double h = g.spacing()[0];
-      const std::string cmd = "/usr/bin/python3 " SDFCONTOUR_SOURCE_DIR "/tests/skimage_mc.py " + grid_path + " " +
-                              std::to_string(h) + " -1 " + verts + " " + faces;
+      const std::string cmd = "/usr/bin/python3 " SDFCONTOUR_SOURCE_DIR "/tests/skimage_mc.py " +
+                              grid_path + " " + std::to_string(h) + " -1 " + verts + " " + faces;
       ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
       const NpyArray v = read_npy(verts), f = read_npy(faces);
       Mesh reference;
-      reference.vertices = Eigen::Map<const PointMatrix>(v.data.data(), Eigen::Index(v.shape[0]), 3);
+      reference.vertices =
+          Eigen::Map<const PointMatrix>(v.data.data(), Eigen::Index(v.shape[0]), 3);
       reference.triangles = Eigen::Map<const Eigen::Matrix<double, -1, 3, Eigen::RowMajor>>(
                                 f.data.data(), Eigen::Index(f.shape[0]), 3)
                                 .cast<int>();
@@ -120,8 +122,9 @@ TEST(Marching, CubesAgreeWithScikitImage) {
       // same polygons, so the vertex sets and face counts match.
       EXPECT_EQ(ours.vertices.rows(), reference.vertices.rows());
       EXPECT_EQ(ours.triangles.rows(), reference.triangles.rows());
-      const double vertex_hausdorff = std::max(point_mesh_distances(ours.vertices, reference).maxCoeff(),
-                                               point_mesh_distances(reference.vertices, ours).maxCoeff());
+      const double vertex_hausdorff =
+          std::max(point_mesh_distances(ours.vertices, reference).maxCoeff(),
+                   point_mesh_distances(reference.vertices, ours).maxCoeff());
       EXPECT_LT(vertex_hausdorff, 0.01 * h);
       const double area_ratio = surface_area(ours) / surface_area(reference);
       EXPECT_NEAR(area_ratio, 1.0, 0.005);
@@ -133,14 +136,16 @@ TEST(Marching, CubesAgreeWithScikitImage) {
       auto mean_error = [&](const Mesh& m) {
         const PointMatrix p = sample_surface(m, 100000, 2);
         double sum = 0;
-        for (Eigen::Index i = 0; i < p.rows(); ++i) sum += std::abs(shape->distance(p.row(i).transpose()));
+        for (Eigen::Index i = 0; i < p.rows(); ++i)
+          sum += std::abs(shape->distance(p.row(i).transpose()));
         return sum / double(p.rows());
       };
       const double ours_error = mean_error(ours), reference_error = mean_error(reference);
       EXPECT_LT(ours_error, 1.02 * reference_error);
-      std::cout << name << " " << n << "^3: vertex Hausdorff " << vertex_hausdorff / h << " h, area ratio " << area_ratio
-                << ", surface Hausdorff " << hausdorff / h << " h, mean error to exact surface " << ours_error / h
-                << " h (scikit-image " << reference_error / h << " h)\n";
+      std::cout << name << " " << n << "^3: vertex Hausdorff " << vertex_hausdorff / h
+                << " h, area ratio " << area_ratio << ", surface Hausdorff " << hausdorff / h
+                << " h, mean error to exact surface " << ours_error / h << " h (scikit-image "
+                << reference_error / h << " h)\n";
     }
   }
 }

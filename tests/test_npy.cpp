@@ -10,7 +10,8 @@ namespace {
 // Writes a .npy by hand: `descr` and `fortran` go into the header verbatim, `payload` after it.
 void write_raw_npy(const std::string& path, const std::string& descr, const std::string& fortran,
                    const std::string& shape, const std::string& payload) {
-  std::string header = "{'descr': '" + descr + "', 'fortran_order': " + fortran + ", 'shape': " + shape + ", }";
+  std::string header =
+      "{'descr': '" + descr + "', 'fortran_order': " + fortran + ", 'shape': " + shape + ", }";
   header.append((64 - (10 + header.size() + 1) % 64) % 64, ' ');
   header += '\n';
   std::ofstream out(path, std::ios::binary);
@@ -81,7 +82,8 @@ TEST(Npy, RejectsBadFiles) {
   std::vector<float> eight(8, 1.0f);
   write_raw_npy((dir / "fortran.npy").string(), "<f4", "True", "(2, 2, 2)", floats_bytes(eight));
   write_raw_npy((dir / "int.npy").string(), "<i8", "False", "(2, 2, 2)", std::string(64, '\0'));
-  write_raw_npy((dir / "big_endian.npy").string(), ">f8", "False", "(2, 2, 2)", std::string(64, '\0'));
+  write_raw_npy((dir / "big_endian.npy").string(), ">f8", "False", "(2, 2, 2)",
+                std::string(64, '\0'));
   write_raw_npy((dir / "truncated.npy").string(), "<f4", "False", "(4, 4, 4)", floats_bytes(eight));
   write_raw_npy((dir / "shape.npy").string(), "<f4", "False", "(4, 2)", floats_bytes(eight));
   write_raw_npy((dir / "few.npy").string(), "<f4", "False", "(2, 4)", floats_bytes(eight));

@@ -43,18 +43,22 @@ Reference reference(const std::string& name) {
   } else if (name == "torus") {
     for (int i = 0; i < count; ++i) {
       const double s = 2 * M_PI * u(rng), t = 2 * M_PI * u(rng);
-      r.surface.row(i) << (0.55 + 0.25 * std::cos(t)) * std::cos(s), (0.55 + 0.25 * std::cos(t)) * std::sin(s),
-          0.25 * std::sin(t);
+      r.surface.row(i) << (0.55 + 0.25 * std::cos(t)) * std::cos(s),
+          (0.55 + 0.25 * std::cos(t)) * std::sin(s), 0.25 * std::sin(t);
     }
-    r.inside = [](const Vector3d& p) { return std::pow(std::hypot(p.x(), p.y()) - 0.55, 2) + p.z() * p.z() < 0.0625; };
+    r.inside = [](const Vector3d& p) {
+      return std::pow(std::hypot(p.x(), p.y()) - 0.55, 2) + p.z() * p.z() < 0.0625;
+    };
   } else if (name == "csg") {
     const Vector3d c0(-0.3, -0.05, 0.02), c1(0.35, 0.1, -0.03);
     const double r0 = 0.5, r1 = 0.42;
     int i = 0;
     while (i < count) {
       const bool first = u(rng) < 0.6;
-      const Vector3d p = first ? Vector3d(c0 + r0 * random_direction(rng)) : Vector3d(c1 + r1 * random_direction(rng));
-      if (first ? (p - c1).norm() < r1 : (p - c0).norm() < r0) continue;  // buried in the other sphere
+      const Vector3d p = first ? Vector3d(c0 + r0 * random_direction(rng))
+                               : Vector3d(c1 + r1 * random_direction(rng));
+      if (first ? (p - c1).norm() < r1 : (p - c0).norm() < r0)
+        continue;  // buried in the other sphere
       r.surface.row(i++) = p.transpose();
     }
     r.inside = [=](const Vector3d& p) { return (p - c0).norm() < r0 || (p - c1).norm() < r1; };
@@ -126,7 +130,8 @@ TEST(BuiltinShapes, SpecParsing) {
 
 TEST(BuiltinShapes, RandomSamplesAreReproducible) {
   const auto shape = make_builtin_shape("sphere");
-  const Samples a = sample_random(*shape, 100, Bounds{}, 5), b = sample_random(*shape, 100, Bounds{}, 5),
+  const Samples a = sample_random(*shape, 100, Bounds{}, 5),
+                b = sample_random(*shape, 100, Bounds{}, 5),
                 c = sample_random(*shape, 100, Bounds{}, 6);
   EXPECT_EQ(a.points, b.points);
   EXPECT_NE(a.points, c.points);

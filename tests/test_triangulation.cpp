@@ -12,8 +12,8 @@ namespace {
 
 // The orthogonal sphere of tet t (centre, squared radius) for weights w: the sphere whose power
 // distance to each of the four weighted vertices is zero.
-std::pair<Vector3d, double> orthosphere(const PointMatrix& p, const Eigen::VectorXd& w, const TetMatrix& tets,
-                                        Eigen::Index t) {
+std::pair<Vector3d, double> orthosphere(const PointMatrix& p, const Eigen::VectorXd& w,
+                                        const TetMatrix& tets, Eigen::Index t) {
   Eigen::Matrix3d A;
   Eigen::Vector3d b;
   const Vector3d p0 = p.row(tets(t, 0));
@@ -28,7 +28,8 @@ std::pair<Vector3d, double> orthosphere(const PointMatrix& p, const Eigen::Vecto
 
 // Checks that no sample lies strictly inside (in conflict with) any tet's orthosphere, which is
 // the defining property of the weighted (or, with zero weights, plain) Delaunay triangulation.
-void expect_empty_orthospheres(const PointMatrix& p, const Eigen::VectorXd& weights, const Triangulation& tri) {
+void expect_empty_orthospheres(const PointMatrix& p, const Eigen::VectorXd& weights,
+                               const Triangulation& tri) {
   int violations = 0;
   for (Eigen::Index t = 0; t < tri.tets.rows(); ++t) {
     const auto [x, r2] = orthosphere(p, weights, tri.tets, t);
@@ -55,7 +56,8 @@ void expect_consistent(const Triangulation& tri, const PointMatrix& p) {
   EXPECT_EQ(hidden, tri.hidden_count);
   // Neighbour lists are symmetric.
   for (int i = 0; i < n; ++i)
-    for (int o = tri.neighbour_offsets[std::size_t(i)]; o < tri.neighbour_offsets[std::size_t(i) + 1]; ++o) {
+    for (int o = tri.neighbour_offsets[std::size_t(i)];
+         o < tri.neighbour_offsets[std::size_t(i) + 1]; ++o) {
       const int j = tri.neighbour_indices[std::size_t(o)];
       const auto b = tri.neighbour_indices.begin() + tri.neighbour_offsets[std::size_t(j)],
                  e = tri.neighbour_indices.begin() + tri.neighbour_offsets[std::size_t(j) + 1];
@@ -120,7 +122,8 @@ TEST(Triangulation, RejectsDegenerateInput) {
 TEST(Triangulation, DuplicatePositionsAreHidden) {
   PointMatrix p = test::random_points(40, 9);
   p.row(39) = p.row(3);
-  const Triangulation tri = triangulate(p, Eigen::VectorXd::Zero(40), {TriangulationKind::Delaunay, true});
+  const Triangulation tri =
+      triangulate(p, Eigen::VectorXd::Zero(40), {TriangulationKind::Delaunay, true});
   EXPECT_EQ(tri.hidden_count, 1);
   EXPECT_TRUE(tri.hidden[3] || tri.hidden[39]);
 }

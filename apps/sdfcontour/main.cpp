@@ -1,13 +1,13 @@
 // sdfcontour: contour signed distance samples into triangle meshes.
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "sdfcontour/atomic_file.h"
@@ -67,7 +67,6 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
     } else {
       loaded.input.is_grid = true;
       loaded.input.grid = sample_grid(*loaded.shape, b.resolution, bounds);
-      loaded.input.samples = loaded.input.grid.to_samples();
     }
     return loaded;
   }
@@ -76,7 +75,8 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
 }
 
 // |value| and normal alignment of contact points against an exact SDF.
-nlohmann::json contact_point_errors(const ContactPoints& cp, const AnalyticShape& shape, double spacing) {
+nlohmann::json contact_point_errors(const ContactPoints& cp, const AnalyticShape& shape,
+                                    double spacing) {
   std::vector<double> err, align;
   for (Eigen::Index i = 0; i < cp.points.rows(); ++i) {
     const Eigen::Vector3d c = cp.points.row(i).transpose();
@@ -99,18 +99,21 @@ nlohmann::json contact_point_errors(const ContactPoints& cp, const AnalyticShape
 
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
-                                      weights = "james";
+                                     weights = "james";
   int knn = 18, threads = 0;
-  double james_epsilon = GradientOptions{}.james_epsilon, tie_tolerance = ContactPointOptions{}.tie_tolerance;
+  double james_epsilon = GradientOptions{}.james_epsilon,
+         tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, quiet = false, ascii = false, serial_triangulation = false;
   std::uint64_t seed = 0;
 };
 
 int run_contour(const ContourArgs& a) {
-  if (a.output.empty() && a.points.empty()) throw Error("nothing to write: give -o OUT and/or --points FILE");
+  if (a.output.empty() && a.points.empty())
+    throw Error("nothing to write: give -o OUT and/or --points FILE");
   std::unique_ptr<tbb::global_control> threads;
   if (a.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    std::size_t(a.threads));
   auto say = [&](const std::string& m) {
     if (!a.quiet) std::cerr << "[sdfcontour] " << m << "\n";
   };
@@ -119,14 +122,22 @@ int run_contour(const ContourArgs& a) {
   opt.method = parse_method(a.method);
   opt.want_mesh = !a.output.empty();
   opt.want_points = !a.points.empty();
-  if (a.gradient == "regular") opt.gradient_source = GradientSource::Regular;
-  else if (a.gradient == "delaunay") opt.gradient_source = GradientSource::Delaunay;
-  else if (a.gradient == "knn") opt.gradient_source = GradientSource::Knn;
-  else throw Error("unknown --gradient '" + a.gradient + "' (known: regular, delaunay, knn)");
-  if (a.weights == "uniform") opt.gradient.weighting = GradientWeighting::Uniform;
-  else if (a.weights == "volume") opt.gradient.weighting = GradientWeighting::Volume;
-  else if (a.weights == "james") opt.gradient.weighting = GradientWeighting::James;
-  else throw Error("unknown --weights '" + a.weights + "' (known: uniform, volume, james)");
+  if (a.gradient == "regular")
+    opt.gradient_source = GradientSource::Regular;
+  else if (a.gradient == "delaunay")
+    opt.gradient_source = GradientSource::Delaunay;
+  else if (a.gradient == "knn")
+    opt.gradient_source = GradientSource::Knn;
+  else
+    throw Error("unknown --gradient '" + a.gradient + "' (known: regular, delaunay, knn)");
+  if (a.weights == "uniform")
+    opt.gradient.weighting = GradientWeighting::Uniform;
+  else if (a.weights == "volume")
+    opt.gradient.weighting = GradientWeighting::Volume;
+  else if (a.weights == "james")
+    opt.gradient.weighting = GradientWeighting::James;
+  else
+    throw Error("unknown --weights '" + a.weights + "' (known: uniform, volume, james)");
   opt.knn = a.knn;
   opt.gradient.james_epsilon = a.james_epsilon;
   opt.contact.tie_tolerance = a.tie_tolerance;
@@ -137,7 +148,8 @@ int run_contour(const ContourArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   say("reading " + a.input);
   LoadedInput in = load_input(a.input, parse_bounds(a.bounds), a.seed);
-  const double load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double load_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ContourResult r = contour(in.input, in.shape.get(), opt);
   r.stages.insert(r.stages.begin(), {"input", load_seconds});
 
@@ -151,7 +163,8 @@ int run_contour(const ContourArgs& a) {
     say("writing " + a.points);
     write_oriented_points(a.points, {r.contact_points->points, r.contact_points->normals}, format);
   }
-  r.stages.push_back({"output", std::chrono::duration<double>(std::chrono::steady_clock::now() - tw).count()});
+  r.stages.push_back(
+      {"output", std::chrono::duration<double>(std::chrono::steady_clock::now() - tw).count()});
 
   nlohmann::json j;
   j["input"] = a.input;
@@ -160,18 +173,27 @@ int run_contour(const ContourArgs& a) {
   if (in.input.is_grid) j["grid"] = in.input.grid.dims;
   if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
   if (r.mesh) {
-    j["mesh"] = {{"vertices", r.mesh->vertices.rows()}, {"triangles", r.mesh->triangles.rows()}, {"file", a.output}};
+    j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
+                 {"triangles", r.mesh->triangles.rows()},
+                 {"file", a.output}};
   }
   if (r.contact_points) {
     const ContactPoints& cp = *r.contact_points;
-    nlohmann::json c = {{"kept", cp.size()},        {"hidden", cp.hidden},   {"zero_gradient", cp.zero_gradient},
-                        {"discarded", cp.discarded}, {"rescued_fn", cp.rescued}, {"file", a.points}};
+    nlohmann::json c = {{"kept", cp.size()},
+                        {"hidden", cp.hidden},
+                        {"zero_gradient", cp.zero_gradient},
+                        {"discarded", cp.discarded},
+                        {"rescued_fn", cp.rescued},
+                        {"file", a.points}};
     if (opt.method != Method::Gtcp) {
-      c["gradient"] = a.gradient == "knn" ? "knn" + std::to_string(a.knn) : a.gradient + "/" + a.weights;
+      c["gradient"] =
+          a.gradient == "knn" ? "knn" + std::to_string(a.knn) : a.gradient + "/" + a.weights;
       c["tie_tolerance"] = a.tie_tolerance;
       c["fn"] = a.fn;
     }
-    if (in.shape) c["error"] = contact_point_errors(cp, *in.shape, in.input.is_grid ? in.input.grid.spacing().maxCoeff() : 0.0);
+    if (in.shape)
+      c["error"] = contact_point_errors(
+          cp, *in.shape, in.input.is_grid ? in.input.grid.spacing().maxCoeff() : 0.0);
     j["contact_points"] = c;
   }
   double total = 0;
@@ -192,7 +214,9 @@ int run_contour(const ContourArgs& a) {
   std::cout << "samples " << r.samples;
   if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
   if (r.contact_points) std::cout << ", contact points kept " << r.contact_points->size();
-  if (r.mesh) std::cout << ", mesh " << r.mesh->vertices.rows() << " vertices / " << r.mesh->triangles.rows() << " triangles";
+  if (r.mesh)
+    std::cout << ", mesh " << r.mesh->vertices.rows() << " vertices / " << r.mesh->triangles.rows()
+              << " triangles";
   std::cout << "\nseconds:" << std::fixed << std::setprecision(3);
   for (const auto& s : r.stages) std::cout << " " << s.name << " " << s.seconds;
   std::cout << " (total " << total << ")" << std::endl;
@@ -205,32 +229,57 @@ int main(int argc, char** argv) {
   CLI::App app{"sdfcontour: contour samples of a signed distance function into a triangle mesh"};
   app.require_subcommand(1);
   ContourArgs a;
-  CLI::App* contour = app.add_subcommand("contour", "Contour SDF samples (grid .npy, scattered .npy or builtin:NAME@N)");
-  contour->add_option("input", a.input,
-                      "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows x,y,z,value, "
-                      "or a built-in shape builtin:NAME@N (N^3 grid) / builtin:NAME@random:COUNT; NAME is one of "
-                      "sphere, torus, box, plate, shell, csg")
+  CLI::App* contour = app.add_subcommand(
+      "contour", "Contour SDF samples (grid .npy, scattered .npy or builtin:NAME@N)");
+  contour
+      ->add_option("input", a.input,
+                   "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
+                   "x,y,z,value, "
+                   "or a built-in shape builtin:NAME@N (N^3 grid) / builtin:NAME@random:COUNT; "
+                   "NAME is one of "
+                   "sphere, torus, box, plate, shell, csg")
       ->required();
   contour->add_option("-o,--output", a.output, "Mesh to write (.ply binary by default, or .obj)");
-  contour->add_option("--points", a.points, "Contact points to write as PLY (x y z nx ny nz): GCP's, or GTCP's for --method gtcp");
-  contour->add_option("-m,--method", a.method, "gcp, gtcp, mc, mt-rt or mt-dt")->capture_default_str();
-  contour->add_option("--bounds", a.bounds, "Grid bounds (positions of the first and last samples) MIN,MAX or "
-                                            "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX; also the box for random built-in samples")
+  contour->add_option(
+      "--points", a.points,
+      "Contact points to write as PLY (x y z nx ny nz): GCP's, or GTCP's for --method gtcp");
+  contour->add_option("-m,--method", a.method, "gcp, gtcp, mc, mt-rt or mt-dt")
       ->capture_default_str();
-  contour->add_option("--gradient", a.gradient, "GCP gradients from the regular or delaunay triangulation, or knn least squares")
+  contour
+      ->add_option("--bounds", a.bounds,
+                   "Grid bounds (positions of the first and last samples) MIN,MAX or "
+                   "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX; also the box for random built-in samples")
       ->capture_default_str();
-  contour->add_option("--weights", a.weights, "Averaging of tet gradients: uniform, volume or james")->capture_default_str();
-  contour->add_option("--knn", a.knn, "k for --gradient knn (the paper uses 6, 18, 26)")->capture_default_str();
-  contour->add_option("--james-epsilon", a.james_epsilon, "Regularisation of the James weights' linear system")
+  contour
+      ->add_option("--gradient", a.gradient,
+                   "GCP gradients from the regular or delaunay triangulation, or knn least squares")
       ->capture_default_str();
-  contour->add_option("--tie-tolerance", a.tie_tolerance,
-                      "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; 0 is the strict test")
+  contour
+      ->add_option("--weights", a.weights, "Averaging of tet gradients: uniform, volume or james")
       ->capture_default_str();
-  contour->add_flag("--fn", a.fn, "+FN: if the averaged gradient's point is discarded, try each incident tet's gradient");
-  contour->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
-  contour->add_option("--threads", a.threads, "Worker threads (0: all cores)")->capture_default_str();
-  contour->add_flag("--serial-triangulation", a.serial_triangulation, "Insert points sequentially (same result, slower)");
-  contour->add_option("--stats", a.stats, "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
+  contour->add_option("--knn", a.knn, "k for --gradient knn (the paper uses 6, 18, 26)")
+      ->capture_default_str();
+  contour
+      ->add_option("--james-epsilon", a.james_epsilon,
+                   "Regularisation of the James weights' linear system")
+      ->capture_default_str();
+  contour
+      ->add_option("--tie-tolerance", a.tie_tolerance,
+                   "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; "
+                   "0 is the strict test")
+      ->capture_default_str();
+  contour->add_flag(
+      "--fn", a.fn,
+      "+FN: if the averaged gradient's point is discarded, try each incident tet's gradient");
+  contour->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")
+      ->capture_default_str();
+  contour->add_option("--threads", a.threads, "Worker threads (0: all cores)")
+      ->capture_default_str();
+  contour->add_flag("--serial-triangulation", a.serial_triangulation,
+                    "Insert points sequentially (same result, slower)");
+  contour->add_option(
+      "--stats", a.stats,
+      "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
   contour->add_flag("--ascii", a.ascii, "Write ASCII PLY instead of binary");
   contour->add_flag("-q,--quiet", a.quiet, "No progress messages on stderr");
 

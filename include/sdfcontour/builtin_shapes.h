@@ -41,8 +41,8 @@ std::unique_ptr<AnalyticShape> make_builtin_shape(const std::string& name);
 struct BuiltinSpec {
   std::string name;
   bool random = false;
-  int resolution = 0;       ///< grid samples per axis, when !random
-  std::size_t count = 0;    ///< number of random samples, when random
+  int resolution = 0;     ///< grid samples per axis, when !random
+  std::size_t count = 0;  ///< number of random samples, when random
 };
 
 /// True if `text` starts with "builtin:".

@@ -45,7 +45,8 @@ bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& v
 /// GCP contact points from per-sample `gradients` (n x 3), filtered on `triangulation` (the
 /// regular triangulation for the exact test).
 ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::VectorXd& values,
-                                      const PointMatrix& gradients, const Triangulation& triangulation,
+                                      const PointMatrix& gradients,
+                                      const Triangulation& triangulation,
                                       const ContactPointOptions& options = {});
 
 /// Ground-truth contact points (GTCP): the exact closest surface point of every sample, with the

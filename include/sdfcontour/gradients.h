@@ -35,12 +35,14 @@ Eigen::VectorXd tet_volumes(const PointMatrix& points, const TetMatrix& tets);
 /// James weights for one sample at p whose incident tets have `centroids` (k x 3): one weight per
 /// tet, w_t = (1 + lambda . r_t/|r_t|) / |r_t| with r_t = c_t - p and
 /// (eps I + sum r^ r^T) lambda = -sum r^.
-Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centroids, double epsilon);
+Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centroids,
+                              double epsilon);
 
 /// Per-sample gradients (n x 3): the weighted average of the incident tets' gradients.
 /// Samples without a (non-degenerate) incident tet, hidden ones say, get a zero row.
 PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
-                             const Triangulation& triangulation, const GradientOptions& options = {});
+                             const Triangulation& triangulation,
+                             const GradientOptions& options = {});
 
 /// Per-sample gradients (n x 3) of the linear function that interpolates the sample and fits its
 /// k nearest neighbours in the least-squares sense (the paper uses k = 6, 18, 26).

@@ -11,7 +11,8 @@ enum class PlyFormat { Binary, Ascii };
 
 /// Writes a mesh as PLY (binary little-endian by default) or OBJ, chosen by the extension
 /// (.ply or .obj; anything else is an Error).
-void write_mesh(const std::string& path, const Mesh& mesh, PlyFormat ply_format = PlyFormat::Binary);
+void write_mesh(const std::string& path, const Mesh& mesh,
+                PlyFormat ply_format = PlyFormat::Binary);
 
 /// Reads a triangle mesh from OBJ, PLY (ASCII or binary) or OFF; polygons are fan-triangulated.
 /// Throws Error for an unreadable or malformed file or one without triangles.

@@ -11,7 +11,8 @@ namespace sdfcontour {
 /// `values` n). Vertices sit on sign-changing edges by linear interpolation and are shared
 /// between tets, so the mesh is closed and outward oriented wherever the surface stays inside
 /// the triangulated region. Each quad is split along its shorter diagonal.
-Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& values, const TetMatrix& tets);
+Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& values,
+                         const TetMatrix& tets);
 
 /// Marching cubes on a grid. Each cube's polygons are traced around its faces; a face with two
 /// diagonal pairs of equal sign is resolved by the asymptotic decider (the sign of the bilinear

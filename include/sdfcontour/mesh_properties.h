@@ -7,11 +7,11 @@ namespace sdfcontour {
 
 /// Edge-based topology of a triangle mesh.
 struct MeshTopology {
-  bool closed = false;            ///< every edge has exactly two incident triangles
+  bool closed = false;                 ///< every edge has exactly two incident triangles
   bool consistently_oriented = false;  ///< every interior edge is used once in each direction
-  long boundary_edges = 0;        ///< edges with one incident triangle
-  long nonmanifold_edges = 0;     ///< edges with more than two incident triangles
-  long euler_characteristic = 0;  ///< V - E + F over referenced vertices
+  long boundary_edges = 0;             ///< edges with one incident triangle
+  long nonmanifold_edges = 0;          ///< edges with more than two incident triangles
+  long euler_characteristic = 0;       ///< V - E + F over referenced vertices
 };
 
 MeshTopology mesh_topology(const Mesh& mesh);

@@ -17,6 +17,7 @@ Eigen::VectorXd point_mesh_distances(const PointMatrix& points, const Mesh& mesh
 
 /// The symmetric Hausdorff distance between two meshes, estimated from each mesh's vertices plus
 /// `samples` area-uniform points, each measured exactly against the other mesh.
-double hausdorff_distance(const Mesh& a, const Mesh& b, std::size_t samples = 100000, std::uint64_t seed = 1);
+double hausdorff_distance(const Mesh& a, const Mesh& b, std::size_t samples = 100000,
+                          std::uint64_t seed = 1);
 
 }  // namespace sdfcontour

@@ -27,7 +27,7 @@ void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
 struct SdfInput {
   bool is_grid = false;
   Grid grid;        ///< valid when is_grid
-  Samples samples;  ///< always valid: the grid's samples, or the scattered ones
+  Samples samples;  ///< the scattered samples, when !is_grid (grid.to_samples() gives a grid's)
 };
 
 /// Interprets an array as a grid (3 dimensions; positions from `bounds`) or as scattered samples

@@ -24,13 +24,13 @@ enum class GradientSource { Regular, Delaunay, Knn };
 
 struct ContourOptions {
   Method method = Method::Gcp;
-  bool want_mesh = true;    ///< produce the method's mesh
-  bool want_points = false; ///< produce contact points (GCP's, or GTCP's for method gtcp)
+  bool want_mesh = true;     ///< produce the method's mesh
+  bool want_points = false;  ///< produce contact points (GCP's, or GTCP's for method gtcp)
   GradientSource gradient_source = GradientSource::Regular;
-  int knn = 18;             ///< k for GradientSource::Knn
+  int knn = 18;  ///< k for GradientSource::Knn
   GradientOptions gradient;
   ContactPointOptions contact;
-  bool parallel = true;     ///< parallel triangulation (other stages follow TBB's thread limit)
+  bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
 };
@@ -51,6 +51,7 @@ struct ContourResult {
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
 /// it may be null for other methods. Throws Error for an input the method cannot use (no sign
 /// change, MC without a grid, GTCP without an exact SDF, GCP's mesh before Poisson exists).
-ContourResult contour(const SdfInput& input, const AnalyticShape* shape, const ContourOptions& options);
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
+                      const ContourOptions& options);
 
 }  // namespace sdfcontour

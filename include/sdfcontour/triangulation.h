@@ -21,13 +21,13 @@ struct TriangulationOptions {
 /// A triangulation of n samples. Compressed rows: the neighbours of sample i are
 /// neighbour_indices[neighbour_offsets[i] .. neighbour_offsets[i+1]), ascending.
 struct Triangulation {
-  TetMatrix tets;                       ///< m x 4 finite tetrahedra, positively oriented, sorted
-  std::vector<int> neighbour_offsets;   ///< n + 1 offsets into neighbour_indices
-  std::vector<int> neighbour_indices;   ///< samples sharing an edge with sample i
-  std::vector<int> incident_offsets;    ///< n + 1 offsets into incident_tets
-  std::vector<int> incident_tets;       ///< rows of `tets` that contain sample i, ascending
-  std::vector<char> hidden;             ///< n flags: 1 if sample i is not a vertex (hidden by
-                                        ///< larger spheres, or a duplicate position)
+  TetMatrix tets;                      ///< m x 4 finite tetrahedra, positively oriented, sorted
+  std::vector<int> neighbour_offsets;  ///< n + 1 offsets into neighbour_indices
+  std::vector<int> neighbour_indices;  ///< samples sharing an edge with sample i
+  std::vector<int> incident_offsets;   ///< n + 1 offsets into incident_tets
+  std::vector<int> incident_tets;      ///< rows of `tets` that contain sample i, ascending
+  std::vector<char> hidden;            ///< n flags: 1 if sample i is not a vertex (hidden by
+                                       ///< larger spheres, or a duplicate position)
   int hidden_count = 0;
 
   int sample_count() const { return int(hidden.size()); }
