@@ -1,5 +1,7 @@
 #include "sdfcontour/marching.h"
 
+#include "cube_polygons.h"
+
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -117,97 +119,9 @@ Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& value
   return mesh;
 }
 
-namespace {
-
-// Cube corners are numbered by bits (x=1, y=2, z=4). A cube edge is (its corner with the axis bit
-// clear, axis); local edge id = axis * 4 + rank of that corner among the four.
-struct CubeTables {
-  int edge_id[8][3];  // edge_id[low corner][axis], -1 if the corner has that bit set
-  // For each of the 6 faces (axis a, side s): its 4 corners counter-clockwise seen from outside.
-  int face_corner[6][4];
-  int edge_faces[12];  // bit (axis * 2 + side) for each of the two faces an edge lies on
-  CubeTables() {
-    for (auto& r : edge_id) r[0] = r[1] = r[2] = -1;
-    for (int a = 0; a < 3; ++a) {
-      int rank = 0;
-      for (int c = 0; c < 8; ++c)
-        if (!(c >> a & 1)) edge_id[c][a] = a * 4 + rank++;
-    }
-    for (int c = 0; c < 8; ++c)
-      for (int a = 0; a < 3; ++a) {
-        if (edge_id[c][a] < 0) continue;
-        int mask = 0;
-        for (int b = 0; b < 3; ++b)
-          if (b != a) mask |= 1 << (b * 2 + (c >> b & 1));
-        edge_faces[edge_id[c][a]] = mask;
-      }
-    for (int a = 0; a < 3; ++a)
-      for (int s = 0; s < 2; ++s) {
-        const int u = (a + 1) % 3, v = (a + 2) % 3;
-        // (0,0) (1,0) (1,1) (0,1) in (u, v) is counter-clockwise about +a.
-        const int uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-        for (int q = 0; q < 4; ++q) {
-          const int from = s ? q : (4 - q) % 4;  // reversed on the -a side
-          face_corner[a * 2 + s][q] = (s << a) | (uv[from][0] << u) | (uv[from][1] << v);
-        }
-      }
-  }
-  int edge_between(int c0, int c1) const {
-    const int diff = c0 ^ c1;
-    const int axis = diff == 1 ? 0 : diff == 2 ? 1 : 2;
-    return edge_id[std::min(c0, c1)][axis];
-  }
-};
-
-const CubeTables& cube_tables() {
-  static const CubeTables tables;
-  return tables;
-}
-
-// Triangles of one slab of cubes; a vertex id -k-1 names the slab's k-th centroid vertex.
-struct SlabOutput {
-  std::vector<std::array<int, 3>> triangles;
-  std::vector<Eigen::Vector3d> centroids;
-};
-
-// Triangulates a cube's polygon (vertex ids, and the cube edges they lie on) as a fan. A fan
-// diagonal must not join two vertices on one cube face: the neighbouring cube could use the same
-// chord, and the mesh would stop being manifold there. Among the apexes whose diagonals avoid
-// that, the one with the shortest diagonals (sum of squares) wins; if there is none, the fan
-// starts from a new vertex at the polygon's centroid.
-void triangulate_polygon(const int* polygon, const int* edges, int size, const CubeTables& T,
-                         const PointMatrix& vertices, SlabOutput& out) {
-  int best_apex = -1;
-  double best_length = 0;
-  for (int a = 0; a < size && size > 3; ++a) {
-    bool valid = true;
-    double length = 0;
-    for (int q = 2; q + 1 < size && valid; ++q) {
-      const int j = (a + q) % size;
-      valid = !(T.edge_faces[edges[a]] & T.edge_faces[edges[j]]);
-      length += (vertices.row(polygon[j]) - vertices.row(polygon[a])).squaredNorm();
-    }
-    if (valid && (best_apex < 0 || length < best_length)) best_apex = a, best_length = length;
-  }
-  if (size == 3) best_apex = 0;
-  if (best_apex >= 0) {
-    for (int q = 1; q + 1 < size; ++q)
-      out.triangles.push_back({polygon[best_apex], polygon[(best_apex + q) % size],
-                               polygon[(best_apex + q + 1) % size]});
-    return;
-  }
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (int q = 0; q < size; ++q) centroid += vertices.row(polygon[q]).transpose();
-  out.centroids.push_back(centroid / size);
-  const int c = -int(out.centroids.size());
-  for (int q = 0; q < size; ++q) out.triangles.push_back({c, polygon[q], polygon[(q + 1) % size]});
-}
-
-}  // namespace
-
 Mesh marching_cubes(const Grid& grid) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-  const CubeTables& T = cube_tables();
+  const detail::CubeTables& T = detail::cube_tables();
   const auto& f = grid.values;
   // 1. A vertex on every sign-changing grid edge: vertex_id[3 * point + axis].
   std::vector<int> vertex_id(grid.size() * 3, -1);
@@ -247,9 +161,9 @@ Mesh marching_cubes(const Grid& grid) {
   });
 
   // 2. Polygons per cube, traced around its faces; triangles collected per slab, in order.
-  std::vector<SlabOutput> slab_output(static_cast<std::size_t>(std::max(nx - 1, 0)));
+  std::vector<detail::PolygonOutput> slab_output(static_cast<std::size_t>(std::max(nx - 1, 0)));
   tbb::parallel_for(0, nx - 1, [&](int i) {
-    SlabOutput& slab = slab_output[std::size_t(i)];
+    detail::PolygonOutput& slab = slab_output[std::size_t(i)];
     for (int j = 0; j + 1 < ny; ++j)
       for (int k = 0; k + 1 < nz; ++k) {
         double value[8];
@@ -261,58 +175,15 @@ Mesh marching_cubes(const Grid& grid) {
           mask |= inside(value[c]) << c;
         }
         if (mask == 0 || mask == 255) continue;
-        // next_edge[e] = the edge where the segment starting at edge e's crossing ends.
-        int next_edge[12];
-        std::fill(std::begin(next_edge), std::end(next_edge), -1);
-        for (int face = 0; face < 6; ++face) {
-          const int* c = T.face_corner[face];
-          int starts[2], ends[2], ns = 0, ne = 0, order[4], crossings = 0;
-          for (int q = 0; q < 4; ++q) {
-            const int c0 = c[q], c1 = c[(q + 1) % 4];
-            if (inside(value[c0]) == inside(value[c1])) continue;
-            order[crossings++] = T.edge_between(c0, c1);
-            if (inside(value[c1]))
-              starts[ns++] = crossings - 1;  // outside -> inside
-            else
-              ends[ne++] = crossings - 1;
+        detail::cube_polygons(value, [&](const int* edges, int size) {
+          int polygon[12];
+          Eigen::Vector3d position[12];
+          for (int q = 0; q < size; ++q) {
+            polygon[q] = vertex_id[3 * corner_point[T.edge_low_corner[edges[q]]] + std::size_t(edges[q] / 4)];
+            position[q] = mesh.vertices.row(polygon[q]).transpose();
           }
-          if (crossings == 2) {
-            next_edge[order[starts[0]]] = order[ends[0]];
-          } else if (crossings == 4) {
-            // Asymptotic decider on the face's bilinear interpolant, evaluated in the face's
-            // own (u, v) corner order so that both cubes sharing it decide alike.
-            const int a = face / 2, u = (a + 1) % 3, v = (a + 2) % 3, side = (face & 1) << a;
-            const double f00 = value[side], f10 = value[side | 1 << u],
-                         f11 = value[side | 1 << u | 1 << v], f01 = value[side | 1 << v];
-            const double saddle = (f00 * f11 - f10 * f01) / (f00 + f11 - f10 - f01);
-            const bool insides_connected = inside(saddle);
-            for (int s = 0; s < 2; ++s) {
-              const int at = starts[s];
-              next_edge[order[at]] = order[insides_connected ? (at + 3) % 4 : (at + 1) % 4];
-            }
-          }
-        }
-        auto global_vertex = [&](int e) {
-          const int a = e / 4;
-          int rank = e % 4, low = 0;
-          for (int c = 0; c < 8; ++c)
-            if (!(c >> a & 1) && rank-- == 0) {
-              low = c;
-              break;
-            }
-          return vertex_id[3 * corner_point[low] + std::size_t(a)];
-        };
-        bool visited[12] = {};
-        for (int e0 = 0; e0 < 12; ++e0) {
-          if (next_edge[e0] < 0 || visited[e0]) continue;
-          int polygon[12], edges_of[12], size = 0;
-          for (int e = e0; !visited[e]; e = next_edge[e]) {
-            visited[e] = true;
-            edges_of[size] = e;
-            polygon[size++] = global_vertex(e);
-          }
-          triangulate_polygon(polygon, edges_of, size, T, mesh.vertices, slab);
-        }
+          detail::triangulate_polygon(polygon, edges, position, size, slab);
+        });
       }
   });
   // Concatenate the slabs in order; centroid vertices (negative ids) go after the edge vertices.
