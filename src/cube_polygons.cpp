@@ -37,8 +37,8 @@ const CubeTables& cube_tables() {
   return tables;
 }
 
-void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vector3d* position, int size,
-                         PolygonOutput& out) {
+void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vector3d* position,
+                         int size, PolygonOutput& out) {
   const CubeTables& T = cube_tables();
   int best_apex = size == 3 ? 0 : -1;
   double best_length = 0;
@@ -54,8 +54,8 @@ void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vect
   }
   if (best_apex >= 0) {
     for (int q = 1; q + 1 < size; ++q)
-      out.triangles.push_back(
-          {polygon[best_apex], polygon[(best_apex + q) % size], polygon[(best_apex + q + 1) % size]});
+      out.triangles.push_back({polygon[best_apex], polygon[(best_apex + q) % size],
+                               polygon[(best_apex + q + 1) % size]});
     return;
   }
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();

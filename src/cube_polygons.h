@@ -54,8 +54,8 @@ void cube_polygons(const double value[8], Emit&& emit) {
       next_edge[order[starts[0]]] = order[ends[0]];
     } else if (crossings == 4) {
       const int a = face / 2, u = (a + 1) % 3, v = (a + 2) % 3, side = (face & 1) << a;
-      const double f00 = value[side], f10 = value[side | 1 << u], f11 = value[side | 1 << u | 1 << v],
-                   f01 = value[side | 1 << v];
+      const double f00 = value[side], f10 = value[side | 1 << u],
+                   f11 = value[side | 1 << u | 1 << v], f01 = value[side | 1 << v];
       const double saddle = (f00 * f11 - f10 * f01) / (f00 + f11 - f10 - f01);
       const bool insides_connected = inside(saddle);
       for (int s = 0; s < 2; ++s) {
@@ -87,7 +87,7 @@ struct PolygonOutput {
 /// use the same chord, and the mesh would stop being manifold there. Among the apexes whose
 /// diagonals avoid that, the one with the shortest diagonals (sum of squares) wins; if there is
 /// none, the fan starts from a new vertex at the polygon's centroid.
-void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vector3d* position, int size,
-                         PolygonOutput& out);
+void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vector3d* position,
+                         int size, PolygonOutput& out);
 
 }  // namespace sdfcontour::detail

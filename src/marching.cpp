@@ -1,7 +1,5 @@
 #include "sdfcontour/marching.h"
 
-#include "cube_polygons.h"
-
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -9,6 +7,8 @@
 #include <array>
 #include <cstdint>
 #include <vector>
+
+#include "cube_polygons.h"
 
 namespace sdfcontour {
 
@@ -179,7 +179,8 @@ Mesh marching_cubes(const Grid& grid) {
           int polygon[12];
           Eigen::Vector3d position[12];
           for (int q = 0; q < size; ++q) {
-            polygon[q] = vertex_id[3 * corner_point[T.edge_low_corner[edges[q]]] + std::size_t(edges[q] / 4)];
+            polygon[q] = vertex_id[3 * corner_point[T.edge_low_corner[edges[q]]] +
+                                   std::size_t(edges[q] / 4)];
             position[q] = mesh.vertices.row(polygon[q]).transpose();
           }
           detail::triangulate_polygon(polygon, edges, position, size, slab);

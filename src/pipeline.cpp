@@ -75,15 +75,6 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
     throw Error("method mc needs a grid input, not scattered samples");
   if (method == Method::Gtcp && !shape)
     throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
-  if (method == Method::Gcp && options.want_mesh)
-    throw Error(
-        "method gcp's mesh needs the screened Poisson solver, which is not built yet; "
-        "write its contact points with --points");
-  if (method == Method::Gtcp && options.want_mesh)
-    throw Error(
-        "method gtcp's mesh needs the screened Poisson solver, which is not built yet; "
-        "write its contact points with --points");
-
   ContourResult result;
   result.samples =
       int(input.is_grid ? input.grid.size() : std::size_t(input.samples.points.rows()));
@@ -93,20 +84,22 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   if (method == Method::Mc && options.want_mesh)
     result.mesh = stages.run("marching", "marching cubes on " + n + " samples",
                              [&] { return marching_cubes(input.grid); });
-  if (!options.want_points && (method == Method::Mc || !options.want_mesh)) return result;
+  if (!options.want_points && method == Method::Mc) return result;
 
   // The other stages see every input as scattered samples; a grid's positions are made here.
   Samples grid_samples;
   if (input.is_grid) grid_samples = input.grid.to_samples();
   const Samples& s = input.is_grid ? grid_samples : input.samples;
 
-  if (method == Method::Gtcp && options.want_points)
+  const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
+  if (method == Method::Gtcp && (options.want_points || options.want_mesh))
     result.contact_points =
         stages.run("contact_points", "exact contact points of " + n + " samples",
                    [&] { return exact_contact_points(s.points, *shape); });
 
   // --points with any method but gtcp gives GCP contact points.
-  const bool need_gcp = options.want_points && method != Method::Gtcp;
+  const bool need_gcp = (options.want_points && method != Method::Gtcp) ||
+                        (method == Method::Gcp && options.want_mesh);
   const bool need_regular = need_gcp || (method == Method::MtRt && options.want_mesh);
   const bool need_delaunay = (method == Method::MtDt && options.want_mesh) ||
                              (need_gcp && options.gradient_source == GradientSource::Delaunay);
@@ -139,6 +132,19 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
     result.contact_points = stages.run("contact_points", "contact points and filter", [&] {
       return gradient_contact_points(s.points, s.values, gradients, *regular, options.contact);
     });
+  }
+  if (contact_mesh) {
+    const ContactPoints& cp = *result.contact_points;
+    if (cp.size() == 0)
+      throw Error("no contact point was kept, so there is nothing to reconstruct a surface from");
+    PoissonOptions popt = options.poisson;
+    popt.progress = options.progress;
+    PoissonResult p = stages.run(
+        "poisson", "screened Poisson reconstruction of " + std::to_string(cp.size()) + " points",
+        [&] {
+          return poisson_reconstruct({cp.points, cp.normals}, popt);
+        });
+    result.mesh = std::move(p.mesh);
   }
   if (method == Method::MtRt && options.want_mesh)
     result.mesh = stages.run(

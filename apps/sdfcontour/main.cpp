@@ -15,6 +15,7 @@
 #include "sdfcontour/io.h"
 #include "sdfcontour/npy.h"
 #include "sdfcontour/pipeline.h"
+#include "sdfcontour/poisson.h"
 #include "sdfcontour/statistics.h"
 
 using namespace sdfcontour;
@@ -97,6 +98,40 @@ nlohmann::json contact_point_errors(const ContactPoints& cp, const AnalyticShape
   return j;
 }
 
+// Screened Poisson options, shared by `contour` (gcp, gtcp) and `poisson`.
+struct PoissonArgs {
+  PoissonOptions options;
+  std::string boundary = "neumann";
+
+  void add_to(CLI::App* app) {
+    app->add_option("--alpha", options.point_weight,
+                    "Screening weight (PoissonRecon's --pointWeight); 0 is plain Poisson")
+        ->capture_default_str();
+    app->add_option("--depth", options.depth, "Finest octree depth")->capture_default_str();
+    app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
+        ->capture_default_str();
+    app->add_option("--samples-per-node", options.samples_per_node,
+                    "Splat each normal where an octree node holds about this many samples")
+        ->capture_default_str();
+    app->add_option("--scale", options.scale,
+                    "Domain = bounding cube of the points enlarged by this factor")
+        ->capture_default_str();
+    app->add_option("--boundary", boundary,
+                    "Boundary condition on the domain cube: neumann or dirichlet")
+        ->capture_default_str();
+  }
+  PoissonOptions resolved() const {
+    PoissonOptions o = options;
+    if (boundary == "neumann")
+      o.boundary = PoissonBoundary::Neumann;
+    else if (boundary == "dirichlet")
+      o.boundary = PoissonBoundary::Dirichlet;
+    else
+      throw Error("unknown --boundary '" + boundary + "' (known: neumann, dirichlet)");
+    return o;
+  }
+};
+
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
                                      weights = "james";
@@ -105,6 +140,7 @@ struct ContourArgs {
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, quiet = false, ascii = false, serial_triangulation = false;
   std::uint64_t seed = 0;
+  PoissonArgs poisson;
 };
 
 int run_contour(const ContourArgs& a) {
@@ -143,6 +179,7 @@ int run_contour(const ContourArgs& a) {
   opt.contact.tie_tolerance = a.tie_tolerance;
   opt.contact.try_tet_gradients = a.fn;
   opt.parallel = !a.serial_triangulation;
+  opt.poisson = a.poisson.resolved();
   opt.progress = say;
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -159,7 +196,7 @@ int run_contour(const ContourArgs& a) {
     say("writing " + a.output);
     write_mesh(a.output, *r.mesh, format);
   }
-  if (r.contact_points) {
+  if (r.contact_points && !a.points.empty()) {
     say("writing " + a.points);
     write_oriented_points(a.points, {r.contact_points->points, r.contact_points->normals}, format);
   }
@@ -223,6 +260,63 @@ int run_contour(const ContourArgs& a) {
   return 0;
 }
 
+struct PoissonCommandArgs {
+  std::string input, output, stats, densities;
+  bool quiet = false, ascii = false;
+  int threads = 0;
+  PoissonArgs poisson;
+};
+
+int run_poisson(const PoissonCommandArgs& a) {
+  std::unique_ptr<tbb::global_control> threads;
+  if (a.threads > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    std::size_t(a.threads));
+  PoissonOptions o = a.poisson.resolved();
+  if (!a.quiet)
+    o.progress = [](const std::string& m) { std::cerr << "[sdfcontour] " << m << "\n"; };
+  const auto t0 = std::chrono::steady_clock::now();
+  const OrientedPoints points = read_oriented_points(a.input);
+  const double read_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  PoissonResult r = poisson_reconstruct(points, o);
+  write_mesh(a.output, r.mesh, a.ascii ? PlyFormat::Ascii : PlyFormat::Binary);
+  if (!a.densities.empty())
+    write_npy(a.densities, {std::size_t(r.vertex_density.size())},
+              std::vector<double>(r.vertex_density.data(),
+                                  r.vertex_density.data() + r.vertex_density.size()));
+  nlohmann::json j;
+  j["input"] = a.input;
+  j["points"] = points.points.rows();
+  j["mesh"] = {{"vertices", r.mesh.vertices.rows()},
+               {"triangles", r.mesh.triangles.rows()},
+               {"file", a.output}};
+  j["iso_value"] = r.iso_value;
+  j["options"] = {{"alpha", o.point_weight},    {"depth", o.depth},
+                  {"full_depth", o.full_depth}, {"samples_per_node", o.samples_per_node},
+                  {"scale", o.scale},           {"boundary", a.poisson.boundary}};
+  nlohmann::json seconds = {{"read", read_seconds}};
+  for (const auto& [name, sec] : r.seconds) seconds[name] = sec;
+  j["seconds"] = seconds;
+  for (const auto& l : r.levels)
+    j["levels"].push_back({{"depth", l.depth},
+                           {"cells", l.cells},
+                           {"unknowns", l.unknowns},
+                           {"iterations", l.iterations},
+                           {"relative_residual", l.relative_residual},
+                           {"assembly_seconds", l.assembly_seconds},
+                           {"solve_seconds", l.solve_seconds}});
+  if (!a.stats.empty()) {
+    AtomicFile f(a.stats);
+    f.stream() << j.dump(2) << "\n";
+    f.commit();
+  }
+  std::cout << "points " << points.points.rows() << ", mesh " << r.mesh.vertices.rows()
+            << " vertices / " << r.mesh.triangles.rows() << " triangles, iso-value " << r.iso_value
+            << std::endl;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -282,6 +376,25 @@ int main(int argc, char** argv) {
       "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
   contour->add_flag("--ascii", a.ascii, "Write ASCII PLY instead of binary");
   contour->add_flag("-q,--quiet", a.quiet, "No progress messages on stderr");
+  a.poisson.add_to(contour);
+
+  PoissonCommandArgs pa;
+  CLI::App* poisson = app.add_subcommand(
+      "poisson", "Screened Poisson reconstruction of an oriented point cloud (PLY x y z nx ny nz)");
+  poisson
+      ->add_option("input", pa.input, "Oriented points: PLY (ASCII or binary) with x y z nx ny nz")
+      ->required();
+  poisson->add_option("-o,--output", pa.output, "Mesh to write (.ply or .obj)")->required();
+  poisson->add_option(
+      "--densities", pa.densities,
+      "Write each vertex's estimated sampling density (samples per unit area) as .npy");
+  poisson->add_option("--stats", pa.stats,
+                      "Write a JSON summary (counts, per-stage seconds, per-depth solver figures)");
+  poisson->add_option("--threads", pa.threads, "Worker threads (0: all cores)")
+      ->capture_default_str();
+  poisson->add_flag("--ascii", pa.ascii, "Write ASCII PLY instead of binary");
+  poisson->add_flag("-q,--quiet", pa.quiet, "No progress messages on stderr");
+  pa.poisson.add_to(poisson);
 
   try {
     app.parse(argc, argv);
@@ -290,6 +403,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (contour->parsed()) return run_contour(a);
+    if (poisson->parsed()) return run_poisson(pa);
   } catch (const std::exception& e) {
     std::cerr << "sdfcontour: error: " << e.what() << "\n";
     return 1;

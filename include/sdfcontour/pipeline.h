@@ -10,6 +10,7 @@
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/gradients.h"
 #include "sdfcontour/npy.h"
+#include "sdfcontour/poisson.h"
 
 namespace sdfcontour {
 
@@ -30,7 +31,8 @@ struct ContourOptions {
   int knn = 18;  ///< k for GradientSource::Knn
   GradientOptions gradient;
   ContactPointOptions contact;
-  bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
+  PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes
+  bool parallel = true;    ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
 };
@@ -50,7 +52,7 @@ struct ContourResult {
 
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
 /// it may be null for other methods. Throws Error for an input the method cannot use (no sign
-/// change, MC without a grid, GTCP without an exact SDF, GCP's mesh before Poisson exists).
+/// change, MC without a grid, GTCP without an exact SDF, no contact point kept).
 ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
                       const ContourOptions& options);
 

@@ -1,0 +1,58 @@
+// Screened Poisson surface reconstruction (Kazhdan, Bolitho & Hoppe 2006; Kazhdan & Hoppe 2013)
+// of oriented points on an adaptive octree, with trilinear (degree-1 B-spline) elements.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+enum class PoissonBoundary {
+  Neumann,    ///< natural boundary: no constraint on the domain's faces
+  Dirichlet,  ///< the indicator is 0 (outside) on the domain's faces
+};
+
+struct PoissonOptions {
+  int depth = 8;                  ///< finest octree depth (the domain cube split 2^depth times)
+  int full_depth = 5;             ///< the octree is complete down to this depth
+  double scale = 1.1;             ///< domain cube = the points' bounding cube enlarged by this
+  double samples_per_node = 1.5;  ///< splat each normal at the depth where a node holds this many
+  double point_weight = 1.0;      ///< alpha, the screening weight (0: plain Poisson)
+  PoissonBoundary boundary = PoissonBoundary::Neumann;
+  double solver_tolerance = 1e-4;  ///< conjugate gradients stop at this relative residual per depth
+  int max_iterations = 200;        ///< and after this many iterations per depth
+  /// Called with a short message as each stage starts; empty for silence.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Per octree depth: size of the system solved there and how the solver fared.
+struct PoissonLevelStats {
+  int depth = 0;
+  long cells = 0;     ///< active cells
+  long unknowns = 0;  ///< nodes solved for (the rest hold the coarser solution)
+  int iterations = 0;
+  double relative_residual = 0;
+  double assembly_seconds = 0;
+  double solve_seconds = 0;
+};
+
+struct PoissonResult {
+  Mesh mesh;                       ///< watertight, outward oriented iso-surface
+  Eigen::VectorXd vertex_density;  ///< per vertex: estimated samples per unit area around it
+  double iso_value = 0;            ///< the indicator's average over the samples
+  std::vector<PoissonLevelStats> levels;
+  std::vector<std::pair<std::string, double>> seconds;  ///< per stage
+};
+
+/// Reconstructs a surface from points (n x 3) and normals (n x 3, any length > 0, outward).
+/// Minimises  int |grad chi - V|^2 + alpha * (A/N) * 2^d * sum_i (chi(p_i) - 1/2)^2,
+/// with V the normals splatted at adaptive depths (each weighted by its sample's area, A/N the
+/// mean), solved coarse to fine, and extracts chi = (average of chi at the samples).
+/// Throws Error for no points, NaN or infinite values, or a zero normal.
+PoissonResult poisson_reconstruct(const OrientedPoints& points, const PoissonOptions& options = {});
+
+}  // namespace sdfcontour

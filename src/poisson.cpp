@@ -1,0 +1,849 @@
+// Screened Poisson reconstruction on an adaptive octree, written from the method of Kazhdan,
+// Bolitho & Hoppe (2006) and Kazhdan & Hoppe (2013).
+//
+// Representation. The domain is mapped to the unit cube. At depth d the cube has 2^d cells per
+// axis; the indicator chi is trilinear on each active cell, with values at the cell corners
+// (degree-1 B-splines). Depths up to full_depth are complete; a cell at depth d-1 is refined where
+// samples want depth >= d (within a dilation), so finer depths cover only a band around the
+// samples. chi is 1 inside and 0 outside.
+//
+// Solve. Coarse to fine (cascadic): at each depth, the screened energy is minimised over the band's
+// interior nodes, the band's boundary nodes holding the coarser depth's solution (a conforming
+// finite-element space with hanging nodes), starting from the prolonged coarser solution, by
+// Jacobi-preconditioned conjugate gradients. Reductions are chunked so that results do not depend
+// on the thread count.
+//
+// Extraction. Marching cubes on finest-depth cells: all active cells at the finest depth, and the
+// finest-depth subcells of coarser leaves whose corners straddle the iso-value, closed under
+// "a face with a sign change has a cell on its other side". Every node value comes from one
+// canonical evaluation, so cells sharing an edge share its vertex: the mesh is watertight.
+#include "sdfcontour/poisson.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <numeric>
+#include <tuple>
+#include <unordered_set>
+
+#include "cube_polygons.h"
+
+namespace sdfcontour {
+
+namespace {
+
+using Key = std::uint64_t;
+constexpr int kKeyBits = 21;
+constexpr Key kKeyMask = (Key(1) << kKeyBits) - 1;
+
+Key pack(long i, long j, long k) {
+  return (Key(i) << (2 * kKeyBits)) | (Key(j) << kKeyBits) | Key(k);
+}
+std::array<long, 3> unpack(Key key) {
+  return {long(key >> (2 * kKeyBits)), long((key >> kKeyBits) & kKeyMask), long(key & kKeyMask)};
+}
+
+// An open-addressing map from keys to their position in a sorted key array.
+class KeyIndex {
+ public:
+  KeyIndex() = default;
+  explicit KeyIndex(const std::vector<Key>& keys) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * keys.size()) capacity *= 2;
+    mask_ = capacity - 1;
+    slots_.assign(capacity, {kEmpty, -1});
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      std::size_t h = hash(keys[i]) & mask_;
+      while (slots_[h].first != kEmpty) h = (h + 1) & mask_;
+      slots_[h] = {keys[i], int(i)};
+    }
+  }
+  int find(Key key) const {
+    if (slots_.empty()) return -1;
+    for (std::size_t h = hash(key) & mask_;; h = (h + 1) & mask_) {
+      if (slots_[h].first == key) return slots_[h].second;
+      if (slots_[h].first == kEmpty) return -1;
+    }
+  }
+
+ private:
+  static constexpr Key kEmpty = ~Key(0);
+  static std::size_t hash(Key x) {  // splitmix64 finaliser
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    return std::size_t(x ^ (x >> 31));
+  }
+  std::vector<std::pair<Key, int>> slots_;
+  std::size_t mask_ = 0;
+};
+
+void sort_unique(std::vector<Key>& keys) {
+  tbb::parallel_sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+}
+
+// Sum of f(i) over [0, n) in fixed chunks, added in chunk order: independent of thread count.
+template <class F>
+double deterministic_sum(std::size_t n, F&& f) {
+  constexpr std::size_t kChunk = 1 << 12;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<double> partial(chunks, 0.0);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+    double s = 0;
+    for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i) s += f(i);
+    partial[c] = s;
+  });
+  return std::accumulate(partial.begin(), partial.end(), 0.0);
+}
+
+// 1D trilinear pieces: hat_{l,i}(x) = max(0, 1 - |x 2^l - i|) restricted to [0, 1].
+double hat(int level, long i, double x) {
+  return std::max(0.0, 1.0 - std::abs(std::ldexp(x, level) - double(i)));
+}
+double hat_slope(int level, long i, double x) {
+  const double t = std::ldexp(x, level) - double(i);
+  if (t <= -1 || t >= 1) return 0;
+  return t < 0 ? std::ldexp(1.0, level) : -std::ldexp(1.0, level);
+}
+
+// Exact integral over [0, 1] of hat_{la,ia} times hat_{lb,ib} (or its derivative): the product
+// is quadratic (or linear) between breakpoints, where Simpson's rule is exact.
+double hat_integral(int la, long ia, int lb, long ib, bool derivative) {
+  const double ha = std::ldexp(1.0, -la), hb = std::ldexp(1.0, -lb);
+  const double lo = std::max({0.0, (ia - 1) * ha, (ib - 1) * hb});
+  const double hi = std::min({1.0, (ia + 1) * ha, (ib + 1) * hb});
+  if (!(lo < hi)) return 0;
+  double breaks[8] = {lo, hi, ia * ha, ib * hb};
+  int n = 4;
+  std::sort(breaks, breaks + n);
+  double sum = 0;
+  for (int s = 0; s + 1 < n; ++s) {
+    const double a = std::max(lo, breaks[s]), b = std::min(hi, breaks[s + 1]);
+    if (!(a < b)) continue;
+    const double m = 0.5 * (a + b);
+    if (derivative) {
+      const double slope = hat_slope(lb, ib, m);  // constant on (a, b)
+      sum += (b - a) * slope * hat(la, ia, m);    // midpoint rule: exact for a linear integrand
+    } else {
+      sum += (b - a) / 6 *
+             (hat(la, ia, a) * hat(lb, ib, a) + 4 * hat(la, ia, m) * hat(lb, ib, m) +
+              hat(la, ia, b) * hat(lb, ib, b));
+    }
+  }
+  return sum;
+}
+
+// Element matrices of the unit cube's trilinear basis (corner bits x=1, y=2, z=4):
+// stiffness (scale by h) and the first-moment matrices D[axis][a][b] = int phi_b d_axis phi_a
+// (scale by h^2).
+struct ElementMatrices {
+  double stiffness[8][8];
+  ElementMatrices() {
+    const double m[2][2] = {{1.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 3}}, k[2][2] = {{1, -1}, {-1, 1}};
+    for (int a = 0; a < 8; ++a)
+      for (int b = 0; b < 8; ++b) {
+        const int ax = a & 1, ay = a >> 1 & 1, az = a >> 2 & 1, bx = b & 1, by = b >> 1 & 1,
+                  bz = b >> 2 & 1;
+        stiffness[a][b] = k[ax][bx] * m[ay][by] * m[az][bz] + m[ax][bx] * k[ay][by] * m[az][bz] +
+                          m[ax][bx] * m[ay][by] * k[az][bz];
+      }
+  }
+};
+
+// Neighbour slot of offset (dx, dy, dz) in {-1, 0, 1}^3.
+int slot(int dx, int dy, int dz) {
+  return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);
+}
+
+struct Level {
+  int depth = 0;
+  long res = 0;  // cells per axis
+  double h = 0;
+  std::vector<Key> cells;  // sorted active cells
+  KeyIndex cell_index;
+  std::vector<char> refined;  // per active cell: its children are active
+  std::vector<Key> nodes;     // sorted corners of active cells
+  KeyIndex node_index;
+  std::vector<std::array<int, 27>> neighbours;
+  std::vector<char> unknown;
+  std::vector<double> x;
+
+  bool active(long i, long j, long k) const {
+    return i >= 0 && j >= 0 && k >= 0 && i < res && j < res && k < res &&
+           cell_index.find(pack(i, j, k)) >= 0;
+  }
+  int node(long i, long j, long k) const {
+    if (i < 0 || j < 0 || k < 0 || i > res || j > res || k > res) return -1;
+    return node_index.find(pack(i, j, k));
+  }
+  // chi at unit-cube point p, by trilinear interpolation in the active cell containing it.
+  double interpolate(const std::array<long, 3>& cell, const Eigen::Vector3d& p) const {
+    double t[3];
+    for (int a = 0; a < 3; ++a)
+      t[a] = std::clamp(p[a] * double(res) - double(cell[std::size_t(a)]), 0.0, 1.0);
+    double v = 0;
+    for (int c = 0; c < 8; ++c) {
+      const int n = node(cell[0] + (c & 1), cell[1] + (c >> 1 & 1), cell[2] + (c >> 2 & 1));
+      const double w = ((c & 1) ? t[0] : 1 - t[0]) * ((c >> 1 & 1) ? t[1] : 1 - t[1]) *
+                       ((c >> 2 & 1) ? t[2] : 1 - t[2]);
+      if (w != 0) v += w * x[std::size_t(n)];
+    }
+    return v;
+  }
+};
+
+std::array<long, 3> cell_of(const Eigen::Vector3d& p, long res) {
+  std::array<long, 3> c;
+  for (int a = 0; a < 3; ++a)
+    c[std::size_t(a)] = std::clamp(long(std::floor(p[a] * double(res))), 0L, res - 1);
+  return c;
+}
+
+// Trilinear weights of p in cell c at resolution res, corner bits x=1, y=2, z=4.
+std::array<double, 8> corner_weights(const Eigen::Vector3d& p, const std::array<long, 3>& c,
+                                     long res) {
+  double t[3];
+  for (int a = 0; a < 3; ++a)
+    t[a] = std::clamp(p[a] * double(res) - double(c[std::size_t(a)]), 0.0, 1.0);
+  std::array<double, 8> w;
+  for (int k = 0; k < 8; ++k)
+    w[std::size_t(k)] = ((k & 1) ? t[0] : 1 - t[0]) * ((k >> 1 & 1) ? t[1] : 1 - t[1]) *
+                        ((k >> 2 & 1) ? t[2] : 1 - t[2]);
+  return w;
+}
+
+void build_nodes(Level& L, PoissonBoundary boundary) {
+  L.cell_index = KeyIndex(L.cells);
+  std::vector<Key> corners(L.cells.size() * 8);
+  tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
+    const auto [i, j, k] = unpack(L.cells[c]);
+    for (int q = 0; q < 8; ++q)
+      corners[8 * c + std::size_t(q)] = pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1));
+  });
+  sort_unique(corners);
+  L.nodes = std::move(corners);
+  L.node_index = KeyIndex(L.nodes);
+  const std::size_t n = L.nodes.size();
+  L.neighbours.resize(n);
+  L.unknown.assign(n, 0);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
+    const auto [i, j, k] = unpack(L.nodes[v]);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          L.neighbours[v][std::size_t(slot(dx, dy, dz))] = L.node(i + dx, j + dy, k + dz);
+    // A node is solved for when every incident cell inside the domain is active (its row of the
+    // system is then complete); Dirichlet fixes the domain's faces too.
+    bool complete = true;
+    for (int c = 0; c < 8 && complete; ++c) {
+      const long ci = i - 1 + (c & 1), cj = j - 1 + (c >> 1 & 1), ck = k - 1 + (c >> 2 & 1);
+      const bool in_domain =
+          ci >= 0 && cj >= 0 && ck >= 0 && ci < L.res && cj < L.res && ck < L.res;
+      if (in_domain && !L.active(ci, cj, ck)) complete = false;
+    }
+    const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
+    L.unknown[v] = complete && !(boundary == PoissonBoundary::Dirichlet && on_face);
+  });
+}
+
+// chi of the finer level's nodes from the coarser level (exact: trilinear functions nest).
+void prolong(const Level& coarse, Level& fine) {
+  fine.x.assign(fine.nodes.size(), 0.0);
+  tbb::parallel_for(std::size_t(0), fine.nodes.size(), [&](std::size_t v) {
+    const auto q = unpack(fine.nodes[v]);
+    long lo[3], hi[3];
+    for (int a = 0; a < 3; ++a)
+      lo[a] = q[std::size_t(a)] >> 1, hi[a] = (q[std::size_t(a)] + 1) >> 1;
+    double sum = 0, weight = 0;
+    for (int c = 0; c < 8; ++c) {
+      const long i = (c & 1) ? hi[0] : lo[0], j = (c >> 1 & 1) ? hi[1] : lo[1],
+                 k = (c >> 2 & 1) ? hi[2] : lo[2];
+      if (((c & 1) && hi[0] == lo[0]) || ((c >> 1 & 1) && hi[1] == lo[1]) ||
+          ((c >> 2 & 1) && hi[2] == lo[2]))
+        continue;
+      const int n = coarse.node(i, j, k);
+      sum += coarse.x[std::size_t(n)];
+      weight += 1;
+    }
+    fine.x[v] = sum / weight;
+  });
+}
+
+struct Sample {
+  Eigen::Vector3d p;  // unit-cube position
+  Eigen::Vector3d n;  // unit normal
+  double area = 0;    // surface area it stands for (unit-cube units)
+  int depth = 0;      // splat depth
+};
+
+}  // namespace
+
+PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o) {
+  using clock = std::chrono::steady_clock;
+  PoissonResult result;
+  auto stage_start = clock::now();
+  auto stage = [&](const std::string& name) {
+    const auto now = clock::now();
+    if (!result.seconds.empty() || name != "setup")
+      result.seconds.back().second = std::chrono::duration<double>(now - stage_start).count();
+    result.seconds.push_back({name, 0.0});
+    stage_start = now;
+    if (o.progress) o.progress("poisson: " + name);
+  };
+  stage("setup");
+
+  // --- Validate and normalise.
+  const Eigen::Index n = input.points.rows();
+  if (n == 0) throw Error("poisson: no points to reconstruct from");
+  if (input.normals.rows() != n) throw Error("poisson: points and normals differ in count");
+  if (o.depth < 1 || o.depth > 16) throw Error("poisson: depth must be between 1 and 16");
+  if (o.full_depth < 1) throw Error("poisson: full depth must be at least 1");
+  if (!(o.scale >= 1.0) || !std::isfinite(o.scale))
+    throw Error("poisson: scale must be at least 1");
+  if (!(o.samples_per_node > 0) || !std::isfinite(o.samples_per_node))
+    throw Error("poisson: samples per node must be positive");
+  if (!(o.point_weight >= 0) || !std::isfinite(o.point_weight))
+    throw Error("poisson: the point weight must be >= 0");
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!input.points.row(i).allFinite() || !input.normals.row(i).allFinite())
+      throw Error("poisson: point " + std::to_string(i) +
+                  " has a NaN or infinite coordinate or normal");
+    if (!(input.normals.row(i).norm() > 0))
+      throw Error("poisson: point " + std::to_string(i) + " has a zero normal");
+  }
+  const int D = o.depth, d_min = std::min(o.full_depth, o.depth);
+  const Eigen::Vector3d lo = input.points.colwise().minCoeff(),
+                        hi = input.points.colwise().maxCoeff();
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
+  double size = (hi - lo).maxCoeff() * o.scale;
+  if (!(size > 0)) size = 1.0;
+  std::vector<Sample> samples(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    auto& s = samples[std::size_t(i)];
+    s.p = (input.points.row(i).transpose() - centre) / size + Eigen::Vector3d::Constant(0.5);
+    s.n = input.normals.row(i).transpose().normalized();
+  }
+
+  // --- Density: unit weights splatted at depth D-2; samples per unit area near each sample.
+  stage("density");
+  const int density_depth = std::max(1, D - 2);
+  const long density_res = 1L << density_depth;
+  const double density_h = 1.0 / double(density_res);
+  std::vector<Key> density_nodes;
+  std::vector<double> density;
+  {
+    std::vector<std::pair<Key, double>> splats(samples.size() * 8);
+    tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t s) {
+      const auto c = cell_of(samples[s].p, density_res);
+      const auto w = corner_weights(samples[s].p, c, density_res);
+      for (int q = 0; q < 8; ++q)
+        splats[8 * s + std::size_t(q)] = {
+            pack(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1)), w[std::size_t(q)]};
+    });
+    tbb::parallel_sort(splats.begin(), splats.end());
+    for (const auto& [key, w] : splats) {
+      if (density_nodes.empty() || density_nodes.back() != key)
+        density_nodes.push_back(key), density.push_back(0.0);
+      density.back() += w;
+    }
+  }
+  // Smooth the splats with [1 2 1]/4 along each axis (a quadratic-B-spline-like kernel), so that
+  // the estimate at a sample hardly depends on where the sample sits inside its cell.
+  for (int axis = 0; axis < 3; ++axis) {
+    const KeyIndex index(density_nodes);
+    std::vector<Key> grown;
+    grown.reserve(density_nodes.size() * 3);
+    for (Key key : density_nodes) {
+      auto c = unpack(key);
+      for (long o2 = -1; o2 <= 1; ++o2) {
+        auto d2 = c;
+        d2[std::size_t(axis)] += o2;
+        if (d2[std::size_t(axis)] >= 0 && d2[std::size_t(axis)] <= density_res)
+          grown.push_back(pack(d2[0], d2[1], d2[2]));
+      }
+    }
+    sort_unique(grown);
+    std::vector<double> blurred(grown.size(), 0.0);
+    tbb::parallel_for(std::size_t(0), grown.size(), [&](std::size_t g) {
+      auto c = unpack(grown[g]);
+      double sum = 0;
+      for (long o2 = -1; o2 <= 1; ++o2) {
+        auto d2 = c;
+        d2[std::size_t(axis)] += o2;
+        if (d2[std::size_t(axis)] < 0 || d2[std::size_t(axis)] > density_res) continue;
+        const int idx = index.find(pack(d2[0], d2[1], d2[2]));
+        if (idx >= 0) sum += (o2 == 0 ? 0.5 : 0.25) * density[std::size_t(idx)];
+      }
+      blurred[g] = sum;
+    });
+    density_nodes = std::move(grown);
+    density = std::move(blurred);
+  }
+  const KeyIndex density_index(density_nodes);
+  auto samples_per_area = [&](const Eigen::Vector3d& p) {
+    const auto c = cell_of(p, density_res);
+    const auto w = corner_weights(p, c, density_res);
+    double sum = 0;
+    for (int q = 0; q < 8; ++q) {
+      const int idx =
+          density_index.find(pack(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1)));
+      if (idx >= 0) sum += w[std::size_t(q)] * density[std::size_t(idx)];
+    }
+    return 12.0 / 5.0 * sum / (density_h * density_h);
+  };
+  double total_area = 0;
+  for (auto& s : samples) {
+    const double sigma = std::max(samples_per_area(s.p), 1e-300);
+    s.area = 1.0 / sigma;
+    total_area += s.area;
+    // Depth where a node of side h holds sigma * h^2 = samples_per_node samples.
+    const double ideal = 0.5 * std::log2(sigma / o.samples_per_node);
+    s.depth = std::clamp(int(std::lround(ideal)), d_min, D);
+  }
+  const double area_per_sample = total_area / double(n);
+
+  // --- Octree: complete to d_min, then refined around samples that want the depth.
+  stage("octree");
+  std::vector<Level> levels(std::size_t(D + 1));
+  for (int d = d_min; d <= D; ++d) {
+    Level& L = levels[std::size_t(d)];
+    L.depth = d;
+    L.res = 1L << d;
+    L.h = 1.0 / double(L.res);
+    if (d == d_min) {
+      L.cells.reserve(std::size_t(L.res * L.res * L.res));
+      for (long i = 0; i < L.res; ++i)
+        for (long j = 0; j < L.res; ++j)
+          for (long k = 0; k < L.res; ++k) L.cells.push_back(pack(i, j, k));
+    } else {
+      Level& P = levels[std::size_t(d - 1)];
+      std::vector<Key> refine;
+      for (const auto& s : samples)
+        if (s.depth >= d) {
+          const auto c = cell_of(s.p, P.res);
+          refine.push_back(pack(c[0], c[1], c[2]));
+        }
+      sort_unique(refine);
+      // Dilate by a cell, one axis at a time: the finer band then reaches two of its cells past
+      // every splat cell, which holds the splat kernels and leaves the band edge beyond them.
+      constexpr long kDilation = 1;
+      for (int axis = 0; axis < 3; ++axis) {
+        std::vector<Key> grown;
+        grown.reserve(refine.size() * (2 * kDilation + 1));
+        for (Key key : refine) {
+          auto c = unpack(key);
+          const long centre_index = c[std::size_t(axis)];
+          for (long o2 = -kDilation; o2 <= kDilation; ++o2) {
+            c[std::size_t(axis)] = centre_index + o2;
+            if (c[std::size_t(axis)] >= 0 && c[std::size_t(axis)] < P.res)
+              grown.push_back(pack(c[0], c[1], c[2]));
+          }
+        }
+        sort_unique(grown);
+        refine = std::move(grown);
+      }
+      std::vector<Key> children;
+      for (Key key : refine) {
+        const int idx = P.cell_index.find(key);
+        if (idx < 0) continue;  // only active cells refine
+        P.refined[std::size_t(idx)] = 1;
+        const auto [i, j, k] = unpack(key);
+        for (int q = 0; q < 8; ++q)
+          children.push_back(pack(2 * i + (q & 1), 2 * j + (q >> 1 & 1), 2 * k + (q >> 2 & 1)));
+      }
+      sort_unique(children);
+      L.cells = std::move(children);
+    }
+    build_nodes(L, o.boundary);
+    L.refined.assign(L.cells.size(), 0);
+    if (L.cells.empty()) break;
+  }
+  int finest = d_min;
+  for (int d = d_min; d <= D; ++d)
+    if (!levels[std::size_t(d)].cells.empty()) finest = d;
+
+  // --- Solve, coarse to fine.
+  stage("solve");
+  // (index, int hat_j0 hat_idx, int hat_j0 hat_idx', int hat_j1 hat_idx, int hat_j1 hat_idx') for
+  // the depth-d nodes idx overlapping the splat cell [j0, j0 + 1] at depth sd, on one axis.
+  std::map<std::array<long, 3>, std::vector<std::array<double, 5>>> integral_cache;
+  auto axis_integrals = [&](int sd, long j0, int d,
+                            long res) -> const std::vector<std::array<double, 5>>& {
+    auto [it, inserted] = integral_cache.try_emplace({long(sd), j0, long(d)});
+    if (!inserted) return it->second;
+    const double sh = std::ldexp(1.0, -sd);
+    const double from = (double(j0) - 1) * sh, to = (double(j0) + 2) * sh;
+    const long first = std::max(0L, long(std::floor(from * double(res))) - 1);
+    const long last = std::min(res, long(std::ceil(to * double(res))) + 1);
+    for (long idx = first; idx <= last; ++idx) {
+      const std::array<double, 5> t{
+          double(idx), hat_integral(sd, j0, d, idx, false), hat_integral(sd, j0, d, idx, true),
+          hat_integral(sd, j0 + 1, d, idx, false), hat_integral(sd, j0 + 1, d, idx, true)};
+      if (t[1] != 0 || t[2] != 0 || t[3] != 0 || t[4] != 0) it->second.push_back(t);
+    }
+    return it->second;
+  };
+  static const ElementMatrices element;
+  for (int d = d_min; d <= finest; ++d) {
+    const auto level_start = clock::now();
+    Level& L = levels[std::size_t(d)];
+    const std::size_t nn = L.nodes.size();
+    if (d == d_min)
+      L.x.assign(nn, 0.0);
+    else
+      prolong(levels[std::size_t(d - 1)], L);
+    // System rows (27 slots) for the unknown nodes: stiffness + screening.
+    std::vector<std::array<double, 27>> A(nn);
+    std::vector<double> b(nn, 0.0);
+    tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+      A[v].fill(0.0);
+      if (!L.unknown[v]) return;
+      const auto [i, j, k] = unpack(L.nodes[v]);
+      for (int c = 0; c < 8; ++c) {  // incident cells: offsets -1/0 per axis
+        const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
+        if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
+            k + oz >= L.res)
+          continue;
+        const int a = (-ox) | (-oy) << 1 | (-oz) << 2;  // this node's corner in the cell
+        for (int corner = 0; corner < 8; ++corner)
+          A[v]
+           [std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1), oz + (corner >> 2 & 1)))] +=
+              L.h * element.stiffness[a][corner];
+      }
+    });
+    const double screening = o.point_weight * area_per_sample * std::ldexp(1.0, d);
+    // Samples in fixed chunks, in parallel, each chunk listing its contributions; the lists are
+    // added in chunk order, so the sums are those of a serial loop whatever the thread count.
+    for (const auto& s : samples)
+      for (int a = 0; a < 3; ++a)
+        axis_integrals(s.depth, cell_of(s.p, 1L << s.depth)[std::size_t(a)], d, L.res);
+    constexpr std::size_t kChunk = 2048;
+    struct Contributions {
+      std::vector<std::pair<int, double>> rhs;
+      std::vector<std::tuple<int, int, double>> matrix;  // (row, slot, value)
+    };
+    std::vector<Contributions> chunks((samples.size() + kChunk - 1) / kChunk);
+    tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t chunk) {
+      Contributions& out = chunks[chunk];
+      for (std::size_t si = chunk * kChunk; si < std::min(samples.size(), (chunk + 1) * kChunk);
+           ++si) {
+        const Sample& s = samples[si];
+        // Divergence of the splatted normals, int V . grad(phi_v) with V = -area * n * F_p, F_p the
+        // unit-integral trilinear kernel at the sample's splat depth.
+        const int sd = s.depth;
+        const long sres = 1L << sd;
+        const double sh = 1.0 / double(sres);
+        const auto sc = cell_of(s.p, sres);
+        double axis_weight[3][2];
+        for (int a = 0; a < 3; ++a) {
+          axis_weight[a][1] =
+              std::clamp(s.p[a] * double(sres) - double(sc[std::size_t(a)]), 0.0, 1.0);
+          axis_weight[a][0] = 1 - axis_weight[a][1];
+        }
+        // Level-d node ranges overlapping the kernel's support along each axis, with the value and
+        // slope integrals against the kernel's two hats on that axis (cached: they depend only on
+        // the splat depth, the splat cell's index on the axis and this depth).
+        std::array<double, 3> factors[3][64];  // (index, value integral, slope integral)
+        int count[3] = {0, 0, 0};
+        for (int a = 0; a < 3; ++a) {
+          const auto& table = integral_cache.find({long(sd), sc[std::size_t(a)], long(d)})->second;
+          for (const auto& t : table) {
+            const double f0 = axis_weight[a][0] * t[1] + axis_weight[a][1] * t[3];
+            const double f1 = axis_weight[a][0] * t[2] + axis_weight[a][1] * t[4];
+            if ((f0 != 0 || f1 != 0) && count[a] < 64) factors[a][count[a]++] = {t[0], f0, f1};
+          }
+        }
+        const double scale = -s.area / (sh * sh * sh);
+        for (int ix = 0; ix < count[0]; ++ix)
+          for (int iy = 0; iy < count[1]; ++iy)
+            for (int iz = 0; iz < count[2]; ++iz) {
+              const auto &fx = factors[0][ix], &fy = factors[1][iy], &fz = factors[2][iz];
+              const int v = L.node(long(fx[0]), long(fy[0]), long(fz[0]));
+              if (v < 0 || !L.unknown[std::size_t(v)]) continue;
+              out.rhs.push_back(
+                  {v, scale * (s.n.x() * fx[2] * fy[1] * fz[1] + s.n.y() * fx[1] * fy[2] * fz[1] +
+                               s.n.z() * fx[1] * fy[1] * fz[2])});
+            }
+        // Screening: (chi(p) - 1/2)^2 for samples inside this depth's active cells.
+        if (screening > 0) {
+          const auto c = cell_of(s.p, L.res);
+          if (L.cell_index.find(pack(c[0], c[1], c[2])) < 0) continue;
+          const auto w = corner_weights(s.p, c, L.res);
+          int corner_node[8];
+          for (int q = 0; q < 8; ++q)
+            corner_node[q] = L.node(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1));
+          for (int qa = 0; qa < 8; ++qa) {
+            const int va = corner_node[qa];
+            if (!L.unknown[std::size_t(va)]) continue;
+            out.rhs.push_back({va, screening * w[std::size_t(qa)] * 0.5});
+            for (int qb = 0; qb < 8; ++qb)
+              out.matrix.emplace_back(va,
+                                      slot((qb & 1) - (qa & 1), (qb >> 1 & 1) - (qa >> 1 & 1),
+                                           (qb >> 2 & 1) - (qa >> 2 & 1)),
+                                      screening * w[std::size_t(qa)] * w[std::size_t(qb)]);
+          }
+        }
+      }
+    });
+    for (const auto& chunk : chunks) {
+      for (const auto& [v, value] : chunk.rhs) b[std::size_t(v)] += value;
+      for (const auto& [v, sl, value] : chunk.matrix) A[std::size_t(v)][std::size_t(sl)] += value;
+    }
+
+    const auto assembled = clock::now();
+    // Jacobi-preconditioned conjugate gradients on the unknowns; fixed nodes keep their values.
+    auto apply = [&](const std::vector<double>& in, std::vector<double>& out, bool unknowns_only) {
+      tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+        if (!L.unknown[v]) {
+          out[v] = 0;
+          return;
+        }
+        double sum = 0;
+        for (int s = 0; s < 27; ++s) {
+          const int u = L.neighbours[v][std::size_t(s)];
+          if (u >= 0 && A[v][std::size_t(s)] != 0 && (!unknowns_only || L.unknown[std::size_t(u)]))
+            sum += A[v][std::size_t(s)] * in[std::size_t(u)];
+        }
+        out[v] = sum;
+      });
+    };
+    std::vector<double> r(nn), z(nn), p(nn), Ap(nn), diag(nn, 1.0);
+    apply(L.x, Ap, false);
+    for (std::size_t v = 0; v < nn; ++v) {
+      r[v] = L.unknown[v] ? b[v] - Ap[v] : 0.0;
+      if (L.unknown[v] && A[v][13] > 0) diag[v] = A[v][13];
+    }
+    const double b_norm = std::sqrt(
+        deterministic_sum(nn, [&](std::size_t v) { return L.unknown[v] ? b[v] * b[v] : 0.0; }));
+    for (std::size_t v = 0; v < nn; ++v) p[v] = z[v] = r[v] / diag[v];
+    double rz = deterministic_sum(nn, [&](std::size_t v) { return r[v] * z[v]; });
+    double r_norm = std::sqrt(deterministic_sum(nn, [&](std::size_t v) { return r[v] * r[v]; }));
+    int it = 0;
+    const double target = o.solver_tolerance * std::max(b_norm, 1e-300);
+    while (it < o.max_iterations && r_norm > target && rz > 0) {
+      apply(p, Ap, true);
+      const double pAp = deterministic_sum(nn, [&](std::size_t v) { return p[v] * Ap[v]; });
+      if (!(pAp > 0)) break;
+      const double step = rz / pAp;
+      tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+        if (!L.unknown[v]) return;
+        L.x[v] += step * p[v];
+        r[v] -= step * Ap[v];
+        z[v] = r[v] / diag[v];
+      });
+      const double rz_next = deterministic_sum(nn, [&](std::size_t v) { return r[v] * z[v]; });
+      const double beta = rz_next / rz;
+      rz = rz_next;
+      tbb::parallel_for(std::size_t(0), nn,
+                        [&](std::size_t v) { p[v] = L.unknown[v] ? z[v] + beta * p[v] : 0.0; });
+      r_norm = std::sqrt(deterministic_sum(nn, [&](std::size_t v) { return r[v] * r[v]; }));
+      ++it;
+    }
+    long unknowns = 0;
+    for (char u : L.unknown) unknowns += u;
+    result.levels.push_back({d, long(L.cells.size()), unknowns, it,
+                             r_norm / std::max(b_norm, 1e-300),
+                             std::chrono::duration<double>(assembled - level_start).count(),
+                             std::chrono::duration<double>(clock::now() - assembled).count()});
+  }
+
+  // --- chi anywhere: the finest depth whose active cell (or node) holds the point.
+  auto chi_at = [&](const Eigen::Vector3d& p) {
+    for (int d = finest; d >= d_min; --d) {
+      const Level& L = levels[std::size_t(d)];
+      const auto c = cell_of(p, L.res);
+      if (L.cell_index.find(pack(c[0], c[1], c[2])) >= 0) return L.interpolate(c, p);
+    }
+    return 0.0;
+  };
+  stage("iso-value");
+  result.iso_value =
+      deterministic_sum(samples.size(), [&](std::size_t s) { return chi_at(samples[s].p); }) /
+      double(n);
+  const double iso = result.iso_value;
+
+  // --- Extraction on finest-depth cells.
+  stage("extraction");
+  const Level& F = levels[std::size_t(finest)];
+  const long R = F.res;
+  // Canonical chi at a finest-depth node (i, j, k): stored where a depth has that node, else
+  // interpolated in the finest active cell holding it; outside the domain, "outside".
+  auto node_value = [&](long i, long j, long k) {
+    if (i < 0 || j < 0 || k < 0 || i > R || j > R || k > R) return iso - 1.0;
+    for (int d = finest; d >= d_min; --d) {
+      const Level& L = levels[std::size_t(d)];
+      const int shift = finest - d;
+      const long m = (1L << shift) - 1;
+      if (!(i & m) && !(j & m) && !(k & m)) {
+        const int idx = L.node(i >> shift, j >> shift, k >> shift);
+        if (idx >= 0) return L.x[std::size_t(idx)];
+      }
+      const std::array<long, 3> c{std::min(i >> shift, L.res - 1), std::min(j >> shift, L.res - 1),
+                                  std::min(k >> shift, L.res - 1)};
+      if (L.cell_index.find(pack(c[0], c[1], c[2])) >= 0) {
+        const Eigen::Vector3d p(double(i) / double(R), double(j) / double(R),
+                                double(k) / double(R));
+        return L.interpolate(c, p);
+      }
+    }
+    return iso - 1.0;
+  };
+  // Cells are keyed with a +1 offset so that the ring just outside the domain has keys too.
+  auto cell_key = [](long i, long j, long k) { return pack(i + 1, j + 1, k + 1); };
+  auto cell_values = [&](long i, long j, long k, double* value) {
+    for (int c = 0; c < 8; ++c)
+      value[c] = iso - node_value(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1));
+  };
+  auto mixed = [](const double* value) {
+    int inside = 0;
+    for (int c = 0; c < 8; ++c) inside += value[c] < 0;
+    return inside > 0 && inside < 8;
+  };
+  // Candidates: finest active cells, and subcells of coarser leaves whose corners straddle iso.
+  std::vector<Key> candidates;
+  for (int d = d_min; d <= finest; ++d) {
+    const Level& L = levels[std::size_t(d)];
+    const int shift = finest - d;
+    std::vector<std::vector<Key>> found(L.cells.size());
+    tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
+      if (d < finest && L.refined[c]) return;
+      const auto [i, j, k] = unpack(L.cells[c]);
+      const long n = 1L << shift;
+      if (d < finest) {
+        double corner[8];
+        int inside = 0;
+        for (int q = 0; q < 8; ++q) {
+          corner[q] = iso - node_value((i + (q & 1)) << shift, (j + (q >> 1 & 1)) << shift,
+                                       (k + (q >> 2 & 1)) << shift);
+          inside += corner[q] < 0;
+        }
+        if (inside == 0 || inside == 8) return;
+      }
+      for (long a = 0; a < n; ++a)
+        for (long bb = 0; bb < n; ++bb)
+          for (long cc = 0; cc < n; ++cc) {
+            double value[8];
+            const long fi = (i << shift) + a, fj = (j << shift) + bb, fk = (k << shift) + cc;
+            cell_values(fi, fj, fk, value);
+            if (mixed(value)) found[c].push_back(cell_key(fi, fj, fk));
+          }
+    });
+    for (auto& f : found) candidates.insert(candidates.end(), f.begin(), f.end());
+  }
+  // Close the set: a face with a sign change needs the cell across it.
+  std::unordered_set<Key> visited(candidates.begin(), candidates.end());
+  std::deque<Key> queue(candidates.begin(), candidates.end());
+  std::vector<Key> cells_with_surface;
+  while (!queue.empty()) {
+    const Key key = queue.front();
+    queue.pop_front();
+    const auto u = unpack(key);
+    const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
+    double value[8];
+    cell_values(i, j, k, value);
+    if (!mixed(value)) continue;
+    cells_with_surface.push_back(key);
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        int inside = 0;
+        for (int c = 0; c < 8; ++c)
+          if ((c >> axis & 1) == side) inside += value[c] < 0;
+        if (inside == 0 || inside == 4) continue;
+        long ni = i, nj = j, nk = k;
+        (axis == 0 ? ni : axis == 1 ? nj : nk) += side ? 1 : -1;
+        if (ni < -1 || nj < -1 || nk < -1 || ni > R || nj > R || nk > R) continue;
+        const Key next = cell_key(ni, nj, nk);
+        if (visited.insert(next).second) queue.push_back(next);
+      }
+  }
+  // Polygons per cell with their edges' global keys; vertices are deduplicated by edge.
+  const detail::CubeTables& T = detail::cube_tables();
+  std::vector<Key> edge_keys;
+  struct CellPolygons {
+    std::vector<std::array<int, 12>> edges;  // local edge ids
+    std::vector<int> sizes;
+  };
+  std::vector<CellPolygons> polygons(cells_with_surface.size());
+  std::vector<std::array<double, 8>> values(cells_with_surface.size());
+  tbb::parallel_for(std::size_t(0), cells_with_surface.size(), [&](std::size_t c) {
+    const auto u = unpack(cells_with_surface[c]);
+    cell_values(u[0] - 1, u[1] - 1, u[2] - 1, values[c].data());
+    detail::cube_polygons(values[c].data(), [&](const int* edges, int size) {
+      std::array<int, 12> e{};
+      std::copy(edges, edges + size, e.begin());
+      polygons[c].edges.push_back(e);
+      polygons[c].sizes.push_back(size);
+    });
+  });
+  auto global_edge = [&](std::size_t c, int e) {
+    const auto u = unpack(cells_with_surface[c]);
+    const int low = T.edge_low_corner[e];
+    return pack(u[0] + (low & 1), u[1] + (low >> 1 & 1), u[2] + (low >> 2 & 1)) * 3 + Key(e / 4);
+  };
+  for (std::size_t c = 0; c < polygons.size(); ++c)
+    for (std::size_t q = 0; q < polygons[c].edges.size(); ++q)
+      for (int v = 0; v < polygons[c].sizes[q]; ++v)
+        edge_keys.push_back(global_edge(c, polygons[c].edges[q][std::size_t(v)]));
+  sort_unique(edge_keys);
+  const KeyIndex edge_index(edge_keys);
+  Mesh& mesh = result.mesh;
+  mesh.vertices.resize(Eigen::Index(edge_keys.size()), 3);
+  tbb::parallel_for(std::size_t(0), edge_keys.size(), [&](std::size_t e) {
+    const Key node_key = edge_keys[e] / 3;
+    const int axis = int(edge_keys[e] % 3);
+    const auto u = unpack(node_key);
+    const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
+    const double v0 = iso - node_value(i, j, k);
+    const double v1 = iso - node_value(i + (axis == 0), j + (axis == 1), k + (axis == 2));
+    const Eigen::Vector3d p0 =
+        Eigen::Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
+    Eigen::Vector3d p1 = p0;
+    p1[axis] += 1;
+    const Eigen::Vector3d unit = (p0 + v0 / (v0 - v1) * (p1 - p0)) / double(R);
+    mesh.vertices.row(Eigen::Index(e)) =
+        ((unit - Eigen::Vector3d::Constant(0.5)) * size + centre).transpose();
+  });
+  detail::PolygonOutput out;
+  for (std::size_t c = 0; c < polygons.size(); ++c)
+    for (std::size_t q = 0; q < polygons[c].edges.size(); ++q) {
+      const int count = polygons[c].sizes[q];
+      int ids[12];
+      Eigen::Vector3d position[12];
+      for (int v = 0; v < count; ++v) {
+        ids[v] = edge_index.find(global_edge(c, polygons[c].edges[q][std::size_t(v)]));
+        position[v] = mesh.vertices.row(ids[v]).transpose();
+      }
+      detail::triangulate_polygon(ids, polygons[c].edges[q].data(), position, count, out);
+    }
+  const Eigen::Index edge_vertices = mesh.vertices.rows();
+  mesh.vertices.conservativeResize(edge_vertices + Eigen::Index(out.centroids.size()), 3);
+  for (std::size_t c = 0; c < out.centroids.size(); ++c)
+    mesh.vertices.row(edge_vertices + Eigen::Index(c)) = out.centroids[c].transpose();
+  mesh.triangles.resize(Eigen::Index(out.triangles.size()), 3);
+  for (std::size_t t = 0; t < out.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int id = out.triangles[t][std::size_t(k)];
+      mesh.triangles(Eigen::Index(t), k) = id >= 0 ? id : int(edge_vertices) - id - 1;
+    }
+
+  // --- Sampling density at each vertex, in samples per unit area of the input's units.
+  result.vertex_density.resize(mesh.vertices.rows());
+  tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
+    const Eigen::Vector3d unit =
+        (mesh.vertices.row(v).transpose() - centre) / size + Eigen::Vector3d::Constant(0.5);
+    result.vertex_density[v] = samples_per_area(unit) / (size * size);
+  });
+  result.seconds.back().second = std::chrono::duration<double>(clock::now() - stage_start).count();
+  return result;
+}
+
+}  // namespace sdfcontour
