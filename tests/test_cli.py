@@ -123,5 +123,45 @@ with tempfile.TemporaryDirectory() as d:
     check("scattered points near sphere", np.median(np.abs(np.linalg.norm(cp[:, :3], axis=1) - 0.6)) < 0.01)
     check("progress on stderr", "[sdfcontour]" in r.stderr, r.stderr)
 
+    # Poisson: GCP and GTCP meshes, the poisson subcommand on a point cloud, and its bad input.
+    for method in ("gcp", "gtcp"):
+        outputs = []
+        for threads in ("1", "2"):
+            mesh = p(f"{method}{threads}.ply")
+            r = run("contour", "builtin:torus@20", "-o", mesh, "--method", method, "--depth", "6", "--threads", threads, "-q")
+            check(f"{method} mesh", r.returncode == 0, r.stderr)
+            outputs.append(open(mesh, "rb").read())
+        check(f"{method} deterministic mesh", outputs[0] == outputs[1])
+    r = run("contour", "builtin:sphere@24", "--points", p("cp.ply"), "-q")
+    check("gcp points", r.returncode == 0, r.stderr)
+    r = run("poisson", p("cp.ply"), "-o", p("poisson.obj"), "--depth", "6", "--alpha", "4", "--boundary", "dirichlet",
+            "--densities", p("density.npy"), "--stats", p("poisson.json"), "-q")
+    check("poisson runs", r.returncode == 0, r.stderr)
+    verts = [line for line in open(p("poisson.obj")) if line.startswith("v ")]
+    density = np.load(p("density.npy"))
+    check("poisson densities", len(density) == len(verts) and np.all(density > 0), (len(density), len(verts)))
+    radii = np.linalg.norm(np.array([[float(x) for x in v.split()[1:]] for v in verts]), axis=1)
+    check("poisson sphere radius", abs(np.median(radii) - 0.6) < 0.01, np.median(radii))
+    s = json.load(open(p("poisson.json")))
+    check("poisson stats", s["options"]["alpha"] == 4 and s["levels"][-1]["depth"] <= 6, s["options"])
+    open(p("empty.ply"), "w").write("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                                   "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n")
+    expect_error("poisson no points", ["poisson", p("empty.ply"), "-o", out], "no points", [out])
+    open(p("zero.ply"), "w").write("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                                  "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n"
+                                  "0 0 0 0 0 1\n1 0 0 0 0 0\n")
+    expect_error("poisson zero normal", ["poisson", p("zero.ply"), "-o", out], "zero normal", [out])
+    open(p("nan.ply"), "w").write("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                 "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n"
+                                 "nan 0 0 0 0 1\n")
+    expect_error("poisson nan text", ["poisson", p("nan.ply"), "-o", out], "cannot parse", [out])
+    body = np.array([[0, 0, 0, 0, 0, 1], [np.nan, 0, 0, 0, 0, 1]], dtype="<f8").tobytes()
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 2\n" +
+              "".join(f"property double {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")) + "end_header\n")
+    open(p("nan_binary.ply"), "wb").write(header.encode() + body)
+    expect_error("poisson nan", ["poisson", p("nan_binary.ply"), "-o", out], "NaN", [out])
+    expect_error("poisson missing", ["poisson", p("none.ply"), "-o", out], "cannot read", [out])
+    expect_error("poisson boundary", ["poisson", p("cp.ply"), "-o", out, "--boundary", "free"], "boundary", [out])
+
 print(f"{passed} passed, {failed} failed")
 sys.exit(1 if failed else 0)
