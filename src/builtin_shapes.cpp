@@ -6,6 +6,8 @@
 #include <limits>
 #include <random>
 
+#include <tbb/parallel_for.h>
+
 namespace sdfcontour {
 
 namespace {
@@ -209,10 +211,11 @@ Grid sample_grid(const AnalyticShape& shape, int n, const Bounds& bounds) {
   grid.dims = {n, n, n};
   grid.bounds = bounds;
   grid.values.resize(Eigen::Index(grid.size()));
-  for (int i = 0; i < n; ++i)
+  tbb::parallel_for(0, n, [&](int i) {
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < n; ++k)
         grid.values[Eigen::Index(grid.index(i, j, k))] = shape.distance(grid.point(i, j, k));
+  });
   return grid;
 }
 
@@ -230,8 +233,9 @@ Samples sample_random(const AnalyticShape& shape, std::size_t count, const Bound
       p[a] = bounds.min[a] + u * (bounds.max[a] - bounds.min[a]);
     }
     s.points.row(Eigen::Index(i)) = p;
-    s.values[Eigen::Index(i)] = shape.distance(p);
   }
+  tbb::parallel_for(Eigen::Index(0), s.points.rows(),
+                    [&](Eigen::Index i) { s.values[i] = shape.distance(s.points.row(i).transpose()); });
   return s;
 }
 

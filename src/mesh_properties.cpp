@@ -41,6 +41,25 @@ MeshTopology mesh_topology(const Mesh& mesh) {
   return t;
 }
 
+int connected_components(const Mesh& mesh) {
+  std::vector<int> parent(std::size_t(mesh.vertices.rows()));
+  std::vector<char> used(parent.size(), 0);
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = int(i);
+  auto find = [&](int x) {
+    while (parent[std::size_t(x)] != x) x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
+    return x;
+  };
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      used[std::size_t(mesh.triangles(f, k))] = 1;
+      const int a = find(mesh.triangles(f, k)), b = find(mesh.triangles(f, (k + 1) % 3));
+      if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
+    }
+  int components = 0;
+  for (std::size_t i = 0; i < parent.size(); ++i) components += used[i] && find(int(i)) == int(i);
+  return components;
+}
+
 static Eigen::Vector3d vertex(const Mesh& m, Eigen::Index f, int k) {
   return m.vertices.row(m.triangles(f, k)).transpose();
 }

@@ -1,5 +1,6 @@
 // sdfcontour: contour signed distance samples into triangle meshes.
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -16,6 +17,11 @@
 #include "sdfcontour/npy.h"
 #include "sdfcontour/pipeline.h"
 #include "sdfcontour/poisson.h"
+#include "sdfcontour/contact_points.h"
+#include "sdfcontour/mesh_properties.h"
+#include "sdfcontour/mesh_sdf.h"
+#include "sdfcontour/mesh_transform.h"
+#include "sdfcontour/metrics.h"
 #include "sdfcontour/statistics.h"
 
 using namespace sdfcontour;
@@ -317,6 +323,117 @@ int run_poisson(const PoissonCommandArgs& a) {
   return 0;
 }
 
+struct SampleArgs {
+  std::string mesh, prefix, bounds = "-1,1";
+  int resolution = 0;
+  std::size_t random = 0;
+  std::uint64_t seed = 0;
+  double scale = 0.9;
+  bool quiet = false;
+};
+
+// mesh -> normalised mesh, SDF samples (grid or random) and their exact contact points.
+int run_sample(const SampleArgs& a) {
+  if ((a.resolution > 0) == (a.random > 0)) throw Error("give exactly one of --res N and --random COUNT");
+  if (a.resolution == 1 || a.resolution > 1024) throw Error("--res must be between 2 and 1024");
+  if (!(a.scale > 0)) throw Error("--scale must be positive");
+  auto say = [&](const std::string& m) {
+    if (!a.quiet) std::cerr << "[sdfcontour] " << m << "\n";
+  };
+  const Bounds bounds = parse_bounds(a.bounds);
+  say("reading " + a.mesh);
+  const Mesh mesh = normalize_mesh(read_mesh(a.mesh), a.scale);
+  const MeshSdf sdf(mesh);
+  Samples samples;
+  if (a.resolution > 0) {
+    say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
+    const Grid grid = sample_grid(sdf, a.resolution, bounds);
+    const std::size_t n = std::size_t(a.resolution);
+    write_npy(a.prefix + ".npy", {n, n, n}, std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
+    samples = grid.to_samples();
+  } else {
+    say("signed distances at " + std::to_string(a.random) + " random points");
+    samples = sample_random(sdf, a.random, bounds, a.seed);
+    std::vector<double> rows(a.random * 4);
+    for (std::size_t i = 0; i < a.random; ++i) {
+      for (int c = 0; c < 3; ++c) rows[4 * i + std::size_t(c)] = samples.points(Eigen::Index(i), c);
+      rows[4 * i + 3] = samples.values[Eigen::Index(i)];
+    }
+    write_npy(a.prefix + ".npy", {a.random, 4}, rows);
+  }
+  say("exact contact points");
+  const ContactPoints gt = exact_contact_points(samples.points, sdf);
+  write_oriented_points(a.prefix + "_gtcp.ply", {gt.points, gt.normals});
+  write_mesh(a.prefix + "_mesh.ply", mesh);
+  std::cout << "samples " << samples.points.rows() << " -> " << a.prefix << ".npy, " << a.prefix << "_gtcp.ply, "
+            << a.prefix << "_mesh.ply" << std::endl;
+  return 0;
+}
+
+struct EvalArgs {
+  std::string recon, gt, output;
+  std::size_t samples = 200000;
+  std::uint64_t seed = 1;
+};
+
+void print_json(const nlohmann::json& j, const std::string& output) {
+  if (output.empty()) {
+    std::cout << j.dump(2) << std::endl;
+    return;
+  }
+  AtomicFile f(output);
+  f.stream() << j.dump(2) << "\n";
+  f.commit();
+}
+
+int run_eval(const EvalArgs& a) {
+  if (a.samples == 0) throw Error("--samples must be positive");
+  const Mesh recon = read_mesh(a.recon), gt = read_mesh(a.gt);
+  const SurfaceDistances d = surface_distances(recon, gt, a.samples, a.seed);
+  const MeshTopology t = mesh_topology(recon);
+  const int components = connected_components(recon);
+  nlohmann::json j;
+  j["recon"] = a.recon;
+  j["gt"] = a.gt;
+  j["samples"] = a.samples;
+  j["L_inf"] = d.hausdorff;
+  j["L1"] = d.l1;
+  j["L2"] = d.l2;
+  j["directed"] = {{"recon_to_gt", {{"mean", d.mean_ab}, {"rms", d.rms_ab}, {"max", d.max_ab}}},
+                   {"gt_to_recon", {{"mean", d.mean_ba}, {"rms", d.rms_ba}, {"max", d.max_ba}}}};
+  j["recon_mesh"] = {{"vertices", recon.vertices.rows()}, {"triangles", recon.triangles.rows()},
+                     {"closed", t.closed}, {"manifold", t.nonmanifold_edges == 0},
+                     {"consistently_oriented", t.consistently_oriented}, {"components", components},
+                     {"euler_characteristic", t.euler_characteristic}};
+  if (t.closed) j["recon_mesh"]["genus"] = (2 * long(components) - t.euler_characteristic) / 2;
+  print_json(j, a.output);
+  return 0;
+}
+
+int run_eval_points(const EvalArgs& a) {
+  const OrientedPoints points = read_oriented_points(a.recon);
+  const MeshSdf sdf(read_mesh(a.gt));
+  const Eigen::Index n = points.points.rows();
+  std::vector<double> value(static_cast<std::size_t>(n)), alignment(static_cast<std::size_t>(n));
+  tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
+    int t = 0;
+    value[std::size_t(i)] = sdf.unsigned_distance(points.points.row(i).transpose(), nullptr, &t);
+    alignment[std::size_t(i)] = points.normals.row(i).normalized().dot(sdf.triangle_normal(t).transpose());
+  });
+  auto summary = [](const std::vector<double>& v) {
+    return nlohmann::json{{"median", quantile(v, 0.5)}, {"mean", mean(v)}, {"p95", quantile(v, 0.95)},
+                          {"p05", quantile(v, 0.05)}};
+  };
+  nlohmann::json j;
+  j["points"] = a.recon;
+  j["gt"] = a.gt;
+  j["count"] = n;
+  j["abs_value"] = summary(value);
+  j["normal_alignment"] = summary(alignment);
+  print_json(j, a.output);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -396,6 +513,33 @@ int main(int argc, char** argv) {
   poisson->add_flag("-q,--quiet", pa.quiet, "No progress messages on stderr");
   pa.poisson.add_to(poisson);
 
+  SampleArgs sa;
+  CLI::App* sample = app.add_subcommand("sample", "Closed mesh -> normalised mesh, SDF samples and their exact contact points");
+  sample->add_option("mesh", sa.mesh, "Closed triangle mesh (OBJ, PLY or OFF)")->required();
+  sample->add_option("-o,--output", sa.prefix, "Output prefix: PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
+                                               "mesh), PREFIX_gtcp.ply (exact contact points with normals)")
+      ->required();
+  sample->add_option("--res", sa.resolution, "Sample an N^3 grid over the bounds");
+  sample->add_option("--random", sa.random, "Sample COUNT uniform random points in the bounds instead");
+  sample->add_option("--seed", sa.seed, "Seed for --random")->capture_default_str();
+  sample->add_option("--scale", sa.scale, "The mesh's longest side is scaled to span [-scale, scale]")->capture_default_str();
+  sample->add_option("--bounds", sa.bounds, "Sampled box: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")->capture_default_str();
+  sample->add_flag("-q,--quiet", sa.quiet, "No progress messages on stderr");
+
+  EvalArgs ea;
+  CLI::App* eval = app.add_subcommand("eval", "Distances between a reconstruction and the ground truth, as JSON");
+  eval->add_option("recon", ea.recon, "Reconstructed mesh")->required();
+  eval->add_option("gt", ea.gt, "Ground-truth mesh")->required();
+  eval->add_option("--samples", ea.samples, "Area-uniform samples on each mesh")->capture_default_str();
+  eval->add_option("--seed", ea.seed, "Seed for the samples")->capture_default_str();
+  eval->add_option("-o,--output", ea.output, "Write the JSON here instead of stdout");
+
+  EvalArgs pe;
+  CLI::App* eval_points = app.add_subcommand("eval-points", "Contact points against the ground truth: |phi(c)| and n . grad phi");
+  eval_points->add_option("points", pe.recon, "Oriented points (PLY x y z nx ny nz)")->required();
+  eval_points->add_option("gt", pe.gt, "Ground-truth closed mesh")->required();
+  eval_points->add_option("-o,--output", pe.output, "Write the JSON here instead of stdout");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -404,6 +548,9 @@ int main(int argc, char** argv) {
   try {
     if (contour->parsed()) return run_contour(a);
     if (poisson->parsed()) return run_poisson(pa);
+    if (sample->parsed()) return run_sample(sa);
+    if (eval->parsed()) return run_eval(ea);
+    if (eval_points->parsed()) return run_eval_points(pe);
   } catch (const std::exception& e) {
     std::cerr << "sdfcontour: error: " << e.what() << "\n";
     return 1;

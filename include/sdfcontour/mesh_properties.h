@@ -15,6 +15,8 @@ struct MeshTopology {
 };
 
 MeshTopology mesh_topology(const Mesh& mesh);
+/// Number of connected components (triangles sharing a vertex are connected).
+int connected_components(const Mesh& mesh);
 /// Total triangle area.
 double surface_area(const Mesh& mesh);
 /// Signed enclosed volume (divergence theorem): positive for a closed, outward-oriented mesh.
