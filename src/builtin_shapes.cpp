@@ -1,12 +1,12 @@
 #include "sdfcontour/builtin_shapes.h"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <tbb/parallel_for.h>
 
 namespace sdfcontour {
 
@@ -234,8 +234,9 @@ Samples sample_random(const AnalyticShape& shape, std::size_t count, const Bound
     }
     s.points.row(Eigen::Index(i)) = p;
   }
-  tbb::parallel_for(Eigen::Index(0), s.points.rows(),
-                    [&](Eigen::Index i) { s.values[i] = shape.distance(s.points.row(i).transpose()); });
+  tbb::parallel_for(Eigen::Index(0), s.points.rows(), [&](Eigen::Index i) {
+    s.values[i] = shape.distance(s.points.row(i).transpose());
+  });
   return s;
 }
 

@@ -46,7 +46,8 @@ int connected_components(const Mesh& mesh) {
   std::vector<char> used(parent.size(), 0);
   for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = int(i);
   auto find = [&](int x) {
-    while (parent[std::size_t(x)] != x) x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
+    while (parent[std::size_t(x)] != x)
+      x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
     return x;
   };
   for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)

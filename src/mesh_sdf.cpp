@@ -23,7 +23,8 @@ void require_closed_mesh(const Mesh& mesh, const std::string& what) {
   const MeshTopology t = mesh_topology(mesh);
   if (!t.closed)
     throw Error(what + " is not closed (" + std::to_string(t.boundary_edges) + " boundary and " +
-                std::to_string(t.nonmanifold_edges) + " non-manifold edges); a signed distance needs a closed mesh");
+                std::to_string(t.nonmanifold_edges) +
+                " non-manifold edges); a signed distance needs a closed mesh");
   if (!t.consistently_oriented) throw Error(what + " is not consistently oriented");
 }
 
@@ -39,13 +40,17 @@ MeshSdf::MeshSdf(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
   SurfaceMesh& sm = impl_->mesh;
   std::vector<SurfaceMesh::Vertex_index> v;
   for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
-    v.push_back(sm.add_vertex(K::Point_3(mesh.vertices(i, 0), mesh.vertices(i, 1), mesh.vertices(i, 2))));
+    v.push_back(
+        sm.add_vertex(K::Point_3(mesh.vertices(i, 0), mesh.vertices(i, 1), mesh.vertices(i, 2))));
   for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f) {
-    sm.add_face(v[std::size_t(mesh.triangles(f, 0))], v[std::size_t(mesh.triangles(f, 1))], v[std::size_t(mesh.triangles(f, 2))]);
-    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(f, 0)), b = mesh.vertices.row(mesh.triangles(f, 1)),
+    sm.add_face(v[std::size_t(mesh.triangles(f, 0))], v[std::size_t(mesh.triangles(f, 1))],
+                v[std::size_t(mesh.triangles(f, 2))]);
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(f, 0)),
+                          b = mesh.vertices.row(mesh.triangles(f, 1)),
                           c = mesh.vertices.row(mesh.triangles(f, 2));
     const Eigen::Vector3d n = (b - a).cross(c - a);
-    impl_->normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ());
+    impl_->normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized())
+                                          : Eigen::Vector3d::UnitZ());
   }
   if (sm.number_of_faces() != std::size_t(mesh.triangles.rows()))
     throw Error("the mesh has faces CGAL cannot connect (non-manifold vertices?)");
@@ -56,7 +61,8 @@ MeshSdf::MeshSdf(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
 
 MeshSdf::~MeshSdf() = default;
 
-double MeshSdf::unsigned_distance(const Eigen::Vector3d& p, Eigen::Vector3d* closest, int* triangle) const {
+double MeshSdf::unsigned_distance(const Eigen::Vector3d& p, Eigen::Vector3d* closest,
+                                  int* triangle) const {
   const K::Point_3 q(p.x(), p.y(), p.z());
   const auto hit = impl_->tree->closest_point_and_primitive(q);
   const Eigen::Vector3d c(hit.first.x(), hit.first.y(), hit.first.z());
@@ -83,6 +89,8 @@ Eigen::Vector3d MeshSdf::gradient(const Eigen::Vector3d& p) const {
   return inside(p) ? Eigen::Vector3d(-away) : away;
 }
 
-Eigen::Vector3d MeshSdf::triangle_normal(int t) const { return impl_->normals[std::size_t(t)]; }
+Eigen::Vector3d MeshSdf::triangle_normal(int t) const {
+  return impl_->normals[std::size_t(t)];
+}
 
 }  // namespace sdfcontour

@@ -4,7 +4,8 @@ namespace sdfcontour {
 
 Mesh normalize_mesh(const Mesh& mesh, double half_extent) {
   if (mesh.vertices.rows() == 0) throw Error("the mesh has no vertices");
-  const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff(), hi = mesh.vertices.colwise().maxCoeff();
+  const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff(),
+                           hi = mesh.vertices.colwise().maxCoeff();
   const double longest = (hi - lo).maxCoeff();
   if (!(longest > 0)) throw Error("the mesh has no extent");
   Mesh out = mesh;

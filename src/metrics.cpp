@@ -73,18 +73,21 @@ Eigen::VectorXd point_mesh_distances(const PointMatrix& points, const Mesh& mesh
   return d;
 }
 
-SurfaceDistances surface_distances(const Mesh& a, const Mesh& b, std::size_t samples, std::uint64_t seed) {
+SurfaceDistances surface_distances(const Mesh& a, const Mesh& b, std::size_t samples,
+                                   std::uint64_t seed) {
   struct Directed {
     double mean, rms, max;
   };
   auto directed = [&](const Mesh& from, const Mesh& to) {
     const Eigen::VectorXd d = point_mesh_distances(sample_surface(from, samples, seed), to);
     const double vertex_max = point_mesh_distances(from.vertices, to).maxCoeff();
-    return Directed{d.mean(), std::sqrt(d.squaredNorm() / double(d.size())), std::max(d.maxCoeff(), vertex_max)};
+    return Directed{d.mean(), std::sqrt(d.squaredNorm() / double(d.size())),
+                    std::max(d.maxCoeff(), vertex_max)};
   };
   const Directed ab = directed(a, b), ba = directed(b, a);
   SurfaceDistances s;
-  s.mean_ab = ab.mean, s.mean_ba = ba.mean, s.rms_ab = ab.rms, s.rms_ba = ba.rms, s.max_ab = ab.max, s.max_ba = ba.max;
+  s.mean_ab = ab.mean, s.mean_ba = ba.mean, s.rms_ab = ab.rms, s.rms_ba = ba.rms, s.max_ab = ab.max,
+  s.max_ba = ba.max;
   s.hausdorff = std::max(ab.max, ba.max);
   s.l1 = 0.5 * (ab.mean + ba.mean);
   s.l2 = 0.5 * (ab.rms + ba.rms);

@@ -163,5 +163,36 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("poisson missing", ["poisson", p("none.ply"), "-o", out], "cannot read", [out])
     expect_error("poisson boundary", ["poisson", p("cp.ply"), "-o", out, "--boundary", "free"], "boundary", [out])
 
+    # sample / eval / eval-points on a shared mesh, and their bad input.
+    meshes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "data", "meshes")
+    prefix = p("spot")
+    r = run("sample", os.path.join(meshes, "spot.obj"), "--res", "24", "-o", prefix, "-q")
+    check("sample runs", r.returncode == 0, r.stderr)
+    grid = np.load(prefix + ".npy")
+    check("sample grid", grid.shape == (24, 24, 24) and (grid < 0).any() and (grid > 0).any(), grid.shape)
+    r = run("sample", os.path.join(meshes, "spot.obj"), "--random", "3000", "--seed", "2", "-o", p("spot_random"), "-q")
+    check("sample random", r.returncode == 0 and np.load(p("spot_random.npy")).shape == (3000, 4), r.stderr)
+    r = run("contour", prefix + ".npy", "-o", p("spot_mc.ply"), "--method", "mc", "-q")
+    check("contour sampled grid", r.returncode == 0, r.stderr)
+    r = run("eval", p("spot_mc.ply"), prefix + "_mesh.ply", "--samples", "20000")
+    check("eval runs", r.returncode == 0, r.stderr)
+    e = json.loads(r.stdout)
+    h = 2 / 23
+    check("eval values", 0 < e["L1"] < 0.1 * h and e["L1"] <= e["L2"] <= e["L_inf"] < h, e)
+    check("eval topology", e["recon_mesh"]["closed"] and e["recon_mesh"]["genus"] == 0, e["recon_mesh"])
+    r = run("eval-points", prefix + "_gtcp.ply", prefix + "_mesh.ply")
+    e = json.loads(r.stdout)
+    check("eval-points gtcp exact", r.returncode == 0 and e["abs_value"]["p95"] < 1e-9 and e["count"] == 24**3, e)
+    lines = open(os.path.join(meshes, "cube.obj")).read().splitlines()
+    faces = [i for i, line in enumerate(lines) if line.startswith("f ")]
+    open(p("open.obj"), "w").write("\n".join(line for i, line in enumerate(lines) if i != faces[-1]) + "\n")
+    expect_error("sample open mesh", ["sample", p("open.obj"), "--res", "8", "-o", p("o")], "not closed", [p("o.npy")])
+    expect_error("sample no mesh", ["sample", p("none.obj"), "--res", "8", "-o", p("o")], "cannot read", [p("o.npy")])
+    expect_error("sample both", ["sample", os.path.join(meshes, "cube.obj"), "--res", "8", "--random", "9", "-o", p("o")],
+                 "exactly one", [p("o.npy")])
+    expect_error("eval unreadable", ["eval", p("none.ply"), prefix + "_mesh.ply"], "cannot read")
+    open(p("empty.off"), "w").write("OFF\n0 0 0\n")
+    expect_error("eval empty mesh", ["eval", p("empty.off"), prefix + "_mesh.ply"], "")
+
 print(f"{passed} passed, {failed} failed")
 sys.exit(1 if failed else 0)

@@ -13,15 +13,15 @@
 
 #include "sdfcontour/atomic_file.h"
 #include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/npy.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/poisson.h"
 #include "sdfcontour/contact_points.h"
+#include "sdfcontour/io.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/mesh_sdf.h"
 #include "sdfcontour/mesh_transform.h"
 #include "sdfcontour/metrics.h"
+#include "sdfcontour/npy.h"
+#include "sdfcontour/pipeline.h"
+#include "sdfcontour/poisson.h"
 #include "sdfcontour/statistics.h"
 
 using namespace sdfcontour;
@@ -334,7 +334,8 @@ struct SampleArgs {
 
 // mesh -> normalised mesh, SDF samples (grid or random) and their exact contact points.
 int run_sample(const SampleArgs& a) {
-  if ((a.resolution > 0) == (a.random > 0)) throw Error("give exactly one of --res N and --random COUNT");
+  if ((a.resolution > 0) == (a.random > 0))
+    throw Error("give exactly one of --res N and --random COUNT");
   if (a.resolution == 1 || a.resolution > 1024) throw Error("--res must be between 2 and 1024");
   if (!(a.scale > 0)) throw Error("--scale must be positive");
   auto say = [&](const std::string& m) {
@@ -349,7 +350,8 @@ int run_sample(const SampleArgs& a) {
     say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
     const Grid grid = sample_grid(sdf, a.resolution, bounds);
     const std::size_t n = std::size_t(a.resolution);
-    write_npy(a.prefix + ".npy", {n, n, n}, std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
+    write_npy(a.prefix + ".npy", {n, n, n},
+              std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
     samples = grid.to_samples();
   } else {
     say("signed distances at " + std::to_string(a.random) + " random points");
@@ -365,8 +367,8 @@ int run_sample(const SampleArgs& a) {
   const ContactPoints gt = exact_contact_points(samples.points, sdf);
   write_oriented_points(a.prefix + "_gtcp.ply", {gt.points, gt.normals});
   write_mesh(a.prefix + "_mesh.ply", mesh);
-  std::cout << "samples " << samples.points.rows() << " -> " << a.prefix << ".npy, " << a.prefix << "_gtcp.ply, "
-            << a.prefix << "_mesh.ply" << std::endl;
+  std::cout << "samples " << samples.points.rows() << " -> " << a.prefix << ".npy, " << a.prefix
+            << "_gtcp.ply, " << a.prefix << "_mesh.ply" << std::endl;
   return 0;
 }
 
@@ -401,9 +403,12 @@ int run_eval(const EvalArgs& a) {
   j["L2"] = d.l2;
   j["directed"] = {{"recon_to_gt", {{"mean", d.mean_ab}, {"rms", d.rms_ab}, {"max", d.max_ab}}},
                    {"gt_to_recon", {{"mean", d.mean_ba}, {"rms", d.rms_ba}, {"max", d.max_ba}}}};
-  j["recon_mesh"] = {{"vertices", recon.vertices.rows()}, {"triangles", recon.triangles.rows()},
-                     {"closed", t.closed}, {"manifold", t.nonmanifold_edges == 0},
-                     {"consistently_oriented", t.consistently_oriented}, {"components", components},
+  j["recon_mesh"] = {{"vertices", recon.vertices.rows()},
+                     {"triangles", recon.triangles.rows()},
+                     {"closed", t.closed},
+                     {"manifold", t.nonmanifold_edges == 0},
+                     {"consistently_oriented", t.consistently_oriented},
+                     {"components", components},
                      {"euler_characteristic", t.euler_characteristic}};
   if (t.closed) j["recon_mesh"]["genus"] = (2 * long(components) - t.euler_characteristic) / 2;
   print_json(j, a.output);
@@ -418,10 +423,13 @@ int run_eval_points(const EvalArgs& a) {
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     int t = 0;
     value[std::size_t(i)] = sdf.unsigned_distance(points.points.row(i).transpose(), nullptr, &t);
-    alignment[std::size_t(i)] = points.normals.row(i).normalized().dot(sdf.triangle_normal(t).transpose());
+    alignment[std::size_t(i)] =
+        points.normals.row(i).normalized().dot(sdf.triangle_normal(t).transpose());
   });
   auto summary = [](const std::vector<double>& v) {
-    return nlohmann::json{{"median", quantile(v, 0.5)}, {"mean", mean(v)}, {"p95", quantile(v, 0.95)},
+    return nlohmann::json{{"median", quantile(v, 0.5)},
+                          {"mean", mean(v)},
+                          {"p95", quantile(v, 0.95)},
                           {"p05", quantile(v, 0.05)}};
   };
   nlohmann::json j;
@@ -514,28 +522,38 @@ int main(int argc, char** argv) {
   pa.poisson.add_to(poisson);
 
   SampleArgs sa;
-  CLI::App* sample = app.add_subcommand("sample", "Closed mesh -> normalised mesh, SDF samples and their exact contact points");
+  CLI::App* sample = app.add_subcommand(
+      "sample", "Closed mesh -> normalised mesh, SDF samples and their exact contact points");
   sample->add_option("mesh", sa.mesh, "Closed triangle mesh (OBJ, PLY or OFF)")->required();
-  sample->add_option("-o,--output", sa.prefix, "Output prefix: PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
-                                               "mesh), PREFIX_gtcp.ply (exact contact points with normals)")
+  sample
+      ->add_option("-o,--output", sa.prefix,
+                   "Output prefix: PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
+                   "mesh), PREFIX_gtcp.ply (exact contact points with normals)")
       ->required();
   sample->add_option("--res", sa.resolution, "Sample an N^3 grid over the bounds");
-  sample->add_option("--random", sa.random, "Sample COUNT uniform random points in the bounds instead");
+  sample->add_option("--random", sa.random,
+                     "Sample COUNT uniform random points in the bounds instead");
   sample->add_option("--seed", sa.seed, "Seed for --random")->capture_default_str();
-  sample->add_option("--scale", sa.scale, "The mesh's longest side is scaled to span [-scale, scale]")->capture_default_str();
-  sample->add_option("--bounds", sa.bounds, "Sampled box: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")->capture_default_str();
+  sample
+      ->add_option("--scale", sa.scale, "The mesh's longest side is scaled to span [-scale, scale]")
+      ->capture_default_str();
+  sample->add_option("--bounds", sa.bounds, "Sampled box: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")
+      ->capture_default_str();
   sample->add_flag("-q,--quiet", sa.quiet, "No progress messages on stderr");
 
   EvalArgs ea;
-  CLI::App* eval = app.add_subcommand("eval", "Distances between a reconstruction and the ground truth, as JSON");
+  CLI::App* eval = app.add_subcommand(
+      "eval", "Distances between a reconstruction and the ground truth, as JSON");
   eval->add_option("recon", ea.recon, "Reconstructed mesh")->required();
   eval->add_option("gt", ea.gt, "Ground-truth mesh")->required();
-  eval->add_option("--samples", ea.samples, "Area-uniform samples on each mesh")->capture_default_str();
+  eval->add_option("--samples", ea.samples, "Area-uniform samples on each mesh")
+      ->capture_default_str();
   eval->add_option("--seed", ea.seed, "Seed for the samples")->capture_default_str();
   eval->add_option("-o,--output", ea.output, "Write the JSON here instead of stdout");
 
   EvalArgs pe;
-  CLI::App* eval_points = app.add_subcommand("eval-points", "Contact points against the ground truth: |phi(c)| and n . grad phi");
+  CLI::App* eval_points = app.add_subcommand(
+      "eval-points", "Contact points against the ground truth: |phi(c)| and n . grad phi");
   eval_points->add_option("points", pe.recon, "Oriented points (PLY x y z nx ny nz)")->required();
   eval_points->add_option("gt", pe.gt, "Ground-truth closed mesh")->required();
   eval_points->add_option("-o,--output", pe.output, "Write the JSON here instead of stdout");

@@ -27,7 +27,8 @@ class MeshSdf : public AnalyticShape {
   /// on the surface, the closest triangle's normal.
   Eigen::Vector3d gradient(const Eigen::Vector3d& p) const override;
   /// Unsigned distance, closest point and the index of its triangle.
-  double unsigned_distance(const Eigen::Vector3d& p, Eigen::Vector3d* closest = nullptr, int* triangle = nullptr) const;
+  double unsigned_distance(const Eigen::Vector3d& p, Eigen::Vector3d* closest = nullptr,
+                           int* triangle = nullptr) const;
   /// Outward unit normal of triangle t.
   Eigen::Vector3d triangle_normal(int t) const;
   bool inside(const Eigen::Vector3d& p) const;

@@ -6,7 +6,8 @@
 namespace sdfcontour {
 
 /// Scales `mesh` uniformly about its bounding box's centre, moved to the origin, so that its
-/// longest side spans [-half_extent, half_extent]. Throws Error for an empty or flat-as-a-point mesh.
+/// longest side spans [-half_extent, half_extent]. Throws Error for an empty or flat-as-a-point
+/// mesh.
 Mesh normalize_mesh(const Mesh& mesh, double half_extent);
 
 }  // namespace sdfcontour
