@@ -80,7 +80,14 @@ SurfaceDistances surface_distances(const Mesh& a, const Mesh& b, std::size_t sam
   };
   auto directed = [&](const Mesh& from, const Mesh& to) {
     const Eigen::VectorXd d = point_mesh_distances(sample_surface(from, samples, seed), to);
-    const double vertex_max = point_mesh_distances(from.vertices, to).maxCoeff();
+    // Only vertices that a triangle uses: a peer may leave unreferenced ones behind.
+    std::vector<char> used(std::size_t(from.vertices.rows()), 0);
+    for (Eigen::Index f = 0; f < from.triangles.rows(); ++f)
+      for (int k = 0; k < 3; ++k) used[std::size_t(from.triangles(f, k))] = 1;
+    PointMatrix corners(Eigen::Index(std::count(used.begin(), used.end(), 1)), 3);
+    for (Eigen::Index v = 0, at = 0; v < from.vertices.rows(); ++v)
+      if (used[std::size_t(v)]) corners.row(at++) = from.vertices.row(v);
+    const double vertex_max = point_mesh_distances(corners, to).maxCoeff();
     return Directed{d.mean(), std::sqrt(d.squaredNorm() / double(d.size())),
                     std::max(d.maxCoeff(), vertex_max)};
   };
