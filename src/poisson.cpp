@@ -531,72 +531,78 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       std::vector<std::pair<int, double>> rhs;
       std::vector<std::tuple<int, int, double>> matrix;  // (row, slot, value)
     };
-    std::vector<Contributions> chunks((samples.size() + kChunk - 1) / kChunk);
-    tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t chunk) {
-      Contributions& out = chunks[chunk];
-      for (std::size_t si = chunk * kChunk; si < std::min(samples.size(), (chunk + 1) * kChunk);
-           ++si) {
-        const Sample& s = samples[si];
-        // Divergence of the splatted normals, int V . grad(phi_v) with V = -area * n * F_p, F_p the
-        // unit-integral trilinear kernel at the sample's splat depth.
-        const int sd = s.depth;
-        const long sres = 1L << sd;
-        const double sh = 1.0 / double(sres);
-        const auto sc = cell_of(s.p, sres);
-        double axis_weight[3][2];
-        for (int a = 0; a < 3; ++a) {
-          axis_weight[a][1] =
-              std::clamp(s.p[a] * double(sres) - double(sc[std::size_t(a)]), 0.0, 1.0);
-          axis_weight[a][0] = 1 - axis_weight[a][1];
-        }
-        // Level-d node ranges overlapping the kernel's support along each axis, with the value and
-        // slope integrals against the kernel's two hats on that axis (cached: they depend only on
-        // the splat depth, the splat cell's index on the axis and this depth).
-        std::array<double, 3> factors[3][64];  // (index, value integral, slope integral)
-        int count[3] = {0, 0, 0};
-        for (int a = 0; a < 3; ++a) {
-          const auto& table = integral_cache.find({long(sd), sc[std::size_t(a)], long(d)})->second;
-          for (const auto& t : table) {
-            const double f0 = axis_weight[a][0] * t[1] + axis_weight[a][1] * t[3];
-            const double f1 = axis_weight[a][0] * t[2] + axis_weight[a][1] * t[4];
-            if ((f0 != 0 || f1 != 0) && count[a] < 64) factors[a][count[a]++] = {t[0], f0, f1};
+    // Chunks are processed kBatch at a time, which bounds the memory the lists take.
+    constexpr std::size_t kBatch = 32;
+    const std::size_t chunk_count = (samples.size() + kChunk - 1) / kChunk;
+    for (std::size_t first_chunk = 0; first_chunk < chunk_count; first_chunk += kBatch) {
+      std::vector<Contributions> chunks(std::min(kBatch, chunk_count - first_chunk));
+      tbb::parallel_for(first_chunk, first_chunk + chunks.size(), [&](std::size_t chunk) {
+        Contributions& out = chunks[chunk - first_chunk];
+        for (std::size_t si = chunk * kChunk; si < std::min(samples.size(), (chunk + 1) * kChunk);
+             ++si) {
+          const Sample& s = samples[si];
+          // Divergence of the splatted normals, int V . grad(phi_v) with V = -area * n * F_p, F_p
+          // the unit-integral trilinear kernel at the sample's splat depth.
+          const int sd = s.depth;
+          const long sres = 1L << sd;
+          const double sh = 1.0 / double(sres);
+          const auto sc = cell_of(s.p, sres);
+          double axis_weight[3][2];
+          for (int a = 0; a < 3; ++a) {
+            axis_weight[a][1] =
+                std::clamp(s.p[a] * double(sres) - double(sc[std::size_t(a)]), 0.0, 1.0);
+            axis_weight[a][0] = 1 - axis_weight[a][1];
           }
-        }
-        const double scale = -s.area / (sh * sh * sh);
-        for (int ix = 0; ix < count[0]; ++ix)
-          for (int iy = 0; iy < count[1]; ++iy)
-            for (int iz = 0; iz < count[2]; ++iz) {
-              const auto &fx = factors[0][ix], &fy = factors[1][iy], &fz = factors[2][iz];
-              const int v = L.node(long(fx[0]), long(fy[0]), long(fz[0]));
-              if (v < 0 || !L.unknown[std::size_t(v)]) continue;
-              out.rhs.push_back(
-                  {v, scale * (s.n.x() * fx[2] * fy[1] * fz[1] + s.n.y() * fx[1] * fy[2] * fz[1] +
-                               s.n.z() * fx[1] * fy[1] * fz[2])});
+          // Level-d node ranges overlapping the kernel's support along each axis, with the value
+          // and slope integrals against the kernel's two hats on that axis (cached: they depend
+          // only on the splat depth, the splat cell's index on the axis and this depth).
+          std::array<double, 3> factors[3][64];  // (index, value integral, slope integral)
+          int count[3] = {0, 0, 0};
+          for (int a = 0; a < 3; ++a) {
+            const auto& table =
+                integral_cache.find({long(sd), sc[std::size_t(a)], long(d)})->second;
+            for (const auto& t : table) {
+              const double f0 = axis_weight[a][0] * t[1] + axis_weight[a][1] * t[3];
+              const double f1 = axis_weight[a][0] * t[2] + axis_weight[a][1] * t[4];
+              if ((f0 != 0 || f1 != 0) && count[a] < 64) factors[a][count[a]++] = {t[0], f0, f1};
             }
-        // Screening: (chi(p) - 1/2)^2 for samples inside this depth's active cells.
-        if (screening > 0) {
-          const auto c = cell_of(s.p, L.res);
-          if (L.cell_index.find(pack(c[0], c[1], c[2])) < 0) continue;
-          const auto w = corner_weights(s.p, c, L.res);
-          int corner_node[8];
-          for (int q = 0; q < 8; ++q)
-            corner_node[q] = L.node(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1));
-          for (int qa = 0; qa < 8; ++qa) {
-            const int va = corner_node[qa];
-            if (!L.unknown[std::size_t(va)]) continue;
-            out.rhs.push_back({va, screening * w[std::size_t(qa)] * 0.5});
-            for (int qb = 0; qb < 8; ++qb)
-              out.matrix.emplace_back(va,
-                                      slot((qb & 1) - (qa & 1), (qb >> 1 & 1) - (qa >> 1 & 1),
-                                           (qb >> 2 & 1) - (qa >> 2 & 1)),
-                                      screening * w[std::size_t(qa)] * w[std::size_t(qb)]);
+          }
+          const double scale = -s.area / (sh * sh * sh);
+          for (int ix = 0; ix < count[0]; ++ix)
+            for (int iy = 0; iy < count[1]; ++iy)
+              for (int iz = 0; iz < count[2]; ++iz) {
+                const auto &fx = factors[0][ix], &fy = factors[1][iy], &fz = factors[2][iz];
+                const int v = L.node(long(fx[0]), long(fy[0]), long(fz[0]));
+                if (v < 0 || !L.unknown[std::size_t(v)]) continue;
+                out.rhs.push_back(
+                    {v, scale * (s.n.x() * fx[2] * fy[1] * fz[1] + s.n.y() * fx[1] * fy[2] * fz[1] +
+                                 s.n.z() * fx[1] * fy[1] * fz[2])});
+              }
+          // Screening: (chi(p) - 1/2)^2 for samples inside this depth's active cells.
+          if (screening > 0) {
+            const auto c = cell_of(s.p, L.res);
+            if (L.cell_index.find(pack(c[0], c[1], c[2])) < 0) continue;
+            const auto w = corner_weights(s.p, c, L.res);
+            int corner_node[8];
+            for (int q = 0; q < 8; ++q)
+              corner_node[q] = L.node(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1));
+            for (int qa = 0; qa < 8; ++qa) {
+              const int va = corner_node[qa];
+              if (!L.unknown[std::size_t(va)]) continue;
+              out.rhs.push_back({va, screening * w[std::size_t(qa)] * 0.5});
+              for (int qb = 0; qb < 8; ++qb)
+                out.matrix.emplace_back(va,
+                                        slot((qb & 1) - (qa & 1), (qb >> 1 & 1) - (qa >> 1 & 1),
+                                             (qb >> 2 & 1) - (qa >> 2 & 1)),
+                                        screening * w[std::size_t(qa)] * w[std::size_t(qb)]);
+            }
           }
         }
+      });
+      for (const auto& chunk : chunks) {
+        for (const auto& [v, value] : chunk.rhs) b[std::size_t(v)] += value;
+        for (const auto& [v, sl, value] : chunk.matrix) A[std::size_t(v)][std::size_t(sl)] += value;
       }
-    });
-    for (const auto& chunk : chunks) {
-      for (const auto& [v, value] : chunk.rhs) b[std::size_t(v)] += value;
-      for (const auto& [v, sl, value] : chunk.matrix) A[std::size_t(v)][std::size_t(sl)] += value;
     }
 
     const auto assembled = clock::now();
@@ -650,6 +656,9 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     }
     long unknowns = 0;
     for (char u : L.unknown) unknowns += u;
+    // Extraction needs only the values, nodes and cells: drop the solver's tables now.
+    std::vector<std::array<int, 27>>().swap(L.neighbours);
+    std::vector<char>().swap(L.unknown);
     result.levels.push_back({d, long(L.cells.size()), unknowns, it,
                              r_norm / std::max(b_norm, 1e-300),
                              std::chrono::duration<double>(assembled - level_start).count(),
