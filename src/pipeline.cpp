@@ -145,6 +145,7 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
           return poisson_reconstruct({cp.points, cp.normals}, popt);
         });
     result.mesh = std::move(p.mesh);
+    for (const auto& [name, seconds] : p.seconds) result.poisson_stages.push_back({name, seconds});
   }
   if (method == Method::MtRt && options.want_mesh)
     result.mesh = stages.run(

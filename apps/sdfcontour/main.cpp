@@ -246,6 +246,11 @@ int run_contour(const ContourArgs& a) {
     total += s.seconds;
   }
   j["seconds"] = stage_json;
+  if (!r.poisson_stages.empty()) {
+    nlohmann::json poisson_json = nlohmann::json::object();
+    for (const auto& s : r.poisson_stages) poisson_json[s.name] = s.seconds;
+    j["poisson_seconds"] = poisson_json;
+  }
   j["seconds_total"] = total;
   if (!a.stats.empty()) {
     AtomicFile f(a.stats);

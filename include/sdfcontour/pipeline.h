@@ -48,6 +48,7 @@ struct ContourResult {
   int samples = 0;
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
+  std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
 };
 
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
