@@ -47,6 +47,33 @@ def sample(name, res=None, random=None, seed=0):
     return prefix
 
 
+def has_surface(prefix):
+    """False when no sample is inside (a thin part between grid points): nothing to contour."""
+    values = np.load(prefix + ".npy")
+    values = values[:, 3] if values.ndim == 2 else values
+    return bool((values < 0).any() and (values >= 0).any())
+
+
+def grid_cases(names, resolutions):
+    """(name, res, sample prefix, ground-truth mesh) for every mesh and resolution that has a
+    surface to contour."""
+    for name in names:
+        for res in resolutions:
+            prefix = sample(name, res)
+            if not has_surface(prefix):
+                print(name, res, "no sample inside the shape: skipped", flush=True)
+                continue
+            yield name, res, prefix, prefix + "_mesh.ply"
+
+
+def log_axis(ax, resolutions):
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xticks(resolutions)
+    ax.set_xticklabels([str(r) for r in resolutions])
+    ax.minorticks_off()
+
+
 def evaluate(mesh, gt):
     r = subprocess.run([CLI, "eval", mesh, gt, "--samples", "50000"], capture_output=True, text=True, check=True)
     e = json.loads(r.stdout)
@@ -155,19 +182,15 @@ def exp_screening(args, names):
     alphas = [0.5, 1, 2, 4, 10]
     resolutions = [int(r) for r in args.resolutions.split(",")] if args.resolutions else [16, 24, 32, 48, 64]
     rows = []
-    for name in names:
-        for res in resolutions:
-            prefix = sample(name, res)
-            gt = prefix + "_mesh.ply"
-            wall, _ = contour(prefix + ".npy", prefix + "_out_mc.ply", "mc")
-            rows.append({"mesh": name, "res": res, "method": "mc", "alpha": "", **evaluate(prefix + "_out_mc.ply", gt),
-                         "seconds": wall})
-            for alpha in alphas:
-                out = f"{prefix}_out_gtcp_a{alpha}.ply"
-                wall, _ = poisson(prefix + "_gtcp.ply", out, ["--alpha", str(alpha), "--depth", str(depth_for(res))])
-                rows.append({"mesh": name, "res": res, "method": "gtcp", "alpha": alpha, **evaluate(out, gt),
-                             "seconds": wall})
-            print(name, res, flush=True)
+    for name, res, prefix, gt in grid_cases(names, resolutions):
+        wall, _ = contour(prefix + ".npy", prefix + "_out_mc.ply", "mc")
+        rows.append({"mesh": name, "res": res, "method": "mc", "alpha": "", **evaluate(prefix + "_out_mc.ply", gt),
+                     "seconds": wall})
+        for alpha in alphas:
+            out = f"{prefix}_out_gtcp_a{alpha}.ply"
+            wall, _ = poisson(prefix + "_gtcp.ply", out, ["--alpha", str(alpha), "--depth", str(depth_for(res))])
+            rows.append({"mesh": name, "res": res, "method": "gtcp", "alpha": alpha, **evaluate(out, gt), "seconds": wall})
+        print(name, res, flush=True)
     write_csv("screening", rows)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
     table = ["| res | " + " | ".join(["MC"] + [f"GTCP α={a:g}" for a in alphas]) + " |", "|---" * (len(alphas) + 2) + "|"]
@@ -175,7 +198,8 @@ def exp_screening(args, names):
         for label, sel in [("MC", lambda r: r["method"] == "mc")] + [
                 (f"GTCP α={a:g}", (lambda a: lambda r: r["method"] == "gtcp" and r["alpha"] == a)(a)) for a in alphas]:
             ys = [np.mean([r[metric] for r in rows if r["res"] == res and sel(r)]) for res in resolutions]
-            ax.loglog(resolutions, ys, marker="o", label=label)
+            ax.plot(resolutions, ys, marker="o", label=label)
+        log_axis(ax, resolutions)
         ax.set_xlabel("grid resolution N (N³ samples)")
         ax.set_title(f"{metric} distance to ground truth (mean over meshes)")
         ax.legend()
@@ -198,28 +222,24 @@ METHODS = ["mc", "mt-rt", "gcp", "gtcp"]
 def exp_resolution(args, names):
     resolutions = [int(r) for r in args.resolutions.split(",")] if args.resolutions else [16, 24, 32, 48, 64, 96, 128]
     rows = []
-    path = os.path.join(RESULTS, "resolution.csv")
-    for name in names:
-        for res in resolutions:
-            prefix = sample(name, res)
-            gt = prefix + "_mesh.ply"
-            for method in METHODS:
-                out = f"{prefix}_out_{method}.ply"
-                depth = ["--depth", str(depth_for(res))]
-                if method == "gtcp":
-                    wall, stats = poisson(prefix + "_gtcp.ply", out, depth)
-                    stages = {"poisson_" + k: v for k, v in stats["seconds"].items()}
-                else:
-                    wall, stats = contour(prefix + ".npy", out, method, depth if method == "gcp" else ())
-                    stages = dict(stats["seconds"])
-                    stages.update({"poisson_" + k: v for k, v in stats.get("poisson_seconds", {}).items()})
-                row = {"mesh": name, "res": res, "method": method, **evaluate(out, gt), "seconds": wall}
-                for key in ("triangulation", "gradients", "contact_points", "marching", "poisson", "poisson_octree",
-                            "poisson_solve", "poisson_extraction", "poisson_density"):
-                    row["s_" + key] = stages.get(key, 0.0)
-                rows.append(row)
-            print(name, res, " ".join(f"{r['method']} {r['L1']:.2e}" for r in rows[-4:]), flush=True)
-        write_csv("resolution", rows)  # after every mesh: a partial run still leaves data
+    for name, res, prefix, gt in grid_cases(names, resolutions):
+        for method in METHODS:
+            out = f"{prefix}_out_{method}.ply"
+            depth = ["--depth", str(depth_for(res))]
+            if method == "gtcp":
+                wall, stats = poisson(prefix + "_gtcp.ply", out, depth)
+                stages = {"poisson_" + k: v for k, v in stats["seconds"].items()}
+            else:
+                wall, stats = contour(prefix + ".npy", out, method, depth if method == "gcp" else ())
+                stages = dict(stats["seconds"])
+                stages.update({"poisson_" + k: v for k, v in stats.get("poisson_seconds", {}).items()})
+            row = {"mesh": name, "res": res, "method": method, **evaluate(out, gt), "seconds": wall}
+            for key in ("triangulation", "gradients", "contact_points", "marching", "poisson", "poisson_octree",
+                        "poisson_solve", "poisson_extraction", "poisson_density"):
+                row["s_" + key] = stages.get(key, 0.0)
+            rows.append(row)
+        print(name, res, " ".join(f"{r['method']} {r['L1']:.2e}" for r in rows[-4:]), flush=True)
+        write_csv("resolution", rows)  # after every case: a partial run still leaves data
     plot_resolution(rows, resolutions, names)
 
 
@@ -235,8 +255,9 @@ def plot_resolution(rows, resolutions, names):
                 mean.append(v.mean() if len(v) else np.nan)
                 low.append(max(v.mean() - v.std(), 1e-12) if len(v) else np.nan)
                 high.append(v.mean() + v.std() if len(v) else np.nan)
-            ax.loglog(resolutions, mean, marker="o", label=method)
+            ax.plot(resolutions, mean, marker="o", label=method)
             ax.fill_between(resolutions, low, high, alpha=0.15)
+        log_axis(ax, resolutions)
         ax.set_xlabel("grid resolution N (N³ samples)")
         ax.set_title(("wall time (s)" if metric == "seconds" else f"{metric} distance") + ", mean ± std over meshes")
         ax.legend()
@@ -311,13 +332,14 @@ def exp_timing(args, names):
     for label, key in stages:
         ys = [float(next(r[key] for r in rows if r["mesh"] == mesh and int(r["res"]) == res and r["method"] == "gcp"))
               for res in resolutions]
-        ax.loglog(resolutions, ys, marker="o", label=label)
+        ax.plot(resolutions, ys, marker="o", label=label)
     gcp = [float(next(r["seconds"] for r in rows if r["mesh"] == mesh and int(r["res"]) == res and r["method"] == "gcp"))
            for res in resolutions]
     mc = [float(next(r["seconds"] for r in rows if r["mesh"] == mesh and int(r["res"]) == res and r["method"] == "mc"))
           for res in resolutions]
-    ax.loglog(resolutions, gcp, "k-", linewidth=2, label="GCP total")
-    ax.loglog(resolutions, mc, "k--", linewidth=2, label="MC total")
+    ax.plot(resolutions, gcp, "k-", linewidth=2, label="GCP total")
+    ax.plot(resolutions, mc, "k--", linewidth=2, label="MC total")
+    log_axis(ax, resolutions)
     for i, res in enumerate(resolutions):
         r = next(r for r in rows if r["mesh"] == mesh and int(r["res"]) == res and r["method"] == "gcp")
         table.append(f"| {res}³ | " + " | ".join(f"{float(r[k]):.3f}" for _, k in stages) +

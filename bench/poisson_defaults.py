@@ -48,6 +48,7 @@ def main():
     configs = [(float(a), int(d)) for a in args.alphas.split(",") for d in args.depths.split(",")]
     # results[grid][config] = list of (l1 / mc_l1, hausdorff / mc_hausdorff, seconds)
     results = {}
+    skipped = []
     with tempfile.TemporaryDirectory() as d:
         for grid in map(int, args.grids.split(",")):
             results[grid] = {c: [] for c in configs}
@@ -55,7 +56,12 @@ def main():
                 prefix = os.path.join(d, f"{name}{grid}")
                 run([args.cli, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(grid), "-o", prefix, "-q"])
                 gt = prefix + "_mesh.ply"
-                run([args.cli, "contour", prefix + ".npy", "-o", prefix + "_mc.ply", "--method", "mc", "-q"])
+                try:
+                    run([args.cli, "contour", prefix + ".npy", "-o", prefix + "_mc.ply", "--method", "mc", "-q"])
+                except subprocess.CalledProcessError:
+                    print(f"{name} {grid}^3: no sample inside (no surface to contour), skipped", flush=True)
+                    skipped.append(f"{name} at {grid}³")
+                    continue
                 mc_l1, mc_linf = evaluate(args.cli, prefix + "_mc.ply", gt)
                 gcp_seconds = run([args.cli, "contour", prefix + ".npy", "--points", prefix + "_gcp.ply", "-q"])
                 line = [f"{name} {grid}^3 mc L1 {mc_l1:.2e}"]
@@ -78,7 +84,8 @@ def main():
         with open(args.out, "w") as f:
             f.write("# Screened Poisson defaults for GCP\n\nGCP meshes (James weights, regular triangulation) of each "
                     f"test mesh's SDF grid, {len(names)} meshes; distances to the ground truth relative to marching "
-                    "cubes on the same grid (below 1: GCP is closer). Made by `/usr/bin/python3 "
+                    "cubes on the same grid (below 1: GCP is closer). "
+                    f"Skipped, no sample inside the shape: {', '.join(skipped) or 'none'}. Made by `/usr/bin/python3 "
                     f"bench/poisson_defaults.py {' '.join(sys.argv[1:])}`.\n\n" + "\n".join(rows) + "\n")
 
 

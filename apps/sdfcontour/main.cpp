@@ -328,6 +328,15 @@ int run_poisson(const PoissonCommandArgs& a) {
   return 0;
 }
 
+// The options every mesh-writing command shares.
+void add_run_options(CLI::App* app, std::string& stats, int& threads, bool& ascii, bool& quiet,
+                     const std::string& stats_help) {
+  app->add_option("--stats", stats, stats_help);
+  app->add_option("--threads", threads, "Worker threads (0: all cores)")->capture_default_str();
+  app->add_flag("--ascii", ascii, "Write ASCII PLY instead of binary");
+  app->add_flag("-q,--quiet", quiet, "No progress messages on stderr");
+}
+
 struct SampleArgs {
   std::string mesh, prefix, bounds = "-1,1";
   int resolution = 0;
@@ -497,15 +506,10 @@ int main(int argc, char** argv) {
       "+FN: if the averaged gradient's point is discarded, try each incident tet's gradient");
   contour->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")
       ->capture_default_str();
-  contour->add_option("--threads", a.threads, "Worker threads (0: all cores)")
-      ->capture_default_str();
+  add_run_options(contour, a.stats, a.threads, a.ascii, a.quiet,
+                  "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
   contour->add_flag("--serial-triangulation", a.serial_triangulation,
                     "Insert points sequentially (same result, slower)");
-  contour->add_option(
-      "--stats", a.stats,
-      "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
-  contour->add_flag("--ascii", a.ascii, "Write ASCII PLY instead of binary");
-  contour->add_flag("-q,--quiet", a.quiet, "No progress messages on stderr");
   a.poisson.add_to(contour);
 
   PoissonCommandArgs pa;
@@ -518,12 +522,8 @@ int main(int argc, char** argv) {
   poisson->add_option(
       "--densities", pa.densities,
       "Write each vertex's estimated sampling density (samples per unit area) as .npy");
-  poisson->add_option("--stats", pa.stats,
-                      "Write a JSON summary (counts, per-stage seconds, per-depth solver figures)");
-  poisson->add_option("--threads", pa.threads, "Worker threads (0: all cores)")
-      ->capture_default_str();
-  poisson->add_flag("--ascii", pa.ascii, "Write ASCII PLY instead of binary");
-  poisson->add_flag("-q,--quiet", pa.quiet, "No progress messages on stderr");
+  add_run_options(poisson, pa.stats, pa.threads, pa.ascii, pa.quiet,
+                  "Write a JSON summary (counts, per-stage seconds, per-depth solver figures)");
   pa.poisson.add_to(poisson);
 
   SampleArgs sa;
