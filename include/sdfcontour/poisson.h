@@ -21,7 +21,7 @@ struct PoissonOptions {
   int full_depth = 5;             ///< the octree is complete down to this depth
   double scale = 1.1;             ///< domain cube = the points' bounding cube enlarged by this
   double samples_per_node = 1.5;  ///< splat each normal at the depth where a node holds this many
-  double point_weight = 1.0;      ///< alpha, the screening weight (0: plain Poisson)
+  double point_weight = 10.0;     ///< alpha, the screening weight (0: plain Poisson); see README
   PoissonBoundary boundary = PoissonBoundary::Neumann;
   double solver_tolerance = 1e-4;  ///< conjugate gradients stop at this relative residual per depth
   int max_iterations = 200;        ///< and after this many iterations per depth
