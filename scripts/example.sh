@@ -5,5 +5,5 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
 mkdir -p out
-./build/sdfcontour contour builtin:torus@64 -o out/torus_mt-rt.ply --method mt-rt \
+./build/sdfcontour contour builtin:torus@64 -o out/torus_gcp.ply --method gcp \
   --points out/torus_gcp_points.ply --stats out/torus_stats.json
