@@ -219,8 +219,31 @@ def exp_screening(args, names):
 METHODS = ["mc", "mt-rt", "gcp", "gtcp"]
 
 
+def load_rows(path):
+    """A results CSV back as typed rows."""
+    rows = []
+    for row in csv.DictReader(open(path)):
+        typed = {}
+        for key, value in row.items():
+            if value in ("True", "False"):
+                typed[key] = value == "True"
+            else:
+                try:
+                    typed[key] = int(value)
+                except ValueError:
+                    try:
+                        typed[key] = float(value)
+                    except ValueError:
+                        typed[key] = value
+        rows.append(typed)
+    return rows
+
+
 def exp_resolution(args, names):
     resolutions = [int(r) for r in args.resolutions.split(",")] if args.resolutions else [16, 24, 32, 48, 64, 96, 128]
+    # With --update, rows of the meshes not re-run now are kept from the last run.
+    path = os.path.join(RESULTS, "resolution.csv")
+    kept = [r for r in load_rows(path) if r["mesh"] not in names] if args.update and os.path.exists(path) else []
     rows = []
     for name, res, prefix, gt in grid_cases(names, resolutions):
         for method in METHODS:
@@ -239,8 +262,9 @@ def exp_resolution(args, names):
                 row["s_" + key] = stages.get(key, 0.0)
             rows.append(row)
         print(name, res, " ".join(f"{r['method']} {r['L1']:.2e}" for r in rows[-4:]), flush=True)
-        write_csv("resolution", rows)  # after every case: a partial run still leaves data
-    plot_resolution(rows, resolutions, names)
+        write_csv("resolution", sorted(kept + rows, key=lambda r: (r["mesh"], r["res"])))  # partial runs leave data
+    rows = sorted(kept + rows, key=lambda r: (r["mesh"], r["res"]))
+    plot_resolution(rows, resolutions, sorted({r["mesh"] for r in rows}))
 
 
 def plot_resolution(rows, resolutions, names):
@@ -360,6 +384,7 @@ def main():
     ap.add_argument("experiments", nargs="+", choices=["gradients", "screening", "resolution", "random", "timing"])
     ap.add_argument("--meshes", default="")
     ap.add_argument("--resolutions", default="")
+    ap.add_argument("--update", action="store_true", help="resolution: keep the other meshes' rows of the last run")
     args = ap.parse_args()
     os.makedirs(RESULTS, exist_ok=True)
     os.makedirs(CACHE, exist_ok=True)

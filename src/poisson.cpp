@@ -291,9 +291,10 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   using clock = std::chrono::steady_clock;
   PoissonResult result;
   auto stage_start = clock::now();
+  // Closes the running stage's timer (if any) and starts the next.
   auto stage = [&](const std::string& name) {
     const auto now = clock::now();
-    if (!result.seconds.empty() || name != "setup")
+    if (!result.seconds.empty())
       result.seconds.back().second = std::chrono::duration<double>(now - stage_start).count();
     result.seconds.push_back({name, 0.0});
     stage_start = now;
@@ -679,6 +680,34 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       deterministic_sum(samples.size(), [&](std::size_t s) { return chi_at(samples[s].p); }) /
       double(n);
   const double iso = result.iso_value;
+  // The normals point outward, so far from the samples chi must be clearly outside (below iso).
+  // With Neumann boundaries chi's level there is set by the data alone; when the normals nearly
+  // cancel (a thin plate sampled from both sides) it can end up level with iso, and the exterior
+  // fills with spurious sheets. Then solve again with the domain's faces pinned to outside
+  // (Dirichlet).
+  if (o.boundary == PoissonBoundary::Neumann) {
+    const Level& C = levels[std::size_t(d_min)];
+    double far = 0;
+    long count = 0;
+    for (std::size_t v = 0; v < C.nodes.size(); ++v) {
+      const auto [i, j, k] = unpack(C.nodes[v]);
+      if (i == 0 || j == 0 || k == 0 || i == C.res || j == C.res || k == C.res)
+        far += C.x[v], ++count;
+    }
+    // chi drops by about 1/2 from the surface (iso) to the far field; far less means the level
+    // outside was left undetermined.
+    constexpr double kMinimumDrop = 0.25;
+    if (iso - far / double(count) < kMinimumDrop) {
+      PoissonOptions pinned = o;
+      pinned.boundary = PoissonBoundary::Dirichlet;
+      if (o.progress)
+        o.progress(
+            "poisson: the far field came out inside; solving again with Dirichlet boundaries");
+      PoissonResult again = poisson_reconstruct(input, pinned);
+      again.boundary_fallback = true;
+      return again;
+    }
+  }
 
   // --- Extraction on finest-depth cells.
   stage("extraction");

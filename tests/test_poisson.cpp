@@ -155,6 +155,36 @@ TEST(Poisson, SparseAndTinyInputs) {
   EXPECT_TRUE(mesh_topology(r.mesh).closed);
 }
 
+// A thin plate sampled from both sides: the normals nearly cancel in the splatted field, and with
+// Neumann boundaries the far field can end up level with the iso-value, filling the domain with
+// spurious sheets. The reconstruction must notice and pin the far field (Dirichlet).
+TEST(Poisson, ThinPlateStaysInsideItsBox) {
+  OrientedPoints o;
+  const int side = 24;
+  o.points.resize(2 * side * side, 3);
+  o.normals.resize(2 * side * side, 3);
+  for (int s = 0; s < 2; ++s)
+    for (int i = 0; i < side; ++i)
+      for (int j = 0; j < side; ++j) {
+        const int r = (s * side + i) * side + j;
+        o.points.row(r) << -0.5 + i / double(side - 1), -0.3 + 0.6 * j / double(side - 1),
+            s ? 0.004 : -0.004;
+        o.normals.row(r) << 0, 0, s ? 1 : -1;
+      }
+  const PoissonResult r = poisson_reconstruct(o, {});
+  ASSERT_GT(r.mesh.vertices.rows(), 0);
+  EXPECT_TRUE(mesh_topology(r.mesh).closed);
+  // Nothing far from the plate: every vertex within a tenth of the plate's size of its box.
+  const Eigen::RowVector3d lo = r.mesh.vertices.colwise().minCoeff(),
+                           hi = r.mesh.vertices.colwise().maxCoeff();
+  EXPECT_GT(lo.x(), -0.6);
+  EXPECT_LT(hi.x(), 0.6);
+  EXPECT_GT(lo.z(), -0.1);
+  EXPECT_LT(hi.z(), 0.1);
+  std::cout << "thin plate: boundary fallback " << r.boundary_fallback << ", z range " << lo.z()
+            << " .. " << hi.z() << "\n";
+}
+
 TEST(Poisson, RejectsBadInput) {
   OrientedPoints empty;
   EXPECT_THROW(poisson_reconstruct(empty, {}), Error);

@@ -303,6 +303,7 @@ int run_poisson(const PoissonCommandArgs& a) {
                {"triangles", r.mesh.triangles.rows()},
                {"file", a.output}};
   j["iso_value"] = r.iso_value;
+  j["boundary_fallback"] = r.boundary_fallback;
   j["options"] = {{"alpha", o.point_weight},    {"depth", o.depth},
                   {"full_depth", o.full_depth}, {"samples_per_node", o.samples_per_node},
                   {"scale", o.scale},           {"boundary", a.poisson.boundary}};
@@ -506,8 +507,9 @@ int main(int argc, char** argv) {
       "+FN: if the averaged gradient's point is discarded, try each incident tet's gradient");
   contour->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")
       ->capture_default_str();
-  add_run_options(contour, a.stats, a.threads, a.ascii, a.quiet,
-                  "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
+  add_run_options(
+      contour, a.stats, a.threads, a.ascii, a.quiet,
+      "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
   contour->add_flag("--serial-triangulation", a.serial_triangulation,
                     "Insert points sequentially (same result, slower)");
   a.poisson.add_to(contour);
