@@ -680,24 +680,20 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       deterministic_sum(samples.size(), [&](std::size_t s) { return chi_at(samples[s].p); }) /
       double(n);
   const double iso = result.iso_value;
-  // The normals point outward, so far from the samples chi must be clearly outside (below iso).
-  // With Neumann boundaries chi's level there is set by the data alone; when the normals nearly
-  // cancel (a thin plate sampled from both sides) it can end up level with iso, and the exterior
-  // fills with spurious sheets. Then solve again with the domain's faces pinned to outside
-  // (Dirichlet).
+  // The normals point outward, so on the domain's faces chi must be outside (below iso). With
+  // Neumann boundaries chi's level there is set by the data alone; when the normals nearly cancel
+  // (a thin plate sampled from both sides) it can end up level with iso, and the exterior fills
+  // with spurious sheets. Then solve again with the domain's faces pinned to outside (Dirichlet).
   if (o.boundary == PoissonBoundary::Neumann) {
     const Level& C = levels[std::size_t(d_min)];
-    double far = 0;
-    long count = 0;
+    long inside = 0, count = 0;
     for (std::size_t v = 0; v < C.nodes.size(); ++v) {
       const auto [i, j, k] = unpack(C.nodes[v]);
       if (i == 0 || j == 0 || k == 0 || i == C.res || j == C.res || k == C.res)
-        far += C.x[v], ++count;
+        inside += C.x[v] >= iso, ++count;
     }
-    // chi drops by about 1/2 from the surface (iso) to the far field; far less means the level
-    // outside was left undetermined.
-    constexpr double kMinimumDrop = 0.25;
-    if (iso - far / double(count) < kMinimumDrop) {
+    // More than a percent of the domain's faces inside: the exterior is not outside.
+    if (inside * 100 > count) {
       PoissonOptions pinned = o;
       pinned.boundary = PoissonBoundary::Dirichlet;
       if (o.progress)

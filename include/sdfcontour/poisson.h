@@ -44,9 +44,9 @@ struct PoissonResult {
   Mesh mesh;                       ///< watertight, outward oriented iso-surface
   Eigen::VectorXd vertex_density;  ///< per vertex: estimated samples per unit area around it
   double iso_value = 0;            ///< the indicator's average over the samples
-  /// True when Neumann boundaries left the far field level with the iso-value (less than 1/4
-  /// below it), which contradicts the outward normals, and the result comes from a second solve
-  /// with Dirichlet boundaries.
+  /// True when Neumann boundaries left part of the domain's faces inside (chi >= iso), which
+  /// contradicts the outward normals, and the result comes from a second solve with Dirichlet
+  /// boundaries.
   bool boundary_fallback = false;
   std::vector<PoissonLevelStats> levels;
   std::vector<std::pair<std::string, double>> seconds;  ///< per stage
