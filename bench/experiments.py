@@ -119,7 +119,7 @@ def depth_for(res):
 def section(name, text):
     with open(os.path.join(RESULTS, name + ".md"), "w") as f:
         f.write(text)
-    order = ["gradients", "screening", "resolution", "random", "timing"]
+    order = ["findings", "gradients", "screening", "resolution", "random", "timing"]
     parts = ["# Results\n\nThe paper's experiments reproduced with sdfcontour on the 17 test meshes of "
              "`../shared/data/meshes` (scaled to [-0.9, 0.9]³, SDFs over [-1, 1]³), on the 2-core machine. "
              "Each section names the command that made it; CSVs and plots are in `docs/results/`.\n"]
