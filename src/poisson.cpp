@@ -164,6 +164,19 @@ int slot(int dx, int dy, int dz) {
   return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);
 }
 
+// Trilinear weights of p in cell c at resolution res, corner bits x=1, y=2, z=4.
+std::array<double, 8> corner_weights(const Eigen::Vector3d& p, const std::array<long, 3>& c,
+                                     long res) {
+  double t[3];
+  for (int a = 0; a < 3; ++a)
+    t[a] = std::clamp(p[a] * double(res) - double(c[std::size_t(a)]), 0.0, 1.0);
+  std::array<double, 8> w;
+  for (int k = 0; k < 8; ++k)
+    w[std::size_t(k)] = ((k & 1) ? t[0] : 1 - t[0]) * ((k >> 1 & 1) ? t[1] : 1 - t[1]) *
+                        ((k >> 2 & 1) ? t[2] : 1 - t[2]);
+  return w;
+}
+
 struct Level {
   int depth = 0;
   long res = 0;  // cells per axis
@@ -187,16 +200,13 @@ struct Level {
   }
   // chi at unit-cube point p, by trilinear interpolation in the active cell containing it.
   double interpolate(const std::array<long, 3>& cell, const Eigen::Vector3d& p) const {
-    double t[3];
-    for (int a = 0; a < 3; ++a)
-      t[a] = std::clamp(p[a] * double(res) - double(cell[std::size_t(a)]), 0.0, 1.0);
+    const auto w = corner_weights(p, cell, res);
     double v = 0;
-    for (int c = 0; c < 8; ++c) {
-      const int n = node(cell[0] + (c & 1), cell[1] + (c >> 1 & 1), cell[2] + (c >> 2 & 1));
-      const double w = ((c & 1) ? t[0] : 1 - t[0]) * ((c >> 1 & 1) ? t[1] : 1 - t[1]) *
-                       ((c >> 2 & 1) ? t[2] : 1 - t[2]);
-      if (w != 0) v += w * x[std::size_t(n)];
-    }
+    for (int c = 0; c < 8; ++c)
+      if (w[std::size_t(c)] != 0)
+        v +=
+            w[std::size_t(c)] *
+            x[std::size_t(node(cell[0] + (c & 1), cell[1] + (c >> 1 & 1), cell[2] + (c >> 2 & 1)))];
     return v;
   }
 };
@@ -206,19 +216,6 @@ std::array<long, 3> cell_of(const Eigen::Vector3d& p, long res) {
   for (int a = 0; a < 3; ++a)
     c[std::size_t(a)] = std::clamp(long(std::floor(p[a] * double(res))), 0L, res - 1);
   return c;
-}
-
-// Trilinear weights of p in cell c at resolution res, corner bits x=1, y=2, z=4.
-std::array<double, 8> corner_weights(const Eigen::Vector3d& p, const std::array<long, 3>& c,
-                                     long res) {
-  double t[3];
-  for (int a = 0; a < 3; ++a)
-    t[a] = std::clamp(p[a] * double(res) - double(c[std::size_t(a)]), 0.0, 1.0);
-  std::array<double, 8> w;
-  for (int k = 0; k < 8; ++k)
-    w[std::size_t(k)] = ((k & 1) ? t[0] : 1 - t[0]) * ((k >> 1 & 1) ? t[1] : 1 - t[1]) *
-                        ((k >> 2 & 1) ? t[2] : 1 - t[2]);
-  return w;
 }
 
 void build_nodes(Level& L, PoissonBoundary boundary) {
