@@ -252,28 +252,74 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
   });
 }
 
-// chi of the finer level's nodes from the coarser level (exact: trilinear functions nest).
-void prolong(const Level& coarse, Level& fine) {
-  fine.x.assign(fine.nodes.size(), 0.0);
+// Values on the finer level's nodes from the coarser level's (exact: trilinear functions nest).
+template <class T>
+std::vector<T> prolong_values(const Level& coarse, const Level& fine,
+                              const std::vector<T>& values) {
+  std::vector<T> out(fine.nodes.size());
   tbb::parallel_for(std::size_t(0), fine.nodes.size(), [&](std::size_t v) {
     const auto q = unpack(fine.nodes[v]);
     long lo[3], hi[3];
     for (int a = 0; a < 3; ++a)
       lo[a] = q[std::size_t(a)] >> 1, hi[a] = (q[std::size_t(a)] + 1) >> 1;
-    double sum = 0, weight = 0;
+    T sum = values[0] * 0.0;
+    double weight = 0;
     for (int c = 0; c < 8; ++c) {
-      const long i = (c & 1) ? hi[0] : lo[0], j = (c >> 1 & 1) ? hi[1] : lo[1],
-                 k = (c >> 2 & 1) ? hi[2] : lo[2];
       if (((c & 1) && hi[0] == lo[0]) || ((c >> 1 & 1) && hi[1] == lo[1]) ||
           ((c >> 2 & 1) && hi[2] == lo[2]))
         continue;
-      const int n = coarse.node(i, j, k);
-      sum += coarse.x[std::size_t(n)];
+      const int n = coarse.node((c & 1) ? hi[0] : lo[0], (c >> 1 & 1) ? hi[1] : lo[1],
+                                (c >> 2 & 1) ? hi[2] : lo[2]);
+      sum += values[std::size_t(n)];
       weight += 1;
     }
-    fine.x[v] = sum / weight;
+    out[v] = sum / weight;
   });
+  return out;
 }
+
+// Morton code of a cell (interleaved index bits, x lowest): the cells of a coarser depth are runs
+// of consecutive codes at a finer one.
+Key spread_bits(long v) {
+  Key x = Key(v) & 0xffff;
+  x = (x | (x << 16)) & 0x0000ff0000ffULL;
+  x = (x | (x << 8)) & 0x00f00f00f00fULL;
+  x = (x | (x << 4)) & 0x0c30c30c30c3ULL;
+  x = (x | (x << 2)) & 0x249249249249ULL;
+  return x;
+}
+long compact_bits(Key x) {
+  x &= 0x249249249249ULL;
+  x = (x | (x >> 2)) & 0x0c30c30c30c3ULL;
+  x = (x | (x >> 4)) & 0x00f00f00f00fULL;
+  x = (x | (x >> 8)) & 0x0000ff0000ffULL;
+  x = (x | (x >> 16)) & 0xffff;
+  return long(x);
+}
+Key morton(const std::array<long, 3>& c) {
+  return spread_bits(c[0]) | spread_bits(c[1]) << 1 | spread_bits(c[2]) << 2;
+}
+std::array<long, 3> morton_cell(Key code) {
+  return {compact_bits(code), compact_bits(code >> 1), compact_bits(code >> 2)};
+}
+
+// 1D integrals between hats of one depth, by the basis node's place on the axis (0: first node,
+// 1: interior, 2: last) and the other hat's offset (-1, 0, 1): value = int hat_j hat_i,
+// slope = int hat_j hat_i'. The last node's hat is cut at the domain's face.
+struct SameDepthIntegrals {
+  double value[3][3], slope[3][3];
+  SameDepthIntegrals(int depth, long res) {
+    const long representative[3] = {0, 1, res};
+    for (int place = 0; place < 3; ++place)
+      for (int o = -1; o <= 1; ++o) {
+        const long i = representative[place], j = i + o;
+        const bool exists = j >= 0 && j <= res;
+        value[place][o + 1] = exists ? hat_integral(depth, j, depth, i, false) : 0;
+        slope[place][o + 1] = exists ? hat_integral(depth, j, depth, i, true) : 0;
+      }
+  }
+  static int place(long i, long res) { return i == 0 ? 0 : i == res ? 2 : 1; }
+};
 
 struct Sample {
   Eigen::Vector3d p;  // unit-cube position
@@ -469,39 +515,142 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   for (int d = d_min; d <= D; ++d)
     if (!levels[std::size_t(d)].cells.empty()) finest = d;
 
+  // --- The data terms, gathered per node from the samples of its incident cells.
+  // Samples are put in Morton order of their depth-D cell, so that at every depth the samples of
+  // one cell are a contiguous run; every sum below runs over cells and samples in a fixed order,
+  // which makes the result independent of the thread count.
+  stage("splatting");
+  std::vector<std::pair<Key, std::uint32_t>> morton_order(samples.size());
+  tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t s) {
+    morton_order[s] = {morton(cell_of(samples[s].p, 1L << D)), std::uint32_t(s)};
+  });
+  tbb::parallel_sort(morton_order.begin(), morton_order.end());
+  // Per active cell of a level: its run [first, last) in morton_order (empty when no sample).
+  auto cell_runs = [&](const Level& L) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> runs(L.cells.size(), {0, 0});
+    const int shift = 3 * (D - L.depth);
+    for (std::size_t first = 0; first < morton_order.size();) {
+      const Key code = morton_order[first].first >> shift;
+      std::size_t last = first + 1;
+      while (last < morton_order.size() && morton_order[last].first >> shift == code) ++last;
+      const auto c = morton_cell(code);
+      const int idx = L.cell_index.find(pack(c[0], c[1], c[2]));
+      if (idx >= 0) runs[std::size_t(idx)] = {std::uint32_t(first), std::uint32_t(last)};
+      first = last;
+    }
+    return runs;
+  };
+  // Calls f(a, cell, first, last) for each active in-domain cell incident to node (i, j, k) that
+  // holds samples, a being the node's corner in that cell.
+  auto for_incident_runs = [](const Level& L,
+                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& runs,
+                              long i, long j, long k, auto&& f) {
+    for (int c = 0; c < 8; ++c) {
+      const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
+      const std::array<long, 3> cell{i + ox, j + oy, k + oz};
+      if (cell[0] < 0 || cell[1] < 0 || cell[2] < 0 || cell[0] >= L.res || cell[1] >= L.res ||
+          cell[2] >= L.res)
+        continue;
+      const int idx = L.cell_index.find(pack(cell[0], cell[1], cell[2]));
+      if (idx < 0 || runs[std::size_t(idx)].first == runs[std::size_t(idx)].second) continue;
+      f((-ox) | (-oy) << 1 | (-oz) << 2, cell, runs[std::size_t(idx)].first,
+        runs[std::size_t(idx)].second);
+    }
+  };
+  // The normal field V = sum over depths sd of the trilinear functions of depth sd with
+  // coefficients V_sd: each sample adds area * n * (its trilinear weights) / h_sd^3 at its splat
+  // depth (a unit-integral kernel). splat[d] holds V_d on the nodes of depth d.
+  std::vector<std::vector<Eigen::Vector3d>> splat(std::size_t(D + 1));
+  for (int d = d_min; d <= finest; ++d) {
+    const Level& L = levels[std::size_t(d)];
+    const auto runs = cell_runs(L);
+    auto& V = splat[std::size_t(d)];
+    V.assign(L.nodes.size(), Eigen::Vector3d::Zero());
+    const double inverse_volume = 1.0 / (L.h * L.h * L.h);
+    tbb::parallel_for(std::size_t(0), L.nodes.size(), [&](std::size_t v) {
+      const auto [i, j, k] = unpack(L.nodes[v]);
+      for_incident_runs(
+          L, runs, i, j, k,
+          [&](int a, const std::array<long, 3>& cell, std::uint32_t first, std::uint32_t last) {
+            for (std::uint32_t r = first; r < last; ++r) {
+              const Sample& s = samples[morton_order[r].second];
+              if (s.depth != d) continue;
+              V[v] +=
+                  s.area * inverse_volume * corner_weights(s.p, cell, L.res)[std::size_t(a)] * s.n;
+            }
+          });
+    });
+  }
+  // S_d(W)[i] = int grad(phi_i) . W for W given by depth-d coefficients, over the 27 neighbours.
+  auto divergence = [&](const Level& L, const SameDepthIntegrals& I,
+                        const std::vector<Eigen::Vector3d>& W, std::size_t v) {
+    const auto [i, j, k] = unpack(L.nodes[v]);
+    const int px = SameDepthIntegrals::place(i, L.res), py = SameDepthIntegrals::place(j, L.res),
+              pz = SameDepthIntegrals::place(k, L.res);
+    double sum = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int u = L.neighbours[v][std::size_t(slot(dx, dy, dz))];
+          if (u < 0) continue;
+          const Eigen::Vector3d& w = W[std::size_t(u)];
+          if (w.isZero(0)) continue;
+          sum += w.x() * I.slope[px][dx + 1] * I.value[py][dy + 1] * I.value[pz][dz + 1] +
+                 w.y() * I.value[px][dx + 1] * I.slope[py][dy + 1] * I.value[pz][dz + 1] +
+                 w.z() * I.value[px][dx + 1] * I.value[py][dy + 1] * I.slope[pz][dz + 1];
+        }
+    return sum;
+  };
+  // The part from finer splats, fine to coarse: finer[d][i] = int grad(phi_i) . (sum of V_sd for
+  // sd >= d). A depth-d hat is the sum of depth-(d+1) hats with weights 1/2, 1, 1/2 per axis, so
+  // finer[d] = S_d(V_d) + restriction of finer[d+1]. (Where a finer node is missing the field
+  // from finer splats is zero: every finer splat lies inside the finer band.)
+  std::vector<std::vector<double>> finer(std::size_t(D + 1));
+  for (int d = finest; d >= d_min; --d) {
+    const Level& L = levels[std::size_t(d)];
+    const SameDepthIntegrals I(d, L.res);
+    auto& e = finer[std::size_t(d)];
+    e.assign(L.nodes.size(), 0.0);
+    const Level* F = d < finest ? &levels[std::size_t(d + 1)] : nullptr;
+    tbb::parallel_for(std::size_t(0), L.nodes.size(), [&](std::size_t v) {
+      double sum = divergence(L, I, splat[std::size_t(d)], v);
+      if (F) {
+        const auto [i, j, k] = unpack(L.nodes[v]);
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int u = F->node(2 * i + dx, 2 * j + dy, 2 * k + dz);
+              if (u >= 0)
+                sum += (1 - 0.5 * std::abs(dx)) * (1 - 0.5 * std::abs(dy)) *
+                       (1 - 0.5 * std::abs(dz)) * finer[std::size_t(d + 1)][std::size_t(u)];
+            }
+      }
+      e[v] = sum;
+    });
+  }
+
   // --- Solve, coarse to fine.
   stage("solve");
-  // (index, int hat_j0 hat_idx, int hat_j0 hat_idx', int hat_j1 hat_idx, int hat_j1 hat_idx') for
-  // the depth-d nodes idx overlapping the splat cell [j0, j0 + 1] at depth sd, on one axis.
-  std::map<std::array<long, 3>, std::vector<std::array<double, 5>>> integral_cache;
-  auto axis_integrals = [&](int sd, long j0, int d,
-                            long res) -> const std::vector<std::array<double, 5>>& {
-    auto [it, inserted] = integral_cache.try_emplace({long(sd), j0, long(d)});
-    if (!inserted) return it->second;
-    const double sh = std::ldexp(1.0, -sd);
-    const double from = (double(j0) - 1) * sh, to = (double(j0) + 2) * sh;
-    const long first = std::max(0L, long(std::floor(from * double(res))) - 1);
-    const long last = std::min(res, long(std::ceil(to * double(res))) + 1);
-    for (long idx = first; idx <= last; ++idx) {
-      const std::array<double, 5> t{
-          double(idx), hat_integral(sd, j0, d, idx, false), hat_integral(sd, j0, d, idx, true),
-          hat_integral(sd, j0 + 1, d, idx, false), hat_integral(sd, j0 + 1, d, idx, true)};
-      if (t[1] != 0 || t[2] != 0 || t[3] != 0 || t[4] != 0) it->second.push_back(t);
-    }
-    return it->second;
-  };
   static const ElementMatrices element;
+  // V from coarser splats, expressed on the current depth's nodes (trilinear functions nest).
+  std::vector<Eigen::Vector3d> coarser;
   for (int d = d_min; d <= finest; ++d) {
     const auto level_start = clock::now();
     Level& L = levels[std::size_t(d)];
     const std::size_t nn = L.nodes.size();
-    if (d == d_min)
+    if (d == d_min) {
       L.x.assign(nn, 0.0);
-    else
-      prolong(levels[std::size_t(d - 1)], L);
+      coarser.assign(nn, Eigen::Vector3d::Zero());
+    } else {
+      L.x = prolong_values(levels[std::size_t(d - 1)], L, levels[std::size_t(d - 1)].x);
+      coarser = prolong_values(levels[std::size_t(d - 1)], L, coarser);
+    }
     // System rows (27 slots) for the unknown nodes: stiffness + screening.
     std::vector<std::array<double, 27>> A(nn);
     std::vector<double> b(nn, 0.0);
+    const double screening = o.point_weight * area_per_sample * std::ldexp(1.0, d);
+    const auto runs = cell_runs(L);
+    const SameDepthIntegrals I(d, L.res);
     tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
       A[v].fill(0.0);
       if (!L.unknown[v]) return;
@@ -517,91 +666,29 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
            [std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1), oz + (corner >> 2 & 1)))] +=
               L.h * element.stiffness[a][corner];
       }
-    });
-    const double screening = o.point_weight * area_per_sample * std::ldexp(1.0, d);
-    // Samples in fixed chunks, in parallel, each chunk listing its contributions; the lists are
-    // added in chunk order, so the sums are those of a serial loop whatever the thread count.
-    for (const auto& s : samples)
-      for (int a = 0; a < 3; ++a)
-        axis_integrals(s.depth, cell_of(s.p, 1L << s.depth)[std::size_t(a)], d, L.res);
-    constexpr std::size_t kChunk = 2048;
-    struct Contributions {
-      std::vector<std::pair<int, double>> rhs;
-      std::vector<std::tuple<int, int, double>> matrix;  // (row, slot, value)
-    };
-    // Chunks are processed kBatch at a time, which bounds the memory the lists take.
-    constexpr std::size_t kBatch = 32;
-    const std::size_t chunk_count = (samples.size() + kChunk - 1) / kChunk;
-    for (std::size_t first_chunk = 0; first_chunk < chunk_count; first_chunk += kBatch) {
-      std::vector<Contributions> chunks(std::min(kBatch, chunk_count - first_chunk));
-      tbb::parallel_for(first_chunk, first_chunk + chunks.size(), [&](std::size_t chunk) {
-        Contributions& out = chunks[chunk - first_chunk];
-        for (std::size_t si = chunk * kChunk; si < std::min(samples.size(), (chunk + 1) * kChunk);
-             ++si) {
-          const Sample& s = samples[si];
-          // Divergence of the splatted normals, int V . grad(phi_v) with V = -area * n * F_p, F_p
-          // the unit-integral trilinear kernel at the sample's splat depth.
-          const int sd = s.depth;
-          const long sres = 1L << sd;
-          const double sh = 1.0 / double(sres);
-          const auto sc = cell_of(s.p, sres);
-          double axis_weight[3][2];
-          for (int a = 0; a < 3; ++a) {
-            axis_weight[a][1] =
-                std::clamp(s.p[a] * double(sres) - double(sc[std::size_t(a)]), 0.0, 1.0);
-            axis_weight[a][0] = 1 - axis_weight[a][1];
-          }
-          // Level-d node ranges overlapping the kernel's support along each axis, with the value
-          // and slope integrals against the kernel's two hats on that axis (cached: they depend
-          // only on the splat depth, the splat cell's index on the axis and this depth).
-          std::array<double, 3> factors[3][64];  // (index, value integral, slope integral)
-          int count[3] = {0, 0, 0};
-          for (int a = 0; a < 3; ++a) {
-            const auto& table =
-                integral_cache.find({long(sd), sc[std::size_t(a)], long(d)})->second;
-            for (const auto& t : table) {
-              const double f0 = axis_weight[a][0] * t[1] + axis_weight[a][1] * t[3];
-              const double f1 = axis_weight[a][0] * t[2] + axis_weight[a][1] * t[4];
-              if ((f0 != 0 || f1 != 0) && count[a] < 64) factors[a][count[a]++] = {t[0], f0, f1};
-            }
-          }
-          const double scale = -s.area / (sh * sh * sh);
-          for (int ix = 0; ix < count[0]; ++ix)
-            for (int iy = 0; iy < count[1]; ++iy)
-              for (int iz = 0; iz < count[2]; ++iz) {
-                const auto &fx = factors[0][ix], &fy = factors[1][iy], &fz = factors[2][iz];
-                const int v = L.node(long(fx[0]), long(fy[0]), long(fz[0]));
-                if (v < 0 || !L.unknown[std::size_t(v)]) continue;
-                out.rhs.push_back(
-                    {v, scale * (s.n.x() * fx[2] * fy[1] * fz[1] + s.n.y() * fx[1] * fy[2] * fz[1] +
-                                 s.n.z() * fx[1] * fy[1] * fz[2])});
+      // Divergence of the splatted normals: -int grad(phi_v) . V.
+      b[v] = -(divergence(L, I, coarser, v) + finer[std::size_t(d)][v]);
+      // Screening: (chi(p) - 1/2)^2 for the samples in this depth's active cells.
+      if (screening > 0)
+        for_incident_runs(
+            L, runs, i, j, k,
+            [&](int a, const std::array<long, 3>& cell, std::uint32_t first, std::uint32_t last) {
+              const int ox = cell[0] - i, oy = cell[1] - j, oz = cell[2] - k;
+              double row[8] = {0, 0, 0, 0, 0, 0, 0, 0}, value = 0;
+              for (std::uint32_t r = first; r < last; ++r) {
+                const auto w = corner_weights(samples[morton_order[r].second].p, cell, L.res);
+                value += w[std::size_t(a)];
+                for (int q = 0; q < 8; ++q) row[q] += w[std::size_t(a)] * w[std::size_t(q)];
               }
-          // Screening: (chi(p) - 1/2)^2 for samples inside this depth's active cells.
-          if (screening > 0) {
-            const auto c = cell_of(s.p, L.res);
-            if (L.cell_index.find(pack(c[0], c[1], c[2])) < 0) continue;
-            const auto w = corner_weights(s.p, c, L.res);
-            int corner_node[8];
-            for (int q = 0; q < 8; ++q)
-              corner_node[q] = L.node(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1));
-            for (int qa = 0; qa < 8; ++qa) {
-              const int va = corner_node[qa];
-              if (!L.unknown[std::size_t(va)]) continue;
-              out.rhs.push_back({va, screening * w[std::size_t(qa)] * 0.5});
-              for (int qb = 0; qb < 8; ++qb)
-                out.matrix.emplace_back(va,
-                                        slot((qb & 1) - (qa & 1), (qb >> 1 & 1) - (qa >> 1 & 1),
-                                             (qb >> 2 & 1) - (qa >> 2 & 1)),
-                                        screening * w[std::size_t(qa)] * w[std::size_t(qb)]);
-            }
-          }
-        }
-      });
-      for (const auto& chunk : chunks) {
-        for (const auto& [v, value] : chunk.rhs) b[std::size_t(v)] += value;
-        for (const auto& [v, sl, value] : chunk.matrix) A[std::size_t(v)][std::size_t(sl)] += value;
-      }
-    }
+              b[v] += screening * 0.5 * value;
+              for (int q = 0; q < 8; ++q)
+                A[v][std::size_t(slot(int(ox) + (q & 1), int(oy) + (q >> 1 & 1),
+                                      int(oz) + (q >> 2 & 1)))] += screening * row[q];
+            });
+    });
+    for (std::size_t v = 0; v < nn; ++v) coarser[v] += splat[std::size_t(d)][v];
+    std::vector<Eigen::Vector3d>().swap(splat[std::size_t(d)]);
+    std::vector<double>().swap(finer[std::size_t(d)]);
 
     const auto assembled = clock::now();
     // Jacobi-preconditioned conjugate gradients on the unknowns; fixed nodes keep their values.
