@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <iterator>
 #include <map>
 #include <numeric>
 #include <tuple>
@@ -220,24 +221,50 @@ std::array<long, 3> cell_of(const Eigen::Vector3d& p, long res) {
 
 void build_nodes(Level& L, PoissonBoundary boundary) {
   L.cell_index = KeyIndex(L.cells);
-  std::vector<Key> corners(L.cells.size() * 8);
-  tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
-    const auto [i, j, k] = unpack(L.cells[c]);
-    for (int q = 0; q < 8; ++q)
-      corners[8 * c + std::size_t(q)] = pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1));
+  // The corners are the union of the sorted cell keys shifted by each corner's offset (packing
+  // adds without carries), merged pairwise rather than sorted.
+  std::vector<std::vector<Key>> lists(8);
+  tbb::parallel_for(0, 8, [&](int q) {
+    const Key offset = pack(q & 1, q >> 1 & 1, q >> 2 & 1);
+    lists[std::size_t(q)].resize(L.cells.size());
+    for (std::size_t c = 0; c < L.cells.size(); ++c) lists[std::size_t(q)][c] = L.cells[c] + offset;
   });
-  sort_unique(corners);
-  L.nodes = std::move(corners);
+  for (std::size_t width = 1; width < lists.size(); width *= 2)
+    tbb::parallel_for(std::size_t(0), lists.size() / (2 * width), [&](std::size_t pair) {
+      auto &a = lists[2 * width * pair], &b = lists[2 * width * pair + width];
+      std::vector<Key> merged;
+      merged.reserve(a.size() + b.size());
+      std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
+      a = std::move(merged);
+      std::vector<Key>().swap(b);
+    });
+  L.nodes = std::move(lists[0]);
   L.node_index = KeyIndex(L.nodes);
   const std::size_t n = L.nodes.size();
   L.neighbours.resize(n);
   L.unknown.assign(n, 0);
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
     const auto [i, j, k] = unpack(L.nodes[v]);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx)
-          L.neighbours[v][std::size_t(slot(dx, dy, dz))] = L.node(i + dx, j + dy, k + dz);
+    // Nodes are sorted with k last, so (i', j', k - 1), (i', j', k), (i', j', k + 1) sit next to
+    // each other when present: one lookup per (dx, dy) usually finds all three.
+    const int count = int(L.nodes.size());
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const long ni = i + dx, nj = j + dy;
+        const int middle = L.node(ni, nj, k);
+        for (int dz = -1; dz <= 1; ++dz) {
+          int u = -1;
+          if (middle >= 0) {
+            const int candidate = middle + dz;
+            if (k + dz >= 0 && candidate >= 0 && candidate < count &&
+                L.nodes[std::size_t(candidate)] == pack(ni, nj, k + dz))
+              u = candidate;
+          } else {
+            u = L.node(ni, nj, k + dz);
+          }
+          L.neighbours[v][std::size_t(slot(dx, dy, dz))] = u;
+        }
+      }
     // A node is solved for when every incident cell inside the domain is active (its row of the
     // system is then complete); Dirichlet fixes the domain's faces too.
     bool complete = true;
@@ -379,26 +406,59 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
 
   // --- Density: unit weights splatted at depth D-2; samples per unit area near each sample.
   stage("density");
+  // Samples in Morton order of their depth-D cell: at every depth, the samples of one cell are a
+  // contiguous run. Every sum over samples below runs over cells and runs in a fixed order, which
+  // makes the result independent of the thread count.
+  std::vector<std::pair<Key, std::uint32_t>> morton_order(samples.size());
+  tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t s) {
+    morton_order[s] = {morton(cell_of(samples[s].p, 1L << D)), std::uint32_t(s)};
+  });
+  tbb::parallel_sort(morton_order.begin(), morton_order.end());
   const int density_depth = std::max(1, D - 2);
   const long density_res = 1L << density_depth;
   const double density_h = 1.0 / double(density_res);
   std::vector<Key> density_nodes;
   std::vector<double> density;
   {
-    std::vector<std::pair<Key, double>> splats(samples.size() * 8);
-    tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t s) {
-      const auto c = cell_of(samples[s].p, density_res);
-      const auto w = corner_weights(samples[s].p, c, density_res);
-      for (int q = 0; q < 8; ++q)
-        splats[8 * s + std::size_t(q)] = {
-            pack(c[0] + (q & 1), c[1] + (q >> 1 & 1), c[2] + (q >> 2 & 1)), w[std::size_t(q)]};
-    });
-    tbb::parallel_sort(splats.begin(), splats.end());
-    for (const auto& [key, w] : splats) {
-      if (density_nodes.empty() || density_nodes.back() != key)
-        density_nodes.push_back(key), density.push_back(0.0);
-      density.back() += w;
+    // Unit weights splatted per cell (a run of Morton-ordered samples), then gathered per node.
+    std::vector<Key> run_keys;
+    std::vector<std::array<std::uint32_t, 2>> run_ranges;
+    const int shift = 3 * (D - density_depth);
+    for (std::size_t first = 0; first < morton_order.size();) {
+      const Key code = morton_order[first].first >> shift;
+      std::size_t last = first + 1;
+      while (last < morton_order.size() && morton_order[last].first >> shift == code) ++last;
+      const auto c = morton_cell(code);
+      run_keys.push_back(pack(c[0], c[1], c[2]));
+      run_ranges.push_back({std::uint32_t(first), std::uint32_t(last)});
+      first = last;
     }
+    std::vector<std::array<double, 8>> corner_sums(run_keys.size());
+    std::vector<Key> corners(8 * run_keys.size());
+    tbb::parallel_for(std::size_t(0), run_keys.size(), [&](std::size_t r) {
+      const auto c = unpack(run_keys[r]);
+      corner_sums[r].fill(0.0);
+      for (std::uint32_t q = run_ranges[r][0]; q < run_ranges[r][1]; ++q) {
+        const auto w = corner_weights(samples[morton_order[q].second].p, c, density_res);
+        for (int a = 0; a < 8; ++a) corner_sums[r][std::size_t(a)] += w[std::size_t(a)];
+      }
+      for (int a = 0; a < 8; ++a)
+        corners[8 * r + std::size_t(a)] =
+            pack(c[0] + (a & 1), c[1] + (a >> 1 & 1), c[2] + (a >> 2 & 1));
+    });
+    sort_unique(corners);
+    density_nodes = std::move(corners);
+    density.assign(density_nodes.size(), 0.0);
+    const KeyIndex run_index(run_keys);
+    tbb::parallel_for(std::size_t(0), density_nodes.size(), [&](std::size_t v) {
+      const auto [i, j, k] = unpack(density_nodes[v]);
+      for (int c = 0; c < 8; ++c) {
+        const long ci = i + (c & 1) - 1, cj = j + (c >> 1 & 1) - 1, ck = k + (c >> 2 & 1) - 1;
+        if (ci < 0 || cj < 0 || ck < 0) continue;
+        const int r = run_index.find(pack(ci, cj, ck));
+        if (r >= 0) density[v] += corner_sums[std::size_t(r)][std::size_t(7 - c)];
+      }
+    });
   }
   // Smooth the splats with [1 2 1]/4 along each axis (a quadratic-B-spline-like kernel), so that
   // the estimate at a sample hardly depends on where the sample sits inside its cell.
@@ -515,19 +575,17 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   for (int d = d_min; d <= D; ++d)
     if (!levels[std::size_t(d)].cells.empty()) finest = d;
 
-  // --- The data terms, gathered per node from the samples of its incident cells.
-  // Samples are put in Morton order of their depth-D cell, so that at every depth the samples of
-  // one cell are a contiguous run; every sum below runs over cells and samples in a fixed order,
-  // which makes the result independent of the thread count.
+  // --- The data terms, gathered per node from the sample runs of its incident cells.
   stage("splatting");
-  std::vector<std::pair<Key, std::uint32_t>> morton_order(samples.size());
-  tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t s) {
-    morton_order[s] = {morton(cell_of(samples[s].p, 1L << D)), std::uint32_t(s)};
-  });
-  tbb::parallel_sort(morton_order.begin(), morton_order.end());
-  // Per active cell of a level: its run [first, last) in morton_order (empty when no sample).
+  // The active cells of a level that hold samples, with their runs [first, last) in
+  // morton_order, and per active cell its index among them (or -1).
+  struct Runs {
+    std::vector<std::array<std::uint32_t, 3>> cells;  // (cell index, first, last)
+    std::vector<int> of_cell;
+  };
   auto cell_runs = [&](const Level& L) {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> runs(L.cells.size(), {0, 0});
+    Runs runs;
+    runs.of_cell.assign(L.cells.size(), -1);
     const int shift = 3 * (D - L.depth);
     for (std::size_t first = 0; first < morton_order.size();) {
       const Key code = morton_order[first].first >> shift;
@@ -535,50 +593,60 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       while (last < morton_order.size() && morton_order[last].first >> shift == code) ++last;
       const auto c = morton_cell(code);
       const int idx = L.cell_index.find(pack(c[0], c[1], c[2]));
-      if (idx >= 0) runs[std::size_t(idx)] = {std::uint32_t(first), std::uint32_t(last)};
+      if (idx >= 0) {
+        runs.of_cell[std::size_t(idx)] = int(runs.cells.size());
+        runs.cells.push_back({std::uint32_t(idx), std::uint32_t(first), std::uint32_t(last)});
+      }
       first = last;
     }
     return runs;
   };
-  // Calls f(a, cell, first, last) for each active in-domain cell incident to node (i, j, k) that
-  // holds samples, a being the node's corner in that cell.
-  auto for_incident_runs = [](const Level& L,
-                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& runs,
-                              long i, long j, long k, auto&& f) {
+  // Calls f(a, offset, run) for each in-domain cell incident to node (i, j, k) that holds
+  // samples: a is the node's corner in that cell, offset the cell's position minus the node's.
+  auto for_incident_runs = [](const Level& L, const Runs& runs, long i, long j, long k, auto&& f) {
     for (int c = 0; c < 8; ++c) {
       const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
-      const std::array<long, 3> cell{i + ox, j + oy, k + oz};
-      if (cell[0] < 0 || cell[1] < 0 || cell[2] < 0 || cell[0] >= L.res || cell[1] >= L.res ||
-          cell[2] >= L.res)
+      if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
+          k + oz >= L.res)
         continue;
-      const int idx = L.cell_index.find(pack(cell[0], cell[1], cell[2]));
-      if (idx < 0 || runs[std::size_t(idx)].first == runs[std::size_t(idx)].second) continue;
-      f((-ox) | (-oy) << 1 | (-oz) << 2, cell, runs[std::size_t(idx)].first,
-        runs[std::size_t(idx)].second);
+      const int idx = L.cell_index.find(pack(i + ox, j + oy, k + oz));
+      if (idx < 0 || runs.of_cell[std::size_t(idx)] < 0) continue;
+      f((-ox) | (-oy) << 1 | (-oz) << 2, std::array<int, 3>{ox, oy, oz},
+        std::size_t(runs.of_cell[std::size_t(idx)]));
     }
+  };
+  auto run_cell = [](const Level& L, const std::array<std::uint32_t, 3>& run) {
+    return unpack(L.cells[run[0]]);
   };
   // The normal field V = sum over depths sd of the trilinear functions of depth sd with
   // coefficients V_sd: each sample adds area * n * (its trilinear weights) / h_sd^3 at its splat
-  // depth (a unit-integral kernel). splat[d] holds V_d on the nodes of depth d.
+  // depth (a unit-integral kernel). splat[d] holds V_d on the nodes of depth d, gathered from
+  // per-cell corner sums.
   std::vector<std::vector<Eigen::Vector3d>> splat(std::size_t(D + 1));
   for (int d = d_min; d <= finest; ++d) {
     const Level& L = levels[std::size_t(d)];
-    const auto runs = cell_runs(L);
+    const Runs runs = cell_runs(L);
+    std::vector<std::array<Eigen::Vector3d, 8>> corner_sums(runs.cells.size());
+    const double inverse_volume = 1.0 / (L.h * L.h * L.h);
+    tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
+      auto& sums = corner_sums[r];
+      sums.fill(Eigen::Vector3d::Zero());
+      const auto cell = run_cell(L, runs.cells[r]);
+      for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
+        const Sample& s = samples[morton_order[q].second];
+        if (s.depth != d) continue;
+        const auto w = corner_weights(s.p, cell, L.res);
+        for (int a = 0; a < 8; ++a)
+          sums[std::size_t(a)] += s.area * inverse_volume * w[std::size_t(a)] * s.n;
+      }
+    });
     auto& V = splat[std::size_t(d)];
     V.assign(L.nodes.size(), Eigen::Vector3d::Zero());
-    const double inverse_volume = 1.0 / (L.h * L.h * L.h);
     tbb::parallel_for(std::size_t(0), L.nodes.size(), [&](std::size_t v) {
       const auto [i, j, k] = unpack(L.nodes[v]);
-      for_incident_runs(
-          L, runs, i, j, k,
-          [&](int a, const std::array<long, 3>& cell, std::uint32_t first, std::uint32_t last) {
-            for (std::uint32_t r = first; r < last; ++r) {
-              const Sample& s = samples[morton_order[r].second];
-              if (s.depth != d) continue;
-              V[v] +=
-                  s.area * inverse_volume * corner_weights(s.p, cell, L.res)[std::size_t(a)] * s.n;
-            }
-          });
+      for_incident_runs(L, runs, i, j, k, [&](int a, const std::array<int, 3>&, std::size_t r) {
+        V[v] += corner_sums[r][std::size_t(a)];
+      });
     });
   }
   // S_d(W)[i] = int grad(phi_i) . W for W given by depth-d coefficients, over the 27 neighbours.
@@ -649,8 +717,29 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     std::vector<std::array<double, 27>> A(nn);
     std::vector<double> b(nn, 0.0);
     const double screening = o.point_weight * area_per_sample * std::ldexp(1.0, d);
-    const auto runs = cell_runs(L);
     const SameDepthIntegrals I(d, L.res);
+    // Screening moments per cell holding samples: sums of w_a w_b (a <= b) and of w_a over its
+    // samples, w the trilinear weights of the cell's corners.
+    const Runs runs = cell_runs(L);
+    constexpr int kPairs = 36;
+    std::vector<std::array<double, kPairs + 8>> moments(screening > 0 ? runs.cells.size() : 0);
+    auto pair_index = [](int a, int b) {
+      if (a > b) std::swap(a, b);
+      return a * 8 - a * (a - 1) / 2 + (b - a);
+    };
+    tbb::parallel_for(std::size_t(0), moments.size(), [&](std::size_t r) {
+      auto& m = moments[r];
+      m.fill(0.0);
+      const auto cell = run_cell(L, runs.cells[r]);
+      for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
+        const auto w = corner_weights(samples[morton_order[q].second].p, cell, L.res);
+        for (int a = 0; a < 8; ++a) {
+          m[std::size_t(kPairs + a)] += w[std::size_t(a)];
+          for (int bb = a; bb < 8; ++bb)
+            m[std::size_t(pair_index(a, bb))] += w[std::size_t(a)] * w[std::size_t(bb)];
+        }
+      }
+    });
     tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
       A[v].fill(0.0);
       if (!L.unknown[v]) return;
@@ -670,21 +759,15 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       b[v] = -(divergence(L, I, coarser, v) + finer[std::size_t(d)][v]);
       // Screening: (chi(p) - 1/2)^2 for the samples in this depth's active cells.
       if (screening > 0)
-        for_incident_runs(
-            L, runs, i, j, k,
-            [&](int a, const std::array<long, 3>& cell, std::uint32_t first, std::uint32_t last) {
-              const int ox = cell[0] - i, oy = cell[1] - j, oz = cell[2] - k;
-              double row[8] = {0, 0, 0, 0, 0, 0, 0, 0}, value = 0;
-              for (std::uint32_t r = first; r < last; ++r) {
-                const auto w = corner_weights(samples[morton_order[r].second].p, cell, L.res);
-                value += w[std::size_t(a)];
-                for (int q = 0; q < 8; ++q) row[q] += w[std::size_t(a)] * w[std::size_t(q)];
-              }
-              b[v] += screening * 0.5 * value;
-              for (int q = 0; q < 8; ++q)
-                A[v][std::size_t(slot(int(ox) + (q & 1), int(oy) + (q >> 1 & 1),
-                                      int(oz) + (q >> 2 & 1)))] += screening * row[q];
-            });
+        for_incident_runs(L, runs, i, j, k,
+                          [&](int a, const std::array<int, 3>& offset, std::size_t r) {
+                            const auto& m = moments[r];
+                            b[v] += screening * 0.5 * m[std::size_t(kPairs + a)];
+                            for (int q = 0; q < 8; ++q)
+                              A[v][std::size_t(slot(offset[0] + (q & 1), offset[1] + (q >> 1 & 1),
+                                                    offset[2] + (q >> 2 & 1)))] +=
+                                  screening * m[std::size_t(pair_index(a, q))];
+                          });
     });
     for (std::size_t v = 0; v < nn; ++v) coarser[v] += splat[std::size_t(d)][v];
     std::vector<Eigen::Vector3d>().swap(splat[std::size_t(d)]);
