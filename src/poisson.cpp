@@ -530,12 +530,21 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
           for (long k = 0; k < L.res; ++k) L.cells.push_back(pack(i, j, k));
     } else {
       Level& P = levels[std::size_t(d - 1)];
+      // Depth-(d-1) cells holding a sample that wants depth >= d: runs in Morton order.
       std::vector<Key> refine;
-      for (const auto& s : samples)
-        if (s.depth >= d) {
-          const auto c = cell_of(s.p, P.res);
+      const int shift = 3 * (D - (d - 1));
+      for (std::size_t first = 0; first < morton_order.size();) {
+        const Key code = morton_order[first].first >> shift;
+        bool wanted = false;
+        std::size_t last = first;
+        for (; last < morton_order.size() && morton_order[last].first >> shift == code; ++last)
+          wanted = wanted || samples[morton_order[last].second].depth >= d;
+        if (wanted) {
+          const auto c = morton_cell(code);
           refine.push_back(pack(c[0], c[1], c[2]));
         }
+        first = last;
+      }
       sort_unique(refine);
       // Dilate by a cell, one axis at a time: the finer band then reaches two of its cells past
       // every splat cell, which holds the splat kernels and leaves the band edge beyond them.
