@@ -7,6 +7,11 @@
 // samples want depth >= d (within a dilation), so finer depths cover only a band around the
 // samples. chi is 1 inside and 0 outside.
 //
+// Data terms. Samples are sorted once in Morton order, so at every depth a cell's samples form
+// one run. Each cell sums its samples' splats and screening moments; each node gathers from its
+// cells. Normals splatted coarser than a depth reach it by prolongation (trilinear functions nest),
+// finer ones by restricting the finer depth's right-hand side: O(nodes) work per depth.
+//
 // Solve. Coarse to fine (cascadic): at each depth, the screened energy is minimised over the band's
 // interior nodes, the band's boundary nodes holding the coarser depth's solution (a conforming
 // finite-element space with hanging nodes), starting from the prolonged coarser solution, by
@@ -29,9 +34,7 @@
 #include <cstdint>
 #include <deque>
 #include <iterator>
-#include <map>
 #include <numeric>
-#include <tuple>
 #include <unordered_set>
 
 #include "cube_polygons.h"
