@@ -417,6 +417,18 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     morton_order[s] = {morton(cell_of(samples[s].p, 1L << D)), std::uint32_t(s)};
   });
   tbb::parallel_sort(morton_order.begin(), morton_order.end());
+  // Calls f(cell, first, last) for each depth-`depth` cell holding samples, in Morton order, with
+  // its run [first, last) in morton_order.
+  auto for_each_run = [&](int depth, auto&& f) {
+    const int shift = 3 * (D - depth);
+    for (std::size_t first = 0; first < morton_order.size();) {
+      const Key code = morton_order[first].first >> shift;
+      std::size_t last = first + 1;
+      while (last < morton_order.size() && morton_order[last].first >> shift == code) ++last;
+      f(morton_cell(code), first, last);
+      first = last;
+    }
+  };
   const int density_depth = std::max(1, D - 2);
   const long density_res = 1L << density_depth;
   const double density_h = 1.0 / double(density_res);
@@ -426,16 +438,11 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     // Unit weights splatted per cell (a run of Morton-ordered samples), then gathered per node.
     std::vector<Key> run_keys;
     std::vector<std::array<std::uint32_t, 2>> run_ranges;
-    const int shift = 3 * (D - density_depth);
-    for (std::size_t first = 0; first < morton_order.size();) {
-      const Key code = morton_order[first].first >> shift;
-      std::size_t last = first + 1;
-      while (last < morton_order.size() && morton_order[last].first >> shift == code) ++last;
-      const auto c = morton_cell(code);
-      run_keys.push_back(pack(c[0], c[1], c[2]));
-      run_ranges.push_back({std::uint32_t(first), std::uint32_t(last)});
-      first = last;
-    }
+    for_each_run(density_depth,
+                 [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
+                   run_keys.push_back(pack(c[0], c[1], c[2]));
+                   run_ranges.push_back({std::uint32_t(first), std::uint32_t(last)});
+                 });
     std::vector<std::array<double, 8>> corner_sums(run_keys.size());
     std::vector<Key> corners(8 * run_keys.size());
     tbb::parallel_for(std::size_t(0), run_keys.size(), [&](std::size_t r) {
@@ -535,19 +542,13 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       Level& P = levels[std::size_t(d - 1)];
       // Depth-(d-1) cells holding a sample that wants depth >= d: runs in Morton order.
       std::vector<Key> refine;
-      const int shift = 3 * (D - (d - 1));
-      for (std::size_t first = 0; first < morton_order.size();) {
-        const Key code = morton_order[first].first >> shift;
-        bool wanted = false;
-        std::size_t last = first;
-        for (; last < morton_order.size() && morton_order[last].first >> shift == code; ++last)
-          wanted = wanted || samples[morton_order[last].second].depth >= d;
-        if (wanted) {
-          const auto c = morton_cell(code);
-          refine.push_back(pack(c[0], c[1], c[2]));
-        }
-        first = last;
-      }
+      for_each_run(d - 1, [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
+        for (std::size_t r = first; r < last; ++r)
+          if (samples[morton_order[r].second].depth >= d) {
+            refine.push_back(pack(c[0], c[1], c[2]));
+            break;
+          }
+      });
       sort_unique(refine);
       // Dilate by a cell, one axis at a time: the finer band then reaches two of its cells past
       // every splat cell, which holds the splat kernels and leaves the band edge beyond them.
@@ -598,19 +599,13 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   auto cell_runs = [&](const Level& L) {
     Runs runs;
     runs.of_cell.assign(L.cells.size(), -1);
-    const int shift = 3 * (D - L.depth);
-    for (std::size_t first = 0; first < morton_order.size();) {
-      const Key code = morton_order[first].first >> shift;
-      std::size_t last = first + 1;
-      while (last < morton_order.size() && morton_order[last].first >> shift == code) ++last;
-      const auto c = morton_cell(code);
+    for_each_run(L.depth, [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
       const int idx = L.cell_index.find(pack(c[0], c[1], c[2]));
       if (idx >= 0) {
         runs.of_cell[std::size_t(idx)] = int(runs.cells.size());
         runs.cells.push_back({std::uint32_t(idx), std::uint32_t(first), std::uint32_t(last)});
       }
-      first = last;
-    }
+    });
     return runs;
   };
   // Calls f(a, offset, run) for each in-domain cell incident to node (i, j, k) that holds
