@@ -630,9 +630,10 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   // depth (a unit-integral kernel). splat[d] holds V_d on the nodes of depth d, gathered from
   // per-cell corner sums.
   std::vector<std::vector<Eigen::Vector3d>> splat(std::size_t(D + 1));
+  std::vector<Runs> level_runs(std::size_t(D + 1));  // kept for the screening terms
   for (int d = d_min; d <= finest; ++d) {
     const Level& L = levels[std::size_t(d)];
-    const Runs runs = cell_runs(L);
+    const Runs& runs = level_runs[std::size_t(d)] = cell_runs(L);
     std::vector<std::array<Eigen::Vector3d, 8>> corner_sums(runs.cells.size());
     const double inverse_volume = 1.0 / (L.h * L.h * L.h);
     tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
@@ -727,7 +728,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     const SameDepthIntegrals I(d, L.res);
     // Screening moments per cell holding samples: sums of w_a w_b (a <= b) and of w_a over its
     // samples, w the trilinear weights of the cell's corners.
-    const Runs runs = cell_runs(L);
+    const Runs& runs = level_runs[std::size_t(d)];
     constexpr int kPairs = 36;
     std::vector<std::array<double, kPairs + 8>> moments(screening > 0 ? runs.cells.size() : 0);
     auto pair_index = [](int a, int b) {
@@ -779,6 +780,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     for (std::size_t v = 0; v < nn; ++v) coarser[v] += splat[std::size_t(d)][v];
     std::vector<Eigen::Vector3d>().swap(splat[std::size_t(d)]);
     std::vector<double>().swap(finer[std::size_t(d)]);
+    level_runs[std::size_t(d)] = Runs();
 
     const auto assembled = clock::now();
     // Jacobi-preconditioned conjugate gradients on the unknowns; fixed nodes keep their values.
