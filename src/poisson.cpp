@@ -4,13 +4,15 @@
 // Representation. The domain is mapped to the unit cube. At depth d the cube has 2^d cells per
 // axis; the indicator chi is trilinear on each active cell, with values at the cell corners
 // (degree-1 B-splines). Depths up to full_depth are complete; a cell at depth d-1 is refined where
-// samples want depth >= d (within a dilation), so finer depths cover only a band around the
-// samples. chi is 1 inside and 0 outside.
+// it holds a sample splatted at depth d-1 or finer (within a dilation of two cells), so finer
+// depths cover only a band around the samples. chi is 1 inside and 0 outside.
 //
 // Data terms. Samples are sorted once in Morton order, so at every depth a cell's samples form
-// one run. Each cell sums its samples' splats and screening moments; each node gathers from its
-// cells. Normals splatted coarser than a depth reach it by prolongation (trilinear functions nest),
-// finer ones by restricting the finer depth's right-hand side: O(nodes) work per depth.
+// one run. Normals are splatted with quadratic B-splines (three cells per axis, as in Kazhdan's
+// code); each cell sums its samples' splats and screening moments, and nodes and spline cells
+// gather from cells. Normals splatted coarser than a depth reach it by prolongation (quadratic
+// B-splines nest), finer ones by restricting the finer depth's right-hand side: O(nodes) work per
+// depth.
 //
 // Solve. Coarse to fine (cascadic): at each depth, the screened energy is minimised over the band's
 // interior nodes, the band's boundary nodes holding the coarser depth's solution (a conforming

@@ -125,6 +125,9 @@ struct PoissonArgs {
     app->add_option("--boundary", boundary,
                     "Boundary condition on the domain cube: neumann or dirichlet")
         ->capture_default_str();
+    app->add_option("--solver-tolerance", options.solver_tolerance,
+                    "Conjugate gradients stop at this relative residual at each depth")
+        ->capture_default_str();
   }
   PoissonOptions resolved() const {
     PoissonOptions o = options;
@@ -304,9 +307,13 @@ int run_poisson(const PoissonCommandArgs& a) {
                {"file", a.output}};
   j["iso_value"] = r.iso_value;
   j["boundary_fallback"] = r.boundary_fallback;
-  j["options"] = {{"alpha", o.point_weight},    {"depth", o.depth},
-                  {"full_depth", o.full_depth}, {"samples_per_node", o.samples_per_node},
-                  {"scale", o.scale},           {"boundary", a.poisson.boundary}};
+  j["options"] = {{"alpha", o.point_weight},
+                  {"depth", o.depth},
+                  {"full_depth", o.full_depth},
+                  {"samples_per_node", o.samples_per_node},
+                  {"scale", o.scale},
+                  {"boundary", a.poisson.boundary},
+                  {"solver_tolerance", o.solver_tolerance}};
   nlohmann::json seconds = {{"read", read_seconds}};
   for (const auto& [name, sec] : r.seconds) seconds[name] = sec;
   j["seconds"] = seconds;
