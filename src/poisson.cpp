@@ -187,6 +187,21 @@ std::array<long, 3> cell_of(const Eigen::Vector3d& p, long res) {
   return c;
 }
 
+// The union of sorted key lists, merged pairwise in parallel.
+std::vector<Key> merge_sorted(std::vector<std::vector<Key>> lists) {
+  while (lists.size() > 1) {
+    std::vector<std::vector<Key>> merged((lists.size() + 1) / 2);
+    tbb::parallel_for(std::size_t(0), lists.size() / 2, [&](std::size_t pair) {
+      const auto &a = lists[2 * pair], &b = lists[2 * pair + 1];
+      merged[pair].reserve(a.size() + b.size());
+      std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged[pair]));
+    });
+    if (lists.size() % 2) merged.back() = std::move(lists.back());
+    lists = std::move(merged);
+  }
+  return lists.empty() ? std::vector<Key>() : std::move(lists[0]);
+}
+
 void build_nodes(Level& L, PoissonBoundary boundary) {
   L.cell_index = KeyIndex(L.cells);
   // The corners are the union of the sorted cell keys shifted by each corner's offset (packing
@@ -197,16 +212,7 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
     lists[std::size_t(q)].resize(L.cells.size());
     for (std::size_t c = 0; c < L.cells.size(); ++c) lists[std::size_t(q)][c] = L.cells[c] + offset;
   });
-  for (std::size_t width = 1; width < lists.size(); width *= 2)
-    tbb::parallel_for(std::size_t(0), lists.size() / (2 * width), [&](std::size_t pair) {
-      auto &a = lists[2 * width * pair], &b = lists[2 * width * pair + width];
-      std::vector<Key> merged;
-      merged.reserve(a.size() + b.size());
-      std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
-      a = std::move(merged);
-      std::vector<Key>().swap(b);
-    });
-  L.nodes = std::move(lists[0]);
+  L.nodes = merge_sorted(std::move(lists));
   L.node_index = KeyIndex(L.nodes);
   const std::size_t n = L.nodes.size();
   L.neighbours.resize(n);
@@ -264,17 +270,7 @@ std::vector<Key> dilate(std::vector<Key> keys, long radius, long limit) {
           out.push_back(offset >= 0 ? key + (Key(offset) << shift) : key - (Key(-offset) << shift));
       }
     });
-    while (lists.size() > 1) {
-      std::vector<std::vector<Key>> merged((lists.size() + 1) / 2);
-      tbb::parallel_for(std::size_t(0), lists.size() / 2, [&](std::size_t pair) {
-        const auto &a = lists[2 * pair], &b = lists[2 * pair + 1];
-        merged[pair].reserve(a.size() + b.size());
-        std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged[pair]));
-      });
-      if (lists.size() % 2) merged.back() = std::move(lists.back());
-      lists = std::move(merged);
-    }
-    keys = std::move(lists[0]);
+    keys = merge_sorted(std::move(lists));
   }
   return keys;
 }
@@ -382,18 +378,6 @@ struct CellGrid {
   int find(long i, long j, long k) const {
     if (i < -1 || j < -1 || k < -1) return -1;
     return index.find(pack(i + 1, j + 1, k + 1));
-  }
-  // Indices of cells (i, j, k0 .. k0 + 3): k is the lowest key part, so a column is one run of
-  // the sorted keys when it is complete.
-  void column(long i, long j, long k0, int out[4]) const {
-    const int first = find(i, j, k0);
-    for (int q = 0; q < 4; ++q) {
-      const int guess = first >= 0 ? first + q : -1;
-      out[q] = guess >= 0 && std::size_t(guess) < keys.size() &&
-                       keys[std::size_t(guess)] == pack(i + 1, j + 1, k0 + q + 1)
-                   ? guess
-                   : find(i, j, k0 + q);
-    }
   }
 };
 
@@ -695,7 +679,8 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   // splat[d] holds V_d on grids[d], gathered from per-run sums over the 27 cells around each run.
   std::vector<CellGrid> grids(std::size_t(D + 1));
   std::vector<std::vector<Eigen::Vector3d>> splat(std::size_t(D + 1));
-  std::vector<Runs> level_runs(std::size_t(D + 1));  // kept for the screening terms
+  std::vector<Runs> level_runs(std::size_t(D + 1));    // kept for the screening terms
+  std::vector<char> splats_at(std::size_t(D + 1), 0);  // some sample splats at this depth
   for (int d = d_min; d <= finest; ++d) {
     const Level& L = levels[std::size_t(d)];
     const Runs& runs = level_runs[std::size_t(d)] = cell_runs(L);
@@ -705,6 +690,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     G.keys = dilate(std::move(G.keys), 2, L.res + 1);
     G.index = KeyIndex(G.keys);
     std::vector<std::array<Eigen::Vector3d, 27>> cell_sums(runs.cells.size());
+    std::vector<char> has_splat(runs.cells.size(), 0);
     const double inverse_volume = 1.0 / (L.h * L.h * L.h);
     tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
       auto& sums = cell_sums[r];
@@ -713,6 +699,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
         const Sample& s = samples[morton_order[q].second];
         if (s.depth != d) continue;
+        has_splat[r] = 1;
         std::array<double, 3> w[3];
         for (int a = 0; a < 3; ++a)
           w[a] = quadratic_weights(
@@ -731,11 +718,8 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     // The runs holding depth-d splats, with the grid indices of their 27 target cells.
     std::vector<std::uint32_t> splatting;
     for (std::size_t r = 0; r < runs.cells.size(); ++r)
-      for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q)
-        if (samples[morton_order[q].second].depth == d) {
-          splatting.push_back(std::uint32_t(r));
-          break;
-        }
+      if (has_splat[r]) splatting.push_back(std::uint32_t(r));
+    splats_at[std::size_t(d)] = !splatting.empty();
     std::vector<std::array<int, 27>> target(splatting.size());
     tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
       const auto c = run_cell(L, runs.cells[splatting[t]]);
@@ -811,9 +795,8 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     auto& e = finer[std::size_t(d)];
     e.assign(L.nodes.size(), 0.0);
     const Level* F = d < finest ? &levels[std::size_t(d + 1)] : nullptr;
-    const bool has_splats = std::any_of(splat[std::size_t(d)].begin(), splat[std::size_t(d)].end(),
-                                        [](const Eigen::Vector3d& w) { return !w.isZero(0); });
-    if (has_splats) divergence(L, splat[std::size_t(d)], e, [](std::size_t) { return true; });
+    if (splats_at[std::size_t(d)])
+      divergence(L, splat[std::size_t(d)], e, [](std::size_t) { return true; });
     tbb::parallel_for(std::size_t(0), L.nodes.size(), [&](std::size_t v) {
       double sum = e[v];
       if (F) {
