@@ -92,6 +92,43 @@ class KeyIndex {
   std::size_t mask_ = 0;
 };
 
+// Positions in a sorted key array, found through its lines (keys sharing i and j): a small hash
+// of the line keys, then a binary search inside the line. The line table is a few percent of the
+// keys, so it stays in cache where a hash over every key would not.
+class LineIndex {
+ public:
+  LineIndex() = default;
+  explicit LineIndex(const std::vector<Key>& keys) {
+    std::vector<Key> line_keys;
+    for (std::size_t v = 0; v < keys.size(); ++v)
+      if (v == 0 || keys[v] >> kKeyBits != keys[v - 1] >> kKeyBits) {
+        line_keys.push_back(keys[v] >> kKeyBits);
+        start_.push_back(std::uint32_t(v));
+      }
+    start_.push_back(std::uint32_t(keys.size()));
+    lines_ = KeyIndex(line_keys);
+  }
+  // Position of key in keys (the array this was built from), or -1.
+  int find(const std::vector<Key>& keys, Key key) const {
+    const int line = lines_.find(key >> kKeyBits);
+    if (line < 0) return -1;
+    const auto first = keys.begin() + start_[std::size_t(line)],
+               last = keys.begin() + start_[std::size_t(line) + 1];
+    const auto it = std::lower_bound(first, last, key);
+    return it != last && *it == key ? int(it - keys.begin()) : -1;
+  }
+  // Range [first, last) of line (i, j), empty if it has no keys.
+  std::array<std::uint32_t, 2> line(long i, long j) const {
+    const int l = lines_.find(pack(0, i, j));
+    if (l < 0) return {0, 0};
+    return {start_[std::size_t(l)], start_[std::size_t(l) + 1]};
+  }
+
+ private:
+  KeyIndex lines_;
+  std::vector<std::uint32_t> start_;
+};
+
 void sort_unique(std::vector<Key>& keys) {
   tbb::parallel_sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -151,22 +188,24 @@ struct Level {
   long res = 0;  // cells per axis
   double h = 0;
   std::vector<Key> cells;  // sorted active cells
-  KeyIndex cell_index;
+  LineIndex cell_lines;
   std::vector<char> refined;  // per active cell: its children are active
   std::vector<Key> nodes;     // sorted corners of active cells
-  KeyIndex node_index;
-  std::vector<std::array<int, 27>> neighbours;
+  LineIndex node_lines;
+  // Per node, the node at (i + dx, j + dy, k) for dx, dy in {-1, 0, 1} (index dx + 1 + 3 (dy + 1)),
+  // or -1. Nodes sorted with k last put (.., k - 1) and (.., k + 1) right before and after it.
+  std::vector<std::array<int, 9>> columns;
   std::vector<char> unknown;
   std::vector<double> x;
 
   bool active(long i, long j, long k) const {
-    return i >= 0 && j >= 0 && k >= 0 && i < res && j < res && k < res &&
-           cell_index.find(pack(i, j, k)) >= 0;
+    return i >= 0 && j >= 0 && k >= 0 && i < res && j < res && k < res && cell(pack(i, j, k)) >= 0;
   }
   int node(long i, long j, long k) const {
     if (i < 0 || j < 0 || k < 0 || i > res || j > res || k > res) return -1;
-    return node_index.find(pack(i, j, k));
+    return node_lines.find(nodes, pack(i, j, k));
   }
+  int cell(Key key) const { return cell_lines.find(cells, key); }
   // chi at unit-cube point p, by trilinear interpolation in the active cell containing it.
   double interpolate(const std::array<long, 3>& cell, const Eigen::Vector3d& p) const {
     const auto w = corner_weights(p, cell, res);
@@ -203,7 +242,7 @@ std::vector<Key> merge_sorted(std::vector<std::vector<Key>> lists) {
 }
 
 void build_nodes(Level& L, PoissonBoundary boundary) {
-  L.cell_index = KeyIndex(L.cells);
+  L.cell_lines = LineIndex(L.cells);
   // The corners are the union of the sorted cell keys shifted by each corner's offset (packing
   // adds without carries), merged pairwise rather than sorted.
   std::vector<std::vector<Key>> lists(8);
@@ -213,43 +252,57 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
     for (std::size_t c = 0; c < L.cells.size(); ++c) lists[std::size_t(q)][c] = L.cells[c] + offset;
   });
   L.nodes = merge_sorted(std::move(lists));
-  L.node_index = KeyIndex(L.nodes);
+  L.node_lines = LineIndex(L.nodes);
   const std::size_t n = L.nodes.size();
-  L.neighbours.resize(n);
+  L.columns.resize(n);
   L.unknown.assign(n, 0);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
-    const auto [i, j, k] = unpack(L.nodes[v]);
-    // Nodes are sorted with k last, so (i', j', k - 1), (i', j', k), (i', j', k + 1) sit next to
-    // each other when present: one lookup per (dx, dy) usually finds all three.
-    const int count = int(L.nodes.size());
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const long ni = i + dx, nj = j + dy;
-        const int middle = L.node(ni, nj, k);
-        for (int dz = -1; dz <= 1; ++dz) {
-          int u = -1;
-          if (middle >= 0) {
-            const int candidate = middle + dz;
-            if (k + dz >= 0 && candidate >= 0 && candidate < count &&
-                L.nodes[std::size_t(candidate)] == pack(ni, nj, k + dz))
-              u = candidate;
-          } else {
-            u = L.node(ni, nj, k + dz);
-          }
-          L.neighbours[v][std::size_t(slot(dx, dy, dz))] = u;
+  std::vector<std::size_t> lines;
+  for (std::size_t v = 0; v < n; ++v)
+    if (v == 0 || L.nodes[v] >> kKeyBits != L.nodes[v - 1] >> kKeyBits) lines.push_back(v);
+  lines.push_back(n);
+  // A line (fixed i, j) at a time: the nine neighbouring node lines and the four incident cell
+  // lines are found once, then walked with cursors that only move forward as k grows.
+  tbb::parallel_for(std::size_t(0), lines.size() - 1, [&](std::size_t line) {
+    const auto [i, j, k_first] = unpack(L.nodes[lines[line]]);
+    std::array<std::uint32_t, 2> node_range[9], cell_range[4];
+    for (int t = 0; t < 9; ++t) {
+      const long ni = i + t % 3 - 1, nj = j + t / 3 - 1;
+      node_range[t] = ni < 0 || nj < 0 || ni > L.res || nj > L.res
+                          ? std::array<std::uint32_t, 2>{0, 0}
+                          : L.node_lines.line(ni, nj);
+    }
+    bool column_in_domain[4];
+    for (int c = 0; c < 4; ++c) {
+      const long ci = i - 1 + (c & 1), cj = j - 1 + (c >> 1);
+      column_in_domain[c] = ci >= 0 && cj >= 0 && ci < L.res && cj < L.res;
+      cell_range[c] =
+          column_in_domain[c] ? L.cell_lines.line(ci, cj) : std::array<std::uint32_t, 2>{0, 0};
+    }
+    for (std::size_t v = lines[line]; v < lines[line + 1]; ++v) {
+      const long k = long(L.nodes[v] & kKeyMask);
+      for (int t = 0; t < 9; ++t) {
+        auto& [cursor, end] = node_range[t];
+        const Key key = pack(i + t % 3 - 1, j + t / 3 - 1, k);
+        while (cursor < end && L.nodes[cursor] < key) ++cursor;
+        L.columns[v][std::size_t(t)] = cursor < end && L.nodes[cursor] == key ? int(cursor) : -1;
+      }
+      // A node is solved for when every incident cell inside the domain is active (its row of
+      // the system is then complete); Dirichlet fixes the domain's faces too.
+      bool complete = true;
+      for (int c = 0; c < 4; ++c) {
+        if (!column_in_domain[c]) continue;
+        auto& [cursor, end] = cell_range[c];
+        const long ci = i - 1 + (c & 1), cj = j - 1 + (c >> 1);
+        const Key below = pack(ci, cj, std::max(k - 1, 0L));
+        while (cursor < end && L.cells[cursor] < below) ++cursor;
+        for (long ck = std::max(k - 1, 0L); ck <= std::min(k, L.res - 1); ++ck) {
+          const std::uint32_t at = cursor + std::uint32_t(ck - std::max(k - 1, 0L));
+          if (at >= end || L.cells[at] != pack(ci, cj, ck)) complete = false;
         }
       }
-    // A node is solved for when every incident cell inside the domain is active (its row of the
-    // system is then complete); Dirichlet fixes the domain's faces too.
-    bool complete = true;
-    for (int c = 0; c < 8 && complete; ++c) {
-      const long ci = i - 1 + (c & 1), cj = j - 1 + (c >> 1 & 1), ck = k - 1 + (c >> 2 & 1);
-      const bool in_domain =
-          ci >= 0 && cj >= 0 && ck >= 0 && ci < L.res && cj < L.res && ck < L.res;
-      if (in_domain && !L.active(ci, cj, ck)) complete = false;
+      const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
+      L.unknown[v] = complete && !(boundary == PoissonBoundary::Dirichlet && on_face);
     }
-    const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
-    L.unknown[v] = complete && !(boundary == PoissonBoundary::Dirichlet && on_face);
   });
 }
 
@@ -374,10 +427,10 @@ struct HatQuadraticIntegrals {
 // splat coefficients whose B-splines reach into it), keyed with a +1 offset.
 struct CellGrid {
   std::vector<Key> keys;  // sorted, offset by +1 per axis
-  KeyIndex index;
+  LineIndex lines;
   int find(long i, long j, long k) const {
     if (i < -1 || j < -1 || k < -1) return -1;
-    return index.find(pack(i + 1, j + 1, k + 1));
+    return lines.find(keys, pack(i + 1, j + 1, k + 1));
   }
 };
 
@@ -617,7 +670,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       refine = dilate(std::move(refine), kDilation, P.res - 1);
       std::vector<Key> children;
       for (Key key : refine) {
-        const int idx = P.cell_index.find(key);
+        const int idx = P.cell(key);
         if (idx < 0) continue;  // only active cells refine
         P.refined[std::size_t(idx)] = 1;
         const auto [i, j, k] = unpack(key);
@@ -647,27 +700,13 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     Runs runs;
     runs.of_cell.assign(L.cells.size(), -1);
     for_each_run(L.depth, [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
-      const int idx = L.cell_index.find(pack(c[0], c[1], c[2]));
+      const int idx = L.cell(pack(c[0], c[1], c[2]));
       if (idx >= 0) {
         runs.of_cell[std::size_t(idx)] = int(runs.cells.size());
         runs.cells.push_back({std::uint32_t(idx), std::uint32_t(first), std::uint32_t(last)});
       }
     });
     return runs;
-  };
-  // Calls f(a, offset, run) for each in-domain cell incident to node (i, j, k) that holds
-  // samples: a is the node's corner in that cell, offset the cell's position minus the node's.
-  auto for_incident_runs = [](const Level& L, const Runs& runs, long i, long j, long k, auto&& f) {
-    for (int c = 0; c < 8; ++c) {
-      const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
-      if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
-          k + oz >= L.res)
-        continue;
-      const int idx = L.cell_index.find(pack(i + ox, j + oy, k + oz));
-      if (idx < 0 || runs.of_cell[std::size_t(idx)] < 0) continue;
-      f((-ox) | (-oy) << 1 | (-oz) << 2, std::array<int, 3>{ox, oy, oz},
-        std::size_t(runs.of_cell[std::size_t(idx)]));
-    }
   };
   auto run_cell = [](const Level& L, const std::array<std::uint32_t, 3>& run) {
     return unpack(L.cells[run[0]]);
@@ -688,7 +727,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     G.keys.resize(L.cells.size());
     for (std::size_t c = 0; c < L.cells.size(); ++c) G.keys[c] = L.cells[c] + pack(1, 1, 1);
     G.keys = dilate(std::move(G.keys), 2, L.res + 1);
-    G.index = KeyIndex(G.keys);
+    G.lines = LineIndex(G.keys);
     std::vector<std::array<Eigen::Vector3d, 27>> cell_sums(runs.cells.size());
     std::vector<char> has_splat(runs.cells.size(), 0);
     const double inverse_volume = 1.0 / (L.h * L.h * L.h);
@@ -831,16 +870,32 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       coarser = prolong_splines(grids[std::size_t(d - 1)], grids[std::size_t(d)], coarser);
       grids[std::size_t(d - 1)] = CellGrid();
     }
-    // System rows (27 slots) for the unknown nodes: stiffness + screening.
-    std::vector<std::array<double, 27>> A(nn);
+    // System rows (27 slots, slot(dx, dy, dz)) of the unknown nodes. Inside the domain and away
+    // from samples a row is the constant stiffness stencil h K; only nodes on the domain's faces
+    // (truncated stencil) and corners of cells holding samples (screening) store their own row.
+    std::array<double, 27> interior_row{};
+    for (int c = 0; c < 8; ++c) {  // incident cells: offsets -1/0 per axis
+      const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
+      const int a = (-ox) | (-oy) << 1 | (-oz) << 2;  // the node's corner in that cell
+      for (int corner = 0; corner < 8; ++corner)
+        interior_row[std::size_t(
+            slot(ox + (corner & 1), oy + (corner >> 1 & 1), oz + (corner >> 2 & 1)))] +=
+            L.h * element.stiffness[a][corner];
+    }
     std::vector<double> b(nn, 0.0);
     divergence(L, coarser, b, [&](std::size_t v) { return bool(L.unknown[v]); });
+    tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+      // Divergence of the splatted normals: -int grad(phi_v) . V.
+      b[v] = L.unknown[v] ? -(b[v] + finer[std::size_t(d)][v]) : 0.0;
+    });
     const double screening = o.point_weight * area_per_sample * std::ldexp(1.0, d);
     // Screening moments per cell holding samples: sums of w_a w_b (a <= b) and of w_a over its
-    // samples, w the trilinear weights of the cell's corners.
+    // samples, w the trilinear weights of the cell's corners; and the cell's corner nodes.
     const Runs& runs = level_runs[std::size_t(d)];
     constexpr int kPairs = 36;
-    std::vector<std::array<double, kPairs + 8>> moments(screening > 0 ? runs.cells.size() : 0);
+    const std::size_t screened_cells = screening > 0 ? runs.cells.size() : 0;
+    std::vector<std::array<double, kPairs + 8>> moments(screened_cells);
+    std::vector<std::array<int, 8>> corners(screened_cells);
     auto pair_index = [](int a, int b) {
       if (a > b) std::swap(a, b);
       return a * 8 - a * (a - 1) / 2 + (b - a);
@@ -849,6 +904,9 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       auto& m = moments[r];
       m.fill(0.0);
       const auto cell = run_cell(L, runs.cells[r]);
+      for (int a = 0; a < 8; ++a)
+        corners[r][std::size_t(a)] =
+            L.node(cell[0] + (a & 1), cell[1] + (a >> 1 & 1), cell[2] + (a >> 2 & 1));
       for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
         const auto w = corner_weights(samples[morton_order[q].second].p, cell, L.res);
         for (int a = 0; a < 8; ++a) {
@@ -858,35 +916,50 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
         }
       }
     });
-    tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
-      A[v].fill(0.0);
-      if (!L.unknown[v]) return;
+    // Nodes with their own row. For a fixed corner the cells' corner nodes are distinct, so one
+    // corner at a time writes without races, in the same order whatever the threads.
+    std::vector<int> row_of(nn, -1);
+    for (int a = 0; a < 8; ++a)
+      tbb::parallel_for(std::size_t(0), screened_cells, [&](std::size_t r) {
+        row_of[std::size_t(corners[r][std::size_t(a)])] = 0;
+      });
+    int own_rows = 0;
+    for (std::size_t v = 0; v < nn; ++v) {
       const auto [i, j, k] = unpack(L.nodes[v]);
-      for (int c = 0; c < 8; ++c) {  // incident cells: offsets -1/0 per axis
+      const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
+      row_of[v] = L.unknown[v] && (on_face || row_of[v] == 0) ? own_rows++ : -1;
+    }
+    std::vector<std::array<double, 27>> rows(static_cast<std::size_t>(own_rows));
+    tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+      if (row_of[v] < 0) return;
+      auto& row = rows[std::size_t(row_of[v])];
+      row.fill(0.0);
+      const auto [i, j, k] = unpack(L.nodes[v]);
+      for (int c = 0; c < 8; ++c) {  // incident cells inside the domain
         const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
         if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
             k + oz >= L.res)
           continue;
-        const int a = (-ox) | (-oy) << 1 | (-oz) << 2;  // this node's corner in the cell
+        const int a = (-ox) | (-oy) << 1 | (-oz) << 2;
         for (int corner = 0; corner < 8; ++corner)
-          A[v]
-           [std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1), oz + (corner >> 2 & 1)))] +=
-              L.h * element.stiffness[a][corner];
+          row[std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1),
+                               oz + (corner >> 2 & 1)))] += L.h * element.stiffness[a][corner];
       }
-      // Divergence of the splatted normals: -int grad(phi_v) . V.
-      b[v] = -(b[v] + finer[std::size_t(d)][v]);
-      // Screening: (chi(p) - 1/2)^2 for the samples in this depth's active cells.
-      if (screening > 0)
-        for_incident_runs(L, runs, i, j, k,
-                          [&](int a, const std::array<int, 3>& offset, std::size_t r) {
-                            const auto& m = moments[r];
-                            b[v] += screening * 0.5 * m[std::size_t(kPairs + a)];
-                            for (int q = 0; q < 8; ++q)
-                              A[v][std::size_t(slot(offset[0] + (q & 1), offset[1] + (q >> 1 & 1),
-                                                    offset[2] + (q >> 2 & 1)))] +=
-                                  screening * m[std::size_t(pair_index(a, q))];
-                          });
     });
+    // Screening: (chi(p) - 1/2)^2 for the samples in this depth's active cells.
+    for (int a = 7; a >= 0; --a)
+      tbb::parallel_for(std::size_t(0), screened_cells, [&](std::size_t r) {
+        const std::size_t v = std::size_t(corners[r][std::size_t(a)]);
+        if (row_of[v] < 0) return;
+        const auto& m = moments[r];
+        auto& row = rows[std::size_t(row_of[v])];
+        b[v] += screening * 0.5 * m[std::size_t(kPairs + a)];
+        const int ox = -(a & 1), oy = -(a >> 1 & 1), oz = -(a >> 2 & 1);
+        for (int q = 0; q < 8; ++q)
+          row[std::size_t(slot(ox + (q & 1), oy + (q >> 1 & 1), oz + (q >> 2 & 1)))] +=
+              screening * m[std::size_t(pair_index(a, q))];
+      });
+    std::vector<std::array<int, 8>>().swap(corners);
     for (std::size_t g = 0; g < coarser.size(); ++g) coarser[g] += splat[std::size_t(d)][g];
     std::vector<Eigen::Vector3d>().swap(splat[std::size_t(d)]);
     std::vector<double>().swap(finer[std::size_t(d)]);
@@ -895,17 +968,30 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     const auto assembled = clock::now();
     // Jacobi-preconditioned conjugate gradients on the unknowns; fixed nodes keep their values.
     // Rows of the unknowns times `in`. The search direction is zero on fixed nodes, so products
-    // with it involve unknowns only.
+    // with it involve unknowns only. Every in-domain neighbour of an unknown node exists (its
+    // incident cells are active), at columns[t] + dz.
+    auto row_at = [&](std::size_t v) {
+      return row_of[v] >= 0 ? rows[std::size_t(row_of[v])].data() : interior_row.data();
+    };
     auto apply = [&](const std::vector<double>& in, std::vector<double>& out) {
       tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
         if (!L.unknown[v]) {
           out[v] = 0;
           return;
         }
+        const double* row = row_at(v);
+        const auto& column = L.columns[v];
+        const long k = long(L.nodes[v] & kKeyMask);
         double sum = 0;
-        for (int s = 0; s < 27; ++s) {
-          const int u = L.neighbours[v][std::size_t(s)];
-          if (u >= 0) sum += A[v][std::size_t(s)] * in[std::size_t(u)];
+        if (row_of[v] < 0) {  // interior: all 27 neighbours exist
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int t = 0; t < 9; ++t)
+              sum += row[t + 9 * (dz + 1)] * in[std::size_t(column[std::size_t(t)] + dz)];
+        } else {
+          for (int dz = k > 0 ? -1 : 0; dz <= (k < L.res ? 1 : 0); ++dz)
+            for (int t = 0; t < 9; ++t)
+              if (column[std::size_t(t)] >= 0)
+                sum += row[t + 9 * (dz + 1)] * in[std::size_t(column[std::size_t(t)] + dz)];
         }
         out[v] = sum;
       });
@@ -914,7 +1000,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     apply(L.x, Ap);
     for (std::size_t v = 0; v < nn; ++v) {
       r[v] = L.unknown[v] ? b[v] - Ap[v] : 0.0;
-      if (L.unknown[v] && A[v][13] > 0) diag[v] = A[v][13];
+      if (L.unknown[v] && row_at(v)[13] > 0) diag[v] = row_at(v)[13];
     }
     const double b_norm = std::sqrt(
         deterministic_sum(nn, [&](std::size_t v) { return L.unknown[v] ? b[v] * b[v] : 0.0; }));
@@ -945,7 +1031,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     long unknowns = 0;
     for (char u : L.unknown) unknowns += u;
     // Extraction needs only the values, nodes and cells: drop the solver's tables now.
-    std::vector<std::array<int, 27>>().swap(L.neighbours);
+    std::vector<std::array<int, 9>>().swap(L.columns);
     std::vector<char>().swap(L.unknown);
     result.levels.push_back({d, long(L.cells.size()), unknowns, it,
                              r_norm / std::max(b_norm, 1e-300),
@@ -958,7 +1044,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     for (int d = finest; d >= d_min; --d) {
       const Level& L = levels[std::size_t(d)];
       const auto c = cell_of(p, L.res);
-      if (L.cell_index.find(pack(c[0], c[1], c[2])) >= 0) return L.interpolate(c, p);
+      if (L.cell(pack(c[0], c[1], c[2])) >= 0) return L.interpolate(c, p);
     }
     return 0.0;
   };
@@ -1010,7 +1096,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       }
       const std::array<long, 3> c{std::min(i >> shift, L.res - 1), std::min(j >> shift, L.res - 1),
                                   std::min(k >> shift, L.res - 1)};
-      if (L.cell_index.find(pack(c[0], c[1], c[2])) >= 0) {
+      if (L.cell(pack(c[0], c[1], c[2])) >= 0) {
         const Eigen::Vector3d p(double(i) / double(R), double(j) / double(R),
                                 double(k) / double(R));
         return L.interpolate(c, p);
