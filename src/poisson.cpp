@@ -117,16 +117,39 @@ class LineIndex {
     const auto it = std::lower_bound(first, last, key);
     return it != last && *it == key ? int(it - keys.begin()) : -1;
   }
-  // Range [first, last) of line (i, j), empty if it has no keys.
+  // Range [first, last) of line (i, j), empty if it has no keys (or i, j lie outside [0, 2^21)).
   std::array<std::uint32_t, 2> line(long i, long j) const {
+    if (i < 0 || j < 0 || i > long(kKeyMask) || j > long(kKeyMask)) return {0, 0};
     const int l = lines_.find(pack(0, i, j));
     if (l < 0) return {0, 0};
     return {start_[std::size_t(l)], start_[std::size_t(l) + 1]};
   }
+  // The lines in key order: line l is [start(l), start(l + 1)).
+  std::size_t count() const { return start_.empty() ? 0 : start_.size() - 1; }
+  std::uint32_t start(std::size_t l) const { return start_[l]; }
 
  private:
   KeyIndex lines_;
   std::vector<std::uint32_t> start_;
+};
+
+// Finds keys of one line of a sorted key array by moving a cursor: cheap when successive keys are
+// close, as when a line of one array is swept against a line of another.
+class LineCursor {
+ public:
+  LineCursor() = default;
+  LineCursor(const std::vector<Key>& keys, std::array<std::uint32_t, 2> range)
+      : keys_(keys.data()), first_(range[0]), at_(range[0]), last_(range[1]) {}
+  // Position of key, or -1.
+  int find(Key key) {
+    while (at_ < last_ && keys_[at_] < key) ++at_;
+    while (at_ > first_ && keys_[at_ - 1] >= key) --at_;
+    return at_ < last_ && keys_[at_] == key ? int(at_) : -1;
+  }
+
+ private:
+  const Key* keys_ = nullptr;
+  std::uint32_t first_ = 0, at_ = 0, last_ = 0;
 };
 
 void sort_unique(std::vector<Key>& keys) {
@@ -256,50 +279,32 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
   const std::size_t n = L.nodes.size();
   L.columns.resize(n);
   L.unknown.assign(n, 0);
-  std::vector<std::size_t> lines;
-  for (std::size_t v = 0; v < n; ++v)
-    if (v == 0 || L.nodes[v] >> kKeyBits != L.nodes[v - 1] >> kKeyBits) lines.push_back(v);
-  lines.push_back(n);
   // A line (fixed i, j) at a time: the nine neighbouring node lines and the four incident cell
-  // lines are found once, then walked with cursors that only move forward as k grows.
-  tbb::parallel_for(std::size_t(0), lines.size() - 1, [&](std::size_t line) {
-    const auto [i, j, k_first] = unpack(L.nodes[lines[line]]);
-    std::array<std::uint32_t, 2> node_range[9], cell_range[4];
-    for (int t = 0; t < 9; ++t) {
-      const long ni = i + t % 3 - 1, nj = j + t / 3 - 1;
-      node_range[t] = ni < 0 || nj < 0 || ni > L.res || nj > L.res
-                          ? std::array<std::uint32_t, 2>{0, 0}
-                          : L.node_lines.line(ni, nj);
-    }
+  // lines are found once, then walked with cursors as k grows.
+  tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
+    const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
+    const auto [i, j, k_first] = unpack(L.nodes[first]);
+    LineCursor node_column[9], cell_column[4];
+    for (int t = 0; t < 9; ++t)
+      node_column[t] = LineCursor(L.nodes, L.node_lines.line(i + t % 3 - 1, j + t / 3 - 1));
     bool column_in_domain[4];
     for (int c = 0; c < 4; ++c) {
       const long ci = i - 1 + (c & 1), cj = j - 1 + (c >> 1);
       column_in_domain[c] = ci >= 0 && cj >= 0 && ci < L.res && cj < L.res;
-      cell_range[c] =
-          column_in_domain[c] ? L.cell_lines.line(ci, cj) : std::array<std::uint32_t, 2>{0, 0};
+      cell_column[c] = LineCursor(L.cells, L.cell_lines.line(ci, cj));
     }
-    for (std::size_t v = lines[line]; v < lines[line + 1]; ++v) {
+    for (std::size_t v = first; v < last; ++v) {
       const long k = long(L.nodes[v] & kKeyMask);
-      for (int t = 0; t < 9; ++t) {
-        auto& [cursor, end] = node_range[t];
-        const Key key = pack(i + t % 3 - 1, j + t / 3 - 1, k);
-        while (cursor < end && L.nodes[cursor] < key) ++cursor;
-        L.columns[v][std::size_t(t)] = cursor < end && L.nodes[cursor] == key ? int(cursor) : -1;
-      }
+      for (int t = 0; t < 9; ++t)
+        L.columns[v][std::size_t(t)] = node_column[t].find(pack(i + t % 3 - 1, j + t / 3 - 1, k));
       // A node is solved for when every incident cell inside the domain is active (its row of
       // the system is then complete); Dirichlet fixes the domain's faces too.
       bool complete = true;
-      for (int c = 0; c < 4; ++c) {
-        if (!column_in_domain[c]) continue;
-        auto& [cursor, end] = cell_range[c];
-        const long ci = i - 1 + (c & 1), cj = j - 1 + (c >> 1);
-        const Key below = pack(ci, cj, std::max(k - 1, 0L));
-        while (cursor < end && L.cells[cursor] < below) ++cursor;
-        for (long ck = std::max(k - 1, 0L); ck <= std::min(k, L.res - 1); ++ck) {
-          const std::uint32_t at = cursor + std::uint32_t(ck - std::max(k - 1, 0L));
-          if (at >= end || L.cells[at] != pack(ci, cj, ck)) complete = false;
-        }
-      }
+      for (int c = 0; c < 4; ++c)
+        for (long ck = std::max(k - 1, 0L); column_in_domain[c] && ck <= std::min(k, L.res - 1);
+             ++ck)
+          if (cell_column[c].find(pack(i - 1 + (c & 1), j - 1 + (c >> 1), ck)) < 0)
+            complete = false;
       const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
       L.unknown[v] = complete && !(boundary == PoissonBoundary::Dirichlet && on_face);
     }
@@ -310,8 +315,8 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
 // coordinates kept in [0, limit]. A shifted copy of a sorted list stays sorted (packing adds
 // without carries), so the copies are merged rather than sorted.
 std::vector<Key> dilate(std::vector<Key> keys, long radius, long limit) {
-  for (int axis = 0; axis < 3; ++axis) {
-    const int shift = axis == 0 ? 2 * kKeyBits : axis == 1 ? kKeyBits : 0;
+  for (int axis = 0; axis < 2; ++axis) {
+    const int shift = axis == 0 ? 2 * kKeyBits : kKeyBits;
     std::vector<std::vector<Key>> lists(std::size_t(2 * radius + 1));
     tbb::parallel_for(long(0), 2 * radius + 1, [&](long q) {
       const long offset = q - radius;
@@ -325,7 +330,19 @@ std::vector<Key> dilate(std::vector<Key> keys, long radius, long limit) {
     });
     keys = merge_sorted(std::move(lists));
   }
-  return keys;
+  // Along k, within a line, the union of the intervals [k - radius, k + radius] comes out sorted
+  // in one pass.
+  std::vector<Key> out;
+  out.reserve(keys.size() + keys.size() / 2);
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    const Key line = keys[v] & ~kKeyMask;
+    const long k = long(keys[v] & kKeyMask);
+    long from = std::max(k - radius, 0L);
+    if (!out.empty() && (out.back() & ~kKeyMask) == line)
+      from = std::max(from, long(out.back() & kKeyMask) + 1);
+    for (long c = from; c <= std::min(k + radius, limit); ++c) out.push_back(line | Key(c));
+  }
+  return out;
 }
 
 // Values on the finer level's nodes from the coarser level's (exact: trilinear functions nest).
@@ -333,23 +350,30 @@ template <class T>
 std::vector<T> prolong_values(const Level& coarse, const Level& fine,
                               const std::vector<T>& values) {
   std::vector<T> out(fine.nodes.size());
-  tbb::parallel_for(std::size_t(0), fine.nodes.size(), [&](std::size_t v) {
-    const auto q = unpack(fine.nodes[v]);
-    long lo[3], hi[3];
-    for (int a = 0; a < 3; ++a)
-      lo[a] = q[std::size_t(a)] >> 1, hi[a] = (q[std::size_t(a)] + 1) >> 1;
-    T sum = values[0] * 0.0;
-    double weight = 0;
-    for (int c = 0; c < 8; ++c) {
-      if (((c & 1) && hi[0] == lo[0]) || ((c >> 1 & 1) && hi[1] == lo[1]) ||
-          ((c >> 2 & 1) && hi[2] == lo[2]))
-        continue;
-      const int n = coarse.node((c & 1) ? hi[0] : lo[0], (c >> 1 & 1) ? hi[1] : lo[1],
-                                (c >> 2 & 1) ? hi[2] : lo[2]);
-      sum += values[std::size_t(n)];
-      weight += 1;
+  // A fine line at a time, with cursors on the (up to) four coarse lines around it.
+  tbb::parallel_for(std::size_t(0), fine.node_lines.count(), [&](std::size_t line) {
+    const std::size_t first = fine.node_lines.start(line), last = fine.node_lines.start(line + 1);
+    const auto [i, j, k_first] = unpack(fine.nodes[first]);
+    const long lo[2] = {i >> 1, j >> 1}, hi[2] = {(i + 1) >> 1, (j + 1) >> 1};
+    LineCursor column[4];
+    for (int c = 0; c < 4; ++c)
+      column[c] = LineCursor(coarse.nodes, coarse.node_lines.line((c & 1) ? hi[0] : lo[0],
+                                                                  (c >> 1 & 1) ? hi[1] : lo[1]));
+    for (std::size_t v = first; v < last; ++v) {
+      const long k = long(fine.nodes[v] & kKeyMask), lo_k = k >> 1, hi_k = (k + 1) >> 1;
+      T sum = values[0] * 0.0;
+      double weight = 0;
+      for (int c = 0; c < 8; ++c) {
+        if (((c & 1) && hi[0] == lo[0]) || ((c >> 1 & 1) && hi[1] == lo[1]) ||
+            ((c >> 2 & 1) && hi_k == lo_k))
+          continue;
+        const int n = column[c & 3].find(pack((c & 1) ? hi[0] : lo[0], (c >> 1 & 1) ? hi[1] : lo[1],
+                                              (c >> 2 & 1) ? hi_k : lo_k));
+        sum += values[std::size_t(n)];
+        weight += 1;
+      }
+      out[v] = sum / weight;
     }
-    out[v] = sum / weight;
   });
   return out;
 }
@@ -440,23 +464,37 @@ struct CellGrid {
 std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
                                              const std::vector<Eigen::Vector3d>& values) {
   std::vector<Eigen::Vector3d> out(fine.keys.size(), Eigen::Vector3d::Zero());
-  tbb::parallel_for(std::size_t(0), fine.keys.size(), [&](std::size_t f) {
-    const auto u = unpack(fine.keys[f]);
+  auto parents = [](long offset_index, long* parent, double* weight) {
+    const long index = offset_index - 1, m = index >> 1;  // floor(index / 2)
+    parent[0] = m, weight[0] = 0.75;
+    parent[1] = (index & 1) ? m + 1 : m - 1, weight[1] = 0.25;
+  };
+  // A fine line at a time, with cursors on the four coarse lines it reads.
+  tbb::parallel_for(std::size_t(0), fine.lines.count(), [&](std::size_t line) {
+    const std::size_t first = fine.lines.start(line), last = fine.lines.start(line + 1);
+    const auto u = unpack(fine.keys[first]);
     long parent[3][2];
     double weight[3][2];
-    for (int a = 0; a < 3; ++a) {
-      const long index = u[std::size_t(a)] - 1, m = index >> 1;  // floor(index / 2)
-      parent[a][0] = m, weight[a][0] = 0.75;
-      parent[a][1] = (index & 1) ? m + 1 : m - 1, weight[a][1] = 0.25;
+    parents(u[0], parent[0], weight[0]);
+    parents(u[1], parent[1], weight[1]);
+    LineCursor column[4];
+    for (int c = 0; c < 4; ++c)
+      column[c] =
+          LineCursor(coarse.keys, coarse.lines.line(parent[0][c & 1] + 1, parent[1][c >> 1] + 1));
+    for (std::size_t f = first; f < last; ++f) {
+      parents(long(fine.keys[f] & kKeyMask), parent[2], weight[2]);
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 8; ++c) {
+        const long pz = parent[2][c >> 2 & 1];
+        if (pz < -1) continue;
+        const int idx =
+            column[c & 3].find(pack(parent[0][c & 1] + 1, parent[1][c >> 1 & 1] + 1, pz + 1));
+        if (idx >= 0)
+          sum += weight[0][c & 1] * weight[1][c >> 1 & 1] * weight[2][c >> 2 & 1] *
+                 values[std::size_t(idx)];
+      }
+      out[f] = sum;
     }
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int c = 0; c < 8; ++c) {
-      const int idx = coarse.find(parent[0][c & 1], parent[1][c >> 1 & 1], parent[2][c >> 2 & 1]);
-      if (idx >= 0)
-        sum += weight[0][c & 1] * weight[1][c >> 1 & 1] * weight[2][c >> 2 & 1] *
-               values[std::size_t(idx)];
-    }
-    out[f] = sum;
   });
   return out;
 }
@@ -782,23 +820,19 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
                         std::vector<double>& out, auto&& want) {
     const CellGrid& G = grids[std::size_t(L.depth)];
     const HatQuadraticIntegrals I(L.res);
-    std::vector<std::size_t> lines;
-    for (std::size_t v = 0; v < L.nodes.size(); ++v)
-      if (v == 0 || L.nodes[v] >> kKeyBits != L.nodes[v - 1] >> kKeyBits) lines.push_back(v);
-    lines.push_back(L.nodes.size());
-    tbb::parallel_for(std::size_t(0), lines.size() - 1, [&](std::size_t line) {
-      const auto [i, j, k_first] = unpack(L.nodes[lines[line]]);
+    tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
+      const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
+      const auto [i, j, k_first] = unpack(L.nodes[first]);
       Key prefix[16];
-      std::size_t cursor[16];
+      std::size_t cursor[16], end[16];
       for (int c = 0; c < 16; ++c) {
         const long ci = i + (c & 3) - 2, cj = j + (c >> 2) - 2;
         prefix[c] = ci < -1 || cj < -1 ? Key(0) : pack(ci + 1, cj + 1, 0);
-        cursor[c] = ci < -1 || cj < -1
-                        ? G.keys.size()
-                        : std::size_t(std::lower_bound(G.keys.begin(), G.keys.end(), prefix[c]) -
-                                      G.keys.begin());
+        const auto range =
+            ci < -1 || cj < -1 ? std::array<std::uint32_t, 2>{0, 0} : G.lines.line(ci + 1, cj + 1);
+        cursor[c] = range[0], end[c] = range[1];
       }
-      for (std::size_t v = lines[line]; v < lines[line + 1]; ++v) {
+      for (std::size_t v = first; v < last; ++v) {
         if (!want(v)) continue;
         const long k = long(L.nodes[v] & kKeyMask);
         const auto &vx = I.value[std::size_t(i)], &vy = I.value[std::size_t(j)],
@@ -810,9 +844,9 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
           // Cells (ci, cj, k - 2 .. k + 1) have offset keys prefix + (k - 1 .. k + 2).
           const Key lo = prefix[c] + Key(std::max(k - 1, 0L)), hi = prefix[c] + Key(k + 2);
           std::size_t& t = cursor[c];
-          while (t < G.keys.size() && G.keys[t] < lo) ++t;
+          while (t < end[c] && G.keys[t] < lo) ++t;
           const int ox = c & 3, oy = c >> 2;
-          for (std::size_t u = t; u < G.keys.size() && G.keys[u] <= hi; ++u) {
+          for (std::size_t u = t; u < end[c] && G.keys[u] <= hi; ++u) {
             const int oz = int(G.keys[u] - prefix[c]) - int(k - 1);
             const Eigen::Vector3d& w = W[u];
             sum += w.x() * sx[std::size_t(ox)] * vy[std::size_t(oy)] * vz[std::size_t(oz)] +
@@ -836,21 +870,30 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     const Level* F = d < finest ? &levels[std::size_t(d + 1)] : nullptr;
     if (splats_at[std::size_t(d)])
       divergence(L, splat[std::size_t(d)], e, [](std::size_t) { return true; });
-    tbb::parallel_for(std::size_t(0), L.nodes.size(), [&](std::size_t v) {
-      double sum = e[v];
-      if (F) {
-        const auto [i, j, k] = unpack(L.nodes[v]);
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const int u = F->node(2 * i + dx, 2 * j + dy, 2 * k + dz);
-              if (u >= 0)
-                sum += (1 - 0.5 * std::abs(dx)) * (1 - 0.5 * std::abs(dy)) *
-                       (1 - 0.5 * std::abs(dz)) * finer[std::size_t(d + 1)][std::size_t(u)];
-            }
-      }
-      e[v] = sum;
-    });
+    if (F)
+      tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
+        const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
+        const auto [i, j, k_first] = unpack(L.nodes[first]);
+        LineCursor column[9];
+        for (int t = 0; t < 9; ++t)
+          column[t] =
+              LineCursor(F->nodes, F->node_lines.line(2 * i + t % 3 - 1, 2 * j + t / 3 - 1));
+        for (std::size_t v = first; v < last; ++v) {
+          const long k = long(L.nodes[v] & kKeyMask);
+          double sum = e[v];
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                if (2 * k + dz < 0) continue;
+                const int u =
+                    column[dx + 1 + 3 * (dy + 1)].find(pack(2 * i + dx, 2 * j + dy, 2 * k + dz));
+                if (u >= 0)
+                  sum += (1 - 0.5 * std::abs(dx)) * (1 - 0.5 * std::abs(dy)) *
+                         (1 - 0.5 * std::abs(dz)) * finer[std::size_t(d + 1)][std::size_t(u)];
+              }
+          e[v] = sum;
+        }
+      });
   }
 
   // --- Solve, coarse to fine.
@@ -1117,15 +1160,15 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   };
   // Candidates: finest active cells, and subcells of coarser leaves whose corners straddle iso.
   std::vector<Key> candidates;
-  for (int d = d_min; d <= finest; ++d) {
+  for (int d = d_min; d < finest; ++d) {
     const Level& L = levels[std::size_t(d)];
     const int shift = finest - d;
     std::vector<std::vector<Key>> found(L.cells.size());
     tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
-      if (d < finest && L.refined[c]) return;
+      if (L.refined[c]) return;
       const auto [i, j, k] = unpack(L.cells[c]);
       const long n = 1L << shift;
-      if (d < finest) {
+      {
         double corner[8];
         int inside = 0;
         for (int q = 0; q < 8; ++q) {
@@ -1143,6 +1186,26 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
             cell_values(fi, fj, fk, value);
             if (mixed(value)) found[c].push_back(cell_key(fi, fj, fk));
           }
+    });
+    for (auto& f : found) candidates.insert(candidates.end(), f.begin(), f.end());
+  }
+  {
+    // Finest cells, a line at a time: their corners are finest nodes, found by cursors.
+    std::vector<std::vector<Key>> found(F.cell_lines.count());
+    tbb::parallel_for(std::size_t(0), F.cell_lines.count(), [&](std::size_t line) {
+      const std::size_t first = F.cell_lines.start(line), last = F.cell_lines.start(line + 1);
+      const auto [i, j, k_first] = unpack(F.cells[first]);
+      LineCursor column[4];
+      for (int c = 0; c < 4; ++c)
+        column[c] = LineCursor(F.nodes, F.node_lines.line(i + (c & 1), j + (c >> 1)));
+      for (std::size_t c = first; c < last; ++c) {
+        const long k = long(F.cells[c] & kKeyMask);
+        double value[8];
+        for (int q = 0; q < 8; ++q)
+          value[q] = iso - F.x[std::size_t(column[q & 3].find(
+                               pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1))))];
+        if (mixed(value)) found[line].push_back(cell_key(i, j, k));
+      }
     });
     for (auto& f : found) candidates.insert(candidates.end(), f.begin(), f.end());
   }
