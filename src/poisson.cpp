@@ -157,18 +157,30 @@ void sort_unique(std::vector<Key>& keys) {
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
 }
 
-// Sum of f(i) over [0, n) in fixed chunks, added in chunk order: independent of thread count.
-template <class F>
-double deterministic_sum(std::size_t n, F&& f) {
+// Sums over [0, n): f(i, sums) adds element i's terms to N running sums. Chunks of fixed size
+// run in parallel and their sums are added in chunk order, so the result does not depend on the
+// thread count. f may also write element i's own outputs (it runs once per element).
+template <std::size_t N, class F>
+std::array<double, N> deterministic_sums(std::size_t n, F&& f) {
   constexpr std::size_t kChunk = 1 << 12;
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
-  std::vector<double> partial(chunks, 0.0);
+  std::vector<std::array<double, N>> partial(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-    double s = 0;
-    for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i) s += f(i);
-    partial[c] = s;
+    std::array<double, N> sums{};
+    for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i) f(i, sums);
+    partial[c] = sums;
   });
-  return std::accumulate(partial.begin(), partial.end(), 0.0);
+  std::array<double, N> total{};
+  for (const auto& sums : partial)
+    for (std::size_t q = 0; q < N; ++q) total[q] += sums[q];
+  return total;
+}
+
+// Sum of f(i) over [0, n), independent of the thread count.
+template <class F>
+double deterministic_sum(std::size_t n, F&& f) {
+  return deterministic_sums<1>(n,
+                               [&](std::size_t i, std::array<double, 1>& s) { s[0] += f(i); })[0];
 }
 
 // Element matrices of the unit cube's trilinear basis (corner bits x=1, y=2, z=4):
@@ -1016,20 +1028,35 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     auto row_at = [&](std::size_t v) {
       return row_of[v] >= 0 ? rows[std::size_t(row_of[v])].data() : interior_row.data();
     };
+    const double kCentre = interior_row[13], kEdge = interior_row[std::size_t(slot(1, 1, 0))],
+                 kCorner = interior_row[std::size_t(slot(1, 1, 1))];
+    // out = A in on the unknowns (0 elsewhere); returns in . out.
     auto apply = [&](const std::vector<double>& in, std::vector<double>& out) {
-      tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+      return deterministic_sum(nn, [&](std::size_t v) {
         if (!L.unknown[v]) {
           out[v] = 0;
-          return;
+          return 0.0;
         }
         const double* row = row_at(v);
         const auto& column = L.columns[v];
         const long k = long(L.nodes[v] & kKeyMask);
         double sum = 0;
-        if (row_of[v] < 0) {  // interior: all 27 neighbours exist
-          for (int dz = -1; dz <= 1; ++dz)
-            for (int t = 0; t < 9; ++t)
-              sum += row[t + 9 * (dz + 1)] * in[std::size_t(column[std::size_t(t)] + dz)];
+        if (row_of[v] < 0) {
+          // Interior: all 27 neighbours exist, and the trilinear stiffness stencil is zero on
+          // the six face neighbours, one value on the twelve edge and another on the eight
+          // corner neighbours.
+          const double* x = in.data();
+          double edges = 0, corners = 0;
+          for (int t : {0, 2, 6, 8}) {
+            const int m = column[std::size_t(t)];
+            edges += x[m];
+            corners += x[m - 1] + x[m + 1];
+          }
+          for (int t : {1, 3, 5, 7}) {
+            const int m = column[std::size_t(t)];
+            edges += x[m - 1] + x[m + 1];
+          }
+          sum = kCentre * x[v] + kEdge * edges + kCorner * corners;
         } else {
           for (int dz = k > 0 ? -1 : 0; dz <= (k < L.res ? 1 : 0); ++dz)
             for (int t = 0; t < 9; ++t)
@@ -1037,6 +1064,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
                 sum += row[t + 9 * (dz + 1)] * in[std::size_t(column[std::size_t(t)] + dz)];
         }
         out[v] = sum;
+        return in[v] * sum;
       });
     };
     std::vector<double> r(nn), z(nn), p(nn), Ap(nn), diag(nn, 1.0);
@@ -1052,23 +1080,26 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     double r_norm = std::sqrt(deterministic_sum(nn, [&](std::size_t v) { return r[v] * r[v]; }));
     int it = 0;
     const double target = o.solver_tolerance * std::max(b_norm, 1e-300);
+    // Each iteration makes three passes over the nodes: the product (with p . Ap), the update
+    // (with r . z and r . r) and the new direction.
     while (it < o.max_iterations && r_norm > target && rz > 0) {
-      apply(p, Ap);
-      const double pAp = deterministic_sum(nn, [&](std::size_t v) { return p[v] * Ap[v]; });
+      const double pAp = apply(p, Ap);
       if (!(pAp > 0)) break;
       const double step = rz / pAp;
-      tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
-        if (!L.unknown[v]) return;
-        L.x[v] += step * p[v];
-        r[v] -= step * Ap[v];
-        z[v] = r[v] / diag[v];
+      const auto sums = deterministic_sums<2>(nn, [&](std::size_t v, std::array<double, 2>& s) {
+        if (L.unknown[v]) {
+          L.x[v] += step * p[v];
+          r[v] -= step * Ap[v];
+          z[v] = r[v] / diag[v];
+        }
+        s[0] += r[v] * z[v];
+        s[1] += r[v] * r[v];
       });
-      const double rz_next = deterministic_sum(nn, [&](std::size_t v) { return r[v] * z[v]; });
-      const double beta = rz_next / rz;
-      rz = rz_next;
+      const double beta = sums[0] / rz;
+      rz = sums[0];
+      r_norm = std::sqrt(sums[1]);
       tbb::parallel_for(std::size_t(0), nn,
                         [&](std::size_t v) { p[v] = L.unknown[v] ? z[v] + beta * p[v] : 0.0; });
-      r_norm = std::sqrt(deterministic_sum(nn, [&](std::size_t v) { return r[v] * r[v]; }));
       ++it;
     }
     long unknowns = 0;
