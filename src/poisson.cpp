@@ -826,8 +826,9 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   }
   // out[v] = S_d(W)[v] = int grad(phi_v) . W, for W given by depth-d quadratic coefficients on
   // grids[d], over the 4 x 4 x 4 cells whose B-splines overlap node v's hat; only for the nodes
-  // with want(v). Nodes are swept a line (fixed i, j) at a time: the 16 cell columns a node reads
-  // then advance monotonically through the sorted grid instead of being looked up.
+  // with want(v). The integrals are products of 1D ones, so a line of nodes (fixed i, j) first
+  // folds its 16 cell columns into two values per cell height k', P(k') (the x and y terms) and
+  // Q(k') (the z term), and each node then sums four heights.
   auto divergence = [&](const Level& L, const std::vector<Eigen::Vector3d>& W,
                         std::vector<double>& out, auto&& want) {
     const CellGrid& G = grids[std::size_t(L.depth)];
@@ -835,36 +836,39 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
       const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
       const auto [i, j, k_first] = unpack(L.nodes[first]);
-      Key prefix[16];
-      std::size_t cursor[16], end[16];
+      const long k_last = long(L.nodes[last - 1] & kKeyMask);
+      // Heights k' = k_first - 2 .. k_last + 1, stored from index 0.
+      const long base = k_first - 2;
+      std::vector<double> P(std::size_t(k_last - k_first + 4), 0.0), Q(P.size(), 0.0);
+      const auto &vx = I.value[std::size_t(i)], &vy = I.value[std::size_t(j)];
+      const auto &sx = I.slope[std::size_t(i)], &sy = I.slope[std::size_t(j)];
       for (int c = 0; c < 16; ++c) {
         const long ci = i + (c & 3) - 2, cj = j + (c >> 2) - 2;
-        prefix[c] = ci < -1 || cj < -1 ? Key(0) : pack(ci + 1, cj + 1, 0);
-        const auto range =
-            ci < -1 || cj < -1 ? std::array<std::uint32_t, 2>{0, 0} : G.lines.line(ci + 1, cj + 1);
-        cursor[c] = range[0], end[c] = range[1];
+        if (ci < -1 || cj < -1) continue;
+        const int ox = c & 3, oy = c >> 2;
+        const double px = sx[std::size_t(ox)] * vy[std::size_t(oy)],
+                     py = vx[std::size_t(ox)] * sy[std::size_t(oy)],
+                     qz = vx[std::size_t(ox)] * vy[std::size_t(oy)];
+        const auto range = G.lines.line(ci + 1, cj + 1);
+        // Offset keys hold k' + 1.
+        const Key prefix = pack(ci + 1, cj + 1, 0), lo = prefix + Key(std::max(base + 1, 0L));
+        std::uint32_t u = std::uint32_t(
+            std::lower_bound(G.keys.begin() + range[0], G.keys.begin() + range[1], lo) -
+            G.keys.begin());
+        for (; u < range[1] && long(G.keys[u] - prefix) - 1 <= k_last + 1; ++u) {
+          const std::size_t at = std::size_t(long(G.keys[u] - prefix) - 1 - base);
+          P[at] += px * W[u].x() + py * W[u].y();
+          Q[at] += qz * W[u].z();
+        }
       }
       for (std::size_t v = first; v < last; ++v) {
         if (!want(v)) continue;
         const long k = long(L.nodes[v] & kKeyMask);
-        const auto &vx = I.value[std::size_t(i)], &vy = I.value[std::size_t(j)],
-                   &vz = I.value[std::size_t(k)];
-        const auto &sx = I.slope[std::size_t(i)], &sy = I.slope[std::size_t(j)],
-                   &sz = I.slope[std::size_t(k)];
+        const auto &vz = I.value[std::size_t(k)], &sz = I.slope[std::size_t(k)];
         double sum = 0;
-        for (int c = 0; c < 16; ++c) {
-          // Cells (ci, cj, k - 2 .. k + 1) have offset keys prefix + (k - 1 .. k + 2).
-          const Key lo = prefix[c] + Key(std::max(k - 1, 0L)), hi = prefix[c] + Key(k + 2);
-          std::size_t& t = cursor[c];
-          while (t < end[c] && G.keys[t] < lo) ++t;
-          const int ox = c & 3, oy = c >> 2;
-          for (std::size_t u = t; u < end[c] && G.keys[u] <= hi; ++u) {
-            const int oz = int(G.keys[u] - prefix[c]) - int(k - 1);
-            const Eigen::Vector3d& w = W[u];
-            sum += w.x() * sx[std::size_t(ox)] * vy[std::size_t(oy)] * vz[std::size_t(oz)] +
-                   w.y() * vx[std::size_t(ox)] * sy[std::size_t(oy)] * vz[std::size_t(oz)] +
-                   w.z() * vx[std::size_t(ox)] * vy[std::size_t(oy)] * sz[std::size_t(oz)];
-          }
+        for (int oz = 0; oz < 4; ++oz) {
+          const std::size_t at = std::size_t(k - 2 + oz - base);
+          sum += P[at] * vz[std::size_t(oz)] + Q[at] * sz[std::size_t(oz)];
         }
         out[v] = sum;
       }
