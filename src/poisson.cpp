@@ -1048,7 +1048,12 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
               screening * m[std::size_t(pair_index(a, q))];
       });
     std::vector<std::array<int, 8>>().swap(corners);
-    for (std::size_t g = 0; g < coarser.size(); ++g) coarser[g] += splat[std::size_t(d)][g];
+    if (d < finest) {
+      for (std::size_t g = 0; g < coarser.size(); ++g) coarser[g] += splat[std::size_t(d)][g];
+    } else {  // nothing finer needs the normal field: free it before the largest solve
+      std::vector<Eigen::Vector3d>().swap(coarser);
+      grids[std::size_t(d)] = CellGrid();
+    }
     std::vector<Eigen::Vector3d>().swap(splat[std::size_t(d)]);
     std::vector<double>().swap(finer[std::size_t(d)]);
     level_runs[std::size_t(d)] = Runs();
