@@ -152,6 +152,17 @@ class LineCursor {
   std::uint32_t first_ = 0, at_ = 0, last_ = 0;
 };
 
+// Calls f(i, j, first, last) for each line [first, last) of a sorted key array (the keys with
+// that i and j), lines in parallel.
+template <class F>
+void for_each_line(const LineIndex& lines, const std::vector<Key>& keys, F&& f) {
+  tbb::parallel_for(std::size_t(0), lines.count(), [&](std::size_t line) {
+    const std::size_t first = lines.start(line);
+    const auto key = unpack(keys[first]);
+    f(key[0], key[1], first, std::size_t(lines.start(line + 1)));
+  });
+}
+
 void sort_unique(std::vector<Key>& keys) {
   tbb::parallel_sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -233,9 +244,6 @@ struct Level {
   std::vector<char> unknown;
   std::vector<double> x;
 
-  bool active(long i, long j, long k) const {
-    return i >= 0 && j >= 0 && k >= 0 && i < res && j < res && k < res && cell(pack(i, j, k)) >= 0;
-  }
   int node(long i, long j, long k) const {
     if (i < 0 || j < 0 || k < 0 || i > res || j > res || k > res) return -1;
     return node_lines.find(nodes, pack(i, j, k));
@@ -293,9 +301,7 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
   L.unknown.assign(n, 0);
   // A line (fixed i, j) at a time: the nine neighbouring node lines and the four incident cell
   // lines are found once, then walked with cursors as k grows.
-  tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
-    const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
-    const auto [i, j, k_first] = unpack(L.nodes[first]);
+  for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
     LineCursor node_column[9], cell_column[4];
     for (int t = 0; t < 9; ++t)
       node_column[t] = LineCursor(L.nodes, L.node_lines.line(i + t % 3 - 1, j + t / 3 - 1));
@@ -363,30 +369,30 @@ std::vector<T> prolong_values(const Level& coarse, const Level& fine,
                               const std::vector<T>& values) {
   std::vector<T> out(fine.nodes.size());
   // A fine line at a time, with cursors on the (up to) four coarse lines around it.
-  tbb::parallel_for(std::size_t(0), fine.node_lines.count(), [&](std::size_t line) {
-    const std::size_t first = fine.node_lines.start(line), last = fine.node_lines.start(line + 1);
-    const auto [i, j, k_first] = unpack(fine.nodes[first]);
-    const long lo[2] = {i >> 1, j >> 1}, hi[2] = {(i + 1) >> 1, (j + 1) >> 1};
-    LineCursor column[4];
-    for (int c = 0; c < 4; ++c)
-      column[c] = LineCursor(coarse.nodes, coarse.node_lines.line((c & 1) ? hi[0] : lo[0],
-                                                                  (c >> 1 & 1) ? hi[1] : lo[1]));
-    for (std::size_t v = first; v < last; ++v) {
-      const long k = long(fine.nodes[v] & kKeyMask), lo_k = k >> 1, hi_k = (k + 1) >> 1;
-      T sum = values[0] * 0.0;
-      double weight = 0;
-      for (int c = 0; c < 8; ++c) {
-        if (((c & 1) && hi[0] == lo[0]) || ((c >> 1 & 1) && hi[1] == lo[1]) ||
-            ((c >> 2 & 1) && hi_k == lo_k))
-          continue;
-        const int n = column[c & 3].find(pack((c & 1) ? hi[0] : lo[0], (c >> 1 & 1) ? hi[1] : lo[1],
-                                              (c >> 2 & 1) ? hi_k : lo_k));
-        sum += values[std::size_t(n)];
-        weight += 1;
-      }
-      out[v] = sum / weight;
-    }
-  });
+  for_each_line(
+      fine.node_lines, fine.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
+        const long lo[2] = {i >> 1, j >> 1}, hi[2] = {(i + 1) >> 1, (j + 1) >> 1};
+        LineCursor column[4];
+        for (int c = 0; c < 4; ++c)
+          column[c] = LineCursor(
+              coarse.nodes,
+              coarse.node_lines.line((c & 1) ? hi[0] : lo[0], (c >> 1 & 1) ? hi[1] : lo[1]));
+        for (std::size_t v = first; v < last; ++v) {
+          const long k = long(fine.nodes[v] & kKeyMask), lo_k = k >> 1, hi_k = (k + 1) >> 1;
+          T sum = values[0] * 0.0;
+          double weight = 0;
+          for (int c = 0; c < 8; ++c) {
+            if (((c & 1) && hi[0] == lo[0]) || ((c >> 1 & 1) && hi[1] == lo[1]) ||
+                ((c >> 2 & 1) && hi_k == lo_k))
+              continue;
+            const int n = column[c & 3].find(pack(
+                (c & 1) ? hi[0] : lo[0], (c >> 1 & 1) ? hi[1] : lo[1], (c >> 2 & 1) ? hi_k : lo_k));
+            sum += values[std::size_t(n)];
+            weight += 1;
+          }
+          out[v] = sum / weight;
+        }
+      });
   return out;
 }
 
@@ -482,13 +488,11 @@ std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellG
     parent[1] = (index & 1) ? m + 1 : m - 1, weight[1] = 0.25;
   };
   // A fine line at a time, with cursors on the four coarse lines it reads.
-  tbb::parallel_for(std::size_t(0), fine.lines.count(), [&](std::size_t line) {
-    const std::size_t first = fine.lines.start(line), last = fine.lines.start(line + 1);
-    const auto u = unpack(fine.keys[first]);
+  for_each_line(fine.lines, fine.keys, [&](long i, long j, std::size_t first, std::size_t last) {
     long parent[3][2];
     double weight[3][2];
-    parents(u[0], parent[0], weight[0]);
-    parents(u[1], parent[1], weight[1]);
+    parents(i, parent[0], weight[0]);
+    parents(j, parent[1], weight[1]);
     LineCursor column[4];
     for (int c = 0; c < 4; ++c)
       column[c] =
@@ -862,12 +866,10 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
                         std::vector<double>& out, auto&& want) {
     const CellGrid& G = grids[std::size_t(L.depth)];
     const HatQuadraticIntegrals I(L.res);
-    tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
-      const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
-      const auto [i, j, k_first] = unpack(L.nodes[first]);
+    for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
       const long k_last = long(L.nodes[last - 1] & kKeyMask);
       // Heights k' = k_first - 2 .. k_last + 1, stored from index 0.
-      const long base = k_first - 2;
+      const long k_first = long(L.nodes[first] & kKeyMask), base = k_first - 2;
       std::vector<double> P(std::size_t(k_last - k_first + 4), 0.0), Q(P.size(), 0.0);
       const auto &vx = I.value[std::size_t(i)], &vy = I.value[std::size_t(j)];
       const auto &sx = I.slope[std::size_t(i)], &sy = I.slope[std::size_t(j)];
@@ -916,29 +918,28 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     if (splats_at[std::size_t(d)])
       divergence(L, splat[std::size_t(d)], e, [](std::size_t) { return true; });
     if (F)
-      tbb::parallel_for(std::size_t(0), L.node_lines.count(), [&](std::size_t line) {
-        const std::size_t first = L.node_lines.start(line), last = L.node_lines.start(line + 1);
-        const auto [i, j, k_first] = unpack(L.nodes[first]);
-        LineCursor column[9];
-        for (int t = 0; t < 9; ++t)
-          column[t] =
-              LineCursor(F->nodes, F->node_lines.line(2 * i + t % 3 - 1, 2 * j + t / 3 - 1));
-        for (std::size_t v = first; v < last; ++v) {
-          const long k = long(L.nodes[v] & kKeyMask);
-          double sum = e[v];
-          for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx) {
-                if (2 * k + dz < 0) continue;
-                const int u =
-                    column[dx + 1 + 3 * (dy + 1)].find(pack(2 * i + dx, 2 * j + dy, 2 * k + dz));
-                if (u >= 0)
-                  sum += (1 - 0.5 * std::abs(dx)) * (1 - 0.5 * std::abs(dy)) *
-                         (1 - 0.5 * std::abs(dz)) * finer[std::size_t(d + 1)][std::size_t(u)];
-              }
-          e[v] = sum;
-        }
-      });
+      for_each_line(
+          L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
+            LineCursor column[9];
+            for (int t = 0; t < 9; ++t)
+              column[t] =
+                  LineCursor(F->nodes, F->node_lines.line(2 * i + t % 3 - 1, 2 * j + t / 3 - 1));
+            for (std::size_t v = first; v < last; ++v) {
+              const long k = long(L.nodes[v] & kKeyMask);
+              double sum = e[v];
+              for (int dz = -1; dz <= 1; ++dz)
+                for (int dy = -1; dy <= 1; ++dy)
+                  for (int dx = -1; dx <= 1; ++dx) {
+                    if (2 * k + dz < 0) continue;
+                    const int u = column[dx + 1 + 3 * (dy + 1)].find(
+                        pack(2 * i + dx, 2 * j + dy, 2 * k + dz));
+                    if (u >= 0)
+                      sum += (1 - 0.5 * std::abs(dx)) * (1 - 0.5 * std::abs(dy)) *
+                             (1 - 0.5 * std::abs(dz)) * finer[std::size_t(d + 1)][std::size_t(u)];
+                  }
+              e[v] = sum;
+            }
+          });
   }
 
   // --- Solve, coarse to fine.
@@ -1260,10 +1261,8 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   }
   {
     // Finest cells, a line at a time: their corners are finest nodes, found by cursors.
-    std::vector<std::vector<Key>> found(F.cell_lines.count());
-    tbb::parallel_for(std::size_t(0), F.cell_lines.count(), [&](std::size_t line) {
-      const std::size_t first = F.cell_lines.start(line), last = F.cell_lines.start(line + 1);
-      const auto [i, j, k_first] = unpack(F.cells[first]);
+    std::vector<char> has_surface(F.cells.size(), 0);
+    for_each_line(F.cell_lines, F.cells, [&](long i, long j, std::size_t first, std::size_t last) {
       LineCursor column[4];
       for (int c = 0; c < 4; ++c)
         column[c] = LineCursor(F.nodes, F.node_lines.line(i + (c & 1), j + (c >> 1)));
@@ -1273,10 +1272,14 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
         for (int q = 0; q < 8; ++q)
           value[q] = iso - F.x[std::size_t(column[q & 3].find(
                                pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1))))];
-        if (mixed(value)) found[line].push_back(cell_key(i, j, k));
+        has_surface[c] = mixed(value);
       }
     });
-    for (auto& f : found) candidates.insert(candidates.end(), f.begin(), f.end());
+    for (std::size_t c = 0; c < F.cells.size(); ++c)
+      if (has_surface[c]) {
+        const auto [i, j, k] = unpack(F.cells[c]);
+        candidates.push_back(cell_key(i, j, k));
+      }
   }
   // Close the set: a face with a sign change needs the cell across it.
   std::unordered_set<Key> visited(candidates.begin(), candidates.end());
