@@ -249,6 +249,9 @@ struct Level {
     return node_lines.find(nodes, pack(i, j, k));
   }
   int cell(Key key) const { return cell_lines.find(cells, key); }
+  bool on_face(long i, long j, long k) const {
+    return i == 0 || j == 0 || k == 0 || i == res || j == res || k == res;
+  }
   // chi at unit-cube point p, by trilinear interpolation in the active cell containing it.
   double interpolate(const std::array<long, 3>& cell, const Eigen::Vector3d& p) const {
     const auto w = corner_weights(p, cell, res);
@@ -323,8 +326,7 @@ void build_nodes(Level& L, PoissonBoundary boundary) {
              ++ck)
           if (cell_column[c].find(pack(i - 1 + (c & 1), j - 1 + (c >> 1), ck)) < 0)
             complete = false;
-      const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
-      L.unknown[v] = complete && !(boundary == PoissonBoundary::Dirichlet && on_face);
+      L.unknown[v] = complete && !(boundary == PoissonBoundary::Dirichlet && L.on_face(i, j, k));
     }
   });
 }
@@ -962,15 +964,22 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     // System rows (27 slots, slot(dx, dy, dz)) of the unknown nodes. Inside the domain and away
     // from samples a row is the constant stiffness stencil h K; only nodes on the domain's faces
     // (truncated stencil) and corners of cells holding samples (screening) store their own row.
-    std::array<double, 27> interior_row{};
-    for (int c = 0; c < 8; ++c) {  // incident cells: offsets -1/0 per axis
-      const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
-      const int a = (-ox) | (-oy) << 1 | (-oz) << 2;  // the node's corner in that cell
-      for (int corner = 0; corner < 8; ++corner)
-        interior_row[std::size_t(
-            slot(ox + (corner & 1), oy + (corner >> 1 & 1), oz + (corner >> 2 & 1)))] +=
-            L.h * element.stiffness[a][corner];
-    }
+    // h K summed over node (i, j, k)'s incident cells inside the domain.
+    auto stiffness_row = [&](long i, long j, long k, std::array<double, 27>& row) {
+      row.fill(0.0);
+      for (int c = 0; c < 8; ++c) {  // incident cells: offsets -1/0 per axis
+        const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
+        if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
+            k + oz >= L.res)
+          continue;
+        const int a = (-ox) | (-oy) << 1 | (-oz) << 2;  // the node's corner in that cell
+        for (int corner = 0; corner < 8; ++corner)
+          row[std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1),
+                               oz + (corner >> 2 & 1)))] += L.h * element.stiffness[a][corner];
+      }
+    };
+    std::array<double, 27> interior_row;
+    stiffness_row(1, 1, 1, interior_row);  // res >= 2, so (1, 1, 1) is off every face
     std::vector<double> b(nn, 0.0);
     divergence(L, coarser, b, [&](std::size_t v) { return bool(L.unknown[v]); });
     tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
@@ -1015,25 +1024,13 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     int own_rows = 0;
     for (std::size_t v = 0; v < nn; ++v) {
       const auto [i, j, k] = unpack(L.nodes[v]);
-      const bool on_face = i == 0 || j == 0 || k == 0 || i == L.res || j == L.res || k == L.res;
-      row_of[v] = L.unknown[v] && (on_face || row_of[v] == 0) ? own_rows++ : -1;
+      row_of[v] = L.unknown[v] && (L.on_face(i, j, k) || row_of[v] == 0) ? own_rows++ : -1;
     }
     std::vector<std::array<double, 27>> rows(static_cast<std::size_t>(own_rows));
     tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
       if (row_of[v] < 0) return;
-      auto& row = rows[std::size_t(row_of[v])];
-      row.fill(0.0);
       const auto [i, j, k] = unpack(L.nodes[v]);
-      for (int c = 0; c < 8; ++c) {  // incident cells inside the domain
-        const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
-        if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
-            k + oz >= L.res)
-          continue;
-        const int a = (-ox) | (-oy) << 1 | (-oz) << 2;
-        for (int corner = 0; corner < 8; ++corner)
-          row[std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1),
-                               oz + (corner >> 2 & 1)))] += L.h * element.stiffness[a][corner];
-      }
+      stiffness_row(i, j, k, rows[std::size_t(row_of[v])]);
     });
     // Screening: (chi(p) - 1/2)^2 for the samples in this depth's active cells.
     for (int a = 7; a >= 0; --a)
@@ -1175,8 +1172,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     long inside = 0, count = 0;
     for (std::size_t v = 0; v < C.nodes.size(); ++v) {
       const auto [i, j, k] = unpack(C.nodes[v]);
-      if (i == 0 || j == 0 || k == 0 || i == C.res || j == C.res || k == C.res)
-        inside += C.x[v] >= iso, ++count;
+      if (C.on_face(i, j, k)) inside += C.x[v] >= iso, ++count;
     }
     // More than a percent of the domain's faces inside: the exterior is not outside.
     if (inside * 100 > count) {
