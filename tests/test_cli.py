@@ -161,7 +161,11 @@ with tempfile.TemporaryDirectory() as d:
     open(p("nan_binary.ply"), "wb").write(header.encode() + body)
     expect_error("poisson nan", ["poisson", p("nan_binary.ply"), "-o", out], "NaN", [out])
     expect_error("poisson missing", ["poisson", p("none.ply"), "-o", out], "cannot read", [out])
-    expect_error("poisson boundary", ["poisson", p("cp.ply"), "-o", out, "--boundary", "free"], "boundary", [out])
+    expect_error("poisson boundary", ["poisson", p("cp.ply"), "-o", out, "--boundary", "robin"], "boundary", [out])
+    for boundary in ("neumann", "free"):
+        r = run("poisson", p("cp.ply"), "-o", p(f"{boundary}.ply"), "--depth", "6", "--boundary", boundary, "-q")
+        check(f"poisson {boundary}", r.returncode == 0, r.stderr)
+    check("poisson free = neumann (degree 1)", open(p("free.ply"), "rb").read() == open(p("neumann.ply"), "rb").read())
 
     # sample / eval / eval-points on a shared mesh, and their bad input.
     meshes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "data", "meshes")

@@ -123,7 +123,8 @@ struct PoissonArgs {
                     "Domain = bounding cube of the points enlarged by this factor")
         ->capture_default_str();
     app->add_option("--boundary", boundary,
-                    "Boundary condition on the domain cube: neumann or dirichlet")
+                    "Boundary condition on the domain cube: neumann, dirichlet (chi = 0 on the "
+                    "faces) or free (for these degree-1 elements the same as neumann)")
         ->capture_default_str();
     app->add_option("--solver-tolerance", options.solver_tolerance,
                     "Conjugate gradients stop at this relative residual at each depth")
@@ -135,8 +136,10 @@ struct PoissonArgs {
       o.boundary = PoissonBoundary::Neumann;
     else if (boundary == "dirichlet")
       o.boundary = PoissonBoundary::Dirichlet;
+    else if (boundary == "free")
+      o.boundary = PoissonBoundary::Free;
     else
-      throw Error("unknown --boundary '" + boundary + "' (known: neumann, dirichlet)");
+      throw Error("unknown --boundary '" + boundary + "' (known: neumann, dirichlet, free)");
     return o;
   }
 };

@@ -11,9 +11,15 @@
 
 namespace sdfcontour {
 
+/// PoissonRecon's three boundary types. Neumann reflects the B-splines at the domain's faces
+/// (even), Dirichlet reflects them oddly (chi = 0 there), free keeps every B-spline whose support
+/// meets the domain, unmodified. For degree-1 elements an even reflection of a face node's hat only
+/// rescales its part inside the domain, and no hat centred outside reaches inside, so Neumann and
+/// free span the same space and give the same chi: the natural condition, dchi/dn = V.n.
 enum class PoissonBoundary {
-  Neumann,    ///< natural boundary: no constraint on the domain's faces
+  Neumann,    ///< reflected (even) B-splines; for degree 1, the natural condition
   Dirichlet,  ///< the indicator is 0 (outside) on the domain's faces
+  Free,       ///< unmodified B-splines; for degree 1, the same space as Neumann
 };
 
 struct PoissonOptions {
@@ -44,7 +50,7 @@ struct PoissonResult {
   Mesh mesh;                       ///< watertight, outward oriented iso-surface
   Eigen::VectorXd vertex_density;  ///< per vertex: estimated samples per unit area around it
   double iso_value = 0;            ///< the indicator's average over the samples
-  /// True when Neumann boundaries left part of the domain's faces inside (chi >= iso), which
+  /// True when Neumann (or free) boundaries left part of the domain's faces inside (chi >= iso), which
   /// contradicts the outward normals, and the result comes from a second solve with Dirichlet
   /// boundaries.
   bool boundary_fallback = false;
