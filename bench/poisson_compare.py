@@ -10,7 +10,8 @@ Each tool runs as its own process on the same PLY file; we report its wall time 
 (`sdfcontour eval`). Ratios are ours / peer; the geometric means are over all rows.
 
 Usage: /usr/bin/python3 bench/poisson_compare.py [--depth 8] [--alpha 2] [--points 100000]
-       [--grid 64] [--meshes bunny,spot] [--out docs/poisson_comparison.md]
+       [--grid 64] [--meshes bunny,spot] [--inputs surface,gtcp] [--peers meshlab,open3d]
+       [--out docs/poisson_comparison.md]
 """
 import argparse
 import json
@@ -69,10 +70,12 @@ def main():
     ap.add_argument("--grid", type=int, default=64)
     ap.add_argument("--meshes", default="", help="comma-separated names (default: all)")
     ap.add_argument("--inputs", default="surface,gtcp")
+    ap.add_argument("--peers", default="meshlab,open3d", help="peers to run (Open3D's alpha is always 2)")
     ap.add_argument("--out", default="")
     args = ap.parse_args()
+    peers = args.peers.split(",")
     names = args.meshes.split(",") if args.meshes else sorted(f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
-    tools = ["ours", "meshlab", "open3d"]
+    tools = ["ours"] + peers
     rows, ratios = [], {"l1_meshlab": [], "l1_open3d": [], "time_meshlab": [], "time_open3d": []}
     with tempfile.TemporaryDirectory() as d:
         mlx = os.path.join(d, "poisson.mlx")
@@ -100,28 +103,33 @@ def main():
                     l1, linf, closed = evaluate(args.cli, out, gt)
                     result[tool] = (l1, linf, wall, mb, closed)
                 ours = result["ours"]
-                for peer in ("meshlab", "open3d"):
+                for peer in peers:
                     ratios["l1_" + peer].append(ours[0] / result[peer][0])
                     ratios["time_" + peer].append(ours[2] / result[peer][2])
                 row = (f"| {name} | {kind} | " + " | ".join(
                     f"{result[t][0]:.2e} / {result[t][1]:.2e}" for t in tools) + " | " + " | ".join(
-                    f"{result[t][2]:.2f} s, {result[t][3]:.0f} MB" for t in tools) +
-                    f" | {ours[0] / result['meshlab'][0]:.2f} | {ours[0] / result['open3d'][0]:.2f} | "
-                    f"{ours[2] / result['meshlab'][2]:.2f} | {ours[2] / result['open3d'][2]:.2f} | "
-                    f"{'yes' if ours[4] else 'NO'} |")
+                    f"{result[t][2]:.2f} s, {result[t][3]:.0f} MB" for t in tools) + " | " +
+                    "".join(f"{ours[0] / result[t][0]:.2f} | " for t in peers) +
+                    "".join(f"{ours[2] / result[t][2]:.2f} | " for t in peers) + f"{'yes' if ours[4] else 'NO'} |")
                 rows.append(row)
                 print(row, flush=True)
     geo = {k: math.exp(sum(map(math.log, v)) / len(v)) for k, v in ratios.items() if v}
-    header = ("| mesh | input | L1 / Hausdorff: ours | MeshLab | Open3D | time, peak memory: ours | MeshLab | Open3D "
-              "| L1 ours/MeshLab | L1 ours/Open3D | time ours/MeshLab | time ours/Open3D | ours closed |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    summary = (f"Geometric means of ours/peer: L1 vs MeshLab {geo['l1_meshlab']:.3f}, vs Open3D {geo['l1_open3d']:.3f}; "
-               f"wall time vs MeshLab {geo['time_meshlab']:.3f}, vs Open3D {geo['time_open3d']:.3f}.")
+    names_of = {"ours": "ours", "meshlab": "MeshLab", "open3d": "Open3D"}
+    columns = (["mesh", "input"] + [f"L1 / Hausdorff: {names_of[t]}" for t in tools] +
+               [f"time, peak memory: {names_of[t]}" for t in tools] +
+               [f"L1 ours/{names_of[t]}" for t in peers] + [f"time ours/{names_of[t]}" for t in peers] +
+               ["ours closed"])
+    header = "| " + " | ".join(columns) + " |\n|" + "---|" * len(columns)
+    summary = "Geometric means of ours/peer: " + "; ".join(
+        f"L1 vs {names_of[t]} {geo['l1_' + t]:.3f} (worst {max(ratios['l1_' + t]):.2f}, "
+        f"{sum(r <= 1.05 for r in ratios['l1_' + t])} of {len(ratios['l1_' + t])} within 5%), "
+        f"wall time vs {names_of[t]} {geo['time_' + t]:.3f} (worst {max(ratios['time_' + t]):.2f})"
+        for t in peers) + "."
     print(summary)
     if args.out:
         with open(args.out, "w") as f:
-            f.write(f"# Screened Poisson: ours against MeshLab and Open3D\n\nDepth {args.depth}, alpha {args.alpha} "
-                    f"(Open3D: 2), {args.points} surface points or the GTCP points of a {args.grid}^3 grid; "
+            f.write(f"# Screened Poisson: ours against {' and '.join(names_of[t] for t in peers)}\n\nDepth {args.depth}, alpha {args.alpha}"
+                    f"{' (Open3D: 2)' if 'open3d' in peers else ''}, {args.points} surface points or the GTCP points of a {args.grid}^3 grid; "
                     f"2 cores. Made by `/usr/bin/python3 bench/poisson_compare.py "
                     f"{' '.join(sys.argv[1:])}`.\n\n{header}\n" + "\n".join(rows) + f"\n\n{summary}\n")
 
