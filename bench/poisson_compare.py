@@ -76,7 +76,7 @@ def main():
     peers = args.peers.split(",")
     names = args.meshes.split(",") if args.meshes else sorted(f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
     tools = ["ours"] + peers
-    rows, ratios = [], {"l1_meshlab": [], "l1_open3d": [], "time_meshlab": [], "time_open3d": []}
+    rows, ratios = [], {f"{measure}_{peer}": [] for measure in ("l1", "time") for peer in peers}
     with tempfile.TemporaryDirectory() as d:
         mlx = os.path.join(d, "poisson.mlx")
         open(mlx, "w").write(MLX.format(depth=args.depth, alpha=args.alpha))

@@ -1164,9 +1164,10 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       double(n);
   const double iso = result.iso_value;
   // The normals point outward, so on the domain's faces chi must be outside (below iso). With
-  // Neumann (or free) boundaries chi's level there is set by the data alone; when the normals nearly cancel
-  // (a thin plate sampled from both sides) it can end up level with iso, and the exterior fills
-  // with spurious sheets. Then solve again with the domain's faces pinned to outside (Dirichlet).
+  // Neumann (or free) boundaries chi's level there is set by the data alone; when the normals
+  // nearly cancel (a thin plate sampled from both sides) it can end up level with iso, and the
+  // exterior fills with spurious sheets. Then solve again with the domain's faces pinned to outside
+  // (Dirichlet).
   if (o.boundary != PoissonBoundary::Dirichlet) {
     const Level& C = levels[std::size_t(d_min)];
     long inside = 0, count = 0;

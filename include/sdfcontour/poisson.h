@@ -50,8 +50,8 @@ struct PoissonResult {
   Mesh mesh;                       ///< watertight, outward oriented iso-surface
   Eigen::VectorXd vertex_density;  ///< per vertex: estimated samples per unit area around it
   double iso_value = 0;            ///< the indicator's average over the samples
-  /// True when Neumann (or free) boundaries left part of the domain's faces inside (chi >= iso), which
-  /// contradicts the outward normals, and the result comes from a second solve with Dirichlet
+  /// True when Neumann (or free) boundaries left part of the domain's faces inside (chi >= iso),
+  /// which contradicts the outward normals, and the result comes from a second solve with Dirichlet
   /// boundaries.
   bool boundary_fallback = false;
   std::vector<PoissonLevelStats> levels;
