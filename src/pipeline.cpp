@@ -79,17 +79,24 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   result.samples =
       int(input.is_grid ? input.grid.size() : std::size_t(input.samples.points.rows()));
   Stages stages(result, options);
-  const std::string n = std::to_string(result.samples);
 
   if (method == Method::Mc && options.want_mesh)
-    result.mesh = stages.run("marching", "marching cubes on " + n + " samples",
+    result.mesh = stages.run("marching",
+                             "marching cubes on " + std::to_string(result.samples) + " samples",
                              [&] { return marching_cubes(input.grid); });
   if (!options.want_points && method == Method::Mc) return result;
 
-  // The other stages see every input as scattered samples; a grid's positions are made here.
-  Samples grid_samples;
-  if (input.is_grid) grid_samples = input.grid.to_samples();
-  const Samples& s = input.is_grid ? grid_samples : input.samples;
+  // The other stages see the band's samples as scattered samples; a grid's positions are made
+  // for the band only.
+  BandSamples band = stages.run("band", "samples within the band", [&] {
+    return input.is_grid ? select_band(input.grid, options.band)
+                         : select_band(input.samples, options.band);
+  });
+  result.band_samples = int(band.samples.values.size());
+  result.band_spacing = band.spacing;
+  result.truncation = band.truncation;
+  const Samples& s = band.samples;
+  const std::string n = std::to_string(result.band_samples);
 
   const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
   if (method == Method::Gtcp && (options.want_points || options.want_mesh))
@@ -133,6 +140,9 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
       return gradient_contact_points(s.points, s.values, gradients, *regular, options.contact);
     });
   }
+  // Contact points name their samples by input index.
+  if (result.contact_points)
+    for (int& i : result.contact_points->samples) i = int(band.source[std::size_t(i)]);
   if (contact_mesh) {
     const ContactPoints& cp = *result.contact_points;
     if (cp.size() == 0)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -56,6 +57,36 @@ Bounds parse_bounds(const std::string& text) {
   }
   for (int a = 0; a < 3; ++a)
     if (!(b.min[a] < b.max[a])) throw Error("--bounds: min must be less than max on every axis");
+  return b;
+}
+
+// A positive number, or one of `words` (returned as the word's value).
+double parse_number_or(const std::string& option, const std::string& text,
+                       const std::vector<std::pair<std::string, double>>& words) {
+  for (const auto& [word, value] : words)
+    if (text == word) return value;
+  std::size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  std::string known;
+  for (const auto& w : words) known += " or '" + w.first + "'";
+  if (used == 0 || used != text.size() || !std::isfinite(x) || !(x > 0))
+    throw Error(option + ": '" + text + "' is not a positive number" + known);
+  return x;
+}
+
+BandOptions parse_band_options(const std::string& band, const std::string& truncation) {
+  BandOptions b;
+  b.band = parse_number_or("--band", band, {{"all", std::numeric_limits<double>::infinity()}});
+  const double t = parse_number_or("--truncation", truncation, {{"auto", -1}, {"none", -2}});
+  b.truncation_mode = t == -1   ? TruncationMode::Auto
+                      : t == -2 ? TruncationMode::None
+                                : TruncationMode::Given;
+  if (t > 0) b.truncation = t;
   return b;
 }
 
@@ -146,7 +177,7 @@ struct PoissonArgs {
 
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
-                                     weights = "james";
+                                     weights = "james", band = "3", truncation = "auto";
   int knn = 18, threads = 0;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
@@ -192,6 +223,7 @@ int run_contour(const ContourArgs& a) {
   opt.contact.try_tet_gradients = a.fn;
   opt.parallel = !a.serial_triangulation;
   opt.poisson = a.poisson.resolved();
+  opt.band = parse_band_options(a.band, a.truncation);
   opt.progress = say;
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -220,6 +252,17 @@ int run_contour(const ContourArgs& a) {
   j["method"] = a.method;
   j["samples"] = r.samples;
   if (in.input.is_grid) j["grid"] = in.input.grid.dims;
+  if (r.band_samples > 0) {
+    nlohmann::json band = {{"band", a.band},
+                           {"spacing", r.band_spacing},
+                           {"samples", r.band_samples},
+                           {"truncation_detected", r.truncation.detected()}};
+    if (r.truncation.inside < std::numeric_limits<double>::infinity())
+      band["truncation_inside"] = r.truncation.inside;
+    if (r.truncation.outside < std::numeric_limits<double>::infinity())
+      band["truncation_outside"] = r.truncation.outside;
+    j["band"] = band;
+  }
   if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
   if (r.mesh) {
     j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
@@ -266,6 +309,7 @@ int run_contour(const ContourArgs& a) {
 
   // The short human summary.
   std::cout << "samples " << r.samples;
+  if (r.band_samples > 0) std::cout << ", in band " << r.band_samples;
   if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
   if (r.contact_points) std::cout << ", contact points kept " << r.contact_points->size();
   if (r.mesh)
@@ -511,6 +555,18 @@ int main(int argc, char** argv) {
       ->add_option("--tie-tolerance", a.tie_tolerance,
                    "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; "
                    "0 is the strict test")
+      ->capture_default_str();
+  contour
+      ->add_option("--band", a.band,
+                   "Triangulation methods (all but mc) use only samples with |value| <= BAND "
+                   "grid spacings (scattered samples: the side of a cube holding one sample); "
+                   "'all' keeps every sample, as in the paper")
+      ->capture_default_str();
+  contour
+      ->add_option("--truncation", a.truncation,
+                   "Values clamped at +-T carry no distance and are left out: T, 'none', or "
+                   "'auto' (a sign is truncated at its largest |value| when >= 64 samples, and "
+                   ">= 1% of that sign's samples, sit there)")
       ->capture_default_str();
   contour->add_flag(
       "--fn", a.fn,

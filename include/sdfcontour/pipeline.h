@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "sdfcontour/band.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/gradients.h"
@@ -31,6 +32,8 @@ struct ContourOptions {
   int knn = 18;  ///< k for GradientSource::Knn
   GradientOptions gradient;
   ContactPointOptions contact;
+  /// The samples the triangulation methods use (every method but mc).
+  BandOptions band;
   PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes
   bool parallel = true;    ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
@@ -45,7 +48,10 @@ struct StageTime {
 struct ContourResult {
   std::optional<Mesh> mesh;
   std::optional<ContactPoints> contact_points;
-  int samples = 0;
+  int samples = 0;       ///< samples in the input
+  int band_samples = 0;  ///< of those, in the band (triangulated); 0 for mc alone
+  double band_spacing = 0;  ///< the spacing h the band is measured in
+  Truncation truncation;    ///< the truncation found or given
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes

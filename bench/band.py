@@ -1,0 +1,94 @@
+"""What the narrow band costs and changes: GCP with --band K against --band all (the paper's,
+every sample triangulated), measured in the same run on grids of the shared meshes.
+
+For each mesh and resolution: samples kept, wall time, peak RSS and L1 against the normalised
+mesh, and the ratios to --band all. Writes a Markdown table (and the raw rows as JSON).
+
+Usage: /usr/bin/python3 bench/band.py [--cli build/sdfcontour] [--meshes bunny,spot,...]
+       [--res 64,128] [--bands 2,3,4,6,all] [--out docs/band.md]
+"""
+import argparse
+import json
+import math
+import os
+import re
+import subprocess
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+MESHES = os.path.join(HERE, "..", "..", "shared", "data", "meshes")
+
+
+def timed(cmd):
+    """Runs cmd under /usr/bin/time; returns (wall seconds, peak RSS in MB, stdout)."""
+    r = subprocess.run(["/usr/bin/time", "-f", "TIME %e %M", *cmd], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"{cmd} failed: {r.stderr}")
+    m = re.search(r"TIME ([\d.]+) (\d+)", r.stderr)
+    return float(m.group(1)), int(m.group(2)) / 1024, r.stdout
+
+
+def l1(cli, mesh, gt):
+    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True, check=True)
+    return json.loads(r.stdout)["L1"]
+
+
+def geomean(v):
+    return math.exp(sum(math.log(x) for x in v) / len(v))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cli", default=os.path.join(HERE, "..", "build", "sdfcontour"))
+    ap.add_argument("--meshes", default="bunny,spot,armadillo,koala_lowres,wingnut,hammer")
+    ap.add_argument("--res", default="64,128")
+    ap.add_argument("--bands", default="2,3,4,6,all")
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args()
+    bands = args.bands.split(",")
+    if "all" not in bands:
+        bands.append("all")
+    rows = []
+    with tempfile.TemporaryDirectory() as d:
+        for res in map(int, args.res.split(",")):
+            for name in args.meshes.split(","):
+                prefix = os.path.join(d, f"{name}_{res}")
+                subprocess.run([args.cli, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res),
+                                "-o", prefix, "-q"], check=True, stdout=subprocess.DEVNULL)
+                for band in bands:
+                    out = os.path.join(d, "m.ply")
+                    stats = os.path.join(d, "s.json")
+                    t, rss, _ = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--band", band, "-q",
+                                       "--stats", stats])
+                    s = json.load(open(stats))
+                    rows.append({"mesh": name, "res": res, "band": band, "seconds": t, "rss_mb": rss,
+                                 "samples": s["band"]["samples"], "kept": s["contact_points"]["kept"],
+                                 "L1": l1(args.cli, out, prefix + "_mesh.ply")})
+                    print(json.dumps(rows[-1]), flush=True)
+    lines = ["| grid | band | samples triangulated (%) | L1 / all (geomean) | worst L1 / all | time / all | "
+             "peak RSS / all |", "|---|---|---|---|---|---|---|"]
+    for res in sorted({r["res"] for r in rows}):
+        ref = {r["mesh"]: r for r in rows if r["res"] == res and r["band"] == "all"}
+        for band in bands:
+            sel = [r for r in rows if r["res"] == res and r["band"] == band]
+            ratio = lambda key: [r[key] / ref[r["mesh"]][key] for r in sel]
+            frac = 100 * sum(r["samples"] for r in sel) / (len(sel) * res**3)
+            lines.append(f"| {res}³ | {band} | {frac:.1f} | {geomean(ratio('L1')):.3f} | {max(ratio('L1')):.3f} | "
+                         f"{geomean(ratio('seconds')):.2f} | {geomean(ratio('rss_mb')):.2f} |")
+    table = "\n".join(lines)
+    print(table)
+    if args.out:
+        with open(args.out, "w") as f:
+            f.write("# The narrow band: GCP with `--band K` against `--band all`\n\n")
+            f.write(f"`/usr/bin/python3 bench/band.py --meshes {args.meshes} --res {args.res} --bands {args.bands}`; "
+                    "2 cores, default Poisson (depth 8, α = 10); ratios are geometric means over the meshes, "
+                    "each against `--band all` on the same grid in the same run.\n\n")
+            f.write(table + "\n\n## Rows\n\n| mesh | grid | band | samples | contact points | s | MB | L1 |\n"
+                    "|---|---|---|---|---|---|---|---|\n")
+            for r in rows:
+                f.write(f"| {r['mesh']} | {r['res']}³ | {r['band']} | {r['samples']} | {r['kept']} | "
+                        f"{r['seconds']:.2f} | {r['rss_mb']:.0f} | {r['L1']:.3e} |\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,73 @@
+// The narrow band: which samples carry surface information for the triangulation methods.
+// A sample far from the surface adds nothing to GCP but triangulation cost, and a sample at a
+// truncation value (a TSDF or an OpenVDB level set clamps far values) carries no distance at
+// all: both are left out before the triangulation.
+#pragma once
+
+#include <limits>
+#include <vector>
+
+#include "sdfcontour/samples.h"
+
+namespace sdfcontour {
+
+/// How values clamped at a truncation distance are recognised.
+enum class TruncationMode {
+  Auto,   ///< detect it (see detect_truncation)
+  Given,  ///< BandOptions::truncation is the truncation distance
+  None,   ///< every value is a distance
+};
+
+struct BandOptions {
+  /// Keep samples with |value| <= band * spacing. Infinity keeps every sample (the paper's).
+  double band = 3.0;
+  TruncationMode truncation_mode = TruncationMode::Auto;
+  /// With TruncationMode::Given: values with |value| >= truncation (to 1e-6 relative) are
+  /// truncated and carry no distance.
+  double truncation = 0;
+};
+
+/// Truncation distances found in (or given for) a field: values at or beyond them carry no
+/// distance. Infinity where a sign is not truncated.
+struct Truncation {
+  double inside = std::numeric_limits<double>::infinity();   ///< of negative values
+  double outside = std::numeric_limits<double>::infinity();  ///< of non-negative values
+  bool detected() const { return inside < std::numeric_limits<double>::infinity() ||
+                                 outside < std::numeric_limits<double>::infinity(); }
+  /// True if `value` is at a truncation distance of its sign.
+  bool truncated(double value) const;
+};
+
+/// The rule for TruncationMode::Auto: per sign, let T be the largest |value| of that sign; the
+/// sign is truncated at T if at least 64 samples, and at least `min_fraction` of that sign's
+/// samples, have |value| >= T (1 - 1e-6). An exact SDF reaches its extreme at a few samples
+/// (the grid's corners, a centre), a clamped one at a whole region. A half-space sampled on a
+/// grid reaches it on a grid face, which is then dropped too: far from the surface, so the band
+/// hides it anyway (TruncationMode::None keeps it).
+Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction = 0.01);
+
+/// The truncation that `options` asks for on `values`.
+Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options);
+
+/// The samples in the band, and where they came from.
+struct BandSamples {
+  Samples samples;           ///< the kept samples (positions and values)
+  std::vector<long> source;  ///< for each kept sample, its index in the input (C order for grids)
+  double spacing = 0;        ///< the spacing h the band is measured in
+  Truncation truncation;
+  long input_count = 0;  ///< samples before the band
+};
+
+/// The grid's samples with |value| <= band * h (h the largest grid spacing) that are not
+/// truncated, in C order. Never builds the full grid's positions.
+BandSamples select_band(const Grid& grid, const BandOptions& options);
+
+/// The same for scattered samples; h is the side of a cube holding one sample on average
+/// (the bounding box's volume / n, cube root).
+BandSamples select_band(const Samples& samples, const BandOptions& options);
+
+/// Throws Error unless `band` is positive (infinity allowed) and a given truncation is positive
+/// and finite.
+void validate_band_options(const BandOptions& options);
+
+}  // namespace sdfcontour

@@ -1,0 +1,136 @@
+#include <cmath>
+
+#include "sdfcontour/band.h"
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/pipeline.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+SdfInput torus_grid(int n) {
+  SdfInput input;
+  input.is_grid = true;
+  input.grid = sample_grid(*make_builtin_shape("torus"), n, Bounds{});
+  return input;
+}
+
+// The grid with every |value| clamped at t, as a TSDF or a level set stores it.
+SdfInput clamped(SdfInput input, double t) {
+  for (Eigen::Index i = 0; i < input.grid.values.size(); ++i)
+    input.grid.values[i] = std::clamp(input.grid.values[i], -t, t);
+  return input;
+}
+
+}  // namespace
+
+TEST(Band, KeepsExactlyTheSamplesWithinTheBand) {
+  const SdfInput input = torus_grid(20);
+  const double h = input.grid.spacing().maxCoeff();
+  BandOptions o;
+  o.band = 2.5;
+  const BandSamples b = select_band(input.grid, o);
+  long expected = 0;
+  for (Eigen::Index i = 0; i < input.grid.values.size(); ++i)
+    expected += std::abs(input.grid.values[i]) <= 2.5 * h;
+  ASSERT_EQ(b.samples.values.size(), expected);
+  EXPECT_LT(expected, input.grid.values.size() / 2);
+  EXPECT_FALSE(b.truncation.detected());
+  for (Eigen::Index r = 0; r < b.samples.values.size(); ++r) {
+    const long p = b.source[std::size_t(r)];
+    EXPECT_EQ(b.samples.values[r], input.grid.values[p]);
+    const int k = int(p % 20), j = int(p / 20 % 20), i = int(p / 400);
+    EXPECT_EQ((b.samples.points.row(r).transpose() - input.grid.point(i, j, k)).norm(), 0.0);
+  }
+  o.band = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(select_band(input.grid, o).samples.values.size(), input.grid.values.size());
+}
+
+TEST(Band, RejectsBadBandsAndEmptyBands) {
+  const SdfInput input = torus_grid(12);
+  BandOptions o;
+  o.band = 0;
+  EXPECT_THROW(select_band(input.grid, o), Error);
+  o.band = std::nan("");
+  EXPECT_THROW(select_band(input.grid, o), Error);
+  o.band = 1e-9;  // no sample that close to the surface
+  EXPECT_THROW(select_band(input.grid, o), Error);
+  o.band = 3;
+  o.truncation_mode = TruncationMode::Given;
+  o.truncation = -1;
+  EXPECT_THROW(select_band(input.grid, o), Error);
+}
+
+TEST(Band, DetectsTruncationOnlyWhereValuesAreClamped) {
+  const SdfInput exact = torus_grid(32);
+  EXPECT_FALSE(detect_truncation(exact.grid.values).detected());
+  const double h = exact.grid.spacing()[0];
+  const Truncation t = detect_truncation(clamped(exact, 3 * h).grid.values);
+  EXPECT_DOUBLE_EQ(t.inside, 3 * h);
+  EXPECT_DOUBLE_EQ(t.outside, 3 * h);
+  // Clamped on the outside only (the torus's inside is thinner than 6h at 32^3).
+  SdfInput outside_only = exact;
+  for (Eigen::Index i = 0; i < outside_only.grid.values.size(); ++i)
+    outside_only.grid.values[i] = std::min(outside_only.grid.values[i], 2 * h);
+  const Truncation o = detect_truncation(outside_only.grid.values);
+  EXPECT_DOUBLE_EQ(o.outside, 2 * h);
+  EXPECT_EQ(o.inside, std::numeric_limits<double>::infinity());
+}
+
+// A truncated grid gives the same contact points and mesh as the exact grid restricted to the
+// band the truncation leaves: the clamped samples never reach the triangulation.
+TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
+  const SdfInput exact = torus_grid(32);
+  const double h = exact.grid.spacing().maxCoeff();
+  const SdfInput truncated = clamped(exact, 2 * h);
+  // No exact value lies between the two cut-offs, so both keep the same samples.
+  for (Eigen::Index i = 0; i < exact.grid.values.size(); ++i)
+    ASSERT_FALSE(std::abs(exact.grid.values[i]) > 1.999 * h &&
+                 std::abs(exact.grid.values[i]) < 2 * h);
+  ContourOptions o;
+  o.want_points = true;
+  o.poisson.depth = 7;
+  o.band.band = std::numeric_limits<double>::infinity();  // the truncation alone cuts
+  const ContourResult a = contour(truncated, nullptr, o);
+  EXPECT_TRUE(a.truncation.detected());
+  o.band.band = 1.999;
+  const ContourResult b = contour(exact, nullptr, o);
+  EXPECT_FALSE(b.truncation.detected());
+  ASSERT_EQ(a.band_samples, b.band_samples);
+  ASSERT_EQ(a.contact_points->size(), b.contact_points->size());
+  EXPECT_EQ(a.contact_points->samples, b.contact_points->samples);
+  EXPECT_EQ((a.contact_points->points - b.contact_points->points).cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_EQ(a.mesh->vertices.rows(), b.mesh->vertices.rows());
+  EXPECT_EQ((a.mesh->vertices - b.mesh->vertices).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(a.mesh->triangles, b.mesh->triangles);
+  // Without the detection, the clamped samples would be taken for distances.
+  o.band.band = std::numeric_limits<double>::infinity();
+  o.band.truncation_mode = TruncationMode::None;
+  EXPECT_GT(contour(truncated, nullptr, o).band_samples, a.band_samples);
+}
+
+// The band keeps the accuracy: contact points of the band's samples lie as close to the
+// surface as those of every sample, and the mesh stays as close.
+TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
+  const auto shape = make_builtin_shape("torus");
+  const SdfInput input = torus_grid(40);
+  const double h = input.grid.spacing().maxCoeff();
+  ContourOptions o;
+  o.want_points = true;
+  o.poisson.depth = 7;
+  auto mean_error = [&](const ContourResult& r) {
+    double sum = 0;
+    for (Eigen::Index i = 0; i < r.contact_points->points.rows(); ++i)
+      sum += std::abs(shape->distance(r.contact_points->points.row(i).transpose()));
+    return sum / double(r.contact_points->points.rows());
+  };
+  const ContourResult band = contour(input, shape.get(), o);
+  o.band.band = std::numeric_limits<double>::infinity();
+  const ContourResult all = contour(input, shape.get(), o);
+  EXPECT_LT(band.band_samples, all.band_samples / 3);
+  EXPECT_LT(mean_error(band), 1e-3 * h);
+  EXPECT_LT(mean_error(band), 2 * mean_error(all) + 1e-6 * h);
+  // Every contact point names an input sample within the band.
+  for (int s : band.contact_points->samples) EXPECT_LE(std::abs(input.grid.values[s]), 3 * h);
+}
