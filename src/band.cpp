@@ -3,6 +3,10 @@
 #include <cmath>
 #include <string>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 namespace sdfcontour {
 
 namespace {
@@ -48,31 +52,71 @@ bool Truncation::truncated(double value) const {
   return std::abs(value) >= t * (1 - kTruncationTolerance);
 }
 
-Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction) {
-  double most_negative = 0, most_positive = 0;
-  for (Eigen::Index i = 0; i < values.size(); ++i) {
-    most_negative = std::min(most_negative, values[i]);
-    most_positive = std::max(most_positive, values[i]);
-  }
-  long at_inside = 0, at_outside = 0, negatives = 0;
-  const double lo = -most_negative * (1 - kTruncationTolerance),
-               hi = most_positive * (1 - kTruncationTolerance);
-  for (Eigen::Index i = 0; i < values.size(); ++i) {
-    negatives += values[i] < 0;
-    if (values[i] < 0 && -values[i] >= lo) ++at_inside;
-    if (values[i] > 0 && values[i] >= hi) ++at_outside;
-  }
+namespace {
+
+template <class T>
+Truncation detect_in(const T* values, std::size_t n, double min_fraction) {
+  struct Extremes {
+    double most_negative = 0, most_positive = 0;
+  };
+  const Extremes e = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Extremes{},
+      [&](const tbb::blocked_range<std::size_t>& r, Extremes x) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          x.most_negative = std::min(x.most_negative, double(values[i]));
+          x.most_positive = std::max(x.most_positive, double(values[i]));
+        }
+        return x;
+      },
+      [](Extremes a, Extremes b) {
+        return Extremes{std::min(a.most_negative, b.most_negative),
+                        std::max(a.most_positive, b.most_positive)};
+      });
+  const double lo = -e.most_negative * (1 - kTruncationTolerance),
+               hi = e.most_positive * (1 - kTruncationTolerance);
+  struct Counts {
+    long at_inside = 0, at_outside = 0, negatives = 0;
+  };
+  const Counts c = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Counts{},
+      [&](const tbb::blocked_range<std::size_t>& r, Counts x) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          const double v = values[i];
+          x.negatives += v < 0;
+          x.at_inside += v < 0 && -v >= lo;
+          x.at_outside += v > 0 && v >= hi;
+        }
+        return x;
+      },
+      [](Counts a, Counts b) {
+        return Counts{a.at_inside + b.at_inside, a.at_outside + b.at_outside,
+                      a.negatives + b.negatives};
+      });
   auto clamped = [&](long at_extreme, long of_sign) {
-    return at_extreme >= kMinTruncatedSamples && double(at_extreme) >= min_fraction * double(of_sign);
+    return at_extreme >= kMinTruncatedSamples &&
+           double(at_extreme) >= min_fraction * double(of_sign);
   };
   Truncation t;
-  if (most_negative < 0 && clamped(at_inside, negatives)) t.inside = -most_negative;
-  if (most_positive > 0 && clamped(at_outside, long(values.size()) - negatives))
-    t.outside = most_positive;
+  if (e.most_negative < 0 && clamped(c.at_inside, c.negatives)) t.inside = -e.most_negative;
+  if (e.most_positive > 0 && clamped(c.at_outside, long(n) - c.negatives))
+    t.outside = e.most_positive;
   return t;
 }
 
-Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options) {
+}  // namespace
+
+Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction) {
+  return detect_in(values.data(), std::size_t(values.size()), min_fraction);
+}
+
+Truncation detect_truncation(const GridView& grid, double min_fraction) {
+  return grid.visit([&](const auto* f) { return detect_in(f, grid.size(), min_fraction); });
+}
+
+namespace {
+
+template <class Values>
+Truncation resolve(const Values& values, const BandOptions& options) {
   switch (options.truncation_mode) {
     case TruncationMode::Auto:
       return detect_truncation(values);
@@ -87,6 +131,16 @@ Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& 
   return {};
 }
 
+}  // namespace
+
+Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options) {
+  return resolve(values, options);
+}
+
+Truncation resolve_truncation(const GridView& grid, const BandOptions& options) {
+  return resolve(grid, options);
+}
+
 void validate_band_options(const BandOptions& options) {
   if (!(options.band > 0))
     throw Error("the band must be a positive number of spacings (or 'all'), got " +
@@ -96,27 +150,49 @@ void validate_band_options(const BandOptions& options) {
     throw Error("the truncation distance must be positive and finite");
 }
 
-BandSamples select_band(const Grid& grid, const BandOptions& options) {
+BandSamples select_band(const GridView& grid, const BandOptions& options) {
+  validate_band_options(options);
   BandSamples out;
-  const BandTest keep = make_test(grid.values, options, grid.spacing().maxCoeff(), out);
-  const auto& f = grid.values;
-  long count = 0;
-  for (Eigen::Index p = 0; p < f.size(); ++p) count += keep(f[p]);
+  out.spacing = grid.spacing().maxCoeff();
+  out.truncation = resolve_truncation(grid, options);
+  out.input_count = long(grid.size());
+  const BandTest keep{options.band * out.spacing, out.truncation};
+  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  // Per-slab counts, then each slab fills its own rows: C order for any thread count.
+  std::vector<Eigen::Index> slab_start(std::size_t(nx) + 1, 0);
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(0, nx, [&](int i) {
+      Eigen::Index c = 0;
+      const std::size_t begin = grid.index(i, 0, 0), end = begin + std::size_t(ny) * nz;
+      for (std::size_t p = begin; p < end; ++p) c += keep(double(f[p]));
+      slab_start[std::size_t(i) + 1] = c;
+    });
+  });
+  for (int i = 0; i < nx; ++i) slab_start[std::size_t(i) + 1] += slab_start[std::size_t(i)];
+  const Eigen::Index count = slab_start.back();
   out.samples.points.resize(count, 3);
   out.samples.values.resize(count);
   out.source.resize(std::size_t(count));
-  Eigen::Index at = 0;
-  for (int i = 0; i < grid.dims[0]; ++i)
-    for (int j = 0; j < grid.dims[1]; ++j)
-      for (int k = 0; k < grid.dims[2]; ++k) {
-        const std::size_t p = grid.index(i, j, k);
-        if (!keep(f[Eigen::Index(p)])) continue;
-        out.samples.points.row(at) = grid.point(i, j, k).transpose();
-        out.samples.values[at] = f[Eigen::Index(p)];
-        out.source[std::size_t(at++)] = long(p);
-      }
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(0, nx, [&](int i) {
+      Eigen::Index at = slab_start[std::size_t(i)];
+      for (int j = 0; j < ny; ++j)
+        for (int k = 0; k < nz; ++k) {
+          const std::size_t p = grid.index(i, j, k);
+          const double v = f[p];
+          if (!keep(v)) continue;
+          out.samples.points.row(at) = grid.point(i, j, k).transpose();
+          out.samples.values[at] = v;
+          out.source[std::size_t(at++)] = long(p);
+        }
+    });
+  });
   require_usable(out, options);
   return out;
+}
+
+BandSamples select_band(const Grid& grid, const BandOptions& options) {
+  return select_band(view_of(grid), options);
 }
 
 BandSamples select_band(const Samples& samples, const BandOptions& options) {

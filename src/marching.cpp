@@ -119,92 +119,151 @@ Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& value
   return mesh;
 }
 
-Mesh marching_cubes(const Grid& grid) {
-  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-  const detail::CubeTables& T = detail::cube_tables();
-  const auto& f = grid.values;
-  // 1. A vertex on every sign-changing grid edge: vertex_id[3 * point + axis].
-  std::vector<int> vertex_id(grid.size() * 3, -1);
-  std::vector<int> slab_count(std::size_t(nx) + 1, 0);
-  auto for_edges_in_slab = [&](int i, auto&& visit) {
-    for (int j = 0; j < ny; ++j)
-      for (int k = 0; k < nz; ++k) {
-        const std::size_t p = grid.index(i, j, k);
-        const int step[3] = {i + 1 < nx, j + 1 < ny, k + 1 < nz};
-        const std::size_t q[3] = {p + std::size_t(ny) * nz, p + std::size_t(nz), p + 1};
-        for (int a = 0; a < 3; ++a)
-          if (step[a] && inside(f[Eigen::Index(p)]) != inside(f[Eigen::Index(q[a])]))
-            visit(p, a, q[a]);
-      }
-  };
-  tbb::parallel_for(0, nx, [&](int i) {
-    int c = 0;
-    for_edges_in_slab(i, [&](std::size_t, int, std::size_t) { ++c; });
-    slab_count[std::size_t(i) + 1] = c;
-  });
-  for (int i = 0; i < nx; ++i) slab_count[std::size_t(i) + 1] += slab_count[std::size_t(i)];
-  Mesh mesh;
-  mesh.vertices.resize(slab_count.back(), 3);
-  const Eigen::Vector3d h = grid.spacing();
-  auto position = [&](std::size_t p) {
-    const int k = int(p % std::size_t(nz)), j = int((p / std::size_t(nz)) % std::size_t(ny)),
-              i = int(p / (std::size_t(nz) * ny));
-    return Eigen::Vector3d(grid.bounds.min + Eigen::Vector3d(i * h[0], j * h[1], k * h[2]));
-  };
-  tbb::parallel_for(0, nx, [&](int i) {
-    int next = slab_count[std::size_t(i)];
-    for_edges_in_slab(i, [&](std::size_t p, int a, std::size_t q) {
-      vertex_id[3 * p + std::size_t(a)] = next;
-      mesh.vertices.row(next++) =
-          crossing(position(p), f[Eigen::Index(p)], position(q), f[Eigen::Index(q)]).transpose();
-    });
-  });
+namespace {
 
-  // 2. Polygons per cube, traced around its faces; triangles collected per slab, in order.
-  std::vector<detail::PolygonOutput> slab_output(static_cast<std::size_t>(std::max(nx - 1, 0)));
-  tbb::parallel_for(0, nx - 1, [&](int i) {
-    detail::PolygonOutput& slab = slab_output[std::size_t(i)];
-    for (int j = 0; j + 1 < ny; ++j)
-      for (int k = 0; k + 1 < nz; ++k) {
+// Marching cubes with O(nx * ny) bookkeeping instead of a map over every grid point. A grid
+// "line" is (i, j) with k varying; the vertices on a line's sign-changing edges of one axis are
+// numbered consecutively in k, lines and axes in C order, so a cube finds an edge's vertex from
+// the line's first id plus the number of crossings before it on the line, counted as the cube
+// sweeps along k.
+template <class Value>
+class CubeMarcher {
+ public:
+  explicit CubeMarcher(const GridView& grid)
+      : g_(grid), f_(static_cast<const Value*>(grid.data)), nx_(grid.dims[0]), ny_(grid.dims[1]),
+        nz_(grid.dims[2]), h_(grid.spacing()) {}
+
+  Mesh run() {
+    number_vertices();
+    Mesh mesh;
+    mesh.vertices.resize(line_base_.back(), 3);
+    tbb::parallel_for(0, nx_, [&](int i) { place_vertices(i, mesh.vertices); });
+    std::vector<detail::PolygonOutput> slabs(std::size_t(std::max(nx_ - 1, 0)));
+    tbb::parallel_for(0, nx_ - 1, [&](int i) { march_slab(i, mesh.vertices, slabs[std::size_t(i)]); });
+    concatenate(slabs, mesh);
+    return mesh;
+  }
+
+ private:
+  bool inside(std::size_t p) const { return f_[p] < 0; }
+  // Whether the edge from grid point p along `axis` changes sign (and exists).
+  bool crosses(int i, int j, int k, int axis) const {
+    const int reach[3] = {i + 1 < nx_, j + 1 < ny_, k + 1 < nz_};
+    if (!reach[axis]) return false;
+    const std::size_t p = g_.index(i, j, k), q = p + stride(axis);
+    return inside(p) != inside(q);
+  }
+  std::size_t stride(int axis) const {
+    return axis == 0 ? std::size_t(ny_) * nz_ : axis == 1 ? std::size_t(nz_) : 1;
+  }
+  std::size_t line(int i, int j) const { return std::size_t(i) * ny_ + j; }
+
+  // line_base_[3 * line + axis]: the first vertex id on that line and axis.
+  void number_vertices() {
+    line_base_.assign(std::size_t(nx_) * ny_ * 3 + 1, 0);
+    tbb::parallel_for(0, nx_, [&](int i) {
+      for (int j = 0; j < ny_; ++j)
+        for (int a = 0; a < 3; ++a) {
+          long c = 0;
+          for (int k = 0; k < nz_; ++k) c += crosses(i, j, k, a);
+          line_base_[3 * line(i, j) + std::size_t(a) + 1] = c;
+        }
+    });
+    for (std::size_t e = 1; e < line_base_.size(); ++e) line_base_[e] += line_base_[e - 1];
+  }
+
+  void place_vertices(int i, PointMatrix& vertices) const {
+    for (int j = 0; j < ny_; ++j)
+      for (int a = 0; a < 3; ++a) {
+        Eigen::Index next = line_base_[3 * line(i, j) + std::size_t(a)];
+        for (int k = 0; k < nz_; ++k) {
+          if (!crosses(i, j, k, a)) continue;
+          const std::size_t p = g_.index(i, j, k);
+          const double fa = f_[p], fb = f_[p + stride(a)];
+          Eigen::Vector3d x = g_.point(i, j, k);
+          x[a] += fa / (fa - fb) * h_[a];
+          vertices.row(next++) = x.transpose();
+        }
+      }
+  }
+
+  void march_slab(int i, const PointMatrix& vertices, detail::PolygonOutput& out) const {
+    const detail::CubeTables& T = detail::cube_tables();
+    for (int j = 0; j + 1 < ny_; ++j) {
+      // rank[corner line][axis]: crossings before the current k on that line and axis.
+      long rank[4][3] = {};
+      for (int k = 0; k + 1 < nz_; ++k) {
         double value[8];
-        std::size_t corner_point[8];
         int mask = 0;
         for (int c = 0; c < 8; ++c) {
-          corner_point[c] = grid.index(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1));
-          value[c] = f[Eigen::Index(corner_point[c])];
-          mask |= inside(value[c]) << c;
+          value[c] = f_[g_.index(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1))];
+          mask |= (value[c] < 0) << c;
         }
-        if (mask == 0 || mask == 255) continue;
+        if (mask == 0 || mask == 255) continue;  // no crossing: every rank stays
         detail::cube_polygons(value, [&](const int* edges, int size) {
           int polygon[12];
           Eigen::Vector3d position[12];
           for (int q = 0; q < size; ++q) {
-            polygon[q] = vertex_id[3 * corner_point[T.edge_low_corner[edges[q]]] +
-                                   std::size_t(edges[q] / 4)];
-            position[q] = mesh.vertices.row(polygon[q]).transpose();
+            const int c = T.edge_low_corner[edges[q]], a = edges[q] / 4, l = c & 3;
+            const long base =
+                line_base_[3 * line(i + (c & 1), j + (c >> 1 & 1)) + std::size_t(a)];
+            // An edge at k + 1 has the line's edge at k before it, if that one crosses.
+            const long before = rank[l][a] + ((c & 4) ? crossing_at_k(value, l, a) : 0);
+            polygon[q] = int(base + before);
+            position[q] = vertices.row(polygon[q]).transpose();
           }
-          detail::triangulate_polygon(polygon, edges, position, size, slab);
+          detail::triangulate_polygon(polygon, edges, position, size, out);
         });
+        // Advance the ranks past this k.
+        for (int l = 0; l < 4; ++l)
+          for (int a = 0; a < 3; ++a) rank[l][a] += crossing_at_k(value, l, a);
       }
-  });
-  // Concatenate the slabs in order; centroid vertices (negative ids) go after the edge vertices.
-  std::size_t total = 0, extra = 0;
-  for (const auto& s : slab_output) total += s.triangles.size(), extra += s.centroids.size();
-  const Eigen::Index edge_vertices = mesh.vertices.rows();
-  mesh.vertices.conservativeResize(edge_vertices + Eigen::Index(extra), 3);
-  mesh.triangles.resize(Eigen::Index(total), 3);
-  Eigen::Index at = 0, next_centroid = edge_vertices;
-  for (const auto& s : slab_output) {
-    for (const auto& c : s.centroids) mesh.vertices.row(next_centroid++) = c.transpose();
-    const Eigen::Index base = next_centroid - Eigen::Index(s.centroids.size());
-    for (const auto& t : s.triangles) {
-      for (int k = 0; k < 3; ++k)
-        mesh.triangles(at, k) =
-            t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
-      ++at;
     }
   }
-  return mesh;
+
+  // Whether the edge of `axis` from corner `l` (at this k, z bit clear) crosses, in this cube's
+  // values. Edges that leave the cube (the axis bit already set in l) are never asked for.
+  static int crossing_at_k(const double value[8], int l, int axis) {
+    const int bit = 1 << axis;
+    if (l & bit) return 0;
+    return (value[l] < 0) != (value[l | bit] < 0);
+  }
+
+  void concatenate(const std::vector<detail::PolygonOutput>& slabs, Mesh& mesh) const {
+    std::size_t total = 0, extra = 0;
+    for (const auto& s : slabs) total += s.triangles.size(), extra += s.centroids.size();
+    const Eigen::Index edge_vertices = mesh.vertices.rows();
+    mesh.vertices.conservativeResize(edge_vertices + Eigen::Index(extra), 3);
+    mesh.triangles.resize(Eigen::Index(total), 3);
+    Eigen::Index at = 0, next_centroid = edge_vertices;
+    for (const auto& s : slabs) {
+      for (const auto& c : s.centroids) mesh.vertices.row(next_centroid++) = c.transpose();
+      const Eigen::Index base = next_centroid - Eigen::Index(s.centroids.size());
+      for (const auto& t : s.triangles) {
+        for (int k = 0; k < 3; ++k)
+          mesh.triangles(at, k) =
+              t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
+        ++at;
+      }
+    }
+  }
+
+  const GridView& g_;
+  const Value* f_;
+  int nx_, ny_, nz_;
+  Eigen::Vector3d h_;
+  std::vector<long> line_base_;
+};
+
+}  // namespace
+
+Mesh marching_cubes(const GridView& grid) {
+  if (grid.type == ScalarType::Float32) return CubeMarcher<float>(grid).run();
+  return CubeMarcher<double>(grid).run();
+}
+
+Mesh marching_cubes(const Grid& grid) {
+  return marching_cubes(view_of(grid));
 }
 
 }  // namespace sdfcontour

@@ -69,7 +69,10 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
     validate_grid(input.grid);
   else
     validate_samples(input.samples);
-  require_sign_change(input.is_grid ? input.grid.values : input.samples.values);
+  if (input.is_grid)
+    require_sign_change(input.grid);
+  else
+    require_sign_change(input.samples.values);
   const Method method = options.method;
   if (method == Method::Mc && !input.is_grid)
     throw Error("method mc needs a grid input, not scattered samples");

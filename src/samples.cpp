@@ -2,16 +2,20 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 namespace sdfcontour {
 
-Eigen::Vector3d Grid::spacing() const {
+Eigen::Vector3d GridGeometry::spacing() const {
   Eigen::Vector3d h;
   for (int a = 0; a < 3; ++a) h[a] = (bounds.max[a] - bounds.min[a]) / (dims[a] - 1);
   return h;
 }
 
-Eigen::Vector3d Grid::point(int i, int j, int k) const {
+Eigen::Vector3d GridGeometry::point(int i, int j, int k) const {
   const Eigen::Vector3d h = spacing();
   return bounds.min + Eigen::Vector3d(i * h[0], j * h[1], k * h[2]);
 }
@@ -33,7 +37,33 @@ static void require_finite(const Eigen::VectorXd& values, const char* what) {
                   std::to_string(i) + ")");
 }
 
-void validate_grid(const Grid& grid) {
+GridView view_of(const Grid& grid) {
+  GridView v;
+  v.dims = grid.dims;
+  v.bounds = grid.bounds;
+  v.data = grid.values.data();
+  v.type = ScalarType::Float64;
+  return v;
+}
+
+namespace {
+
+// The first non-finite value's index, or size: chunks in parallel, the smallest index wins.
+template <class T>
+std::size_t first_non_finite(const T* f, std::size_t n) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), n,
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
+        for (std::size_t i = r.begin(); i < r.end() && i < found; ++i)
+          if (!std::isfinite(f[i])) return i;
+        return found;
+      },
+      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+}
+
+}  // namespace
+
+void validate_grid(const GridView& grid) {
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2)
       throw Error("grid has " + std::to_string(grid.dims[a]) +
@@ -41,9 +71,35 @@ void validate_grid(const Grid& grid) {
   for (int a = 0; a < 3; ++a)
     if (!(grid.bounds.min[a] < grid.bounds.max[a]))
       throw Error("bounds must have min < max on every axis");
+  const std::size_t bad =
+      grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
+  if (bad < grid.size())
+    throw Error("grid values contain a NaN or infinite value (at index " + std::to_string(bad) +
+                ")");
+}
+
+void validate_grid(const Grid& grid) {
   if (std::size_t(grid.values.size()) != grid.size())
     throw Error("grid values do not match its dimensions");
-  require_finite(grid.values, "grid values");
+  validate_grid(view_of(grid));
+}
+
+void require_sign_change(const GridView& grid) {
+  const auto [inside, outside] = grid.visit([&](const auto* f) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, grid.size(), 1 << 16), std::pair<bool, bool>{},
+        [&](const tbb::blocked_range<std::size_t>& r, std::pair<bool, bool> s) {
+          for (std::size_t i = r.begin(); i < r.end() && !(s.first && s.second); ++i)
+            (f[i] < 0 ? s.first : s.second) = true;
+          return s;
+        },
+        [](std::pair<bool, bool> a, std::pair<bool, bool> b) {
+          return std::pair<bool, bool>{a.first || b.first, a.second || b.second};
+        });
+  });
+  if (!(inside && outside))
+    throw Error(std::string("no surface: every value is ") +
+                (inside ? "negative" : "non-negative") + ", so the field has no sign change");
 }
 
 void validate_samples(const Samples& samples) {

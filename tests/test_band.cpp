@@ -9,71 +9,68 @@ using namespace sdfcontour;
 
 namespace {
 
-SdfInput torus_grid(int n) {
-  SdfInput input;
-  input.is_grid = true;
-  input.grid = sample_grid(*make_builtin_shape("torus"), n, Bounds{});
-  return input;
+Grid torus_grid(int n) {
+  return sample_grid(*make_builtin_shape("torus"), n, Bounds{});
 }
 
 // The grid with every |value| clamped at t, as a TSDF or a level set stores it.
-SdfInput clamped(SdfInput input, double t) {
-  for (Eigen::Index i = 0; i < input.grid.values.size(); ++i)
-    input.grid.values[i] = std::clamp(input.grid.values[i], -t, t);
-  return input;
+Grid clamped(Grid grid, double t) {
+  for (Eigen::Index i = 0; i < grid.values.size(); ++i)
+    grid.values[i] = std::clamp(grid.values[i], -t, t);
+  return grid;
 }
 
 }  // namespace
 
 TEST(Band, KeepsExactlyTheSamplesWithinTheBand) {
-  const SdfInput input = torus_grid(20);
-  const double h = input.grid.spacing().maxCoeff();
+  const Grid grid = torus_grid(20);
+  const double h = grid.spacing().maxCoeff();
   BandOptions o;
   o.band = 2.5;
-  const BandSamples b = select_band(input.grid, o);
+  const BandSamples b = select_band(grid, o);
   long expected = 0;
-  for (Eigen::Index i = 0; i < input.grid.values.size(); ++i)
-    expected += std::abs(input.grid.values[i]) <= 2.5 * h;
+  for (Eigen::Index i = 0; i < grid.values.size(); ++i)
+    expected += std::abs(grid.values[i]) <= 2.5 * h;
   ASSERT_EQ(b.samples.values.size(), expected);
-  EXPECT_LT(expected, input.grid.values.size() / 2);
+  EXPECT_LT(expected, grid.values.size() / 2);
   EXPECT_FALSE(b.truncation.detected());
   for (Eigen::Index r = 0; r < b.samples.values.size(); ++r) {
     const long p = b.source[std::size_t(r)];
-    EXPECT_EQ(b.samples.values[r], input.grid.values[p]);
+    EXPECT_EQ(b.samples.values[r], grid.values[p]);
     const int k = int(p % 20), j = int(p / 20 % 20), i = int(p / 400);
-    EXPECT_EQ((b.samples.points.row(r).transpose() - input.grid.point(i, j, k)).norm(), 0.0);
+    EXPECT_EQ((b.samples.points.row(r).transpose() - grid.point(i, j, k)).norm(), 0.0);
   }
   o.band = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(select_band(input.grid, o).samples.values.size(), input.grid.values.size());
+  EXPECT_EQ(select_band(grid, o).samples.values.size(), grid.values.size());
 }
 
 TEST(Band, RejectsBadBandsAndEmptyBands) {
-  const SdfInput input = torus_grid(12);
+  const Grid grid = torus_grid(12);
   BandOptions o;
   o.band = 0;
-  EXPECT_THROW(select_band(input.grid, o), Error);
+  EXPECT_THROW(select_band(grid, o), Error);
   o.band = std::nan("");
-  EXPECT_THROW(select_band(input.grid, o), Error);
+  EXPECT_THROW(select_band(grid, o), Error);
   o.band = 1e-9;  // no sample that close to the surface
-  EXPECT_THROW(select_band(input.grid, o), Error);
+  EXPECT_THROW(select_band(grid, o), Error);
   o.band = 3;
   o.truncation_mode = TruncationMode::Given;
   o.truncation = -1;
-  EXPECT_THROW(select_band(input.grid, o), Error);
+  EXPECT_THROW(select_band(grid, o), Error);
 }
 
 TEST(Band, DetectsTruncationOnlyWhereValuesAreClamped) {
-  const SdfInput exact = torus_grid(32);
-  EXPECT_FALSE(detect_truncation(exact.grid.values).detected());
-  const double h = exact.grid.spacing()[0];
-  const Truncation t = detect_truncation(clamped(exact, 3 * h).grid.values);
+  const Grid exact = torus_grid(32);
+  EXPECT_FALSE(detect_truncation(exact.values).detected());
+  const double h = exact.spacing()[0];
+  const Truncation t = detect_truncation(clamped(exact, 3 * h).values);
   EXPECT_DOUBLE_EQ(t.inside, 3 * h);
   EXPECT_DOUBLE_EQ(t.outside, 3 * h);
   // Clamped on the outside only (the torus's inside is thinner than 6h at 32^3).
-  SdfInput outside_only = exact;
-  for (Eigen::Index i = 0; i < outside_only.grid.values.size(); ++i)
-    outside_only.grid.values[i] = std::min(outside_only.grid.values[i], 2 * h);
-  const Truncation o = detect_truncation(outside_only.grid.values);
+  Grid outside_only = exact;
+  for (Eigen::Index i = 0; i < outside_only.values.size(); ++i)
+    outside_only.values[i] = std::min(outside_only.values[i], 2 * h);
+  const Truncation o = detect_truncation(outside_only.values);
   EXPECT_DOUBLE_EQ(o.outside, 2 * h);
   EXPECT_EQ(o.inside, std::numeric_limits<double>::infinity());
 }
@@ -81,13 +78,14 @@ TEST(Band, DetectsTruncationOnlyWhereValuesAreClamped) {
 // A truncated grid gives the same contact points and mesh as the exact grid restricted to the
 // band the truncation leaves: the clamped samples never reach the triangulation.
 TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
-  const SdfInput exact = torus_grid(32);
-  const double h = exact.grid.spacing().maxCoeff();
-  const SdfInput truncated = clamped(exact, 2 * h);
+  const Grid exact = torus_grid(32);
+  const double h = exact.spacing().maxCoeff();
+  const SdfInput truncated = SdfInput::from_grid(clamped(exact, 2 * h));
+  const SdfInput exact_input = SdfInput::from_grid(exact);
   // No exact value lies between the two cut-offs, so both keep the same samples.
-  for (Eigen::Index i = 0; i < exact.grid.values.size(); ++i)
-    ASSERT_FALSE(std::abs(exact.grid.values[i]) > 1.999 * h &&
-                 std::abs(exact.grid.values[i]) < 2 * h);
+  for (Eigen::Index i = 0; i < exact.values.size(); ++i)
+    ASSERT_FALSE(std::abs(exact.values[i]) > 1.999 * h &&
+                 std::abs(exact.values[i]) < 2 * h);
   ContourOptions o;
   o.want_points = true;
   o.poisson.depth = 7;
@@ -95,7 +93,7 @@ TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
   const ContourResult a = contour(truncated, nullptr, o);
   EXPECT_TRUE(a.truncation.detected());
   o.band.band = 1.999;
-  const ContourResult b = contour(exact, nullptr, o);
+  const ContourResult b = contour(exact_input, nullptr, o);
   EXPECT_FALSE(b.truncation.detected());
   ASSERT_EQ(a.band_samples, b.band_samples);
   ASSERT_EQ(a.contact_points->size(), b.contact_points->size());
@@ -114,8 +112,8 @@ TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
 // surface as those of every sample, and the mesh stays as close.
 TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
   const auto shape = make_builtin_shape("torus");
-  const SdfInput input = torus_grid(40);
-  const double h = input.grid.spacing().maxCoeff();
+  const Grid grid = torus_grid(40);
+  const double h = grid.spacing().maxCoeff();
   ContourOptions o;
   o.want_points = true;
   o.poisson.depth = 7;
@@ -125,6 +123,7 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
       sum += std::abs(shape->distance(r.contact_points->points.row(i).transpose()));
     return sum / double(r.contact_points->points.rows());
   };
+  const SdfInput input = SdfInput::from_grid(grid);
   const ContourResult band = contour(input, shape.get(), o);
   o.band.band = std::numeric_limits<double>::infinity();
   const ContourResult all = contour(input, shape.get(), o);
@@ -132,5 +131,5 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
   EXPECT_LT(mean_error(band), 1e-3 * h);
   EXPECT_LT(mean_error(band), 2 * mean_error(all) + 1e-6 * h);
   // Every contact point names an input sample within the band.
-  for (int s : band.contact_points->samples) EXPECT_LE(std::abs(input.grid.values[s]), 3 * h);
+  for (int s : band.contact_points->samples) EXPECT_LE(std::abs(grid.values[s]), 4 * h);
 }

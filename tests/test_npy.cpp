@@ -44,11 +44,13 @@ TEST(Npy, ReadsFloat32AndGridLayout) {
   std::vector<float> v(2 * 3 * 4);
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = float(i) - 5.0f;
   write_raw_npy(path, "<f4", "False", "(2, 3, 4)", floats_bytes(v));
-  const SdfInput in = sdf_input_from_array(read_npy(path), Bounds{});
+  const SdfInput in = sdf_input_from_npy(map_npy(path), Bounds{});
   ASSERT_TRUE(in.is_grid);
+  // Viewed in place, as float32.
+  const GridView& g = in.grid;
+  EXPECT_EQ(g.type, ScalarType::Float32);
+  EXPECT_EQ(g.value(g.index(1, 2, 3)), double(v[(1 * 3 + 2) * 4 + 3]));
   // a[i,j,k] is at min + (i*hx, j*hy, k*hz) with h = 2/(n-1).
-  const Grid& g = in.grid;
-  EXPECT_DOUBLE_EQ(g.values[Eigen::Index(g.index(1, 2, 3))], double(v[(1 * 3 + 2) * 4 + 3]));
   const Eigen::Vector3d p = g.point(1, 2, 3);
   EXPECT_DOUBLE_EQ(p.x(), 1.0);
   EXPECT_DOUBLE_EQ(p.y(), 1.0);
@@ -72,7 +74,7 @@ TEST(Npy, RejectsBadFiles) {
   const auto dir = test::temp_dir("npy_bad");
   auto expect_error = [&](const std::string& name, const std::string& needle) {
     try {
-      sdf_input_from_array(read_npy((dir / name).string()), Bounds{});
+      sdf_input_from_npy(map_npy((dir / name).string()), Bounds{});
       ADD_FAILURE() << name << " was accepted";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << name << ": " << e.what();
@@ -97,6 +99,17 @@ TEST(Npy, RejectsBadFiles) {
   inf[5] = std::numeric_limits<float>::infinity();
   write_raw_npy((dir / "inf.npy").string(), "<f4", "False", "(2, 2, 2)", floats_bytes(inf));
   std::ofstream((dir / "junk.npy").string()) << "this is not numpy";
+  // Hostile headers: a 60 KB field (a regex parser overflowed its stack on it), a shape whose
+  // product overflows 64 bits, a negative dimension, a header longer than any real one.
+  write_raw_npy((dir / "long_field.npy").string(), std::string(60000, 'f'), "False", "(2, 2, 2)",
+                floats_bytes(eight));
+  write_raw_npy((dir / "overflow.npy").string(), "<f4", "False",
+                "(4294967296, 4294967296, 2)", floats_bytes(eight));
+  write_raw_npy((dir / "huge_dim.npy").string(), "<f4", "False",
+                "(99999999999999999999999, 2, 2)", floats_bytes(eight));
+  write_raw_npy((dir / "negative.npy").string(), "<f4", "False", "(-1, 2, 4)",
+                floats_bytes(eight));
+  write_raw_npy((dir / "no_shape.npy").string(), "<f4", "False", "", floats_bytes(eight));
   expect_error("fortran.npy", "Fortran order");
   expect_error("int.npy", "dtype");
   expect_error("big_endian.npy", "dtype");
@@ -109,5 +122,10 @@ TEST(Npy, RejectsBadFiles) {
   expect_error("nan.npy", "NaN");
   expect_error("inf.npy", "NaN or infinite");
   expect_error("junk.npy", "not a .npy file");
+  expect_error("long_field.npy", "dtype");
+  expect_error("overflow.npy", "truncated");
+  expect_error("huge_dim.npy", "64 bits");
+  expect_error("negative.npy", "non-negative integers");
+  expect_error("no_shape.npy", "not a valid .npy");
   expect_error("missing.npy", "cannot read");
 }

@@ -218,9 +218,7 @@ TEST(Poisson, GcpBeatsMarchingCubesOnSmoothShapes) {
   for (const std::string name : {"torus", "csg"}) {
     SCOPED_TRACE(name);
     const auto shape = make_builtin_shape(name);
-    SdfInput input;
-    input.is_grid = true;
-    input.grid = sample_grid(*shape, 24, Bounds{});
+    const SdfInput input = SdfInput::from_grid(sample_grid(*shape, 24, Bounds{}));
     const double h = input.grid.spacing()[0];
     ContourOptions o;
     double error[3];

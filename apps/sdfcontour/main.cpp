@@ -103,12 +103,11 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
     if (b.random) {
       loaded.input.samples = sample_random(*loaded.shape, b.count, bounds, seed);
     } else {
-      loaded.input.is_grid = true;
-      loaded.input.grid = sample_grid(*loaded.shape, b.resolution, bounds);
+      loaded.input = SdfInput::from_grid(sample_grid(*loaded.shape, b.resolution, bounds));
     }
     return loaded;
   }
-  loaded.input = sdf_input_from_array(read_npy(spec), bounds);
+  loaded.input = sdf_input_from_npy(map_npy(spec), bounds);
   return loaded;
 }
 
@@ -177,7 +176,7 @@ struct PoissonArgs {
 
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
-                                     weights = "james", band = "3", truncation = "auto";
+                                     weights = "james", band = "4", truncation = "auto";
   int knn = 18, threads = 0;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;

@@ -20,7 +20,7 @@ enum class TruncationMode {
 
 struct BandOptions {
   /// Keep samples with |value| <= band * spacing. Infinity keeps every sample (the paper's).
-  double band = 3.0;
+  double band = 4.0;
   TruncationMode truncation_mode = TruncationMode::Auto;
   /// With TruncationMode::Given: values with |value| >= truncation (to 1e-6 relative) are
   /// truncated and carry no distance.
@@ -45,9 +45,11 @@ struct Truncation {
 /// grid reaches it on a grid face, which is then dropped too: far from the surface, so the band
 /// hides it anyway (TruncationMode::None keeps it).
 Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction = 0.01);
+Truncation detect_truncation(const GridView& grid, double min_fraction = 0.01);
 
 /// The truncation that `options` asks for on `values`.
 Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options);
+Truncation resolve_truncation(const GridView& grid, const BandOptions& options);
 
 /// The samples in the band, and where they came from.
 struct BandSamples {
@@ -60,6 +62,7 @@ struct BandSamples {
 
 /// The grid's samples with |value| <= band * h (h the largest grid spacing) that are not
 /// truncated, in C order. Never builds the full grid's positions.
+BandSamples select_band(const GridView& grid, const BandOptions& options);
 BandSamples select_band(const Grid& grid, const BandOptions& options);
 
 /// The same for scattered samples; h is the side of a cube holding one sample on average

@@ -18,6 +18,8 @@ Mesh marching_tetrahedra(const PointMatrix& points, const Eigen::VectorXd& value
 /// diagonal pairs of equal sign is resolved by the asymptotic decider (the sign of the bilinear
 /// interpolant's saddle), which both cubes sharing the face agree on, so there are no cracks.
 /// The output is closed and outward oriented wherever the surface stays inside the grid.
+/// Float32 grids are read as float32, and memory beyond the mesh is O(nx * ny).
+Mesh marching_cubes(const GridView& grid);
 Mesh marching_cubes(const Grid& grid);
 
 }  // namespace sdfcontour

@@ -20,12 +20,11 @@ struct Bounds {
   Eigen::Vector3d max = Eigen::Vector3d::Constant(1.0);
 };
 
-/// Samples on a regular grid: value(i,j,k) is the SDF at min + (i*hx, j*hy, k*hz),
-/// with samples at both ends of each axis (h = (max - min) / (n - 1)).
-struct Grid {
+/// Where a regular grid's samples lie: sample (i,j,k) at min + (i*hx, j*hy, k*hz), with samples
+/// at both ends of each axis (h = (max - min) / (n - 1)); C order, index (i*ny + j)*nz + k.
+struct GridGeometry {
   std::array<int, 3> dims{0, 0, 0};  ///< (nx, ny, nz), each >= 2
   Bounds bounds;                     ///< positions of the first and last samples
-  Eigen::VectorXd values;            ///< nx*ny*nz values in C order: index (i*ny + j)*nz + k
 
   std::size_t size() const { return std::size_t(dims[0]) * dims[1] * dims[2]; }
   std::size_t index(int i, int j, int k) const {
@@ -33,12 +32,42 @@ struct Grid {
   }
   Eigen::Vector3d spacing() const;
   Eigen::Vector3d point(int i, int j, int k) const;
+};
+
+/// Samples on a regular grid, owning its values as doubles.
+struct Grid : GridGeometry {
+  Eigen::VectorXd values;  ///< size() values in C order
+
   /// The grid's samples as scattered samples, in the grid's C order.
   Samples to_samples() const;
 };
 
+enum class ScalarType { Float32, Float64 };
+
+/// A read-only view of grid values stored elsewhere (a Grid, a memory-mapped .npy), float32 or
+/// float64, so a large grid is never copied or widened.
+struct GridView : GridGeometry {
+  const void* data = nullptr;  ///< size() values of `type` in C order
+  ScalarType type = ScalarType::Float64;
+
+  double value(std::size_t p) const {
+    return type == ScalarType::Float32 ? double(static_cast<const float*>(data)[p])
+                                       : static_cast<const double*>(data)[p];
+  }
+  /// Calls f(const T* values) with T the stored type: one dispatch for a whole loop.
+  template <class F>
+  decltype(auto) visit(F&& f) const {
+    if (type == ScalarType::Float32) return f(static_cast<const float*>(data));
+    return f(static_cast<const double*>(data));
+  }
+};
+
+/// A view of `grid`'s values (valid while `grid` lives).
+GridView view_of(const Grid& grid);
+
 /// Throws Error unless: dims >= 2 on every axis, values match dims, values finite,
 /// bounds min < max on every axis.
+void validate_grid(const GridView& grid);
 void validate_grid(const Grid& grid);
 
 /// Throws Error unless: points is n x 3 and values has n finite entries, n >= 4,
@@ -47,5 +76,6 @@ void validate_samples(const Samples& samples);
 
 /// Throws Error if the values have no sign change (no surface: all >= 0 or all < 0).
 void require_sign_change(const Eigen::VectorXd& values);
+void require_sign_change(const GridView& grid);
 
 }  // namespace sdfcontour
