@@ -158,23 +158,38 @@ class CubeMarcher {
   }
   std::size_t line(int i, int j) const { return std::size_t(i) * ny_ + j; }
 
-  // line_base_[3 * line + axis]: the first vertex id on that line and axis.
+  // line_base_[3 * line + axis]: the first vertex id on that line and axis. The one full pass
+  // over the grid: the later passes visit only lines and cube rows with a crossing.
   void number_vertices() {
     line_base_.assign(std::size_t(nx_) * ny_ * 3 + 1, 0);
     tbb::parallel_for(0, nx_, [&](int i) {
-      for (int j = 0; j < ny_; ++j)
-        for (int a = 0; a < 3; ++a) {
+      for (int j = 0; j < ny_; ++j) {
+        const Value* f = f_ + g_.index(i, j, 0);
+        const Value* next[2] = {i + 1 < nx_ ? f + stride(0) : nullptr,
+                                j + 1 < ny_ ? f + stride(1) : nullptr};
+        long* count = &line_base_[3 * line(i, j) + 1];
+        for (int a = 0; a < 2; ++a) {
+          if (!next[a]) continue;
           long c = 0;
-          for (int k = 0; k < nz_; ++k) c += crosses(i, j, k, a);
-          line_base_[3 * line(i, j) + std::size_t(a) + 1] = c;
+          for (int k = 0; k < nz_; ++k) c += (f[k] < 0) != (next[a][k] < 0);
+          count[a] = c;
         }
+        long c = 0;
+        for (int k = 0; k + 1 < nz_; ++k) c += (f[k] < 0) != (f[k + 1] < 0);
+        count[2] = c;
+      }
     });
     for (std::size_t e = 1; e < line_base_.size(); ++e) line_base_[e] += line_base_[e - 1];
+  }
+  long crossings(int i, int j, int axis) const {
+    const std::size_t e = 3 * line(i, j) + std::size_t(axis);
+    return line_base_[e + 1] - line_base_[e];
   }
 
   void place_vertices(int i, PointMatrix& vertices) const {
     for (int j = 0; j < ny_; ++j)
       for (int a = 0; a < 3; ++a) {
+        if (crossings(i, j, a) == 0) continue;
         Eigen::Index next = line_base_[3 * line(i, j) + std::size_t(a)];
         for (int k = 0; k < nz_; ++k) {
           if (!crosses(i, j, k, a)) continue;
@@ -190,6 +205,12 @@ class CubeMarcher {
   void march_slab(int i, const PointMatrix& vertices, detail::PolygonOutput& out) const {
     const detail::CubeTables& T = detail::cube_tables();
     for (int j = 0; j + 1 < ny_; ++j) {
+      // Every edge of this row of cubes is on a line counted above: no crossing, no polygon.
+      if (crossings(i, j, 0) + crossings(i, j, 1) + crossings(i, j, 2) + crossings(i + 1, j, 1) +
+              crossings(i + 1, j, 2) + crossings(i, j + 1, 0) + crossings(i, j + 1, 2) +
+              crossings(i + 1, j + 1, 2) ==
+          0)
+        continue;
       // rank[corner line][axis]: crossings before the current k on that line and axis.
       long rank[4][3] = {};
       for (int k = 0; k + 1 < nz_; ++k) {
