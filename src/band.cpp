@@ -17,26 +17,30 @@ constexpr double kTruncationTolerance = 1e-6;
 // Fewer samples at a sign's extreme than this are a coincidence (a grid's corners, a centre).
 constexpr long kMinTruncatedSamples = 64;
 
-// Keep sample i when it lies in the band and carries a distance.
+// Keep sample i when it lies in the band or its margin and carries a distance; it is a core
+// sample (one that gives a contact point) when it lies in the band and a margin away from a
+// truncation distance.
 struct BandTest {
-  double limit;  // band * h
+  double keep_limit;  // (band + margin) * h
+  double core_limit;  // band * h
+  double margin;      // margin * h
   Truncation truncation;
-  bool operator()(double v) const { return std::abs(v) <= limit && !truncation.truncated(v); }
+  bool operator()(double v) const { return std::abs(v) <= keep_limit && !truncation.truncated(v); }
+  bool core(double v) const {
+    const double t = v < 0 ? truncation.inside : truncation.outside;
+    return std::abs(v) <= core_limit && std::abs(v) <= t * (1 - kTruncationTolerance) - margin;
+  }
 };
 
-BandTest make_test(const Eigen::VectorXd& values, const BandOptions& options, double h,
-                   BandSamples& out) {
-  validate_band_options(options);
-  out.spacing = h;
-  out.truncation = resolve_truncation(values, options);
-  out.input_count = long(values.size());
-  return {options.band * h, out.truncation};
+BandTest make_test(const BandOptions& options, double h, const Truncation& truncation) {
+  return {(options.band + options.margin) * h, options.band * h, options.margin * h, truncation};
 }
 
 void require_usable(const BandSamples& b, const BandOptions& options) {
   const Eigen::Index n = b.samples.values.size();
   bool inside = false, outside = false;
-  for (Eigen::Index i = 0; i < n; ++i) (b.samples.values[i] < 0 ? inside : outside) = true;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (b.core[std::size_t(i)]) (b.samples.values[i] < 0 ? inside : outside) = true;
   if (n < 4 || !(inside && outside))
     throw Error("only " + std::to_string(n) + " samples lie within the band of " +
                 std::to_string(options.band) + " spacings" +
@@ -145,6 +149,8 @@ void validate_band_options(const BandOptions& options) {
   if (!(options.band > 0))
     throw Error("the band must be a positive number of spacings (or 'all'), got " +
                 std::to_string(options.band));
+  if (!(options.margin >= 0) || !std::isfinite(options.margin))
+    throw Error("the band's margin must be a non-negative number of spacings");
   if (options.truncation_mode == TruncationMode::Given &&
       !(options.truncation > 0 && std::isfinite(options.truncation)))
     throw Error("the truncation distance must be positive and finite");
@@ -156,7 +162,7 @@ BandSamples select_band(const GridView& grid, const BandOptions& options) {
   out.spacing = grid.spacing().maxCoeff();
   out.truncation = resolve_truncation(grid, options);
   out.input_count = long(grid.size());
-  const BandTest keep{options.band * out.spacing, out.truncation};
+  const BandTest keep = make_test(options, out.spacing, out.truncation);
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   // Per-slab counts, then each slab fills its own rows: C order for any thread count.
   std::vector<Eigen::Index> slab_start(std::size_t(nx) + 1, 0);
@@ -173,6 +179,7 @@ BandSamples select_band(const GridView& grid, const BandOptions& options) {
   out.samples.points.resize(count, 3);
   out.samples.values.resize(count);
   out.source.resize(std::size_t(count));
+  out.core.resize(std::size_t(count));
   grid.visit([&](const auto* f) {
     tbb::parallel_for(0, nx, [&](int i) {
       Eigen::Index at = slab_start[std::size_t(i)];
@@ -183,6 +190,7 @@ BandSamples select_band(const GridView& grid, const BandOptions& options) {
           if (!keep(v)) continue;
           out.samples.points.row(at) = grid.point(i, j, k).transpose();
           out.samples.values[at] = v;
+          out.core[std::size_t(at)] = keep.core(v);
           out.source[std::size_t(at++)] = long(p);
         }
     });
@@ -202,17 +210,23 @@ BandSamples select_band(const Samples& samples, const BandOptions& options) {
   // A flat box still has a spacing: measure it in the largest extent then.
   const double volume = extent.prod();
   const double h = volume > 0 ? std::cbrt(volume / double(n)) : extent.maxCoeff() / std::cbrt(n);
+  validate_band_options(options);
   BandSamples out;
-  const BandTest keep = make_test(samples.values, options, h, out);
+  out.spacing = h;
+  out.truncation = resolve_truncation(samples.values, options);
+  out.input_count = long(n);
+  const BandTest keep = make_test(options, h, out.truncation);
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < n; ++i)
     if (keep(samples.values[i])) kept.push_back(i);
   out.samples.points.resize(Eigen::Index(kept.size()), 3);
   out.samples.values.resize(Eigen::Index(kept.size()));
   out.source.resize(kept.size());
+  out.core.resize(kept.size());
   for (std::size_t r = 0; r < kept.size(); ++r) {
     out.samples.points.row(Eigen::Index(r)) = samples.points.row(kept[r]);
     out.samples.values[Eigen::Index(r)] = samples.values[kept[r]];
+    out.core[r] = keep.core(samples.values[kept[r]]);
     out.source[r] = long(kept[r]);
   }
   require_usable(out, options);

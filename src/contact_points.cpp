@@ -17,7 +17,7 @@ Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) {
 // Gradients shorter than this have no usable direction.
 constexpr double kTinyGradient = 1e-300;
 
-enum class Outcome : char { Hidden, ZeroGradient, Discarded, Kept, Rescued };
+enum class Outcome : char { Skipped, Hidden, ZeroGradient, Discarded, Kept, Rescued };
 
 }  // namespace
 
@@ -37,7 +37,8 @@ bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& v
 
 ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::VectorXd& values,
                                       const PointMatrix& gradients, const Triangulation& tri,
-                                      const ContactPointOptions& options) {
+                                      const ContactPointOptions& options,
+                                      const std::vector<char>* only) {
   const Eigen::Index n = points.rows();
   std::vector<Outcome> outcome(static_cast<std::size_t>(n));
   PointMatrix c(n, 3), normal(n, 3);
@@ -46,6 +47,10 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
 
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     auto& out = outcome[std::size_t(i)];
+    if (only && !(*only)[std::size_t(i)]) {
+      out = Outcome::Skipped;
+      return;
+    }
     if (tri.hidden[std::size_t(i)]) {
       out = Outcome::Hidden;
       return;
@@ -81,6 +86,8 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
   std::vector<int> kept;
   for (Eigen::Index i = 0; i < n; ++i) {
     switch (outcome[std::size_t(i)]) {
+      case Outcome::Skipped:
+        break;
       case Outcome::Hidden:
         ++result.hidden;
         break;
@@ -109,17 +116,18 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
   return result;
 }
 
-ContactPoints exact_contact_points(const PointMatrix& points, const AnalyticShape& shape) {
-  const Eigen::Index n = points.rows();
+ContactPoints exact_contact_points(const PointMatrix& points, const AnalyticShape& shape,
+                                   const std::vector<char>* only) {
   ContactPoints result;
+  for (Eigen::Index i = 0; i < points.rows(); ++i)
+    if (!only || (*only)[std::size_t(i)]) result.samples.push_back(int(i));
+  const Eigen::Index n = Eigen::Index(result.samples.size());
   result.points.resize(n, 3);
   result.normals.resize(n, 3);
-  result.samples.resize(std::size_t(n));
-  tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
-    const Eigen::Vector3d p = row(points, i);
-    result.points.row(i) = shape.closest_point(p).transpose();
-    result.normals.row(i) = shape.gradient(p).transpose();
-    result.samples[std::size_t(i)] = int(i);
+  tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index r) {
+    const Eigen::Vector3d p = row(points, result.samples[std::size_t(r)]);
+    result.points.row(r) = shape.closest_point(p).transpose();
+    result.normals.row(r) = shape.gradient(p).transpose();
   });
   return result;
 }

@@ -1,7 +1,10 @@
 #include "sdfcontour/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
+#include "sdfcontour/bricks.h"
 #include "sdfcontour/marching.h"
 
 namespace sdfcontour {
@@ -101,16 +104,30 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   const Samples& s = band.samples;
   const std::string n = std::to_string(result.band_samples);
 
+  // Only the band proper gives contact points; its margin closes their stars.
+  const std::vector<char>* core = &band.core;
+  const std::string n_core = std::to_string(std::count(band.core.begin(), band.core.end(), 1));
   const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
   if (method == Method::Gtcp && (options.want_points || options.want_mesh))
     result.contact_points =
-        stages.run("contact_points", "exact contact points of " + n + " samples",
-                   [&] { return exact_contact_points(s.points, *shape); });
+        stages.run("contact_points", "exact contact points of " + n_core + " samples",
+                   [&] { return exact_contact_points(s.points, *shape, core); });
 
   // --points with any method but gtcp gives GCP contact points.
   const bool need_gcp = (options.want_points && method != Method::Gtcp) ||
                         (method == Method::Gcp && options.want_mesh);
-  const bool need_regular = need_gcp || (method == Method::MtRt && options.want_mesh);
+  // GCP from the regular triangulation runs brick by brick (the same points, less memory).
+  // Bricks need a band (or a truncation): without one, the weights are unbounded and no halo
+  // is local. The default halo is twice the largest |value| kept, in spacings.
+  const double largest = s.values.size() ? s.values.cwiseAbs().maxCoeff() : 0.0;
+  const bool bounded = std::isfinite(options.band.band) ||
+                       (std::isfinite(band.truncation.inside) && std::isfinite(band.truncation.outside));
+  const bool gcp_in_bricks = need_gcp && options.gradient_source == GradientSource::Regular &&
+                             options.bricks.size > 0 && bounded;
+  BrickOptions bricks = options.bricks;
+  if (bricks.halo == 0) bricks.halo = std::max(2 * largest / band.spacing, 1.0);
+  const bool need_regular =
+      (need_gcp && !gcp_in_bricks) || (method == Method::MtRt && options.want_mesh);
   const bool need_delaunay = (method == Method::MtDt && options.want_mesh) ||
                              (need_gcp && options.gradient_source == GradientSource::Delaunay);
   TriangulationOptions topt;
@@ -127,7 +144,23 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
     delaunay = stages.run("delaunay_triangulation", "Delaunay triangulation of " + n + " samples",
                           [&] { return triangulate(s.points, s.values, topt); });
   }
-  if (need_gcp) {
+  if (gcp_in_bricks) {
+    result.contact_points = stages.run(
+        "contact_points", "triangulation, gradients and contact points in bricks", [&] {
+          std::function<void(int, int)> report;
+          if (options.progress_fraction)
+            report = [&](int done, int total) {
+              options.progress_fraction("bricks", done, total);
+            };
+          BrickStats st;
+          ContactPoints cp = brick_contact_points(s, band.spacing, options.gradient,
+                                                  options.contact, bricks, &st, report,
+                                                  core);
+          result.bricks = st;
+          return cp;
+        });
+    result.hidden = result.contact_points->hidden;
+  } else if (need_gcp) {
     const PointMatrix gradients = stages.run("gradients", "gradients at " + n + " samples", [&] {
       switch (options.gradient_source) {
         case GradientSource::Knn:
@@ -140,7 +173,8 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
       return vertex_gradients(s.points, s.values, *regular, options.gradient);
     });
     result.contact_points = stages.run("contact_points", "contact points and filter", [&] {
-      return gradient_contact_points(s.points, s.values, gradients, *regular, options.contact);
+      return gradient_contact_points(s.points, s.values, gradients, *regular, options.contact,
+                                     core);
     });
   }
   // Contact points name their samples by input index.

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <iterator>
 #include <utility>
 
 namespace sdfcontour {
@@ -77,6 +78,11 @@ Triangulation run(const std::vector<std::pair<Site, int>>& sites, const CGAL::Bb
   for (auto v = tr->finite_vertices_begin(); v != tr->finite_vertices_end(); ++v)
     out.hidden[std::size_t(v->info())] = 0;
   out.hidden_count = int(std::count(out.hidden.begin(), out.hidden.end(), 1));
+  out.on_hull.assign(std::size_t(n), 0);
+  std::vector<typename Tr::Vertex_handle> hull;
+  tr->adjacent_vertices(tr->infinite_vertex(), std::back_inserter(hull));
+  for (auto v : hull)
+    if (!tr->is_infinite(v)) out.on_hull[std::size_t(v->info())] = 1;
 
   std::vector<std::array<int, 4>> tets;
   tets.reserve(tr->number_of_finite_cells());

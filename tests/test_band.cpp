@@ -1,6 +1,7 @@
 #include <cmath>
 
 #include "sdfcontour/band.h"
+#include "sdfcontour/bricks.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/pipeline.h"
 #include "test_support.h"
@@ -28,15 +29,20 @@ TEST(Band, KeepsExactlyTheSamplesWithinTheBand) {
   BandOptions o;
   o.band = 2.5;
   const BandSamples b = select_band(grid, o);
-  long expected = 0;
-  for (Eigen::Index i = 0; i < grid.values.size(); ++i)
-    expected += std::abs(grid.values[i]) <= 2.5 * h;
+  // The band proper (core) and its margin of one spacing.
+  long expected = 0, expected_core = 0;
+  for (Eigen::Index i = 0; i < grid.values.size(); ++i) {
+    expected += std::abs(grid.values[i]) <= 3.5 * h;
+    expected_core += std::abs(grid.values[i]) <= 2.5 * h;
+  }
   ASSERT_EQ(b.samples.values.size(), expected);
+  EXPECT_EQ(std::count(b.core.begin(), b.core.end(), 1), expected_core);
   EXPECT_LT(expected, grid.values.size() / 2);
   EXPECT_FALSE(b.truncation.detected());
   for (Eigen::Index r = 0; r < b.samples.values.size(); ++r) {
     const long p = b.source[std::size_t(r)];
     EXPECT_EQ(b.samples.values[r], grid.values[p]);
+    EXPECT_EQ(bool(b.core[std::size_t(r)]), std::abs(grid.values[p]) <= 2.5 * h);
     const int k = int(p % 20), j = int(p / 20 % 20), i = int(p / 400);
     EXPECT_EQ((b.samples.points.row(r).transpose() - grid.point(i, j, k)).norm(), 0.0);
   }
@@ -76,23 +82,26 @@ TEST(Band, DetectsTruncationOnlyWhereValuesAreClamped) {
 }
 
 // A truncated grid gives the same contact points and mesh as the exact grid restricted to the
-// band the truncation leaves: the clamped samples never reach the triangulation.
+// band the truncation leaves: the clamped samples never reach the triangulation, and the last
+// spacing inside the truncation is the band's margin.
 TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
   const Grid exact = torus_grid(32);
   const double h = exact.spacing().maxCoeff();
   const SdfInput truncated = SdfInput::from_grid(clamped(exact, 2 * h));
   const SdfInput exact_input = SdfInput::from_grid(exact);
-  // No exact value lies between the two cut-offs, so both keep the same samples.
-  for (Eigen::Index i = 0; i < exact.values.size(); ++i)
-    ASSERT_FALSE(std::abs(exact.values[i]) > 1.999 * h &&
-                 std::abs(exact.values[i]) < 2 * h);
+  // No exact value lies between the cut-offs compared, so both keep the same samples.
+  for (Eigen::Index i = 0; i < exact.values.size(); ++i) {
+    const double v = std::abs(exact.values[i]);
+    ASSERT_FALSE(v > 1.999 * h && v < 2 * h);
+    ASSERT_FALSE(v > 0.999 * h && v <= 1.000001 * h);
+  }
   ContourOptions o;
   o.want_points = true;
   o.poisson.depth = 7;
   o.band.band = std::numeric_limits<double>::infinity();  // the truncation alone cuts
   const ContourResult a = contour(truncated, nullptr, o);
   EXPECT_TRUE(a.truncation.detected());
-  o.band.band = 1.999;
+  o.band.band = 0.999;  // + the margin of 1: 1.999
   const ContourResult b = contour(exact_input, nullptr, o);
   EXPECT_FALSE(b.truncation.detected());
   ASSERT_EQ(a.band_samples, b.band_samples);
@@ -132,4 +141,74 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
   EXPECT_LT(mean_error(band), 2 * mean_error(all) + 1e-6 * h);
   // Every contact point names an input sample within the band.
   for (int s : band.contact_points->samples) EXPECT_LE(std::abs(grid.values[s]), 4 * h);
+}
+
+namespace {
+
+// The global computation the bricks must reproduce.
+ContactPoints global_contact_points(const BandSamples& band, const ContactPointOptions& contact) {
+  const Samples& s = band.samples;
+  const Triangulation tri = triangulate(s.points, s.values);
+  const PointMatrix g = vertex_gradients(s.points, s.values, tri, GradientOptions{});
+  return gradient_contact_points(s.points, s.values, g, tri, contact, &band.core);
+}
+
+void expect_same(const ContactPoints& a, const ContactPoints& b) {
+  ASSERT_EQ(a.samples, b.samples);
+  EXPECT_EQ(a.hidden, b.hidden);
+  EXPECT_EQ(a.zero_gradient, b.zero_gradient);
+  EXPECT_EQ(a.discarded, b.discarded);
+  EXPECT_EQ(a.rescued, b.rescued);
+  // Bit for bit: the same stars, summed in the same order.
+  EXPECT_EQ((a.points - b.points).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((a.normals - b.normals).cwiseAbs().maxCoeff(), 0.0);
+}
+
+}  // namespace
+
+// Bricks give exactly the global triangulation's contact points, on a grid's band and on
+// scattered samples, with small bricks and a thin first halo so that retries happen.
+TEST(Bricks, EqualTheGlobalTriangulation) {
+  for (const auto& [name, fn] : {std::pair<std::string, bool>{"torus", false}, {"box", true}}) {
+    SCOPED_TRACE(name);
+    const Grid grid = sample_grid(*make_builtin_shape(name), 32, Bounds{});
+    const BandSamples band = select_band(grid, BandOptions{});
+    ContactPointOptions contact;
+    contact.try_tet_gradients = fn;
+    const ContactPoints global = global_contact_points(band, contact);
+    BrickOptions o;
+    o.size = 12;
+    o.halo = 5;
+    BrickStats stats;
+    const ContactPoints bricks =
+        brick_contact_points(band.samples, band.spacing, {}, contact, o, &stats, {}, &band.core);
+    std::cout << name << ": " << stats.bricks << " bricks, " << stats.retries << " retries, "
+              << stats.triangulated << " samples triangulated for " << band.samples.values.size()
+              << "\n";
+    EXPECT_GT(stats.bricks, 8);
+    EXPECT_GT(stats.retries, 0);
+    expect_same(bricks, global);
+  }
+  // Scattered samples.
+  const auto shape = make_builtin_shape("csg");
+  const Samples random = sample_random(*shape, 4000, Bounds{}, 5);
+  const BandSamples band = select_band(random, BandOptions{});
+  BrickOptions o;
+  o.size = 5;
+  o.halo = 3;
+  BrickStats stats;
+  expect_same(brick_contact_points(band.samples, band.spacing, {}, {}, o, &stats, {}, &band.core),
+              global_contact_points(band, {}));
+  EXPECT_GT(stats.bricks, 8);
+}
+
+TEST(Bricks, RejectBadOptions) {
+  const Grid grid = sample_grid(*make_builtin_shape("sphere"), 12, Bounds{});
+  const BandSamples band = select_band(grid, BandOptions{});
+  BrickOptions o;
+  o.size = 0;
+  EXPECT_THROW(brick_contact_points(band.samples, band.spacing, {}, {}, o), Error);
+  o.size = 8;
+  o.halo = 0;
+  EXPECT_THROW(brick_contact_points(band.samples, band.spacing, {}, {}, o), Error);
 }

@@ -177,7 +177,8 @@ struct PoissonArgs {
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
                                      weights = "james", band = "4", truncation = "auto";
-  int knn = 18, threads = 0;
+  int knn = 18, threads = 0, brick_size = BrickOptions{}.size;
+  double brick_halo = BrickOptions{}.halo;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, quiet = false, ascii = false, serial_triangulation = false;
@@ -223,6 +224,9 @@ int run_contour(const ContourArgs& a) {
   opt.parallel = !a.serial_triangulation;
   opt.poisson = a.poisson.resolved();
   opt.band = parse_band_options(a.band, a.truncation);
+  if (a.brick_size < 0) throw Error("--brick-size must be at least 1 (or 0 for no bricks)");
+  opt.bricks.size = a.brick_size;
+  opt.bricks.halo = a.brick_halo;
   opt.progress = say;
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -262,6 +266,12 @@ int run_contour(const ContourArgs& a) {
       band["truncation_outside"] = r.truncation.outside;
     j["band"] = band;
   }
+  if (r.bricks)
+    j["bricks"] = {{"size", a.brick_size},
+                   {"count", r.bricks->bricks},
+                   {"retries", r.bricks->retries},
+                   {"samples_triangulated", r.bricks->triangulated},
+                   {"largest_brick_samples", r.bricks->largest_brick}};
   if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
   if (r.mesh) {
     j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
@@ -566,6 +576,17 @@ int main(int argc, char** argv) {
                    "Values clamped at +-T carry no distance and are left out: T, 'none', or "
                    "'auto' (a sign is truncated at its largest |value| when >= 64 samples, and "
                    ">= 1% of that sign's samples, sit there)")
+      ->capture_default_str();
+  contour
+      ->add_option("--brick-size", a.brick_size,
+                   "GCP triangulates the band in bricks of this many spacings, each with a halo, "
+                   "in parallel; memory follows a brick, the result equals one global "
+                   "triangulation's; 0 triangulates the whole band at once (so does --band all)")
+      ->capture_default_str();
+  contour
+      ->add_option("--brick-halo", a.brick_halo,
+                   "First halo around a brick, in spacings (doubled where it does not suffice); "
+                   "0: twice the largest |value| in the band and its margin")
       ->capture_default_str();
   contour->add_flag(
       "--fn", a.fn,

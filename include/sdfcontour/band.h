@@ -21,6 +21,10 @@ enum class TruncationMode {
 struct BandOptions {
   /// Keep samples with |value| <= band * spacing. Infinity keeps every sample (the paper's).
   double band = 4.0;
+  /// Samples up to `margin` spacings beyond the band (or inside a truncation distance) are
+  /// triangulated too but give no contact point: they close the band's samples' stars, which
+  /// would otherwise reach across the empty space beyond the band (and not be local).
+  double margin = 1.0;
   TruncationMode truncation_mode = TruncationMode::Auto;
   /// With TruncationMode::Given: values with |value| >= truncation (to 1e-6 relative) are
   /// truncated and carry no distance.
@@ -55,13 +59,15 @@ Truncation resolve_truncation(const GridView& grid, const BandOptions& options);
 struct BandSamples {
   Samples samples;           ///< the kept samples (positions and values)
   std::vector<long> source;  ///< for each kept sample, its index in the input (C order for grids)
+  std::vector<char> core;    ///< for each kept sample, 1 if in the band proper (not the margin)
   double spacing = 0;        ///< the spacing h the band is measured in
   Truncation truncation;
   long input_count = 0;  ///< samples before the band
 };
 
-/// The grid's samples with |value| <= band * h (h the largest grid spacing) that are not
-/// truncated, in C order. Never builds the full grid's positions.
+/// The grid's samples with |value| <= (band + margin) * h (h the largest grid spacing) that are
+/// not truncated, in C order; core flags those with |value| <= band * h and a margin inside the
+/// truncation distance. Never builds the full grid's positions.
 BandSamples select_band(const GridView& grid, const BandOptions& options);
 BandSamples select_band(const Grid& grid, const BandOptions& options);
 
@@ -69,8 +75,8 @@ BandSamples select_band(const Grid& grid, const BandOptions& options);
 /// (the bounding box's volume / n, cube root).
 BandSamples select_band(const Samples& samples, const BandOptions& options);
 
-/// Throws Error unless `band` is positive (infinity allowed) and a given truncation is positive
-/// and finite.
+/// Throws Error unless `band` is positive (infinity allowed), `margin` non-negative and finite,
+/// and a given truncation positive and finite.
 void validate_band_options(const BandOptions& options);
 
 }  // namespace sdfcontour

@@ -43,14 +43,18 @@ bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& v
                              double tie_tolerance);
 
 /// GCP contact points from per-sample `gradients` (n x 3), filtered on `triangulation` (the
-/// regular triangulation for the exact test).
+/// regular triangulation for the exact test). With `only` (n flags), just the flagged samples
+/// are considered and counted.
 ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::VectorXd& values,
                                       const PointMatrix& gradients,
                                       const Triangulation& triangulation,
-                                      const ContactPointOptions& options = {});
+                                      const ContactPointOptions& options = {},
+                                      const std::vector<char>* only = nullptr);
 
 /// Ground-truth contact points (GTCP): the exact closest surface point of every sample, with the
 /// exact gradient as normal. No filter: they all lie on the surface.
-ContactPoints exact_contact_points(const PointMatrix& points, const AnalyticShape& shape);
+/// With `only` (n flags), just the flagged samples.
+ContactPoints exact_contact_points(const PointMatrix& points, const AnalyticShape& shape,
+                                   const std::vector<char>* only = nullptr);
 
 }  // namespace sdfcontour

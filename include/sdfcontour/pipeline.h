@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sdfcontour/band.h"
+#include "sdfcontour/bricks.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/gradients.h"
@@ -34,10 +35,14 @@ struct ContourOptions {
   ContactPointOptions contact;
   /// The samples the triangulation methods use (every method but mc).
   BandOptions band;
+  /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
+  BrickOptions bricks;
   PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes
   bool parallel = true;    ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
+  /// Called as a long stage advances: (stage, done, total). Empty for silence.
+  std::function<void(const std::string&, long, long)> progress_fraction;
 };
 
 struct StageTime {
@@ -52,6 +57,7 @@ struct ContourResult {
   int band_samples = 0;  ///< of those, in the band (triangulated); 0 for mc alone
   double band_spacing = 0;  ///< the spacing h the band is measured in
   Truncation truncation;    ///< the truncation found or given
+  std::optional<BrickStats> bricks;  ///< when GCP ran in bricks
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes

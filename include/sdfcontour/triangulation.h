@@ -29,6 +29,7 @@ struct Triangulation {
   std::vector<char> hidden;            ///< n flags: 1 if sample i is not a vertex (hidden by
                                        ///< larger spheres, or a duplicate position)
   int hidden_count = 0;
+  std::vector<char> on_hull;  ///< n flags: 1 if sample i is a vertex of the convex hull
 
   int sample_count() const { return int(hidden.size()); }
 };

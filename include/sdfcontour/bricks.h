@@ -1,0 +1,52 @@
+// GCP contact points brick by brick: memory bounded by a brick, not by the whole band.
+//
+// Space is cut into cubic bricks; each brick triangulates its own samples plus those in a halo
+// around it, and keeps the contact points of its own samples only. A brick's triangulation can
+// differ from the global one only where a tetrahedron's orthosphere (its empty power sphere)
+// reaches out of the halo's box: a sample outside could then lie in it. So a brick certifies
+// each of its samples: every incident tetrahedron's orthosphere, grown by the largest weight of
+// any sample, must stay inside the box, and the sample must not be on the box's convex hull.
+// A brick with an uncertified sample is redone with twice the halo. Certified samples have
+// exactly the global star, hence the same neighbours, gradients (sums in the same order, since
+// samples keep their global order) and kept contact points: the result equals the global one.
+#pragma once
+
+#include <functional>
+
+#include "sdfcontour/contact_points.h"
+#include "sdfcontour/gradients.h"
+#include "sdfcontour/samples.h"
+
+namespace sdfcontour {
+
+struct BrickOptions {
+  int size = 64;  ///< brick side in spacings; 0: one triangulation of every sample
+  /// First halo width in spacings (doubled where a star is not certified); 0: twice the largest
+  /// |value| kept (the band and its margin), from measurement: orthocentres of band-edge tets
+  /// lie up to about that far out, and their spheres reach as far again.
+  double halo = 0;
+};
+
+/// What the bricks did.
+struct BrickStats {
+  int bricks = 0;            ///< bricks holding samples
+  int retries = 0;           ///< bricks redone with a wider halo
+  long triangulated = 0;     ///< samples triangulated over all bricks (halos counted again)
+  long largest_brick = 0;    ///< samples in the largest triangulation
+};
+
+/// GCP contact points of `samples` (positions n x 3, values n), computed brick by brick with the
+/// regular triangulation, `gradient` and `contact` options: equal to
+/// gradient_contact_points(points, values, vertex_gradients(points, values, regular), regular)
+/// of the global regular triangulation. `spacing` is the unit of `options` (the grid spacing).
+/// Bricks run in parallel (TBB). `progress(done, total)` is called as bricks finish (from any
+/// thread, serialised). With `only` (n flags), just the flagged samples give contact points, and
+/// only they need a certified star. Throws Error for bad options.
+ContactPoints brick_contact_points(const Samples& samples, double spacing,
+                                   const GradientOptions& gradient,
+                                   const ContactPointOptions& contact, const BrickOptions& options,
+                                   BrickStats* stats = nullptr,
+                                   const std::function<void(int, int)>& progress = {},
+                                   const std::vector<char>* only = nullptr);
+
+}  // namespace sdfcontour

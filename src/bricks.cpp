@@ -1,0 +1,314 @@
+#include "sdfcontour/bricks.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <string>
+
+#include "sdfcontour/triangulation.h"
+
+namespace sdfcontour {
+
+namespace {
+
+using Eigen::Vector3d;
+
+struct Box {
+  Vector3d min, max;
+  bool contains(const Vector3d& p) const {
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+  bool contains(const Box& b) const { return contains(b.min) && contains(b.max); }
+  // Distance from p (inside) to the box's outside; 0 outside.
+  double depth(const Vector3d& p) const {
+    if (!contains(p)) return 0;
+    return std::min((p - min).minCoeff(), (max - p).minCoeff());
+  }
+};
+
+// Samples bucketed by brick, each bucket in ascending sample order.
+struct BrickGrid {
+  Vector3d origin;
+  double side = 0;
+  std::array<int, 3> dims{1, 1, 1};
+  std::vector<long> offsets;  // dims product + 1
+  std::vector<int> members;
+
+  int count() const { return dims[0] * dims[1] * dims[2]; }
+  int id(int i, int j, int k) const { return (i * dims[1] + j) * dims[2] + k; }
+  std::array<int, 3> cell_of(const Vector3d& p) const {
+    std::array<int, 3> c;
+    for (int a = 0; a < 3; ++a)
+      c[std::size_t(a)] = std::clamp(int(std::floor((p[a] - origin[a]) / side)), 0, dims[a] - 1);
+    return c;
+  }
+  Box box(int b) const {
+    const int k = b % dims[2], j = b / dims[2] % dims[1], i = b / (dims[1] * dims[2]);
+    const Vector3d lo = origin + side * Vector3d(i, j, k);
+    return {lo, lo + Vector3d::Constant(side)};
+  }
+};
+
+BrickGrid bucket(const PointMatrix& points, double side) {
+  BrickGrid g;
+  g.origin = points.colwise().minCoeff().transpose();
+  const Vector3d extent = points.colwise().maxCoeff().transpose() - g.origin;
+  g.side = side;
+  for (int a = 0; a < 3; ++a)
+    g.dims[std::size_t(a)] = std::max(1, int(std::ceil(extent[a] / side + 1e-9)));
+  const Eigen::Index n = points.rows();
+  std::vector<int> brick_of(static_cast<std::size_t>(n));
+  g.offsets.assign(std::size_t(g.count()) + 1, 0);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto c = g.cell_of(points.row(i).transpose());
+    brick_of[std::size_t(i)] = g.id(c[0], c[1], c[2]);
+    ++g.offsets[std::size_t(brick_of[std::size_t(i)]) + 1];
+  }
+  for (int b = 0; b < g.count(); ++b) g.offsets[std::size_t(b) + 1] += g.offsets[std::size_t(b)];
+  g.members.resize(std::size_t(n));
+  std::vector<long> fill(g.offsets.begin(), g.offsets.end() - 1);
+  for (Eigen::Index i = 0; i < n; ++i)
+    g.members[std::size_t(fill[std::size_t(brick_of[std::size_t(i)])]++)] = int(i);
+  return g;
+}
+
+// The samples inside `box`, ascending.
+std::vector<int> gather(const BrickGrid& g, const PointMatrix& points, const Box& box) {
+  const auto lo = g.cell_of(box.min), hi = g.cell_of(box.max);
+  std::vector<int> out;
+  for (int i = lo[0]; i <= hi[0]; ++i)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int k = lo[2]; k <= hi[2]; ++k) {
+        const int b = g.id(i, j, k);
+        for (long m = g.offsets[std::size_t(b)]; m < g.offsets[std::size_t(b) + 1]; ++m) {
+          const int s = g.members[std::size_t(m)];
+          if (box.contains(Vector3d(points.row(s).transpose()))) out.push_back(s);
+        }
+      }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// True if the tet's orthosphere, grown by `max_weight`, stays `margin` inside `box`: then no
+// sample outside the box can have a negative power product with it. Otherwise `need` grows to
+// hold the grown sphere (or, for a flat tet, by nothing: the caller widens the box then).
+bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
+                        const Box& box, double max_weight, double margin, Box& need) {
+  auto w = [&](int i) { return values[i] * values[i]; };
+  const Vector3d p0 = p.row(v[0]).transpose();
+  Eigen::Matrix3d a;
+  Vector3d b;
+  for (int r = 0; r < 3; ++r) {
+    const Vector3d d = p.row(v[r + 1]).transpose() - p0;
+    a.row(r) = 2 * d.transpose();
+    b[r] = d.squaredNorm() - w(v[r + 1]) + w(v[0]);
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(a);
+  if (!lu.isInvertible()) return false;
+  const Vector3d x = lu.solve(b);
+  // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
+  const double reach2 = x.squaredNorm() - w(v[0]) + max_weight;
+  if (!std::isfinite(reach2)) return false;
+  if (reach2 <= -margin * margin) return true;  // an imaginary sphere: no sample can violate it
+  const double reach = std::sqrt(std::max(reach2, 0.0)) + margin;
+  const Vector3d c = p0 + x;
+  if (box.depth(c) > reach) return true;
+  need.min = need.min.cwiseMin(c - Vector3d::Constant(2 * reach));
+  need.max = need.max.cwiseMax(c + Vector3d::Constant(2 * reach));
+  return false;
+}
+
+struct BrickOutput {
+  std::vector<int> samples;  // global indices of kept points
+  PointMatrix points, normals;
+  int hidden = 0, zero_gradient = 0, discarded = 0, rescued = 0;
+  long triangulated = 0, largest = 0;
+  int retries = 0;
+};
+
+class BrickRunner {
+ public:
+  BrickRunner(const Samples& s, double h, const GradientOptions& g, const ContactPointOptions& c,
+              const BrickOptions& o, const std::vector<char>* only)
+      : s_(s), h_(h), gradient_(g), contact_(c), options_(o), only_(only),
+        grid_(bucket(s.points, o.size * h)) {
+    max_weight_ = s.values.array().square().maxCoeff();
+    all_ = {s.points.colwise().minCoeff().transpose(), s.points.colwise().maxCoeff().transpose()};
+    margin_ = 1e-9 * (all_.max - all_.min).maxCoeff();
+  }
+  const BrickGrid& grid() const { return grid_; }
+
+  BrickOutput run(int brick) const {
+    BrickOutput out;
+    std::vector<int> targets;
+    const BrickGrid& g = grid_;
+    for (long m = g.offsets[std::size_t(brick)]; m < g.offsets[std::size_t(brick) + 1]; ++m) {
+      const int s = g.members[std::size_t(m)];
+      if (!only_ || (*only_)[std::size_t(s)]) targets.push_back(s);
+    }
+    const Box own = grid_.box(brick);
+    const Vector3d halo = Vector3d::Constant(options_.halo * h_);
+    solve({own.min - halo, own.max + halo}, targets, out);
+    return out;
+  }
+
+ private:
+  // Contact points of `targets` (ascending sample indices inside `box`) from the triangulation
+  // of the samples in `box`. Targets whose stars it cannot certify are solved again in a box
+  // grown to hold the orthospheres that failed (or, if that is no growth, twice as wide).
+  void solve(const Box& box, const std::vector<int>& targets, BrickOutput& out) const {
+    if (targets.empty()) return;
+    const bool everything = box.contains(all_);
+    const std::vector<int> local = gather(grid_, s_.points, box);
+    Samples ls;
+    Triangulation tri;
+    Box need = box;
+    std::vector<int> failed;
+    std::vector<char> keep(local.size(), 0);
+    if (triangulate_local(local, everything, ls, tri)) {
+      out.triangulated += long(local.size());
+      out.largest = std::max(out.largest, long(local.size()));
+      for (std::size_t r = 0, t = 0; r < local.size() && t < targets.size(); ++r) {
+        if (local[r] != targets[t]) continue;
+        ++t;
+        if (everything || tri.hidden[r] || certified(ls, tri, r, box, need))
+          keep[r] = 1;
+        else
+          failed.push_back(local[r]);
+      }
+      const PointMatrix g = vertex_gradients(ls.points, ls.values, tri, gradient_);
+      collect(gradient_contact_points(ls.points, ls.values, g, tri, contact_, &keep), local, out);
+    } else {
+      failed = targets;
+    }
+    if (failed.empty()) return;
+    ++out.retries;
+    const Vector3d grow = (box.max - box.min) / 2;
+    if ((need.min.array() >= box.min.array()).all() && (need.max.array() <= box.max.array()).all())
+      need = {box.min - grow, box.max + grow};
+    solve(need, failed, out);
+  }
+
+  // The local samples' triangulation; false if there is none yet (too few or flat samples).
+  bool triangulate_local(const std::vector<int>& local, bool everything, Samples& ls,
+                         Triangulation& tri) const {
+    if (local.size() < 4 && !everything) return false;
+    ls.points.resize(Eigen::Index(local.size()), 3);
+    ls.values.resize(Eigen::Index(local.size()));
+    for (std::size_t r = 0; r < local.size(); ++r) {
+      ls.points.row(Eigen::Index(r)) = s_.points.row(local[r]);
+      ls.values[Eigen::Index(r)] = s_.values[local[r]];
+    }
+    TriangulationOptions topt;
+    topt.parallel = false;  // bricks are the parallel unit
+    try {
+      tri = triangulate(ls.points, ls.values, topt);
+    } catch (const Error&) {
+      if (everything) throw;
+      return false;
+    }
+    return true;
+  }
+
+  // Local row r's star is the global one: not on the hull, every orthosphere inside `box`.
+  // Failing orthospheres grow `need`.
+  bool certified(const Samples& ls, const Triangulation& tri, std::size_t r, const Box& box,
+                 Box& need) const {
+    if (tri.on_hull[r]) return false;
+    bool ok = true;
+    for (int o = tri.incident_offsets[r]; o < tri.incident_offsets[r + 1]; ++o)
+      ok &= orthosphere_inside(ls.points, ls.values,
+                               tri.tets.row(tri.incident_tets[std::size_t(o)]).data(), box,
+                               max_weight_, margin_, need);
+    return ok;
+  }
+
+  // Appends the kept points, in global indices, and their counts.
+  static void collect(const ContactPoints& cp, const std::vector<int>& local, BrickOutput& out) {
+    const Eigen::Index at = out.points.rows(), k = cp.points.rows();
+    out.points.conservativeResize(at + k, 3);
+    out.normals.conservativeResize(at + k, 3);
+    out.points.bottomRows(k) = cp.points;
+    out.normals.bottomRows(k) = cp.normals;
+    for (int s : cp.samples) out.samples.push_back(local[std::size_t(s)]);
+    out.hidden += cp.hidden;
+    out.zero_gradient += cp.zero_gradient;
+    out.discarded += cp.discarded;
+    out.rescued += cp.rescued;
+  }
+
+  const Samples& s_;
+  double h_;
+  const GradientOptions& gradient_;
+  const ContactPointOptions& contact_;
+  const BrickOptions& options_;
+  const std::vector<char>* only_;
+  BrickGrid grid_;
+  double max_weight_ = 0, margin_ = 0;
+  Box all_;
+};
+
+}  // namespace
+
+ContactPoints brick_contact_points(const Samples& samples, double spacing,
+                                   const GradientOptions& gradient,
+                                   const ContactPointOptions& contact, const BrickOptions& options,
+                                   BrickStats* stats,
+                                   const std::function<void(int, int)>& progress,
+                                   const std::vector<char>* only) {
+  if (options.size < 1)
+    throw Error("the brick size must be at least 1 spacing, got " + std::to_string(options.size));
+  if (!(options.halo > 0) || !std::isfinite(options.halo))
+    throw Error("the brick halo must be a positive number of spacings (resolve 0 first)");
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
+  const BrickRunner runner(samples, spacing, gradient, contact, options, only);
+  const BrickGrid& grid = runner.grid();
+  std::vector<int> active;
+  for (int b = 0; b < grid.count(); ++b)
+    if (grid.offsets[std::size_t(b) + 1] > grid.offsets[std::size_t(b)]) active.push_back(b);
+  std::vector<BrickOutput> outputs(active.size());
+  std::mutex progress_mutex;
+  int done = 0;
+  tbb::parallel_for(std::size_t(0), active.size(), std::size_t(1), [&](std::size_t a) {
+    outputs[a] = runner.run(active[a]);
+    if (progress) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(++done, int(active.size()));
+    }
+  });
+
+  // Merge in ascending sample order: the global function's order.
+  ContactPoints result;
+  std::vector<std::pair<int, std::pair<std::size_t, Eigen::Index>>> order;
+  BrickStats st;
+  st.bricks = int(active.size());
+  for (std::size_t a = 0; a < outputs.size(); ++a) {
+    const BrickOutput& o = outputs[a];
+    for (std::size_t r = 0; r < o.samples.size(); ++r)
+      order.push_back({o.samples[r], {a, Eigen::Index(r)}});
+    result.hidden += o.hidden;
+    result.zero_gradient += o.zero_gradient;
+    result.discarded += o.discarded;
+    result.rescued += o.rescued;
+    st.retries += o.retries;
+    st.triangulated += o.triangulated;
+    st.largest_brick = std::max(st.largest_brick, o.largest);
+  }
+  std::sort(order.begin(), order.end());
+  result.points.resize(Eigen::Index(order.size()), 3);
+  result.normals.resize(Eigen::Index(order.size()), 3);
+  result.samples.resize(order.size());
+  for (std::size_t r = 0; r < order.size(); ++r) {
+    const auto& [a, row] = order[r].second;
+    result.samples[r] = order[r].first;
+    result.points.row(Eigen::Index(r)) = outputs[a].points.row(row);
+    result.normals.row(Eigen::Index(r)) = outputs[a].normals.row(row);
+  }
+  if (stats) *stats = st;
+  return result;
+}
+
+}  // namespace sdfcontour
