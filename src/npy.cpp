@@ -241,13 +241,16 @@ NpyArray read_npy(const std::string& path) {
   return array;
 }
 
-void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
-               const std::vector<double>& data) {
+namespace {
+
+void write_npy_bytes(const std::string& path, const std::vector<std::size_t>& shape,
+                     const char* descr, const char* data, std::size_t bytes) {
   std::string shape_text = "(";
   for (std::size_t i = 0; i < shape.size(); ++i)
     shape_text += (i ? ", " : "") + std::to_string(shape[i]);
   shape_text += shape.size() == 1 ? ",)" : ")";
-  std::string header = "{'descr': '<f8', 'fortran_order': False, 'shape': " + shape_text + ", }";
+  std::string header = std::string("{'descr': '") + descr +
+                       "', 'fortran_order': False, 'shape': " + shape_text + ", }";
   // Pad so that the data starts at a multiple of 64 bytes, ending the header with '\n'.
   const std::size_t total = 10 + header.size() + 1;
   header.append((64 - total % 64) % 64, ' ');
@@ -259,9 +262,22 @@ void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
   const char len_bytes[2] = {char(len & 0xff), char(len >> 8)};
   out.write(len_bytes, 2);
   out.write(header.data(), std::streamsize(header.size()));
-  out.write(reinterpret_cast<const char*>(data.data()),
-            std::streamsize(data.size() * sizeof(double)));
+  out.write(data, std::streamsize(bytes));
   file.commit();
+}
+
+}  // namespace
+
+void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
+               const std::vector<double>& data) {
+  write_npy_bytes(path, shape, "<f8", reinterpret_cast<const char*>(data.data()),
+                  data.size() * sizeof(double));
+}
+
+void write_npy_float32(const std::string& path, const std::vector<std::size_t>& shape,
+                       const std::vector<float>& data) {
+  write_npy_bytes(path, shape, "<f4", reinterpret_cast<const char*>(data.data()),
+                  data.size() * sizeof(float));
 }
 
 SdfInput SdfInput::from_grid(Grid grid) {

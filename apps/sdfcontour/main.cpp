@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "sdfcontour/atomic_file.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_points.h"
@@ -89,6 +91,36 @@ BandOptions parse_band_options(const std::string& band, const std::string& trunc
   if (t > 0) b.truncation = t;
   return b;
 }
+
+// A progress bar on stderr for long stages: "[sdfcontour] bricks [=====     ] 12/24, ETA 8 s".
+// On a terminal it redraws one line; otherwise it prints a line per tenth.
+class ProgressBar {
+ public:
+  void operator()(const std::string& stage, long done, long total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (stage != stage_) stage_ = stage, start_ = now, last_tenth_ = -1;
+    const double fraction = total > 0 ? double(done) / double(total) : 1.0;
+    const int tenth = int(fraction * 10);
+    if (!tty_ && tenth == last_tenth_ && done != total) return;
+    last_tenth_ = tenth;
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const int width = 24, filled = int(fraction * width);
+    std::ostringstream line;
+    line << "[sdfcontour] " << stage << " [" << std::string(std::size_t(filled), '=')
+         << std::string(std::size_t(width - filled), ' ') << "] " << done << "/" << total;
+    if (done > 0 && done < total)
+      line << ", ETA " << std::fixed << std::setprecision(0) << elapsed * (1 - fraction) / fraction
+           << " s";
+    std::cerr << (tty_ ? "\r" : "") << line.str() << (tty_ && done < total ? "" : "\n")
+              << std::flush;
+  }
+
+ private:
+  bool tty_ = ::isatty(2);
+  std::string stage_;
+  std::chrono::steady_clock::time_point start_;
+  int last_tenth_ = -1;
+};
 
 struct LoadedInput {
   SdfInput input;
@@ -228,6 +260,7 @@ int run_contour(const ContourArgs& a) {
   opt.bricks.size = a.brick_size;
   opt.bricks.halo = a.brick_halo;
   opt.progress = say;
+  if (!a.quiet) opt.progress_fraction = ProgressBar();
 
   const auto t0 = std::chrono::steady_clock::now();
   say("reading " + a.input);
@@ -406,8 +439,8 @@ struct SampleArgs {
   int resolution = 0;
   std::size_t random = 0;
   std::uint64_t seed = 0;
-  double scale = 0.9;
-  bool quiet = false;
+  double scale = 0.9, truncate = 0;
+  bool quiet = false, float32 = false;
 };
 
 // mesh -> normalised mesh, SDF samples (grid or random) and their exact contact points.
@@ -424,13 +457,29 @@ int run_sample(const SampleArgs& a) {
   const Mesh mesh = normalize_mesh(read_mesh(a.mesh), a.scale);
   const MeshSdf sdf(mesh);
   Samples samples;
+  if (!(a.truncate >= 0) || !std::isfinite(a.truncate))
+    throw Error("--truncate must be a non-negative number of spacings");
+  if (a.truncate > 0 && a.resolution == 0) throw Error("--truncate needs a grid (--res N)");
   if (a.resolution > 0) {
     say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
-    const Grid grid = sample_grid(sdf, a.resolution, bounds);
+    const double h = (bounds.max - bounds.min).maxCoeff() / (a.resolution - 1);
+    const Grid grid = a.truncate > 0
+                          ? sample_grid_truncated(sdf, a.resolution, bounds, a.truncate * h)
+                          : sample_grid(sdf, a.resolution, bounds);
     const std::size_t n = std::size_t(a.resolution);
-    write_npy(a.prefix + ".npy", {n, n, n},
-              std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
-    samples = grid.to_samples();
+    if (a.float32)
+      write_npy_float32(a.prefix + ".npy", {n, n, n},
+                std::vector<float>(grid.values.data(), grid.values.data() + grid.values.size()));
+    else
+      write_npy(a.prefix + ".npy", {n, n, n},
+                std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
+    // A truncated grid's exact contact points: those of the samples inside the truncation.
+    BandOptions all;
+    all.band = std::numeric_limits<double>::infinity();
+    all.margin = 0;
+    all.truncation_mode = a.truncate > 0 ? TruncationMode::Given : TruncationMode::None;
+    all.truncation = a.truncate * h;
+    samples = select_band(grid, all).samples;
   } else {
     say("signed distances at " + std::to_string(a.random) + " random points");
     samples = sample_random(sdf, a.random, bounds, a.seed);
@@ -632,6 +681,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sample->add_option("--bounds", sa.bounds, "Sampled box: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")
       ->capture_default_str();
+  sample->add_option("--truncate", sa.truncate,
+                     "Truncate the grid's distances at this many spacings (a TSDF, as OpenVDB "
+                     "stores level sets); only blocks near the surface are evaluated, so large "
+                     "grids sample fast. 0: exact everywhere")
+      ->capture_default_str();
+  sample->add_flag("--float32", sa.float32, "Write the grid as float32 (default float64)");
   sample->add_flag("-q,--quiet", sa.quiet, "No progress messages on stderr");
 
   EvalArgs ea;

@@ -52,6 +52,14 @@ BuiltinSpec parse_builtin_spec(const std::string& text);
 
 /// Samples `shape` on an n^3 grid spanning `bounds` (samples at both ends).
 Grid sample_grid(const AnalyticShape& shape, int n, const Bounds& bounds);
+/// A truncated SDF of `shape` on an n^3 grid: the distance where |distance| < truncation, and
+/// +-truncation elsewhere, as TSDF fusion and OpenVDB store it. The distance is 1-Lipschitz, so
+/// an 8^3 block whose centre is farther than truncation + its half-diagonal from the surface is
+/// filled without evaluating its samples: the cost follows the surface, not n^3. `evaluations`
+/// (optional) receives the number of distance evaluations.
+Grid sample_grid_truncated(const AnalyticShape& shape, int n, const Bounds& bounds,
+                           double truncation, std::size_t* evaluations = nullptr);
+
 /// Samples `shape` at `count` points uniformly distributed in `bounds`; deterministic in `seed`.
 Samples sample_random(const AnalyticShape& shape, std::size_t count, const Bounds& bounds,
                       std::uint64_t seed);
