@@ -95,6 +95,37 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("unwritable output", ["contour", p("good.npy"), "-o", p("no/such/dir/out.ply"), "--method", "mc"],
                  "cannot write")
 
+    # The band, truncation and bricks: bad values, and a band without a surface.
+    for opt, value, needle in [("--band", "0", "--band"), ("--band", "wide", "--band"), ("--band", "nan", "--band"),
+                               ("--truncation", "-1", "--truncation"), ("--truncation", "maybe", "--truncation"),
+                               ("--brick-size", "-1", "--brick-size"), ("--brick-halo", "-2", "halo"),
+                               ("--brick-halo", "inf", "halo")]:
+        expect_error(f"{opt} {value}", ["contour", "builtin:torus@24", "-o", out, "--points", p("bp.ply"), opt, value],
+                     needle, [out, p("bp.ply")])
+    expect_error("band without samples", ["contour", "builtin:torus@24", "-o", out, "--band", "1e-6", "--margin", "0"],
+                 "band", [out])
+
+    # A truncated grid (values clamped at 3h, as a TSDF stores them) is detected, and gives the same
+    # contact points as the exact grid cut to the band it leaves; bricks give the same bytes as one
+    # triangulation.
+    x = np.linspace(-1, 1, 39)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    torus = np.sqrt((np.sqrt(X**2 + Y**2) - 0.55) ** 2 + Z**2) - 0.25
+    h = 2 / 38
+    np.save(p("torus.npy"), torus)
+    np.save(p("torus_tsdf.npy"), np.clip(torus, -3 * h, 3 * h))
+    r = run("contour", p("torus_tsdf.npy"), "--points", p("tsdf_cp.ply"), "--band", "all", "--stats", p("t.json"), "-q")
+    check("tsdf runs", r.returncode == 0, r.stderr)
+    check("tsdf detected", json.load(open(p("t.json")))["band"]["truncation_detected"], open(p("t.json")).read())
+    assert not np.any((np.abs(torus) > 2.999 * h) & (np.abs(torus) < 3 * h))
+    assert not np.any((np.abs(torus) > 1.999 * h) & (np.abs(torus) <= 2 * h))
+    r = run("contour", p("torus.npy"), "--points", p("exact_cp.ply"), "--band", "1.999", "-q")
+    check("tsdf = exact in band", open(p("tsdf_cp.ply"), "rb").read() == open(p("exact_cp.ply"), "rb").read())
+    for size in ("0", "8"):
+        r = run("contour", p("torus.npy"), "--points", p(f"brick{size}.ply"), "--brick-size", size, "-q")
+        check(f"brick size {size} runs", r.returncode == 0, r.stderr)
+    check("bricks = one triangulation", open(p("brick0.ply"), "rb").read() == open(p("brick8.ply"), "rb").read())
+
     # Good input: same bytes with 1 and 2 threads, for every mesh method and the contact points.
     for method, source in [("mc", "builtin:csg@32"), ("mt-rt", "builtin:torus@28"), ("mt-dt", "builtin:box@random:20000")]:
         outputs = []

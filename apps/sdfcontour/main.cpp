@@ -210,7 +210,7 @@ struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
                                      weights = "james", band = "4", truncation = "auto";
   int knn = 18, threads = 0, brick_size = BrickOptions{}.size;
-  double brick_halo = BrickOptions{}.halo;
+  double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, quiet = false, ascii = false, serial_triangulation = false;
@@ -258,7 +258,10 @@ int run_contour(const ContourArgs& a) {
   opt.band = parse_band_options(a.band, a.truncation);
   if (a.brick_size < 0) throw Error("--brick-size must be at least 1 (or 0 for no bricks)");
   opt.bricks.size = a.brick_size;
+  if (!(a.brick_halo >= 0) || !std::isfinite(a.brick_halo))
+    throw Error("--brick-halo must be a non-negative number of spacings (0: automatic)");
   opt.bricks.halo = a.brick_halo;
+  opt.band.margin = a.margin;
   opt.progress = say;
   if (!a.quiet) opt.progress_fraction = ProgressBar();
 
@@ -619,6 +622,11 @@ int main(int argc, char** argv) {
                    "Triangulation methods (all but mc) use only samples with |value| <= BAND "
                    "grid spacings (scattered samples: the side of a cube holding one sample); "
                    "'all' keeps every sample, as in the paper")
+      ->capture_default_str();
+  contour
+      ->add_option("--margin", a.margin,
+                   "Samples up to this many spacings beyond the band are triangulated but give "
+                   "no contact point: they close the band's stars")
       ->capture_default_str();
   contour
       ->add_option("--truncation", a.truncation,
