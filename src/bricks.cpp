@@ -107,7 +107,7 @@ bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, con
     b[r] = d.squaredNorm() - w(v[r + 1]) + w(v[0]);
   }
   const Eigen::FullPivLU<Eigen::Matrix3d> lu(a);
-  if (!lu.isInvertible()) return false;
+  if (!lu.isInvertible()) return false;  // flat: not certifiable
   const Vector3d x = lu.solve(b);
   // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
   const double reach2 = x.squaredNorm() - w(v[0]) + max_weight;
@@ -179,7 +179,7 @@ class BrickRunner {
         else
           failed.push_back(local[r]);
       }
-      const PointMatrix g = vertex_gradients(ls.points, ls.values, tri, gradient_);
+      const PointMatrix g = vertex_gradients(ls.points, ls.values, tri, gradient_, &keep);
       collect(gradient_contact_points(ls.points, ls.values, g, tri, contact_, &keep), local, out);
     } else {
       failed = targets;

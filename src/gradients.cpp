@@ -82,12 +82,14 @@ Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centr
 }
 
 PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
-                             const Triangulation& tri, const GradientOptions& options) {
+                             const Triangulation& tri, const GradientOptions& options,
+                             const std::vector<char>* only) {
   std::vector<char> degenerate;
   const PointMatrix tet_g = tet_gradients(points, values, tri.tets, &degenerate);
   const Eigen::Index n = points.rows();
   PointMatrix g = PointMatrix::Zero(n, 3);
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
+    if (only && !(*only)[std::size_t(i)]) return;
     std::vector<int> ts;
     for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
          ++o)

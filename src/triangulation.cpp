@@ -5,6 +5,8 @@
 #include <CGAL/Regular_triangulation_3.h>
 #include <CGAL/Spatial_lock_grid_3.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -115,11 +117,10 @@ void build_adjacency(Triangulation& tri, int n) {
       for (int k = 0; k < 4; ++k)
         tri.incident_tets[std::size_t(fill[std::size_t(tri.tets(t, k))]++)] = int(t);
   }
-  // Neighbours: the other vertices of the incident tets, deduplicated.
-  std::vector<std::vector<int>> lists(static_cast<std::size_t>(n));
-  tri.neighbour_offsets.assign(std::size_t(n) + 1, 0);
-  for (int i = 0; i < n; ++i) {
-    auto& list = lists[std::size_t(i)];
+  // Neighbours: the other vertices of the incident tets, deduplicated. Counted, then filled,
+  // in parallel with one scratch list per task instead of a list per sample.
+  auto neighbours_of = [&](int i, std::vector<int>& list) {
+    list.clear();
     for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
          ++o)
       for (int k = 0; k < 4; ++k) {
@@ -128,13 +129,26 @@ void build_adjacency(Triangulation& tri, int n) {
       }
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
-    tri.neighbour_offsets[std::size_t(i) + 1] =
-        tri.neighbour_offsets[std::size_t(i)] + int(list.size());
-  }
-  tri.neighbour_indices.resize(std::size_t(tri.neighbour_offsets.back()));
+  };
+  tri.neighbour_offsets.assign(std::size_t(n) + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
+    std::vector<int> list;
+    for (int i = r.begin(); i < r.end(); ++i) {
+      neighbours_of(i, list);
+      tri.neighbour_offsets[std::size_t(i) + 1] = int(list.size());
+    }
+  });
   for (int i = 0; i < n; ++i)
-    std::copy(lists[std::size_t(i)].begin(), lists[std::size_t(i)].end(),
-              tri.neighbour_indices.begin() + tri.neighbour_offsets[std::size_t(i)]);
+    tri.neighbour_offsets[std::size_t(i) + 1] += tri.neighbour_offsets[std::size_t(i)];
+  tri.neighbour_indices.resize(std::size_t(tri.neighbour_offsets.back()));
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
+    std::vector<int> list;
+    for (int i = r.begin(); i < r.end(); ++i) {
+      neighbours_of(i, list);
+      std::copy(list.begin(), list.end(),
+                tri.neighbour_indices.begin() + tri.neighbour_offsets[std::size_t(i)]);
+    }
+  });
 }
 
 Triangulation triangulate(const PointMatrix& points, const Eigen::VectorXd& values,

@@ -39,10 +39,12 @@ Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centr
                               double epsilon);
 
 /// Per-sample gradients (n x 3): the weighted average of the incident tets' gradients.
-/// Samples without a (non-degenerate) incident tet, hidden ones say, get a zero row.
+/// Samples without a (non-degenerate) incident tet, hidden ones say, get a zero row; so do
+/// samples not flagged in `only` (n flags), when given.
 PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
                              const Triangulation& triangulation,
-                             const GradientOptions& options = {});
+                             const GradientOptions& options = {},
+                             const std::vector<char>* only = nullptr);
 
 /// Per-sample gradients (n x 3) of the linear function that interpolates the sample and fits its
 /// k nearest neighbours in the least-squares sense (the paper uses k = 6, 18, 26).
