@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   cmake g++ make pkg-config
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
-  libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libgtest-dev libopenvdb-dev libboost-iostreams-dev
   python3-numpy python3-scipy python3-skimage python3-matplotlib
 )
 missing=()

@@ -203,13 +203,15 @@ BandSamples select_band(const Grid& grid, const BandOptions& options) {
   return select_band(view_of(grid), options);
 }
 
-BandSamples select_band(const Samples& samples, const BandOptions& options) {
+BandSamples select_band(const Samples& samples, const BandOptions& options, double spacing) {
   const Eigen::Index n = samples.points.rows();
   const Eigen::Vector3d extent =
       samples.points.colwise().maxCoeff() - samples.points.colwise().minCoeff();
   // A flat box still has a spacing: measure it in the largest extent then.
   const double volume = extent.prod();
-  const double h = volume > 0 ? std::cbrt(volume / double(n)) : extent.maxCoeff() / std::cbrt(n);
+  const double h = spacing > 0     ? spacing
+                   : volume > 0    ? std::cbrt(volume / double(n))
+                                   : extent.maxCoeff() / std::cbrt(n);
   validate_band_options(options);
   BandSamples out;
   out.spacing = h;

@@ -96,7 +96,7 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   // for the band only.
   BandSamples band = stages.run("band", "samples within the band", [&] {
     return input.is_grid ? select_band(input.grid, options.band)
-                         : select_band(input.samples, options.band);
+                         : select_band(input.samples, options.band, input.spacing);
   });
   result.band_samples = int(band.samples.values.size());
   result.band_spacing = band.spacing;

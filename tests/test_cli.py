@@ -225,6 +225,22 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("sample no mesh", ["sample", p("none.obj"), "--res", "8", "-o", p("o")], "cannot read", [p("o.npy")])
     expect_error("sample both", ["sample", os.path.join(meshes, "cube.obj"), "--res", "8", "--random", "9", "-o", p("o")],
                  "exactly one", [p("o.npy")])
+    # OpenVDB: sample to a level set, contour it sparse, and its bad input.
+    r = run("sample", os.path.join(meshes, "spot.obj"), "--res", "40", "-o", p("spot.vdb"), "-q")
+    check("sample vdb", r.returncode == 0 and os.path.exists(p("spot.vdb")) and os.path.exists(p("spot_mesh.ply")),
+          r.stderr)
+    r = run("contour", p("spot.vdb"), "-o", p("spot_vdb.ply"), "--depth", "7", "--stats", p("vdb.json"), "-q")
+    check("contour vdb", r.returncode == 0, r.stderr)
+    s = json.load(open(p("vdb.json")))
+    check("vdb sparse", s["samples"] < 40**3 / 4 and abs(s["band"]["spacing"] - 2 / 39) < 1e-9, s)
+    r = run("eval", p("spot_vdb.ply"), p("spot_mesh.ply"), "--samples", "20000")
+    check("vdb mesh accurate", r.returncode == 0 and json.loads(r.stdout)["L1"] < 0.05 * 2 / 39, r.stdout)
+    expect_error("vdb grid name", ["contour", p("spot.vdb"), "-o", out, "--grid", "density"], "no float grid named",
+                 [out])
+    open(p("junk.vdb"), "w").write("not a vdb")
+    expect_error("vdb junk", ["contour", p("junk.vdb"), "-o", out], "not a .vdb", [out])
+    expect_error("vdb random", ["sample", os.path.join(meshes, "cube.obj"), "--random", "100", "-o", p("c.vdb")],
+                 "grid", [p("c.vdb")])
     expect_error("eval unreadable", ["eval", p("none.ply"), prefix + "_mesh.ply"], "cannot read")
     open(p("empty.off"), "w").write("OFF\n0 0 0\n")
     expect_error("eval empty mesh", ["eval", p("empty.off"), prefix + "_mesh.ply"], "")

@@ -26,6 +26,7 @@
 #include "sdfcontour/pipeline.h"
 #include "sdfcontour/poisson.h"
 #include "sdfcontour/statistics.h"
+#include "sdfcontour/vdb.h"
 
 using namespace sdfcontour;
 
@@ -125,9 +126,11 @@ class ProgressBar {
 struct LoadedInput {
   SdfInput input;
   std::unique_ptr<AnalyticShape> shape;  // for built-in shapes
+  double vdb_background = 0;             // for OpenVDB level sets: the truncation distance
 };
 
-LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint64_t seed) {
+LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint64_t seed,
+                       const std::string& grid_name) {
   LoadedInput loaded;
   if (is_builtin_spec(spec)) {
     const BuiltinSpec b = parse_builtin_spec(spec);
@@ -137,6 +140,13 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
     } else {
       loaded.input = SdfInput::from_grid(sample_grid(*loaded.shape, b.resolution, bounds));
     }
+    return loaded;
+  }
+  if (is_vdb_path(spec)) {
+    VdbLevelSet level_set = read_vdb_level_set(spec, grid_name);
+    loaded.input.samples = std::move(level_set.samples);
+    loaded.input.spacing = level_set.voxel_size;
+    loaded.vdb_background = level_set.background;
     return loaded;
   }
   loaded.input = sdf_input_from_npy(map_npy(spec), bounds);
@@ -208,7 +218,7 @@ struct PoissonArgs {
 
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
-                                     weights = "james", band = "4", truncation = "auto";
+                                     weights = "james", band = "4", truncation = "auto", grid;
   int knn = 18, threads = 0, brick_size = BrickOptions{}.size;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
@@ -267,7 +277,12 @@ int run_contour(const ContourArgs& a) {
 
   const auto t0 = std::chrono::steady_clock::now();
   say("reading " + a.input);
-  LoadedInput in = load_input(a.input, parse_bounds(a.bounds), a.seed);
+  LoadedInput in = load_input(a.input, parse_bounds(a.bounds), a.seed, a.grid);
+  // A level set's background is its truncation distance, unless one is given.
+  if (in.vdb_background > 0 && opt.band.truncation_mode == TruncationMode::Auto) {
+    opt.band.truncation_mode = TruncationMode::Given;
+    opt.band.truncation = in.vdb_background;
+  }
   const double load_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ContourResult r = contour(in.input, in.shape.get(), opt);
@@ -442,7 +457,7 @@ struct SampleArgs {
   int resolution = 0;
   std::size_t random = 0;
   std::uint64_t seed = 0;
-  double scale = 0.9, truncate = 0;
+  double scale = 0.9, truncate = 0, half_width = 3;
   bool quiet = false, float32 = false;
 };
 
@@ -463,14 +478,24 @@ int run_sample(const SampleArgs& a) {
   if (!(a.truncate >= 0) || !std::isfinite(a.truncate))
     throw Error("--truncate must be a non-negative number of spacings");
   if (a.truncate > 0 && a.resolution == 0) throw Error("--truncate needs a grid (--res N)");
+  const bool vdb = is_vdb_path(a.prefix);
+  if (vdb && a.resolution == 0) throw Error("a .vdb output needs a grid (--res N)");
+  if (vdb && !(a.half_width > 0 && std::isfinite(a.half_width)))
+    throw Error("--half-width must be a positive number of voxels");
+  // x.vdb writes x.vdb, x_mesh.ply and x_gtcp.ply; a prefix writes PREFIX.npy and the rest.
+  const std::string stem = vdb ? a.prefix.substr(0, a.prefix.size() - 4) : a.prefix;
+  // A level set needs values only inside its band: sample truncated, fast.
+  const double truncate = vdb && a.truncate == 0 ? a.half_width + 1 : a.truncate;
   if (a.resolution > 0) {
     say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
     const double h = (bounds.max - bounds.min).maxCoeff() / (a.resolution - 1);
-    const Grid grid = a.truncate > 0
-                          ? sample_grid_truncated(sdf, a.resolution, bounds, a.truncate * h)
+    const Grid grid = truncate > 0
+                          ? sample_grid_truncated(sdf, a.resolution, bounds, truncate * h)
                           : sample_grid(sdf, a.resolution, bounds);
     const std::size_t n = std::size_t(a.resolution);
-    if (a.float32)
+    if (is_vdb_path(a.prefix))
+      write_vdb_level_set(a.prefix, grid, a.half_width);
+    else if (a.float32)
       write_npy_float32(a.prefix + ".npy", {n, n, n},
                 std::vector<float>(grid.values.data(), grid.values.data() + grid.values.size()));
     else
@@ -480,8 +505,8 @@ int run_sample(const SampleArgs& a) {
     BandOptions all;
     all.band = std::numeric_limits<double>::infinity();
     all.margin = 0;
-    all.truncation_mode = a.truncate > 0 ? TruncationMode::Given : TruncationMode::None;
-    all.truncation = a.truncate * h;
+    all.truncation_mode = truncate > 0 ? TruncationMode::Given : TruncationMode::None;
+    all.truncation = (vdb ? a.half_width : truncate) * h;
     samples = select_band(grid, all).samples;
   } else {
     say("signed distances at " + std::to_string(a.random) + " random points");
@@ -495,10 +520,10 @@ int run_sample(const SampleArgs& a) {
   }
   say("exact contact points");
   const ContactPoints gt = exact_contact_points(samples.points, sdf);
-  write_oriented_points(a.prefix + "_gtcp.ply", {gt.points, gt.normals});
-  write_mesh(a.prefix + "_mesh.ply", mesh);
-  std::cout << "samples " << samples.points.rows() << " -> " << a.prefix << ".npy, " << a.prefix
-            << "_gtcp.ply, " << a.prefix << "_mesh.ply" << std::endl;
+  write_oriented_points(stem + "_gtcp.ply", {gt.points, gt.normals});
+  write_mesh(stem + "_mesh.ply", mesh);
+  std::cout << "samples " << samples.points.rows() << " -> " << (vdb ? a.prefix : stem + ".npy")
+            << ", " << stem << "_gtcp.ply, " << stem << "_mesh.ply" << std::endl;
   return 0;
 }
 
@@ -579,11 +604,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   ContourArgs a;
   CLI::App* contour = app.add_subcommand(
-      "contour", "Contour SDF samples (grid .npy, scattered .npy or builtin:NAME@N)");
+      "contour",
+      "Contour SDF samples (grid .npy, scattered .npy, OpenVDB level set .vdb or builtin:NAME@N)");
   contour
       ->add_option("input", a.input,
                    "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
-                   "x,y,z,value, "
+                   "x,y,z,value, an OpenVDB float level set .vdb (read sparse; its voxel size and "
+                   "transform are used), "
                    "or a built-in shape builtin:NAME@N (N^3 grid) / builtin:NAME@random:COUNT; "
                    "NAME is one of "
                    "sphere, torus, box, plate, shell, csg")
@@ -623,6 +650,8 @@ int main(int argc, char** argv) {
                    "grid spacings (scattered samples: the side of a cube holding one sample); "
                    "'all' keeps every sample, as in the paper")
       ->capture_default_str();
+  contour->add_option("--grid", a.grid,
+                      "For a .vdb input: the float level set grid to read (default: the first)");
   contour
       ->add_option("--margin", a.margin,
                    "Samples up to this many spacings beyond the band are triangulated but give "
@@ -678,7 +707,8 @@ int main(int argc, char** argv) {
   sample
       ->add_option("-o,--output", sa.prefix,
                    "Output prefix: PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
-                   "mesh), PREFIX_gtcp.ply (exact contact points with normals)")
+                   "mesh), PREFIX_gtcp.ply (exact contact points with normals); or X.vdb: an "
+                   "OpenVDB level set (with X_mesh.ply and X_gtcp.ply)")
       ->required();
   sample->add_option("--res", sa.resolution, "Sample an N^3 grid over the bounds");
   sample->add_option("--random", sa.random,
@@ -695,6 +725,8 @@ int main(int argc, char** argv) {
                      "grids sample fast. 0: exact everywhere")
       ->capture_default_str();
   sample->add_flag("--float32", sa.float32, "Write the grid as float32 (default float64)");
+  sample->add_option("--half-width", sa.half_width, "A .vdb level set's narrow band, in voxels")
+      ->capture_default_str();
   sample->add_flag("-q,--quiet", sa.quiet, "No progress messages on stderr");
 
   EvalArgs ea;

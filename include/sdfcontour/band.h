@@ -71,9 +71,9 @@ struct BandSamples {
 BandSamples select_band(const GridView& grid, const BandOptions& options);
 BandSamples select_band(const Grid& grid, const BandOptions& options);
 
-/// The same for scattered samples; h is the side of a cube holding one sample on average
-/// (the bounding box's volume / n, cube root).
-BandSamples select_band(const Samples& samples, const BandOptions& options);
+/// The same for scattered samples; h is `spacing` if positive, else the side of a cube holding
+/// one sample on average (the bounding box's volume / n, cube root).
+BandSamples select_band(const Samples& samples, const BandOptions& options, double spacing = 0);
 
 /// Throws Error unless `band` is positive (infinity allowed), `margin` non-negative and finite,
 /// and a given truncation positive and finite.

@@ -62,6 +62,8 @@ struct SdfInput {
   GridView grid;                        ///< valid when is_grid
   std::shared_ptr<const void> storage;  ///< owns (or maps) the memory `grid` views
   Samples samples;                      ///< the scattered samples, when !is_grid
+  /// The scattered samples' spacing when known (an OpenVDB voxel size); 0: estimated.
+  double spacing = 0;
 
   /// An input that owns `grid`.
   static SdfInput from_grid(Grid grid);

@@ -1,0 +1,103 @@
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+
+#include <fstream>
+
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/pipeline.h"
+#include "sdfcontour/vdb.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+void write_grids(const std::string& path, openvdb::GridPtrVec grids) {
+  openvdb::initialize();
+  openvdb::io::File(path).write(grids);
+}
+
+void expect_error(const std::string& path, const std::string& grid, const std::string& needle) {
+  try {
+    read_vdb_level_set(path, grid);
+    ADD_FAILURE() << path << " was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+
+// sample -> .vdb -> samples: the active voxels are the grid samples inside the band, at their
+// world positions, with their values (as float32).
+TEST(Vdb, RoundTripKeepsTheBandSparse) {
+  const auto dir = test::temp_dir("vdb_roundtrip");
+  const std::string path = (dir / "torus.vdb").string();
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(-1.0, -0.9, -0.8);
+  bounds.max = bounds.min + Eigen::Vector3d::Constant(2.0);
+  const Grid grid = sample_grid(*make_builtin_shape("torus"), 33, bounds);
+  const double h = grid.spacing()[0];
+  write_vdb_level_set(path, grid, 3.0);
+  const VdbLevelSet ls = read_vdb_level_set(path);
+  EXPECT_EQ(ls.grid_name, "surface");
+  EXPECT_NEAR(ls.voxel_size, h, 1e-12);
+  EXPECT_NEAR(ls.background, 3 * h, 1e-6);
+  long expected = 0;
+  for (Eigen::Index i = 0; i < grid.values.size(); ++i)
+    expected += std::abs(float(grid.values[i])) < float(3 * h);
+  ASSERT_EQ(ls.samples.values.size(), expected);
+  EXPECT_LT(expected, grid.values.size() / 4);
+  for (Eigen::Index r = 0; r < ls.samples.values.size(); ++r) {
+    const Eigen::Vector3d p = ls.samples.points.row(r).transpose();
+    const Eigen::Vector3d ijk = (p - bounds.min) / h;
+    const Eigen::Vector3i c = ijk.array().round().cast<int>();
+    ASSERT_LT((ijk - c.cast<double>()).norm(), 1e-6);
+    EXPECT_EQ(ls.samples.values[r], double(float(grid.values[Eigen::Index(grid.index(c[0], c[1], c[2]))])));
+  }
+  // GCP on the level set: its background is the truncation distance.
+  SdfInput input;
+  input.samples = ls.samples;
+  input.spacing = ls.voxel_size;
+  ContourOptions o;
+  o.band.truncation_mode = TruncationMode::Given;
+  o.band.truncation = ls.background;
+  o.poisson.depth = 7;
+  const ContourResult r = contour(input, nullptr, o);
+  const auto torus = make_builtin_shape("torus");
+  double worst = 0;
+  for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i)
+    worst = std::max(worst, std::abs(torus->distance(r.mesh->vertices.row(i).transpose())));
+  EXPECT_LT(worst, 0.5 * h);
+}
+
+TEST(Vdb, RejectsWhatIsNotAFloatLevelSet) {
+  const auto dir = test::temp_dir("vdb_bad");
+  const std::string d = dir.string() + "/";
+  std::ofstream(d + "junk.vdb") << "this is not a vdb file at all";
+  expect_error(d + "junk.vdb", "", "not a .vdb file");
+  expect_error(d + "missing.vdb", "", "cannot read");
+  auto ints = openvdb::Int32Grid::create(0);
+  ints->setName("labels");
+  ints->tree().setValue(openvdb::Coord(1, 2, 3), 7);
+  write_grids(d + "ints.vdb", {ints});
+  expect_error(d + "ints.vdb", "", "no float grid");
+  auto fog = openvdb::FloatGrid::create(0.f);
+  fog->setName("density");
+  fog->setGridClass(openvdb::GRID_FOG_VOLUME);
+  fog->tree().setValue(openvdb::Coord(0, 0, 0), 0.5f);
+  write_grids(d + "fog.vdb", {fog});
+  expect_error(d + "fog.vdb", "", "not a level set");
+  expect_error(d + "fog.vdb", "surface", "no float grid named 'surface'");
+  auto empty = openvdb::FloatGrid::create(0.1f);
+  empty->setGridClass(openvdb::GRID_LEVEL_SET);
+  write_grids(d + "empty.vdb", {empty});
+  expect_error(d + "empty.vdb", "", "no active voxels");
+  // Truncated: the header is fine, the rest is cut off.
+  const Grid grid = sample_grid(*make_builtin_shape("sphere"), 16, Bounds{});
+  write_vdb_level_set(d + "whole.vdb", grid, 3.0);
+  std::ifstream in(d + "whole.vdb", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream(d + "cut.vdb", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  expect_error(d + "cut.vdb", "", "cannot read");
+}
