@@ -95,6 +95,18 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("unwritable output", ["contour", p("good.npy"), "-o", p("no/such/dir/out.ply"), "--method", "mc"],
                  "cannot write")
 
+    # Options out of range end in an error, never a garbage mesh with exit 0.
+    for opt, value in [("--solver-tolerance", "nan"), ("--alpha", "1e300"), ("--alpha", "-1"), ("--scale", "1e300"),
+                       ("--full-depth", "30"), ("--depth", "0"), ("--threads", "-1"), ("--samples-per-node", "0"),
+                       ("--tie-tolerance", "inf"), ("--knn", "1"), ("--bounds=-1e308,1e308", None)]:
+        depth = [] if opt in ("--depth", "--full-depth") else ["--depth", "5"]
+        args = ["contour", "builtin:sphere@12", "-o", out, *depth] + ([opt, value] if value else [opt])
+        expect_error(f"{opt} {value}", args, opt.split("=")[0], [out])
+    open(p("one.ply"), "w").write("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                 "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                                 "end_header\n0 0 0 0 0 1\n")
+    expect_error("poisson one point", ["poisson", p("one.ply"), "-o", out], "empty", [out])
+
     # The band, truncation and bricks: bad values, and a band without a surface.
     for opt, value, needle in [("--band", "0", "--band"), ("--band", "wide", "--band"), ("--band", "nan", "--band"),
                                ("--truncation", "-1", "--truncation"), ("--truncation", "maybe", "--truncation"),
@@ -244,6 +256,9 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("eval unreadable", ["eval", p("none.ply"), prefix + "_mesh.ply"], "cannot read")
     open(p("empty.off"), "w").write("OFF\n0 0 0\n")
     expect_error("eval empty mesh", ["eval", p("empty.off"), prefix + "_mesh.ply"], "")
+    expect_error("eval samples -1", ["eval", p("spot_mc.ply"), prefix + "_mesh.ply", "--samples", "-1"], "--samples")
+    expect_error("sample scale inf", ["sample", os.path.join(meshes, "cube.obj"), "--res", "8", "--scale", "inf", "-o",
+                                      p("o")], "--scale", [p("o.npy")])
 
 print(f"{passed} passed, {failed} failed")
 sys.exit(1 if failed else 0)

@@ -58,9 +58,29 @@ Bounds parse_bounds(const std::string& text) {
   } else {
     throw Error("--bounds takes MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX");
   }
-  for (int a = 0; a < 3; ++a)
+  for (int a = 0; a < 3; ++a) {
     if (!(b.min[a] < b.max[a])) throw Error("--bounds: min must be less than max on every axis");
+    if (!std::isfinite(b.max[a] - b.min[a]) || b.max[a] - b.min[a] > 1e150)
+      throw Error("--bounds: the box is too large to compute with");
+  }
   return b;
+}
+
+// Range checks for numeric options: finite and within [lo, hi].
+void require_range(const std::string& option, double value, double lo, double hi) {
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    std::ostringstream m;
+    m << option << " must be a finite number between " << lo << " and " << hi << ", got " << value;
+    throw Error(m.str());
+  }
+}
+
+// A mesh is written only if it has triangles and finite vertices.
+void require_writable_mesh(const Mesh& mesh, const std::string& what) {
+  if (mesh.triangles.rows() == 0 || mesh.vertices.rows() == 0)
+    throw Error(what + " is empty: no surface was found (check the input and options)");
+  if (!mesh.vertices.allFinite())
+    throw Error(what + " has non-finite vertices (the input's scale is out of range)");
 }
 
 // A positive number, or one of `words` (returned as the word's value).
@@ -204,6 +224,12 @@ struct PoissonArgs {
   }
   PoissonOptions resolved() const {
     PoissonOptions o = options;
+    require_range("--alpha", o.point_weight, 0, 1e4);
+    require_range("--depth", o.depth, 1, 16);
+    require_range("--full-depth", o.full_depth, 0, o.depth);
+    require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
+    require_range("--scale", o.scale, 1, 16);
+    require_range("--solver-tolerance", o.solver_tolerance, 1e-16, 0.5);
     if (boundary == "neumann")
       o.boundary = PoissonBoundary::Neumann;
     else if (boundary == "dirichlet")
@@ -232,6 +258,7 @@ int run_contour(const ContourArgs& a) {
   if (a.output.empty() && a.points.empty())
     throw Error("nothing to write: give -o OUT and/or --points FILE");
   std::unique_ptr<tbb::global_control> threads;
+  require_range("--threads", a.threads, 0, 4096);
   if (a.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     std::size_t(a.threads));
@@ -259,6 +286,9 @@ int run_contour(const ContourArgs& a) {
     opt.gradient.weighting = GradientWeighting::James;
   else
     throw Error("unknown --weights '" + a.weights + "' (known: uniform, volume, james)");
+  require_range("--knn", a.knn, 3, 1000);
+  require_range("--james-epsilon", a.james_epsilon, 0, 1e6);
+  require_range("--tie-tolerance", a.tie_tolerance, 0, 1);
   opt.knn = a.knn;
   opt.gradient.james_epsilon = a.james_epsilon;
   opt.contact.tie_tolerance = a.tie_tolerance;
@@ -291,6 +321,7 @@ int run_contour(const ContourArgs& a) {
   const auto tw = std::chrono::steady_clock::now();
   const PlyFormat format = a.ascii ? PlyFormat::Ascii : PlyFormat::Binary;
   if (r.mesh) {
+    require_writable_mesh(*r.mesh, "the " + a.method + " mesh");
     say("writing " + a.output);
     write_mesh(a.output, *r.mesh, format);
   }
@@ -390,6 +421,7 @@ struct PoissonCommandArgs {
 
 int run_poisson(const PoissonCommandArgs& a) {
   std::unique_ptr<tbb::global_control> threads;
+  require_range("--threads", a.threads, 0, 4096);
   if (a.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     std::size_t(a.threads));
@@ -401,6 +433,7 @@ int run_poisson(const PoissonCommandArgs& a) {
   const double read_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   PoissonResult r = poisson_reconstruct(points, o);
+  require_writable_mesh(r.mesh, "the reconstructed mesh");
   write_mesh(a.output, r.mesh, a.ascii ? PlyFormat::Ascii : PlyFormat::Binary);
   if (!a.densities.empty())
     write_npy(a.densities, {std::size_t(r.vertex_density.size())},
@@ -466,7 +499,7 @@ int run_sample(const SampleArgs& a) {
   if ((a.resolution > 0) == (a.random > 0))
     throw Error("give exactly one of --res N and --random COUNT");
   if (a.resolution == 1 || a.resolution > 1024) throw Error("--res must be between 2 and 1024");
-  if (!(a.scale > 0)) throw Error("--scale must be positive");
+  require_range("--scale", a.scale, 1e-6, 1e6);
   auto say = [&](const std::string& m) {
     if (!a.quiet) std::cerr << "[sdfcontour] " << m << "\n";
   };
@@ -544,7 +577,8 @@ void print_json(const nlohmann::json& j, const std::string& output) {
 }
 
 int run_eval(const EvalArgs& a) {
-  if (a.samples == 0) throw Error("--samples must be positive");
+  if (a.samples == 0 || a.samples > 100000000)
+    throw Error("--samples must be between 1 and 100000000");
   const Mesh recon = read_mesh(a.recon), gt = read_mesh(a.gt);
   const SurfaceDistances d = surface_distances(recon, gt, a.samples, a.seed);
   const MeshTopology t = mesh_topology(recon);
