@@ -43,10 +43,16 @@ def write_ply(path, v, f):
 
 
 def peer(name, grid_path, out_path):
-    """Runs one peer in this process; prints its seconds (load + contour) as JSON."""
+    """Runs one peer in this process; prints its seconds (load + contour, after the imports) as JSON."""
+    if name.startswith("openvdb"):
+        import pyopenvdb as vdb
+    elif name == "skimage":
+        from skimage.measure import marching_cubes
+    elif name == "vtk":
+        import vtk
+        from vtk.util import numpy_support
     t = time.perf_counter()
     if name == "openvdb-vdb":
-        import pyopenvdb as vdb
         grid = vdb.read(grid_path, vdb.readAllGridMetadata(grid_path)[0].name)
         points, tris, quads = grid.convertToPolygons(isovalue=0.0, adaptivity=0.0)
         seconds = time.perf_counter() - t
@@ -58,12 +64,10 @@ def peer(name, grid_path, out_path):
     n = a.shape[0]
     h = 2 / (n - 1)
     if name == "skimage":
-        from skimage.measure import marching_cubes
         v, f, _, _ = marching_cubes(a, 0.0, spacing=(h, h, h))
         seconds = time.perf_counter() - t
         write_ply(out_path, v - 1, f)
     elif name == "openvdb":
-        import pyopenvdb as vdb
         grid = vdb.FloatGrid(background=float(np.abs(a).max()))
         grid.copyFromArray(a.astype(np.float32, copy=False))
         grid.transform = vdb.createLinearTransform([[h, 0, 0, 0], [0, h, 0, 0], [0, 0, h, 0], [-1, -1, -1, 1]])
@@ -72,8 +76,6 @@ def peer(name, grid_path, out_path):
         faces = np.vstack([tris.reshape(-1, 3), quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
         write_ply(out_path, points, faces)
     elif name == "vtk":
-        import vtk
-        from vtk.util import numpy_support
         image = vtk.vtkImageData()
         image.SetDimensions(*a.shape)
         image.SetSpacing(h, h, h)
