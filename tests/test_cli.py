@@ -95,6 +95,28 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("unwritable output", ["contour", p("good.npy"), "-o", p("no/such/dir/out.ply"), "--method", "mc"],
                  "cannot write")
 
+    # Outputs appear together or not at all: a bad second output path fails before any work, and
+    # SIGINT / SIGTERM at any moment leave neither outputs nor temporary files.
+    expect_error("bad points path", ["contour", p("good.npy"), "-o", out, "--points", p("no/dir/cp.ply")],
+                 "cannot write", [out])
+    expect_error("stats is a folder", ["contour", p("good.npy"), "-o", out, "--stats", d], "directory", [out])
+    import signal
+    import time as _time
+    sig_dir = p("signals")
+    os.mkdir(sig_dir)
+    for delay, sig in [(0.3, signal.SIGINT), (0.8, signal.SIGTERM), (1.5, signal.SIGINT)]:
+        proc = subprocess.Popen([CLI, "contour", "builtin:torus@72", "-o", os.path.join(sig_dir, "m.ply"), "--points",
+                                 os.path.join(sig_dir, "cp.ply"), "--depth", "7", "-q"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _time.sleep(delay)
+        proc.send_signal(sig)
+        code = proc.wait(timeout=120)
+        left = os.listdir(sig_dir)
+        check(f"signal {sig} after {delay}s leaves nothing partial",
+              (code != 0 and not left) or (code == 0 and sorted(left) == ["cp.ply", "m.ply"]), (code, left))
+        for f in left:
+            os.remove(os.path.join(sig_dir, f))
+
     # Options out of range end in an error, never a garbage mesh with exit 0.
     for opt, value in [("--solver-tolerance", "nan"), ("--alpha", "1e300"), ("--alpha", "-1"), ("--scale", "1e300"),
                        ("--full-depth", "30"), ("--depth", "0"), ("--threads", "-1"), ("--samples-per-node", "0"),

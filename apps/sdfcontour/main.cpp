@@ -257,6 +257,9 @@ struct ContourArgs {
 int run_contour(const ContourArgs& a) {
   if (a.output.empty() && a.points.empty())
     throw Error("nothing to write: give -o OUT and/or --points FILE");
+  for (const std::string* path : {&a.output, &a.points, &a.stats})
+    if (!path->empty()) require_writable(*path);
+  OutputBatch outputs;  // every file appears at the end, or none
   std::unique_ptr<tbb::global_control> threads;
   require_range("--threads", a.threads, 0, 4096);
   if (a.threads > 0)
@@ -397,6 +400,7 @@ int run_contour(const ContourArgs& a) {
     f.stream() << j.dump(2) << "\n";
     f.commit();
   }
+  outputs.commit();
 
   // The short human summary.
   std::cout << "samples " << r.samples;
@@ -420,6 +424,9 @@ struct PoissonCommandArgs {
 };
 
 int run_poisson(const PoissonCommandArgs& a) {
+  for (const std::string* path : {&a.output, &a.stats, &a.densities})
+    if (!path->empty()) require_writable(*path);
+  OutputBatch outputs;
   std::unique_ptr<tbb::global_control> threads;
   require_range("--threads", a.threads, 0, 4096);
   if (a.threads > 0)
@@ -470,6 +477,7 @@ int run_poisson(const PoissonCommandArgs& a) {
     f.stream() << j.dump(2) << "\n";
     f.commit();
   }
+  outputs.commit();
   std::cout << "points " << points.points.rows() << ", mesh " << r.mesh.vertices.rows()
             << " vertices / " << r.mesh.triangles.rows() << " triangles, iso-value " << r.iso_value
             << std::endl;
@@ -517,6 +525,10 @@ int run_sample(const SampleArgs& a) {
     throw Error("--half-width must be a positive number of voxels");
   // x.vdb writes x.vdb, x_mesh.ply and x_gtcp.ply; a prefix writes PREFIX.npy and the rest.
   const std::string stem = vdb ? a.prefix.substr(0, a.prefix.size() - 4) : a.prefix;
+  for (const std::string& path :
+       {vdb ? a.prefix : stem + ".npy", stem + "_gtcp.ply", stem + "_mesh.ply"})
+    require_writable(path);
+  OutputBatch outputs;
   // A level set needs values only inside its band: sample truncated, fast.
   const double truncate = vdb && a.truncate == 0 ? a.half_width + 1 : a.truncate;
   if (a.resolution > 0) {
@@ -555,6 +567,7 @@ int run_sample(const SampleArgs& a) {
   const ContactPoints gt = exact_contact_points(samples.points, sdf);
   write_oriented_points(stem + "_gtcp.ply", {gt.points, gt.normals});
   write_mesh(stem + "_mesh.ply", mesh);
+  outputs.commit();
   std::cout << "samples " << samples.points.rows() << " -> " << (vdb ? a.prefix : stem + ".npy")
             << ", " << stem << "_gtcp.ply, " << stem << "_mesh.ply" << std::endl;
   return 0;
@@ -785,6 +798,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  remove_temporary_files_on_signals();
   try {
     if (contour->parsed()) return run_contour(a);
     if (poisson->parsed()) return run_poisson(pa);
