@@ -69,7 +69,7 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
   stream_.open(temporary_path_, std::ios::binary | std::ios::trunc);
   if (!stream_) {
     unregister_temporary(slot_of(temporary_path_));
-    throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    throw IoError("cannot write '" + path + "': " + std::strerror(errno));
   }
 }
 
@@ -83,7 +83,7 @@ AtomicFile::~AtomicFile() {
 
 void AtomicFile::commit() {
   stream_.flush();
-  if (!stream_) throw Error("write to '" + path_ + "' failed");
+  if (!stream_) throw IoError("write to '" + path_ + "' failed");
   stream_.close();
   {
     std::lock_guard<std::mutex> lock(g_batch_mutex);
@@ -94,7 +94,7 @@ void AtomicFile::commit() {
     }
   }
   if (std::rename(temporary_path_.c_str(), path_.c_str()) != 0)
-    throw Error("cannot rename the output onto '" + path_ + "': " + std::strerror(errno));
+    throw IoError("cannot rename the output onto '" + path_ + "': " + std::strerror(errno));
   unregister_temporary(slot_of(temporary_path_));
   committed_ = true;
 }
@@ -119,7 +119,7 @@ void OutputBatch::commit() {
   std::lock_guard<std::mutex> lock(g_batch_mutex);
   for (const auto& [temporary, final_path] : g_pending) {
     if (std::rename(temporary.c_str(), final_path.c_str()) != 0)
-      throw Error("cannot rename the output onto '" + final_path + "': " + std::strerror(errno));
+      throw IoError("cannot rename the output onto '" + final_path + "': " + std::strerror(errno));
     unregister_temporary(slot_of(temporary));
   }
   g_pending.clear();
@@ -129,12 +129,12 @@ void require_writable(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path p(path);
-  if (fs::is_directory(p, ec)) throw Error("cannot write '" + path + "': it is a directory");
+  if (fs::is_directory(p, ec)) throw IoError("cannot write '" + path + "': it is a directory");
   const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::is_directory(folder, ec))
-    throw Error("cannot write '" + path + "': folder '" + folder.string() + "' does not exist");
+    throw IoError("cannot write '" + path + "': folder '" + folder.string() + "' does not exist");
   if (::access(folder.c_str(), W_OK) != 0)
-    throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    throw IoError("cannot write '" + path + "': " + std::strerror(errno));
 }
 
 void remove_temporary_files_on_signals() {

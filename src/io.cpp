@@ -98,7 +98,7 @@ Mesh read_mesh(const std::string& path) {
     throw Error("cannot read a mesh from '" + path + "': use a .obj, .ply or .off file");
   {
     std::ifstream probe(path, std::ios::binary);
-    if (!probe) throw Error("cannot read '" + path + "': " + std::strerror(errno));
+    if (!probe) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
   }
   using P = CGAL::Simple_cartesian<double>::Point_3;
   std::vector<P> points;
@@ -144,7 +144,7 @@ void write_oriented_points(const std::string& path, const OrientedPoints& points
 
 OrientedPoints read_oriented_points(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot read '" + path + "': " + std::strerror(errno));
+  if (!in) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
   using K = CGAL::Simple_cartesian<double>;
   using PN = std::pair<K::Point_3, K::Vector_3>;
   std::vector<PN> pn;

@@ -30,20 +30,20 @@ class MappedFile {
   explicit MappedFile(const std::string& path) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
-      throw Error("cannot read '" + path + "': it is a directory");
+      throw IoError("cannot read '" + path + "': it is a directory");
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw Error("cannot read '" + path + "': " + std::strerror(errno));
+    if (fd_ < 0) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
     struct stat st {};
     if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
       ::close(fd_);
-      throw Error("cannot read '" + path + "': not a regular file");
+      throw IoError("cannot read '" + path + "': not a regular file");
     }
     size_ = std::size_t(st.st_size);
     if (size_ > 0) {
       void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
       if (p == MAP_FAILED) {
         ::close(fd_);
-        throw Error("cannot read '" + path + "': " + std::strerror(errno));
+        throw IoError("cannot read '" + path + "': " + std::strerror(errno));
       }
       data_ = static_cast<const char*>(p);
     }

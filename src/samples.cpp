@@ -30,11 +30,14 @@ Samples Grid::to_samples() const {
   return s;
 }
 
+// Larger values would overflow the squared weights and the predicates' filters.
+constexpr double kLargestValue = 1e100;
+
 static void require_finite(const Eigen::VectorXd& values, const char* what) {
   for (Eigen::Index i = 0; i < values.size(); ++i)
-    if (!std::isfinite(values[i]))
-      throw Error(std::string(what) + " contain a NaN or infinite value (at index " +
-                  std::to_string(i) + ")");
+    if (!(std::abs(values[i]) <= kLargestValue))
+      throw Error(std::string(what) + " contain a NaN, infinite or too large (over 1e100) value "
+                  "(at index " + std::to_string(i) + ")");
 }
 
 GridView view_of(const Grid& grid) {
@@ -55,7 +58,7 @@ std::size_t first_non_finite(const T* f, std::size_t n) {
       tbb::blocked_range<std::size_t>(0, n, 1 << 16), n,
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
         for (std::size_t i = r.begin(); i < r.end() && i < found; ++i)
-          if (!std::isfinite(f[i])) return i;
+          if (!(std::abs(double(f[i])) <= kLargestValue)) return i;
         return found;
       },
       [](std::size_t a, std::size_t b) { return std::min(a, b); });
@@ -74,8 +77,8 @@ void validate_grid(const GridView& grid) {
   const std::size_t bad =
       grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
   if (bad < grid.size())
-    throw Error("grid values contain a NaN or infinite value (at index " + std::to_string(bad) +
-                ")");
+    throw Error("grid values contain a NaN, infinite or too large (over 1e100) value (at index " +
+                std::to_string(bad) + ")");
 }
 
 void validate_grid(const Grid& grid) {
@@ -110,9 +113,9 @@ void validate_samples(const Samples& samples) {
     throw Error("need at least 4 samples, got " + std::to_string(samples.points.rows()));
   for (Eigen::Index i = 0; i < samples.points.rows(); ++i)
     for (int a = 0; a < 3; ++a)
-      if (!std::isfinite(samples.points(i, a)))
-        throw Error("sample positions contain a NaN or infinite value (at row " +
-                    std::to_string(i) + ")");
+      if (!(std::abs(samples.points(i, a)) <= kLargestValue))
+        throw Error("sample positions contain a NaN, infinite or too large (over 1e100) value "
+                    "(at row " + std::to_string(i) + ")");
   require_finite(samples.values, "sample values");
 }
 

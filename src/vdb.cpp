@@ -24,7 +24,7 @@ void initialise() {
 // .vdb file (magic number 0x56444220, "VDB " little-endian) before handing it over.
 void check_magic(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot read '" + path + "': " + std::strerror(errno));
+  if (!in) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
   unsigned char magic[8] = {};
   in.read(reinterpret_cast<char*>(magic), 8);
   const unsigned char expected[4] = {0x20, 0x42, 0x44, 0x56};
@@ -48,7 +48,7 @@ VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_
     grids = file.getGrids();
     file.close();
   } catch (const std::exception& e) {
-    throw Error("cannot read '" + path + "' as OpenVDB: " + e.what());
+    throw IoError("cannot read '" + path + "' as OpenVDB: " + e.what());
   }
   openvdb::FloatGrid::Ptr grid;
   std::string names;

@@ -805,9 +805,23 @@ int main(int argc, char** argv) {
     if (sample->parsed()) return run_sample(sa);
     if (eval->parsed()) return run_eval(ea);
     if (eval_points->parsed()) return run_eval_points(pe);
-  } catch (const std::exception& e) {
+  } catch (const InternalError& e) {
+    std::cerr << "sdfcontour: error: internal error (please report it): " << e.what() << "\n";
+    return 2;
+  } catch (const Error& e) {
     std::cerr << "sdfcontour: error: " << e.what() << "\n";
     return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "sdfcontour: error: out of memory (try a smaller --band or --brick-size)\n";
+    return 1;
+  } catch (const std::exception& e) {
+    // Not ours: a library below us failed (CGAL's assertions, say); it is a bug of ours not to
+    // have refused the input first.
+    std::string what = std::string(e.what()).substr(0, 300);
+    for (char& c : what)
+      if (c == '\n') c = ' ';
+    std::cerr << "sdfcontour: error: internal error (please report it): " << what << "\n";
+    return 2;
   }
   return 0;
 }

@@ -28,10 +28,23 @@ struct OrientedPoints {
   PointMatrix normals;
 };
 
-/// Every error the library reports about its input: a one-line, user-facing message.
+/// Every error the library reports: a one-line, user-facing message. Thrown as is, it blames the
+/// input (a bad value, shape, option or file content).
 class Error : public std::runtime_error {
  public:
   explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// A file that cannot be opened, read, written or renamed (the operating system said no).
+class IoError : public Error {
+ public:
+  explicit IoError(const std::string& message) : Error(message) {}
+};
+
+/// A broken invariant inside sdfcontour: a bug to report, not the user's fault.
+class InternalError : public Error {
+ public:
+  explicit InternalError(const std::string& message) : Error(message) {}
 };
 
 }  // namespace sdfcontour
