@@ -120,7 +120,7 @@ TEST(Npy, RejectsBadFiles) {
   expect_error("empty.npy", "at least 2");
   expect_error("flat.npy", "at least 2");
   expect_error("nan.npy", "NaN");
-  expect_error("inf.npy", "NaN or infinite");
+  expect_error("inf.npy", "NaN, infinite");
   expect_error("junk.npy", "not a .npy file");
   expect_error("long_field.npy", "dtype");
   expect_error("overflow.npy", "truncated");
