@@ -34,6 +34,13 @@ std::string method_name(Method method) {
   return "?";
 }
 
+int auto_poisson_depth(const PointMatrix& points, double spacing) {
+  if (points.rows() == 0 || !(spacing > 0)) return 8;
+  const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
+  const double samples_per_axis = extent / spacing + 1;
+  return samples_per_axis > 129 ? 9 : 8;
+}
+
 namespace {
 
 // Times each stage and reports its start through the progress callback.
@@ -186,6 +193,8 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
       throw Error("no contact point was kept, so there is nothing to reconstruct a surface from");
     PoissonOptions popt = options.poisson;
     popt.progress = options.progress;
+    if (popt.depth == 0) popt.depth = auto_poisson_depth(s.points, band.spacing);
+    result.poisson_depth = popt.depth;
     PoissonResult p = stages.run(
         "poisson", "screened Poisson reconstruction of " + std::to_string(cp.size()) + " points",
         [&] {

@@ -200,12 +200,18 @@ nlohmann::json contact_point_errors(const ContactPoints& cp, const AnalyticShape
 struct PoissonArgs {
   PoissonOptions options;
   std::string boundary = "neumann";
+  std::string depth = "8";  // "auto" (contour only): from the grid's resolution
 
   void add_to(CLI::App* app) {
     app->add_option("--alpha", options.point_weight,
                     "Screening weight (PoissonRecon's --pointWeight); 0 is plain Poisson")
         ->capture_default_str();
-    app->add_option("--depth", options.depth, "Finest octree depth")->capture_default_str();
+    app->add_option("--depth", depth,
+                    depth == "auto"
+                        ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 above "
+                          "(deeper needs more memory than a 512^3 run should take)"
+                        : "Finest octree depth")
+        ->capture_default_str();
     app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
         ->capture_default_str();
     app->add_option("--samples-per-node", options.samples_per_node,
@@ -225,8 +231,15 @@ struct PoissonArgs {
   PoissonOptions resolved() const {
     PoissonOptions o = options;
     require_range("--alpha", o.point_weight, 0, 1e4);
-    require_range("--depth", o.depth, 1, 16);
-    require_range("--full-depth", o.full_depth, 0, o.depth);
+    if (depth == "auto") {
+      o.depth = 0;  // the pipeline chooses
+      require_range("--full-depth", o.full_depth, 0, 8);
+    } else {
+      o.depth = int(parse_number_or("--depth", depth, {}));
+      require_range("--depth", o.depth, 1, 16);
+      if (std::to_string(o.depth) != depth) throw Error("--depth must be a whole number or 'auto'");
+      require_range("--full-depth", o.full_depth, 0, o.depth);
+    }
     require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
     require_range("--scale", o.scale, 1, 16);
     require_range("--solver-tolerance", o.solver_tolerance, 1e-16, 0.5);
@@ -242,6 +255,12 @@ struct PoissonArgs {
   }
 };
 
+PoissonArgs contour_poisson_args() {
+  PoissonArgs p;
+  p.depth = "auto";
+  return p;
+}
+
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", stats, gradient = "regular",
                                      weights = "james", band = "4", truncation = "auto", grid;
@@ -251,7 +270,7 @@ struct ContourArgs {
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, quiet = false, ascii = false, serial_triangulation = false;
   std::uint64_t seed = 0;
-  PoissonArgs poisson;
+  PoissonArgs poisson = contour_poisson_args();
 };
 
 int run_contour(const ContourArgs& a) {
@@ -358,6 +377,7 @@ int run_contour(const ContourArgs& a) {
                    {"samples_triangulated", r.bricks->triangulated},
                    {"largest_brick_samples", r.bricks->largest_brick}};
   if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
+  if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;
   if (r.mesh) {
     j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
                  {"triangles", r.mesh->triangles.rows()},

@@ -37,7 +37,7 @@ struct ContourOptions {
   BandOptions band;
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
-  PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes
+  PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes; depth 0: automatic
   bool parallel = true;    ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
@@ -58,10 +58,17 @@ struct ContourResult {
   double band_spacing = 0;  ///< the spacing h the band is measured in
   Truncation truncation;    ///< the truncation found or given
   std::optional<BrickStats> bricks;  ///< when GCP ran in bricks
+  int poisson_depth = 0;             ///< the depth the mesh was reconstructed at
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
 };
+
+/// The Poisson depth for samples `spacing` apart spanning `points`' extent: 8 up to 129 samples
+/// per axis, 9 above. Measured (bench/scale.py, docs/scale.md): at 256^3 depth 8 is coarser than
+/// the grid (GCP's L1 1.27x MC's), depth 9 gives 0.68x MC's on the bunny in 2.2 GB, depth 10
+/// 0.51x in 6.7 GB: too much memory until the Poisson solver's high-depth memory is reduced.
+int auto_poisson_depth(const PointMatrix& points, double spacing);
 
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
 /// it may be null for other methods. Throws Error for an input the method cannot use (no sign
