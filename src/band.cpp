@@ -1,11 +1,11 @@
 #include "sdfcontour/band.h"
 
-#include <cmath>
-#include <string>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+
+#include <cmath>
+#include <string>
 
 namespace sdfcontour {
 
@@ -209,9 +209,9 @@ BandSamples select_band(const Samples& samples, const BandOptions& options, doub
       samples.points.colwise().maxCoeff() - samples.points.colwise().minCoeff();
   // A flat box still has a spacing: measure it in the largest extent then.
   const double volume = extent.prod();
-  const double h = spacing > 0     ? spacing
-                   : volume > 0    ? std::cbrt(volume / double(n))
-                                   : extent.maxCoeff() / std::cbrt(n);
+  const double h = spacing > 0  ? spacing
+                   : volume > 0 ? std::cbrt(volume / double(n))
+                                : extent.maxCoeff() / std::cbrt(n);
   validate_band_options(options);
   BandSamples out;
   out.spacing = h;

@@ -133,7 +133,12 @@ class BrickRunner {
  public:
   BrickRunner(const Samples& s, double h, const GradientOptions& g, const ContactPointOptions& c,
               const BrickOptions& o, const std::vector<char>* only)
-      : s_(s), h_(h), gradient_(g), contact_(c), options_(o), only_(only),
+      : s_(s),
+        h_(h),
+        gradient_(g),
+        contact_(c),
+        options_(o),
+        only_(only),
         grid_(bucket(s.points, o.size * h)) {
     max_weight_ = s.values.array().square().maxCoeff();
     all_ = {s.points.colwise().minCoeff().transpose(), s.points.colwise().maxCoeff().transpose()};
@@ -256,8 +261,7 @@ class BrickRunner {
 ContactPoints brick_contact_points(const Samples& samples, double spacing,
                                    const GradientOptions& gradient,
                                    const ContactPointOptions& contact, const BrickOptions& options,
-                                   BrickStats* stats,
-                                   const std::function<void(int, int)>& progress,
+                                   BrickStats* stats, const std::function<void(int, int)>& progress,
                                    const std::vector<char>* only) {
   if (options.size < 1)
     throw Error("the brick size must be at least 1 spacing, got " + std::to_string(options.size));

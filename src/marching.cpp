@@ -130,8 +130,12 @@ template <class Value>
 class CubeMarcher {
  public:
   explicit CubeMarcher(const GridView& grid)
-      : g_(grid), f_(static_cast<const Value*>(grid.data)), nx_(grid.dims[0]), ny_(grid.dims[1]),
-        nz_(grid.dims[2]), h_(grid.spacing()) {}
+      : g_(grid),
+        f_(static_cast<const Value*>(grid.data)),
+        nx_(grid.dims[0]),
+        ny_(grid.dims[1]),
+        nz_(grid.dims[2]),
+        h_(grid.spacing()) {}
 
   Mesh run() {
     number_vertices();
@@ -139,7 +143,8 @@ class CubeMarcher {
     mesh.vertices.resize(line_base_.back(), 3);
     tbb::parallel_for(0, nx_, [&](int i) { place_vertices(i, mesh.vertices); });
     std::vector<detail::PolygonOutput> slabs(std::size_t(std::max(nx_ - 1, 0)));
-    tbb::parallel_for(0, nx_ - 1, [&](int i) { march_slab(i, mesh.vertices, slabs[std::size_t(i)]); });
+    tbb::parallel_for(0, nx_ - 1,
+                      [&](int i) { march_slab(i, mesh.vertices, slabs[std::size_t(i)]); });
     concatenate(slabs, mesh);
     return mesh;
   }
@@ -226,8 +231,7 @@ class CubeMarcher {
           Eigen::Vector3d position[12];
           for (int q = 0; q < size; ++q) {
             const int c = T.edge_low_corner[edges[q]], a = edges[q] / 4, l = c & 3;
-            const long base =
-                line_base_[3 * line(i + (c & 1), j + (c >> 1 & 1)) + std::size_t(a)];
+            const long base = line_base_[3 * line(i + (c & 1), j + (c >> 1 & 1)) + std::size_t(a)];
             // An edge at k + 1 has the line's edge at k before it, if that one crosses.
             const long before = rank[l][a] + ((c & 4) ? crossing_at_k(value, l, a) : 0);
             polygon[q] = int(base + before);

@@ -1,5 +1,10 @@
 #include "sdfcontour/npy.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -9,11 +14,6 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
-
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "sdfcontour/atomic_file.h"
 
@@ -189,8 +189,8 @@ std::shared_ptr<const MappedNpy> map_npy(const std::string& path) {
   }
   if (header_len > kMaxHeaderBytes)
     throw Error("'" + path + "' is not a valid .npy file: its header claims " +
-                std::to_string(header_len) + " bytes (at most " +
-                std::to_string(kMaxHeaderBytes) + " are accepted)");
+                std::to_string(header_len) + " bytes (at most " + std::to_string(kMaxHeaderBytes) +
+                " are accepted)");
   if (size < header_start + header_len)
     throw Error("'" + path + "' is a truncated .npy file (header cut short)");
   const NpyHeader header =
@@ -207,7 +207,8 @@ std::shared_ptr<const MappedNpy> map_npy(const std::string& path) {
                 "'; only little-endian float32 ('<f4') and float64 ('<f8') are supported");
   const std::size_t item = mapped->type == ScalarType::Float64 ? 8 : 4;
   std::string shape_text;
-  for (std::size_t d : header.shape) shape_text += (shape_text.empty() ? "" : ", ") + std::to_string(d);
+  for (std::size_t d : header.shape)
+    shape_text += (shape_text.empty() ? "" : ", ") + std::to_string(d);
   shape_text = "(" + shape_text + ")";
   // Overflow-safe: the product of the dimensions times the item size must fit the file.
   const std::size_t data_start = header_start + header_len;

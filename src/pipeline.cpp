@@ -94,9 +94,9 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   Stages stages(result, options);
 
   if (method == Method::Mc && options.want_mesh)
-    result.mesh = stages.run("marching",
-                             "marching cubes on " + std::to_string(result.samples) + " samples",
-                             [&] { return marching_cubes(input.grid); });
+    result.mesh =
+        stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
+                   [&] { return marching_cubes(input.grid); });
   if (!options.want_points && method == Method::Mc) return result;
 
   // The other stages see the band's samples as scattered samples; a grid's positions are made
@@ -127,8 +127,8 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   // Bricks need a band (or a truncation): without one, the weights are unbounded and no halo
   // is local. The default halo is twice the largest |value| kept, in spacings.
   const double largest = s.values.size() ? s.values.cwiseAbs().maxCoeff() : 0.0;
-  const bool bounded = std::isfinite(options.band.band) ||
-                       (std::isfinite(band.truncation.inside) && std::isfinite(band.truncation.outside));
+  const bool bounded = std::isfinite(options.band.band) || (std::isfinite(band.truncation.inside) &&
+                                                            std::isfinite(band.truncation.outside));
   const bool gcp_in_bricks = need_gcp && options.gradient_source == GradientSource::Regular &&
                              options.bricks.size > 0 && bounded;
   BrickOptions bricks = options.bricks;
@@ -152,17 +152,14 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
                           [&] { return triangulate(s.points, s.values, topt); });
   }
   if (gcp_in_bricks) {
-    result.contact_points = stages.run(
-        "contact_points", "triangulation, gradients and contact points in bricks", [&] {
+    result.contact_points =
+        stages.run("contact_points", "triangulation, gradients and contact points in bricks", [&] {
           std::function<void(int, int)> report;
           if (options.progress_fraction)
-            report = [&](int done, int total) {
-              options.progress_fraction("bricks", done, total);
-            };
+            report = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
           BrickStats st;
           ContactPoints cp = brick_contact_points(s, band.spacing, options.gradient,
-                                                  options.contact, bricks, &st, report,
-                                                  core);
+                                                  options.contact, bricks, &st, report, core);
           result.bricks = st;
           return cp;
         });

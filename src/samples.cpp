@@ -1,11 +1,11 @@
 #include "sdfcontour/samples.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <cmath>
 #include <string>
 #include <utility>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 
 namespace sdfcontour {
 
@@ -36,8 +36,10 @@ constexpr double kLargestValue = 1e100;
 static void require_finite(const Eigen::VectorXd& values, const char* what) {
   for (Eigen::Index i = 0; i < values.size(); ++i)
     if (!(std::abs(values[i]) <= kLargestValue))
-      throw Error(std::string(what) + " contain a NaN, infinite or too large (over 1e100) value "
-                  "(at index " + std::to_string(i) + ")");
+      throw Error(std::string(what) +
+                  " contain a NaN, infinite or too large (over 1e100) value "
+                  "(at index " +
+                  std::to_string(i) + ")");
 }
 
 GridView view_of(const Grid& grid) {
@@ -114,8 +116,10 @@ void validate_samples(const Samples& samples) {
   for (Eigen::Index i = 0; i < samples.points.rows(); ++i)
     for (int a = 0; a < 3; ++a)
       if (!(std::abs(samples.points(i, a)) <= kLargestValue))
-        throw Error("sample positions contain a NaN, infinite or too large (over 1e100) value "
-                    "(at row " + std::to_string(i) + ")");
+        throw Error(
+            "sample positions contain a NaN, infinite or too large (over 1e100) value "
+            "(at row " +
+            std::to_string(i) + ")");
   require_finite(samples.values, "sample values");
 }
 

@@ -60,8 +60,8 @@ VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_
   }
   if (!grid) {
     if (!grid_name.empty())
-      throw Error("'" + path + "' has no float grid named '" + grid_name + "' (grids: " +
-                  (names.empty() ? "none" : names) + ")");
+      throw Error("'" + path + "' has no float grid named '" + grid_name +
+                  "' (grids: " + (names.empty() ? "none" : names) + ")");
     throw Error("'" + path + "' has no float grid (grids: " + (names.empty() ? "none" : names) +
                 ")");
   }
@@ -78,7 +78,8 @@ VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_
   if (!(out.voxel_size > 0) || !std::isfinite(out.voxel_size))
     throw Error("grid '" + out.grid_name + "' has a degenerate transform");
   const openvdb::Index64 count = grid->activeVoxelCount();
-  if (count == 0) throw Error("grid '" + out.grid_name + "' in '" + path + "' has no active voxels");
+  if (count == 0)
+    throw Error("grid '" + out.grid_name + "' in '" + path + "' has no active voxels");
   // Active tiles would stand for many voxels; a level set has none, and we do not densify them.
   if (grid->tree().activeTileCount() > 0)
     throw Error("grid '" + out.grid_name + "' has active tiles; a narrow-band level set has none");

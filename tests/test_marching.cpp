@@ -96,6 +96,7 @@ TEST(Marching, CubesHandleEveryCornerConfiguration) {
 }
 
 TEST(Marching, CubesAgreeWithScikitImage) {
+  SDFCONTOUR_REQUIRE_PYTHON_MODULE("skimage");
   const auto dir = test::temp_dir("mc_skimage");
   for (const std::string name : {"sphere", "torus", "csg", "box"}) {
     for (int n : {24, 48}) {

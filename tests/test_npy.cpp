@@ -103,12 +103,11 @@ TEST(Npy, RejectsBadFiles) {
   // product overflows 64 bits, a negative dimension, a header longer than any real one.
   write_raw_npy((dir / "long_field.npy").string(), std::string(60000, 'f'), "False", "(2, 2, 2)",
                 floats_bytes(eight));
-  write_raw_npy((dir / "overflow.npy").string(), "<f4", "False",
-                "(4294967296, 4294967296, 2)", floats_bytes(eight));
-  write_raw_npy((dir / "huge_dim.npy").string(), "<f4", "False",
-                "(99999999999999999999999, 2, 2)", floats_bytes(eight));
-  write_raw_npy((dir / "negative.npy").string(), "<f4", "False", "(-1, 2, 4)",
+  write_raw_npy((dir / "overflow.npy").string(), "<f4", "False", "(4294967296, 4294967296, 2)",
                 floats_bytes(eight));
+  write_raw_npy((dir / "huge_dim.npy").string(), "<f4", "False", "(99999999999999999999999, 2, 2)",
+                floats_bytes(eight));
+  write_raw_npy((dir / "negative.npy").string(), "<f4", "False", "(-1, 2, 4)", floats_bytes(eight));
   write_raw_npy((dir / "no_shape.npy").string(), "<f4", "False", "", floats_bytes(eight));
   expect_error("fortran.npy", "Fortran order");
   expect_error("int.npy", "dtype");

@@ -46,6 +46,7 @@ PointMatrix exact_surface_points(bool torus, int count) {
 // Distance functions of two surfaces differ by at most their Hausdorff distance, and their signs
 // agree away from the surfaces: the mesh SDF must match the analytic SDF that well.
 TEST(Sampling, MeshSdfMatchesAnalyticShapes) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   for (const bool torus : {false, true}) {
     SCOPED_TRACE(torus ? "torus" : "sphere");
     const Mesh mesh =
@@ -78,6 +79,7 @@ TEST(Sampling, MeshSdfMatchesAnalyticShapes) {
 }
 
 TEST(Sampling, NormalisationSpansTheBox) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   const Mesh m = normalize_mesh(read_mesh(kMeshes + "bunny.obj"), 0.9);
   const Eigen::RowVector3d lo = m.vertices.colwise().minCoeff(),
                            hi = m.vertices.colwise().maxCoeff();
@@ -90,6 +92,7 @@ TEST(Sampling, NormalisationSpansTheBox) {
 // 4 [1 - (1-t)^3] / 3; the four side faces give 4 t^2. Squared: 4t^2, 8 (t^2/2 - 2t^3/3 + t^4/4)
 // and 8 t^3 / 3. The Hausdorff distance is t. Both directions are alike by symmetry.
 TEST(Metrics, CubeAgainstShiftedCube) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   const Mesh cube = normalize_mesh(read_mesh(kMeshes + "cube.obj"), 1.0);
   Mesh shifted = cube;
   const double t = 0.3;
@@ -110,6 +113,7 @@ TEST(Metrics, CubeAgainstShiftedCube) {
 // A sphere against the same sphere scaled by 1.1 about its centre: every point is 0.1 r from the
 // other surface, up to the meshes' faceting.
 TEST(Metrics, SphereAgainstScaledSphere) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   const Mesh sphere = read_mesh(kMeshes + "sphere.obj");
   Mesh scaled = sphere;
   scaled.vertices *= 1.1;
@@ -120,6 +124,7 @@ TEST(Metrics, SphereAgainstScaledSphere) {
 }
 
 TEST(Metrics, ComponentsAndGenus) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   const Mesh torus = read_mesh(kMeshes + "torus.obj");
   const MeshTopology t = mesh_topology(torus);
   EXPECT_TRUE(t.closed);
@@ -136,6 +141,7 @@ TEST(Metrics, ComponentsAndGenus) {
 }
 
 TEST(Sampling, RejectsBadMeshes) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   Mesh open = read_mesh(kMeshes + "cube.obj");
   open.triangles.conservativeResize(open.triangles.rows() - 1, 3);
   EXPECT_THROW(MeshSdf{open}, Error);

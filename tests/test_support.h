@@ -5,21 +5,48 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <cstdlib>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "sdfcontour/samples.h"
 
 namespace sdfcontour::test {
 
-/// A fresh temporary directory for one test.
+/// Removes the temporary directories the tests made when the test program ends.
+struct TempDirs {
+  std::vector<std::filesystem::path> made;
+  ~TempDirs() {
+    std::error_code ec;
+    for (const auto& d : made) std::filesystem::remove_all(d, ec);
+  }
+};
+
+/// A fresh temporary directory for one test, removed when the test program ends.
 inline std::filesystem::path temp_dir(const std::string& name) {
+  static TempDirs dirs;
   auto dir = std::filesystem::temp_directory_path() /
              ("sdfcontour_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  dirs.made.push_back(dir);
   return dir;
 }
+
+/// Skips the calling test, with the reason, unless `path` exists (an optional peer or data).
+#define SDFCONTOUR_REQUIRE_PATH(path, what)                                        \
+  do {                                                                             \
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "needs " << what << " at " << (path); \
+  } while (0)
+
+/// Skips the calling test unless Debian's python3 can import `module`.
+#define SDFCONTOUR_REQUIRE_PYTHON_MODULE(module)                                          \
+  do {                                                                                    \
+    if (std::system("/usr/bin/python3 -c 'import " module "' 2>/dev/null") != 0)          \
+      GTEST_SKIP() << "needs Debian's python3 with " module " (apt-get install python3-" \
+                   << module << ")";                                                      \
+  } while (0)
 
 /// n points uniformly random in [-1, 1]^3.
 inline PointMatrix random_points(int n, unsigned seed) {

@@ -53,7 +53,8 @@ TEST(Vdb, RoundTripKeepsTheBandSparse) {
     const Eigen::Vector3d ijk = (p - bounds.min) / h;
     const Eigen::Vector3i c = ijk.array().round().cast<int>();
     ASSERT_LT((ijk - c.cast<double>()).norm(), 1e-6);
-    EXPECT_EQ(ls.samples.values[r], double(float(grid.values[Eigen::Index(grid.index(c[0], c[1], c[2]))])));
+    EXPECT_EQ(ls.samples.values[r],
+              double(float(grid.values[Eigen::Index(grid.index(c[0], c[1], c[2]))])));
   }
   // GCP on the level set: its background is the truncation distance.
   SdfInput input;

@@ -1,6 +1,7 @@
 // sdfcontour: contour signed distance samples into triangle meshes.
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -11,8 +12,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
-
-#include <unistd.h>
 
 #include "sdfcontour/atomic_file.h"
 #include "sdfcontour/builtin_shapes.h"
@@ -554,15 +553,15 @@ int run_sample(const SampleArgs& a) {
   if (a.resolution > 0) {
     say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
     const double h = (bounds.max - bounds.min).maxCoeff() / (a.resolution - 1);
-    const Grid grid = truncate > 0
-                          ? sample_grid_truncated(sdf, a.resolution, bounds, truncate * h)
-                          : sample_grid(sdf, a.resolution, bounds);
+    const Grid grid = truncate > 0 ? sample_grid_truncated(sdf, a.resolution, bounds, truncate * h)
+                                   : sample_grid(sdf, a.resolution, bounds);
     const std::size_t n = std::size_t(a.resolution);
     if (is_vdb_path(a.prefix))
       write_vdb_level_set(a.prefix, grid, a.half_width);
     else if (a.float32)
-      write_npy_float32(a.prefix + ".npy", {n, n, n},
-                std::vector<float>(grid.values.data(), grid.values.data() + grid.values.size()));
+      write_npy_float32(
+          a.prefix + ".npy", {n, n, n},
+          std::vector<float>(grid.values.data(), grid.values.data() + grid.values.size()));
     else
       write_npy(a.prefix + ".npy", {n, n, n},
                 std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
@@ -786,10 +785,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sample->add_option("--bounds", sa.bounds, "Sampled box: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")
       ->capture_default_str();
-  sample->add_option("--truncate", sa.truncate,
-                     "Truncate the grid's distances at this many spacings (a TSDF, as OpenVDB "
-                     "stores level sets); only blocks near the surface are evaluated, so large "
-                     "grids sample fast. 0: exact everywhere")
+  sample
+      ->add_option("--truncate", sa.truncate,
+                   "Truncate the grid's distances at this many spacings (a TSDF, as OpenVDB "
+                   "stores level sets); only blocks near the surface are evaluated, so large "
+                   "grids sample fast. 0: exact everywhere")
       ->capture_default_str();
   sample->add_flag("--float32", sa.float32, "Write the grid as float32 (default float64)");
   sample->add_option("--half-width", sa.half_width, "A .vdb level set's narrow band, in voxels")

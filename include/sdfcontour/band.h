@@ -36,8 +36,10 @@ struct BandOptions {
 struct Truncation {
   double inside = std::numeric_limits<double>::infinity();   ///< of negative values
   double outside = std::numeric_limits<double>::infinity();  ///< of non-negative values
-  bool detected() const { return inside < std::numeric_limits<double>::infinity() ||
-                                 outside < std::numeric_limits<double>::infinity(); }
+  bool detected() const {
+    return inside < std::numeric_limits<double>::infinity() ||
+           outside < std::numeric_limits<double>::infinity();
+  }
   /// True if `value` is at a truncation distance of its sign.
   bool truncated(double value) const;
 };

@@ -29,10 +29,10 @@ struct BrickOptions {
 
 /// What the bricks did.
 struct BrickStats {
-  int bricks = 0;            ///< bricks holding samples
-  int retries = 0;           ///< bricks redone with a wider halo
-  long triangulated = 0;     ///< samples triangulated over all bricks (halos counted again)
-  long largest_brick = 0;    ///< samples in the largest triangulation
+  int bricks = 0;          ///< bricks holding samples
+  int retries = 0;         ///< bricks redone with a wider halo
+  long triangulated = 0;   ///< samples triangulated over all bricks (halos counted again)
+  long largest_brick = 0;  ///< samples in the largest triangulation
 };
 
 /// GCP contact points of `samples` (positions n x 3, values n), computed brick by brick with the

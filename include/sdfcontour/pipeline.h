@@ -53,10 +53,10 @@ struct StageTime {
 struct ContourResult {
   std::optional<Mesh> mesh;
   std::optional<ContactPoints> contact_points;
-  int samples = 0;       ///< samples in the input
-  int band_samples = 0;  ///< of those, in the band (triangulated); 0 for mc alone
-  double band_spacing = 0;  ///< the spacing h the band is measured in
-  Truncation truncation;    ///< the truncation found or given
+  int samples = 0;                   ///< samples in the input
+  int band_samples = 0;              ///< of those, in the band (triangulated); 0 for mc alone
+  double band_spacing = 0;           ///< the spacing h the band is measured in
+  Truncation truncation;             ///< the truncation found or given
   std::optional<BrickStats> bricks;  ///< when GCP ran in bricks
   int poisson_depth = 0;             ///< the depth the mesh was reconstructed at
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built

@@ -15,10 +15,10 @@ bool is_vdb_path(const std::string& path);
 
 /// A float level set's active voxels.
 struct VdbLevelSet {
-  Samples samples;         ///< active voxels: world positions and values
-  double voxel_size = 0;   ///< the largest voxel side, in world units
-  double background = 0;   ///< the outside background value (the band's half width)
-  std::string grid_name;   ///< the grid read
+  Samples samples;        ///< active voxels: world positions and values
+  double voxel_size = 0;  ///< the largest voxel side, in world units
+  double background = 0;  ///< the outside background value (the band's half width)
+  std::string grid_name;  ///< the grid read
 };
 
 /// Reads the float level set named `grid_name` (empty: the first float grid) from a .vdb file.

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Builds the fuzz targets with clang's libFuzzer (+ ASan/UBSan) and runs each for SECONDS
+# (default 60), starting from the seed corpus in tests/fuzz/corpus/<target>/. Findings are written
+# to build-fuzz/findings/; a crash input becomes a regression test (tests/test_npy.cpp).
+# Usage: bash tests/fuzz/run.sh [SECONDS]
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+seconds="${1:-60}"
+out=build-fuzz
+mkdir -p "$out/findings"
+flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
+       -Iinclude -I/usr/include/eigen3)
+clang++ "${flags[@]}" tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp \
+  -ltbb -o "$out/fuzz_npy"
+for target in npy; do
+  corpus="$out/corpus_$target"
+  mkdir -p "$corpus"
+  cp tests/fuzz/corpus/$target/* "$corpus/"
+  "$out/fuzz_$target" "$corpus" -max_total_time="$seconds" -max_len=4096 -rss_limit_mb=2048 \
+    -artifact_prefix="$out/findings/${target}_" 2>&1 | tail -n 12
+done
