@@ -9,37 +9,22 @@ Usage: /usr/bin/python3 bench/band.py [--cli build/sdfcontour] [--meshes bunny,s
 """
 import argparse
 import json
-import math
 import os
-import re
 import subprocess
 import tempfile
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-MESHES = os.path.join(HERE, "..", "..", "shared", "data", "meshes")
+from common import CLI, MESHES, geomean, l1, timed
 
 
-def timed(cmd):
-    """Runs cmd under /usr/bin/time; returns (wall seconds, peak RSS in MB, stdout)."""
-    r = subprocess.run(["/usr/bin/time", "-f", "TIME %e %M", *cmd], capture_output=True, text=True)
-    if r.returncode != 0:
-        raise RuntimeError(f"{cmd} failed: {r.stderr}")
-    m = re.search(r"TIME ([\d.]+) (\d+)", r.stderr)
-    return float(m.group(1)), int(m.group(2)) / 1024, r.stdout
 
 
-def l1(cli, mesh, gt):
-    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True, check=True)
-    return json.loads(r.stdout)["L1"]
 
 
-def geomean(v):
-    return math.exp(sum(math.log(x) for x in v) / len(v))
 
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--cli", default=os.path.join(HERE, "..", "build", "sdfcontour"))
+    ap.add_argument("--cli", default=CLI)
     ap.add_argument("--meshes", default="bunny,spot,armadillo,koala_lowres,wingnut,hammer")
     ap.add_argument("--res", default="64,128")
     ap.add_argument("--bands", default="2,3,4,6,all")
@@ -58,8 +43,10 @@ def main():
                 for band in bands:
                     out = os.path.join(d, "m.ply")
                     stats = os.path.join(d, "s.json")
-                    t, rss, _ = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--band", band, "-q",
+                    t, rss, _, err = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--band", band, "-q",
                                        "--stats", stats])
+                    if t is None:
+                        raise RuntimeError(f"{name} {res} band {band} failed: {err}")
                     s = json.load(open(stats))
                     rows.append({"mesh": name, "res": res, "band": band, "seconds": t, "rss_mb": rss,
                                  "samples": s["band"]["samples"], "kept": s["contact_points"]["kept"],

@@ -15,17 +15,14 @@ Needs Debian's python3-skimage, python3-openvdb and python3-vtk9.
 """
 import argparse
 import json
-import math
 import os
-import re
 import subprocess
 import sys
 import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-MESHES = os.path.join(HERE, "..", "..", "shared", "data", "meshes")
+from common import CLI, MESHES, geomean, l1, timed
 
 
 def write_ply(path, v, f):
@@ -95,27 +92,15 @@ def peer(name, grid_path, out_path):
     print(json.dumps({"seconds": seconds}))
 
 
-def timed(cmd):
-    r = subprocess.run(["/usr/bin/time", "-f", "TIME %e %M", *cmd], capture_output=True, text=True)
-    m = re.search(r"TIME ([\d.]+) (\d+)", r.stderr)
-    if r.returncode != 0 or not m:
-        return None, None, r.stdout, r.stderr.strip().splitlines()[-2:]
-    return float(m.group(1)), int(m.group(2)) / 1024, r.stdout, None
 
 
-def l1(cli, mesh, gt):
-    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True)
-    return json.loads(r.stdout)["L1"] if r.returncode == 0 else None
 
 
-def geomean(v):
-    v = [x for x in v if x]
-    return math.exp(sum(math.log(x) for x in v) / len(v)) if v else float("nan")
 
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--cli", default=os.path.join(HERE, "..", "build", "sdfcontour"))
+    ap.add_argument("--cli", default=CLI)
     ap.add_argument("--res", default="64,128,256,512")
     ap.add_argument("--meshes", default="bunny,spot,armadillo")
     ap.add_argument("--methods", default="gcp,mt-rt,mc,skimage,openvdb,vtk")

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -31,21 +32,27 @@ using namespace sdfcontour;
 
 namespace {
 
+// The whole of `text` as a finite number, or nothing.
+std::optional<double> parse_finite(const std::string& text) {
+  std::size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(x)) return std::nullopt;
+  return x;
+}
+
 Bounds parse_bounds(const std::string& text) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string token;
   while (std::getline(ss, token, ',')) {
-    std::size_t used = 0;
-    double x = 0;
-    try {
-      x = std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != token.size() || !std::isfinite(x))
-      throw Error("--bounds: '" + token + "' is not a finite number");
-    v.push_back(x);
+    const std::optional<double> x = parse_finite(token);
+    if (!x) throw Error("--bounds: '" + token + "' is not a finite number");
+    v.push_back(*x);
   }
   Bounds b;
   if (v.size() == 2) {
@@ -87,18 +94,11 @@ double parse_number_or(const std::string& option, const std::string& text,
                        const std::vector<std::pair<std::string, double>>& words) {
   for (const auto& [word, value] : words)
     if (text == word) return value;
-  std::size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
+  const std::optional<double> x = parse_finite(text);
   std::string known;
   for (const auto& w : words) known += " or '" + w.first + "'";
-  if (used == 0 || used != text.size() || !std::isfinite(x) || !(x > 0))
-    throw Error(option + ": '" + text + "' is not a positive number" + known);
-  return x;
+  if (!x || !(*x > 0)) throw Error(option + ": '" + text + "' is not a positive number" + known);
+  return *x;
 }
 
 BandOptions parse_band_options(const std::string& band, const std::string& truncation) {

@@ -1,0 +1,32 @@
+"""Helpers the benchmarks share: timing a command's wall time and peak RSS, L1 from
+`sdfcontour eval`, geometric means, where the shared meshes are."""
+import json
+import math
+import os
+import re
+import subprocess
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+MESHES = os.path.join(HERE, "..", "..", "shared", "data", "meshes")
+CLI = os.path.join(HERE, "..", "build", "sdfcontour")
+
+
+def timed(cmd):
+    """Runs cmd under /usr/bin/time: (wall seconds, peak RSS in MB, stdout, None) or, if it failed,
+    (None, None, stdout, the last lines of stderr)."""
+    r = subprocess.run(["/usr/bin/time", "-f", "TIME %e %M", *cmd], capture_output=True, text=True)
+    m = re.search(r"TIME ([\d.]+) (\d+)", r.stderr)
+    if r.returncode != 0 or not m:
+        return None, None, r.stdout, r.stderr.strip().splitlines()[-2:]
+    return float(m.group(1)), int(m.group(2)) / 1024, r.stdout, None
+
+
+def l1(cli, mesh, gt):
+    """The paper's L1 distance between two meshes, or None if eval failed."""
+    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True)
+    return json.loads(r.stdout)["L1"] if r.returncode == 0 else None
+
+
+def geomean(values):
+    v = [x for x in values if x]
+    return math.exp(sum(math.log(x) for x in v) / len(v)) if v else float("nan")
