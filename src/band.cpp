@@ -135,6 +135,15 @@ Truncation resolve(const Values& values, const BandOptions& options) {
   return {};
 }
 
+// What both selections start with: checked options, the spacing, the truncation, the test.
+template <class Values>
+BandTest begin_band(BandSamples& out, const Values& values, const BandOptions& options, double h) {
+  validate_band_options(options);
+  out.spacing = h;
+  out.truncation = resolve(values, options);
+  return make_test(options, h, out.truncation);
+}
+
 }  // namespace
 
 Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options) {
@@ -157,12 +166,8 @@ void validate_band_options(const BandOptions& options) {
 }
 
 BandSamples select_band(const GridView& grid, const BandOptions& options) {
-  validate_band_options(options);
   BandSamples out;
-  out.spacing = grid.spacing().maxCoeff();
-  out.truncation = resolve_truncation(grid, options);
-  out.input_count = long(grid.size());
-  const BandTest keep = make_test(options, out.spacing, out.truncation);
+  const BandTest keep = begin_band(out, grid, options, grid.spacing().maxCoeff());
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   // Per-slab counts, then each slab fills its own rows: C order for any thread count.
   std::vector<Eigen::Index> slab_start(std::size_t(nx) + 1, 0);
@@ -212,12 +217,8 @@ BandSamples select_band(const Samples& samples, const BandOptions& options, doub
   const double h = spacing > 0  ? spacing
                    : volume > 0 ? std::cbrt(volume / double(n))
                                 : extent.maxCoeff() / std::cbrt(n);
-  validate_band_options(options);
   BandSamples out;
-  out.spacing = h;
-  out.truncation = resolve_truncation(samples.values, options);
-  out.input_count = long(n);
-  const BandTest keep = make_test(options, h, out.truncation);
+  const BandTest keep = begin_band(out, samples.values, options, h);
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < n; ++i)
     if (keep(samples.values[i])) kept.push_back(i);

@@ -64,7 +64,6 @@ struct BandSamples {
   std::vector<char> core;    ///< for each kept sample, 1 if in the band proper (not the margin)
   double spacing = 0;        ///< the spacing h the band is measured in
   Truncation truncation;
-  long input_count = 0;  ///< samples before the band
 };
 
 /// The grid's samples with |value| <= (band + margin) * h (h the largest grid spacing) that are
