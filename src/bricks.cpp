@@ -121,10 +121,16 @@ bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, con
   return false;
 }
 
+// Adds `from`'s outcome counts to `to`'s.
+void add_counts(ContactPoints& to, const ContactPoints& from) {
+  to.hidden += from.hidden;
+  to.zero_gradient += from.zero_gradient;
+  to.discarded += from.discarded;
+  to.rescued += from.rescued;
+}
+
 struct BrickOutput {
-  std::vector<int> samples;  // global indices of kept points
-  PointMatrix points, normals;
-  int hidden = 0, zero_gradient = 0, discarded = 0, rescued = 0;
+  ContactPoints kept;  // samples named by global index, in the order solved
   long triangulated = 0, largest = 0;
   int retries = 0;
 };
@@ -233,16 +239,14 @@ class BrickRunner {
 
   // Appends the kept points, in global indices, and their counts.
   static void collect(const ContactPoints& cp, const std::vector<int>& local, BrickOutput& out) {
-    const Eigen::Index at = out.points.rows(), k = cp.points.rows();
-    out.points.conservativeResize(at + k, 3);
-    out.normals.conservativeResize(at + k, 3);
-    out.points.bottomRows(k) = cp.points;
-    out.normals.bottomRows(k) = cp.normals;
-    for (int s : cp.samples) out.samples.push_back(local[std::size_t(s)]);
-    out.hidden += cp.hidden;
-    out.zero_gradient += cp.zero_gradient;
-    out.discarded += cp.discarded;
-    out.rescued += cp.rescued;
+    ContactPoints& to = out.kept;
+    const Eigen::Index at = to.points.rows(), k = cp.points.rows();
+    to.points.conservativeResize(at + k, 3);
+    to.normals.conservativeResize(at + k, 3);
+    to.points.bottomRows(k) = cp.points;
+    to.normals.bottomRows(k) = cp.normals;
+    for (int s : cp.samples) to.samples.push_back(local[std::size_t(s)]);
+    add_counts(to, cp);
   }
 
   const Samples& s_;
@@ -291,12 +295,9 @@ ContactPoints brick_contact_points(const Samples& samples, double spacing,
   st.bricks = int(active.size());
   for (std::size_t a = 0; a < outputs.size(); ++a) {
     const BrickOutput& o = outputs[a];
-    for (std::size_t r = 0; r < o.samples.size(); ++r)
-      order.push_back({o.samples[r], {a, Eigen::Index(r)}});
-    result.hidden += o.hidden;
-    result.zero_gradient += o.zero_gradient;
-    result.discarded += o.discarded;
-    result.rescued += o.rescued;
+    for (std::size_t r = 0; r < o.kept.samples.size(); ++r)
+      order.push_back({o.kept.samples[r], {a, Eigen::Index(r)}});
+    add_counts(result, o.kept);
     st.retries += o.retries;
     st.triangulated += o.triangulated;
     st.largest_brick = std::max(st.largest_brick, o.largest);
@@ -308,8 +309,8 @@ ContactPoints brick_contact_points(const Samples& samples, double spacing,
   for (std::size_t r = 0; r < order.size(); ++r) {
     const auto& [a, row] = order[r].second;
     result.samples[r] = order[r].first;
-    result.points.row(Eigen::Index(r)) = outputs[a].points.row(row);
-    result.normals.row(Eigen::Index(r)) = outputs[a].normals.row(row);
+    result.points.row(Eigen::Index(r)) = outputs[a].kept.points.row(row);
+    result.normals.row(Eigen::Index(r)) = outputs[a].kept.normals.row(row);
   }
   if (stats) *stats = st;
   return result;
