@@ -10,8 +10,8 @@
 #include <iostream>
 #include <limits>
 #include <memory>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "sdfcontour/atomic_file.h"
@@ -101,14 +101,25 @@ double parse_number_or(const std::string& option, const std::string& text,
   return *x;
 }
 
+// --threads: 0 for every core, else at most that many workers while the result lives.
+std::unique_ptr<tbb::global_control> limit_threads(int threads) {
+  require_range("--threads", threads, 0, 4096);
+  if (threads == 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               std::size_t(threads));
+}
+
 BandOptions parse_band_options(const std::string& band, const std::string& truncation) {
   BandOptions b;
   b.band = parse_number_or("--band", band, {{"all", std::numeric_limits<double>::infinity()}});
-  const double t = parse_number_or("--truncation", truncation, {{"auto", -1}, {"none", -2}});
-  b.truncation_mode = t == -1   ? TruncationMode::Auto
-                      : t == -2 ? TruncationMode::None
-                                : TruncationMode::Given;
-  if (t > 0) b.truncation = t;
+  if (truncation == "auto") {
+    b.truncation_mode = TruncationMode::Auto;
+  } else if (truncation == "none") {
+    b.truncation_mode = TruncationMode::None;
+  } else {
+    b.truncation_mode = TruncationMode::Given;
+    b.truncation = parse_number_or("--truncation (T, auto or none)", truncation, {});
+  }
   return b;
 }
 
@@ -278,11 +289,7 @@ int run_contour(const ContourArgs& a) {
   for (const std::string* path : {&a.output, &a.points, &a.stats})
     if (!path->empty()) require_writable(*path);
   OutputBatch outputs;  // every file appears at the end, or none
-  std::unique_ptr<tbb::global_control> threads;
-  require_range("--threads", a.threads, 0, 4096);
-  if (a.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    std::size_t(a.threads));
+  const auto threads = limit_threads(a.threads);
   auto say = [&](const std::string& m) {
     if (!a.quiet) std::cerr << "[sdfcontour] " << m << "\n";
   };
@@ -446,11 +453,7 @@ int run_poisson(const PoissonCommandArgs& a) {
   for (const std::string* path : {&a.output, &a.stats, &a.densities})
     if (!path->empty()) require_writable(*path);
   OutputBatch outputs;
-  std::unique_ptr<tbb::global_control> threads;
-  require_range("--threads", a.threads, 0, 4096);
-  if (a.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    std::size_t(a.threads));
+  const auto threads = limit_threads(a.threads);
   PoissonOptions o = a.poisson.resolved();
   if (!a.quiet)
     o.progress = [](const std::string& m) { std::cerr << "[sdfcontour] " << m << "\n"; };
