@@ -65,4 +65,23 @@ void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vect
   for (int q = 0; q < size; ++q) out.triangles.push_back({c, polygon[q], polygon[(q + 1) % size]});
 }
 
+void polygons_to_mesh(const std::vector<PolygonOutput>& parts, Mesh& mesh) {
+  std::size_t total = 0, extra = 0;
+  for (const auto& s : parts) total += s.triangles.size(), extra += s.centroids.size();
+  const Eigen::Index edge_vertices = mesh.vertices.rows();
+  mesh.vertices.conservativeResize(edge_vertices + Eigen::Index(extra), 3);
+  mesh.triangles.resize(Eigen::Index(total), 3);
+  Eigen::Index at = 0, next_centroid = edge_vertices;
+  for (const auto& s : parts) {
+    for (const auto& c : s.centroids) mesh.vertices.row(next_centroid++) = c.transpose();
+    const Eigen::Index base = next_centroid - Eigen::Index(s.centroids.size());
+    for (const auto& t : s.triangles) {
+      for (int k = 0; k < 3; ++k)
+        mesh.triangles(at, k) =
+            t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
+      ++at;
+    }
+  }
+}
+
 }  // namespace sdfcontour::detail

@@ -7,6 +7,8 @@
 #include <array>
 #include <vector>
 
+#include "sdfcontour/types.h"
+
 namespace sdfcontour::detail {
 
 // Cube corners are numbered by bits (x=1, y=2, z=4). A cube edge is (its corner with the axis bit
@@ -89,5 +91,10 @@ struct PolygonOutput {
 /// none, the fan starts from a new vertex at the polygon's centroid.
 void triangulate_polygon(const int* polygon, const int* edges, const Eigen::Vector3d* position,
                          int size, PolygonOutput& out);
+
+/// Completes a mesh whose vertices so far are the edge vertices: appends the parts' centroid
+/// vertices in part order and sets the triangles (the parts' triangles in order, centroid ids
+/// resolved).
+void polygons_to_mesh(const std::vector<PolygonOutput>& parts, Mesh& mesh);
 
 }  // namespace sdfcontour::detail

@@ -145,7 +145,7 @@ class CubeMarcher {
     std::vector<detail::PolygonOutput> slabs(std::size_t(std::max(nx_ - 1, 0)));
     tbb::parallel_for(0, nx_ - 1,
                       [&](int i) { march_slab(i, mesh.vertices, slabs[std::size_t(i)]); });
-    concatenate(slabs, mesh);
+    detail::polygons_to_mesh(slabs, mesh);
     return mesh;
   }
 
@@ -252,25 +252,6 @@ class CubeMarcher {
     const int bit = 1 << axis;
     if (l & bit) return 0;
     return (value[l] < 0) != (value[l | bit] < 0);
-  }
-
-  void concatenate(const std::vector<detail::PolygonOutput>& slabs, Mesh& mesh) const {
-    std::size_t total = 0, extra = 0;
-    for (const auto& s : slabs) total += s.triangles.size(), extra += s.centroids.size();
-    const Eigen::Index edge_vertices = mesh.vertices.rows();
-    mesh.vertices.conservativeResize(edge_vertices + Eigen::Index(extra), 3);
-    mesh.triangles.resize(Eigen::Index(total), 3);
-    Eigen::Index at = 0, next_centroid = edge_vertices;
-    for (const auto& s : slabs) {
-      for (const auto& c : s.centroids) mesh.vertices.row(next_centroid++) = c.transpose();
-      const Eigen::Index base = next_centroid - Eigen::Index(s.centroids.size());
-      for (const auto& t : s.triangles) {
-        for (int k = 0; k < 3; ++k)
-          mesh.triangles(at, k) =
-              t[std::size_t(k)] >= 0 ? t[std::size_t(k)] : int(base) - t[std::size_t(k)] - 1;
-        ++at;
-      }
-    }
   }
 
   const GridView& g_;

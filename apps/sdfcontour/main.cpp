@@ -492,6 +492,7 @@ int run_poisson(const PoissonCommandArgs& a) {
                            {"unknowns", l.unknowns},
                            {"iterations", l.iterations},
                            {"relative_residual", l.relative_residual},
+                           {"converged", l.converged},
                            {"assembly_seconds", l.assembly_seconds},
                            {"solve_seconds", l.solve_seconds}});
   if (!a.stats.empty()) {

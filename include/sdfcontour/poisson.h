@@ -30,7 +30,7 @@ struct PoissonOptions {
   double point_weight = 10.0;     ///< alpha, the screening weight (0: plain Poisson); see README
   PoissonBoundary boundary = PoissonBoundary::Neumann;
   double solver_tolerance = 1e-4;  ///< conjugate gradients stop at this relative residual per depth
-  int max_iterations = 200;        ///< and after this many iterations per depth
+  int max_iterations = 200;  ///< and after this many iterations per depth (then: not converged)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
 };
@@ -42,6 +42,7 @@ struct PoissonLevelStats {
   long unknowns = 0;  ///< nodes solved for (the rest hold the coarser solution)
   int iterations = 0;
   double relative_residual = 0;
+  bool converged = false;  ///< the relative residual reached the solver tolerance
   double assembly_seconds = 0;
   double solve_seconds = 0;
 };
@@ -50,9 +51,9 @@ struct PoissonResult {
   Mesh mesh;                       ///< watertight, outward oriented iso-surface
   Eigen::VectorXd vertex_density;  ///< per vertex: estimated samples per unit area around it
   double iso_value = 0;            ///< the indicator's average over the samples
-  /// True when Neumann (or free) boundaries left part of the domain's faces inside (chi >= iso),
-  /// which contradicts the outward normals, and the result comes from a second solve with Dirichlet
-  /// boundaries.
+  /// True when Neumann (or free) boundaries left part of the domain's faces inside at the coarsest
+  /// depth (chi >= the points' mean chi there), which contradicts the outward normals, and the
+  /// result comes from Dirichlet boundaries (the coarsest depth solved again, the rest with them).
   bool boundary_fallback = false;
   std::vector<PoissonLevelStats> levels;
   std::vector<std::pair<std::string, double>> seconds;  ///< per stage

@@ -1,0 +1,144 @@
+#include "cascade.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "bspline.h"
+#include "conjugate_gradients.h"
+#include "deterministic_sum.h"
+#include "system.h"
+
+namespace sdfcontour::poisson {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Whether more than 1% of the coarsest depth's face nodes are inside (chi >= the points' mean
+// chi at that depth).
+bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
+                      const std::vector<UnitPoint>& points) {
+  const double iso =
+      deterministic_sum(points.size(),
+                        [&](std::size_t s) {
+                          const auto c = cell_of(points[s].p, C.res);
+                          const auto w = corner_weights(points[s].p, c, C.res);
+                          double v = 0;
+                          for (int q = 0; q < 8; ++q)
+                            if (w[std::size_t(q)] != 0)
+                              v += w[std::size_t(q)] *
+                                   x[std::size_t(C.node(c[0] + (q & 1), c[1] + (q >> 1 & 1),
+                                                        c[2] + (q >> 2 & 1)))];
+                          return v;
+                        }) /
+      double(points.size());
+  long inside = 0, count = 0;
+  for (std::size_t v = 0; v < C.nodes.size(); ++v) {
+    const auto [i, j, k] = unpack(C.nodes[v]);
+    if (C.on_face(i, j, k)) inside += x[v] >= iso, ++count;
+  }
+  return inside * 100 > count;
+}
+
+}  // namespace
+
+CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
+                                   const std::vector<UnitPoint>& points, const MortonRuns& runs,
+                                   double area_per_point, const PoissonOptions& o) {
+  CascadeResult result;
+  result.values.resize(tree.levels.size());
+  PoissonBoundary boundary = o.boundary;
+  const CgOptions cg{o.solver_tolerance, o.max_iterations};
+  // V from coarser splats, expressed on the current depth's grid (quadratic B-splines nest).
+  std::vector<Eigen::Vector3d> coarser;
+  for (int d = tree.min_depth; d <= tree.finest; ++d) {
+    const auto level_start = Clock::now();
+    OctreeLevel& L = tree.level(d);
+    auto& x = result.values[std::size_t(d)];
+    if (d == tree.min_depth) {
+      coarser.assign(field.grids[std::size_t(d)].keys.size(), Eigen::Vector3d::Zero());
+    } else {
+      x = prolong_values(tree.level(d - 1), L, result.values[std::size_t(d - 1)]);
+      coarser =
+          prolong_splines(field.grids[std::size_t(d - 1)], field.grids[std::size_t(d)], coarser);
+      field.grids[std::size_t(d - 1)] = CellGrid();
+    }
+    const LevelTerms terms{&field.grids[std::size_t(d)], &coarser, &field.finer[std::size_t(d)],
+                           &field.runs[std::size_t(d)],
+                           o.point_weight * area_per_point * std::ldexp(1.0, d)};
+    // Assembles and solves this depth with the current boundary; returns its statistics.
+    const double prolong_seconds = seconds_since(level_start);
+    auto solve = [&](std::vector<char>& solved) {
+      const auto start = Clock::now();
+      if (d == tree.min_depth) x.assign(L.nodes.size(), 0.0);
+      solved = solved_nodes(L, boundary);
+      LevelSystem system = assemble_system(L, solved, terms, points, runs);
+      const bool last = d == tree.finest;
+      if (d > tree.min_depth) {
+        // The terms are in the system now: free them before the solve (the largest at the end).
+        if (!last) {
+          for (std::size_t g = 0; g < coarser.size(); ++g)
+            coarser[g] += field.splat[std::size_t(d)][g];
+        } else {
+          std::vector<Eigen::Vector3d>().swap(coarser);
+          field.grids[std::size_t(d)] = CellGrid();
+        }
+        std::vector<Eigen::Vector3d>().swap(field.splat[std::size_t(d)]);
+        std::vector<double>().swap(field.finer[std::size_t(d)]);
+        field.runs[std::size_t(d)] = CellRuns();
+      }
+      const double assembly = seconds_since(start);
+      const auto solve_start = Clock::now();
+      const CgState state = conjugate_gradients(L, solved, system, x, cg);
+      long unknowns = 0;
+      for (char u : solved) unknowns += u;
+      return PoissonLevelStats{d,
+                               long(L.cells.size()),
+                               unknowns,
+                               state.iterations,
+                               state.relative_residual,
+                               state.converged,
+                               prolong_seconds + assembly,
+                               seconds_since(solve_start)};
+    };
+    std::vector<char> solved;
+    PoissonLevelStats stats = solve(solved);
+    if (d == tree.min_depth) {
+      if (boundary != PoissonBoundary::Dirichlet && far_field_inside(L, x, points)) {
+        boundary = PoissonBoundary::Dirichlet;
+        result.boundary_fallback = true;
+        if (o.progress)
+          o.progress(
+              "poisson: the far field came out inside; solving again with Dirichlet boundaries");
+        stats = solve(solved);
+      }
+      // The coarsest depth's terms were kept for a second solve; pass them on now.
+      if (d < tree.finest) {
+        for (std::size_t g = 0; g < coarser.size(); ++g)
+          coarser[g] += field.splat[std::size_t(d)][g];
+      } else {
+        std::vector<Eigen::Vector3d>().swap(coarser);
+      }
+      std::vector<Eigen::Vector3d>().swap(field.splat[std::size_t(d)]);
+      std::vector<double>().swap(field.finer[std::size_t(d)]);
+      field.runs[std::size_t(d)] = CellRuns();
+    }
+    if (!stats.converged && o.progress) {
+      std::ostringstream message;
+      message << "poisson: depth " << d << " stopped at relative residual "
+              << stats.relative_residual << " after " << stats.iterations
+              << " iterations (tolerance " << o.solver_tolerance << ")";
+      o.progress(message.str());
+    }
+    // Extraction needs only the values, nodes and cells: drop the solver's tables now.
+    std::vector<std::array<int, 9>>().swap(L.columns);
+    result.levels.push_back(stats);
+  }
+  return result;
+}
+
+}  // namespace sdfcontour::poisson

@@ -1,0 +1,35 @@
+// Internal: the cascadic solve. Coarse to fine, the screened energy is minimised over each depth's
+// solved nodes, the band's boundary nodes holding the coarser depth's solution (a conforming
+// finite-element space with hanging nodes), starting from the prolonged coarser solution.
+#pragma once
+
+#include <vector>
+
+#include "normal_field.h"
+#include "octree.h"
+#include "points.h"
+#include "sdfcontour/poisson.h"
+
+namespace sdfcontour::poisson {
+
+struct CascadeResult {
+  std::vector<std::vector<double>> values;  ///< chi at each depth's nodes
+  std::vector<PoissonLevelStats> levels;
+  bool boundary_fallback = false;  ///< the far field came out inside; solved with Dirichlet
+};
+
+/// Solves every depth. Consumes the normal field and the node columns level by level, so that
+/// the finest solve runs with only what it needs in memory.
+///
+/// The normals point outward, so on the domain's faces chi must be outside (below the iso-value).
+/// With Neumann (or free) boundaries chi's level there is set by the data alone; when the normals
+/// nearly cancel (a thin plate sampled from both sides) it can end up level with the iso-value,
+/// and the exterior fills with spurious sheets. This shows at the coarsest depth already (finer
+/// depths do not change its values), so there the faces are checked against the points' mean chi,
+/// and if more than 1% of them are inside, the depth is solved again with the faces pinned to
+/// outside (Dirichlet), and so are all finer depths.
+CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
+                                   const std::vector<UnitPoint>& points, const MortonRuns& runs,
+                                   double area_per_point, const PoissonOptions& options);
+
+}  // namespace sdfcontour::poisson

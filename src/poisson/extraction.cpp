@@ -1,0 +1,204 @@
+#include "extraction.h"
+
+#include <deque>
+#include <unordered_set>
+
+#include "../cube_polygons.h"
+
+namespace sdfcontour::poisson {
+
+namespace {
+
+// Finest-depth cells, keyed with a +1 offset so that the ring just outside the domain has keys.
+Key cell_key(long i, long j, long k) {
+  return pack(i + 1, j + 1, k + 1);
+}
+
+bool mixed(const double* value) {
+  int inside = 0;
+  for (int c = 0; c < 8; ++c) inside += value[c] < 0;
+  return inside > 0 && inside < 8;
+}
+
+// Cells and the polygons in them are found from iso - chi at finest-depth nodes (inside < 0).
+class SurfaceCells {
+ public:
+  SurfaceCells(const Indicator& chi, double iso)
+      : chi_(chi), iso_(iso), finest_(chi.tree().level(chi.tree().finest)) {}
+
+  void cell_values(long i, long j, long k, double* value) const {
+    for (int c = 0; c < 8; ++c)
+      value[c] =
+          iso_ - chi_.at_finest_node(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1), iso_ - 1.0);
+  }
+
+  // Candidates: finest active cells with a sign change, and subcells of coarser leaves whose
+  // corners straddle iso.
+  std::vector<Key> candidates() const {
+    std::vector<Key> found;
+    const Octree& tree = chi_.tree();
+    for (int d = tree.min_depth; d < tree.finest; ++d) leaf_candidates(tree.level(d), found);
+    finest_candidates(found);
+    return found;
+  }
+
+  // Closes the candidates: a face with a sign change needs the cell across it. Returns the cells
+  // with a sign change and their values.
+  void close(const std::vector<Key>& candidates, std::vector<Key>& cells,
+             std::vector<std::array<double, 8>>& values) const {
+    const long R = finest_.res;
+    std::unordered_set<Key> visited(candidates.begin(), candidates.end());
+    std::deque<Key> queue(candidates.begin(), candidates.end());
+    while (!queue.empty()) {
+      const Key key = queue.front();
+      queue.pop_front();
+      const auto u = unpack(key);
+      const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
+      std::array<double, 8> value;
+      cell_values(i, j, k, value.data());
+      if (!mixed(value.data())) continue;
+      cells.push_back(key);
+      values.push_back(value);
+      for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+          int inside = 0;
+          for (int c = 0; c < 8; ++c)
+            if ((c >> axis & 1) == side) inside += value[std::size_t(c)] < 0;
+          if (inside == 0 || inside == 4) continue;
+          long ni = i, nj = j, nk = k;
+          (axis == 0 ? ni : axis == 1 ? nj : nk) += side ? 1 : -1;
+          if (ni < -1 || nj < -1 || nk < -1 || ni > R || nj > R || nk > R) continue;
+          const Key next = cell_key(ni, nj, nk);
+          if (visited.insert(next).second) queue.push_back(next);
+        }
+    }
+  }
+
+ private:
+  void leaf_candidates(const OctreeLevel& L, std::vector<Key>& out) const {
+    const int shift = chi_.tree().finest - L.depth;
+    std::vector<std::vector<Key>> found(L.cells.size());
+    tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
+      if (L.refined[c]) return;
+      const auto [i, j, k] = unpack(L.cells[c]);
+      const long n = 1L << shift;
+      int inside = 0;
+      for (int q = 0; q < 8; ++q)
+        inside += iso_ - chi_.at_finest_node((i + (q & 1)) << shift, (j + (q >> 1 & 1)) << shift,
+                                             (k + (q >> 2 & 1)) << shift, iso_ - 1.0) <
+                  0;
+      if (inside == 0 || inside == 8) return;
+      for (long a = 0; a < n; ++a)
+        for (long b = 0; b < n; ++b)
+          for (long e = 0; e < n; ++e) {
+            double value[8];
+            const long fi = (i << shift) + a, fj = (j << shift) + b, fk = (k << shift) + e;
+            cell_values(fi, fj, fk, value);
+            if (mixed(value)) found[c].push_back(cell_key(fi, fj, fk));
+          }
+    });
+    for (auto& f : found) out.insert(out.end(), f.begin(), f.end());
+  }
+
+  // Finest cells, a line at a time: their corners are finest nodes, found by cursors.
+  void finest_candidates(std::vector<Key>& out) const {
+    const OctreeLevel& F = finest_;
+    const auto& x = chi_.values(F.depth);
+    std::vector<char> has_surface(F.cells.size(), 0);
+    for_each_line(F.cell_lines, F.cells, [&](long i, long j, std::size_t first, std::size_t last) {
+      LineCursor column[4];
+      for (int c = 0; c < 4; ++c)
+        column[c] = LineCursor(F.nodes, F.node_lines.line(i + (c & 1), j + (c >> 1)));
+      for (std::size_t c = first; c < last; ++c) {
+        const long k = long(F.cells[c] & kKeyMask);
+        double value[8];
+        for (int q = 0; q < 8; ++q)
+          value[q] = iso_ - x[std::size_t(column[q & 3].find(
+                                pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1))))];
+        has_surface[c] = mixed(value);
+      }
+    });
+    for (std::size_t c = 0; c < F.cells.size(); ++c)
+      if (has_surface[c]) {
+        const auto [i, j, k] = unpack(F.cells[c]);
+        out.push_back(cell_key(i, j, k));
+      }
+  }
+
+  const Indicator& chi_;
+  double iso_;
+  const OctreeLevel& finest_;
+};
+
+// The global key of local edge e of the cell with (offset) key `cell`: its low node's key times 3
+// plus its axis.
+Key global_edge(Key cell, int e) {
+  const auto u = unpack(cell);
+  const int low = detail::cube_tables().edge_low_corner[e];
+  return pack(u[0] + (low & 1), u[1] + (low >> 1 & 1), u[2] + (low >> 2 & 1)) * 3 + Key(e / 4);
+}
+
+struct CellPolygons {
+  std::vector<std::array<int, 12>> edges;  // local edge ids
+  std::vector<int> sizes;
+};
+
+}  // namespace
+
+Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame) {
+  const SurfaceCells surface(chi, iso);
+  std::vector<Key> cells;
+  std::vector<std::array<double, 8>> values;
+  surface.close(surface.candidates(), cells, values);
+  // Polygons per cell with their edges' global keys; vertices are deduplicated by edge.
+  std::vector<CellPolygons> polygons(cells.size());
+  tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
+    detail::cube_polygons(values[c].data(), [&](const int* edges, int size) {
+      std::array<int, 12> e{};
+      std::copy(edges, edges + size, e.begin());
+      polygons[c].edges.push_back(e);
+      polygons[c].sizes.push_back(size);
+    });
+  });
+  std::vector<Key> edge_keys;
+  for (std::size_t c = 0; c < polygons.size(); ++c)
+    for (std::size_t q = 0; q < polygons[c].edges.size(); ++q)
+      for (int v = 0; v < polygons[c].sizes[q]; ++v)
+        edge_keys.push_back(global_edge(cells[c], polygons[c].edges[q][std::size_t(v)]));
+  sort_unique(edge_keys);
+  const KeyIndex edge_index(edge_keys);
+  const long R = chi.tree().level(chi.tree().finest).res;
+  Mesh mesh;
+  mesh.vertices.resize(Eigen::Index(edge_keys.size()), 3);
+  tbb::parallel_for(std::size_t(0), edge_keys.size(), [&](std::size_t e) {
+    const Key node_key = edge_keys[e] / 3;
+    const int axis = int(edge_keys[e] % 3);
+    const auto u = unpack(node_key);
+    const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
+    const double v0 = iso - chi.at_finest_node(i, j, k, iso - 1.0);
+    const double v1 =
+        iso - chi.at_finest_node(i + (axis == 0), j + (axis == 1), k + (axis == 2), iso - 1.0);
+    const Eigen::Vector3d p0(static_cast<double>(i), static_cast<double>(j),
+                             static_cast<double>(k));
+    Eigen::Vector3d p1 = p0;
+    p1[axis] += 1;
+    const Eigen::Vector3d unit = (p0 + v0 / (v0 - v1) * (p1 - p0)) / double(R);
+    mesh.vertices.row(Eigen::Index(e)) = frame.from_unit(unit).transpose();
+  });
+  std::vector<detail::PolygonOutput> out(1);
+  for (std::size_t c = 0; c < polygons.size(); ++c)
+    for (std::size_t q = 0; q < polygons[c].edges.size(); ++q) {
+      const int count = polygons[c].sizes[q];
+      int ids[12];
+      Eigen::Vector3d position[12];
+      for (int v = 0; v < count; ++v) {
+        ids[v] = edge_index.find(global_edge(cells[c], polygons[c].edges[q][std::size_t(v)]));
+        position[v] = mesh.vertices.row(ids[v]).transpose();
+      }
+      detail::triangulate_polygon(ids, polygons[c].edges[q].data(), position, count, out[0]);
+    }
+  detail::polygons_to_mesh(out, mesh);
+  return mesh;
+}
+
+}  // namespace sdfcontour::poisson

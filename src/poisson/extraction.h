@@ -1,0 +1,17 @@
+// Internal: the iso-surface of chi, by marching cubes on finest-depth cells: all active cells at
+// the finest depth, and the finest-depth subcells of coarser leaves whose corners straddle the
+// iso-value, closed under "a face with a sign change has a cell on its other side". Every node
+// value comes from one canonical evaluation, so cells sharing an edge share its vertex: the mesh
+// is watertight.
+#pragma once
+
+#include "indicator.h"
+#include "points.h"
+#include "sdfcontour/types.h"
+
+namespace sdfcontour::poisson {
+
+/// The surface chi = iso, outward (chi < iso outside), in the input's units (via frame).
+Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame);
+
+}  // namespace sdfcontour::poisson

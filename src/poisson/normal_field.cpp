@@ -1,0 +1,218 @@
+#include "normal_field.h"
+
+#include "bspline.h"
+
+namespace sdfcontour::poisson {
+
+CellRuns cell_runs(const OctreeLevel& L, const MortonRuns& runs) {
+  CellRuns out;
+  runs.for_each_run(
+      L.depth, [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
+        const int idx = L.cell(pack(c[0], c[1], c[2]));
+        if (idx >= 0)
+          out.cells.push_back({std::uint32_t(idx), std::uint32_t(first), std::uint32_t(last)});
+      });
+  return out;
+}
+
+namespace {
+
+// The depth-d splat coefficients on G, gathered from per-run sums over the 27 cells around each
+// run; returns whether any point splats at this depth.
+bool splat_depth(const OctreeLevel& L, const CellRuns& runs, const CellGrid& G,
+                 const std::vector<UnitPoint>& points, const MortonRuns& morton,
+                 std::vector<Eigen::Vector3d>& V) {
+  const int d = L.depth;
+  std::vector<std::array<Eigen::Vector3d, 27>> cell_sums(runs.cells.size());
+  std::vector<char> has_splat(runs.cells.size(), 0);
+  const double inverse_volume = 1.0 / (L.h * L.h * L.h);
+  tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
+    auto& sums = cell_sums[r];
+    sums.fill(Eigen::Vector3d::Zero());
+    const auto cell = runs.cell(L, r);
+    for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
+      const UnitPoint& s = points[morton.point(q)];
+      if (s.depth != d) continue;
+      has_splat[r] = 1;
+      std::array<double, 3> w[3];
+      for (int a = 0; a < 3; ++a)
+        w[a] = quadratic_weights(
+            std::clamp(s.p[a] * double(L.res) - double(cell[std::size_t(a)]), 0.0, 1.0));
+      const Eigen::Vector3d weighted = s.area * inverse_volume * s.n;
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx)
+            sums[std::size_t(slot(dx, dy, dz))] += w[0][std::size_t(dx + 1)] *
+                                                   w[1][std::size_t(dy + 1)] *
+                                                   w[2][std::size_t(dz + 1)] * weighted;
+    }
+  });
+  V.assign(G.keys.size(), Eigen::Vector3d::Zero());
+  // The runs holding depth-d splats, with the grid indices of their 27 target cells.
+  std::vector<std::uint32_t> splatting;
+  for (std::size_t r = 0; r < runs.cells.size(); ++r)
+    if (has_splat[r]) splatting.push_back(std::uint32_t(r));
+  std::vector<std::array<int, 27>> target(splatting.size());
+  tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
+    const auto c = runs.cell(L, splatting[t]);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          target[t][std::size_t(slot(dx, dy, dz))] = G.find(c[0] + dx, c[1] + dy, c[2] + dz);
+  });
+  // One offset at a time: for a fixed offset the runs' target cells are distinct, so the writes
+  // do not race and every cell adds its terms in the same order whatever the threads.
+  for (int q = 0; q < 27; ++q)
+    tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
+      V[std::size_t(target[t][std::size_t(q)])] += cell_sums[splatting[t]][std::size_t(q)];
+    });
+  return !splatting.empty();
+}
+
+// e[v] += the restriction of the finer depth's finer-splat divergence: a depth-d hat is the sum of
+// depth-(d+1) hats with weights 1/2, 1, 1/2 per axis. (Where a finer node is missing, the field
+// from finer splats is zero there: every finer splat lies inside the finer band.)
+void restrict_divergence(const OctreeLevel& L, const OctreeLevel& F,
+                         const std::vector<double>& fine, std::vector<double>& e) {
+  for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
+    LineCursor column[9];
+    for (int t = 0; t < 9; ++t)
+      column[t] = LineCursor(F.nodes, F.node_lines.line(2 * i + t % 3 - 1, 2 * j + t / 3 - 1));
+    for (std::size_t v = first; v < last; ++v) {
+      const long k = long(L.nodes[v] & kKeyMask);
+      double sum = e[v];
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (2 * k + dz < 0) continue;
+            const int u =
+                column[dx + 1 + 3 * (dy + 1)].find(pack(2 * i + dx, 2 * j + dy, 2 * k + dz));
+            if (u >= 0)
+              sum += (1 - 0.5 * std::abs(dx)) * (1 - 0.5 * std::abs(dy)) *
+                     (1 - 0.5 * std::abs(dz)) * fine[std::size_t(u)];
+          }
+      e[v] = sum;
+    }
+  });
+}
+
+}  // namespace
+
+NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
+                          const MortonRuns& runs) {
+  const std::size_t depths = tree.levels.size();
+  NormalField field;
+  field.grids.resize(depths);
+  field.splat.resize(depths);
+  field.splats_at.assign(depths, 0);
+  field.finer.resize(depths);
+  field.runs.resize(depths);
+  for (int d = tree.min_depth; d <= tree.finest; ++d) {
+    const OctreeLevel& L = tree.level(d);
+    field.runs[std::size_t(d)] = cell_runs(L, runs);
+    CellGrid& G = field.grids[std::size_t(d)];
+    G.keys.resize(L.cells.size());
+    for (std::size_t c = 0; c < L.cells.size(); ++c) G.keys[c] = L.cells[c] + pack(1, 1, 1);
+    G.keys = dilate(std::move(G.keys), 2, L.res + 1);
+    G.lines = LineIndex(G.keys);
+    field.splats_at[std::size_t(d)] =
+        splat_depth(L, field.runs[std::size_t(d)], G, points, runs, field.splat[std::size_t(d)]);
+  }
+  // Fine to coarse: finer[d] = S_d(V_d) + restriction of finer[d + 1].
+  for (int d = tree.finest; d >= tree.min_depth; --d) {
+    const OctreeLevel& L = tree.level(d);
+    auto& e = field.finer[std::size_t(d)];
+    e.assign(L.nodes.size(), 0.0);
+    if (field.splats_at[std::size_t(d)])
+      divergence(L, field.grids[std::size_t(d)], field.splat[std::size_t(d)], e, nullptr);
+    if (d < tree.finest)
+      restrict_divergence(L, tree.level(d + 1), field.finer[std::size_t(d + 1)], e);
+  }
+  return field;
+}
+
+std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
+                                             const std::vector<Eigen::Vector3d>& values) {
+  // Q_c = (Q_{2c-1} + 3 Q_{2c} + 3 Q_{2c+1} + Q_{2c+2}) / 4 per axis.
+  std::vector<Eigen::Vector3d> out(fine.keys.size(), Eigen::Vector3d::Zero());
+  auto parents = [](long offset_index, long* parent, double* weight) {
+    const long index = offset_index - 1, m = index >> 1;  // floor(index / 2)
+    parent[0] = m, weight[0] = 0.75;
+    parent[1] = (index & 1) ? m + 1 : m - 1, weight[1] = 0.25;
+  };
+  // A fine line at a time, with cursors on the four coarse lines it reads.
+  for_each_line(fine.lines, fine.keys, [&](long i, long j, std::size_t first, std::size_t last) {
+    long parent[3][2];
+    double weight[3][2];
+    parents(i, parent[0], weight[0]);
+    parents(j, parent[1], weight[1]);
+    LineCursor column[4];
+    for (int c = 0; c < 4; ++c)
+      column[c] =
+          LineCursor(coarse.keys, coarse.lines.line(parent[0][c & 1] + 1, parent[1][c >> 1] + 1));
+    for (std::size_t f = first; f < last; ++f) {
+      parents(long(fine.keys[f] & kKeyMask), parent[2], weight[2]);
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 8; ++c) {
+        const long pz = parent[2][c >> 2 & 1];
+        if (pz < -1) continue;
+        const int idx =
+            column[c & 3].find(pack(parent[0][c & 1] + 1, parent[1][c >> 1 & 1] + 1, pz + 1));
+        if (idx >= 0)
+          sum += weight[0][c & 1] * weight[1][c >> 1 & 1] * weight[2][c >> 2 & 1] *
+                 values[std::size_t(idx)];
+      }
+      out[f] = sum;
+    }
+  });
+  return out;
+}
+
+void divergence(const OctreeLevel& L, const CellGrid& G, const std::vector<Eigen::Vector3d>& W,
+                std::vector<double>& out, const std::vector<char>* want) {
+  // Over the 4 x 4 x 4 cells whose B-splines overlap node v's hat. The integrals are products of
+  // 1D ones, so a line of nodes (fixed i, j) first folds its 16 cell columns into two values per
+  // cell height k', P(k') (the x and y terms) and Q(k') (the z term), and each node then sums
+  // four heights.
+  const HatQuadraticIntegrals I(L.res);
+  for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
+    const long k_last = long(L.nodes[last - 1] & kKeyMask);
+    // Heights k' = k_first - 2 .. k_last + 1, stored from index 0.
+    const long k_first = long(L.nodes[first] & kKeyMask), base = k_first - 2;
+    std::vector<double> P(std::size_t(k_last - k_first + 4), 0.0), Q(P.size(), 0.0);
+    const auto &vx = I.value[std::size_t(i)], &vy = I.value[std::size_t(j)];
+    const auto &sx = I.slope[std::size_t(i)], &sy = I.slope[std::size_t(j)];
+    for (int c = 0; c < 16; ++c) {
+      const long ci = i + (c & 3) - 2, cj = j + (c >> 2) - 2;
+      if (ci < -1 || cj < -1) continue;
+      const int ox = c & 3, oy = c >> 2;
+      const double px = sx[std::size_t(ox)] * vy[std::size_t(oy)],
+                   py = vx[std::size_t(ox)] * sy[std::size_t(oy)],
+                   qz = vx[std::size_t(ox)] * vy[std::size_t(oy)];
+      const auto range = G.lines.line(ci + 1, cj + 1);
+      // Offset keys hold k' + 1.
+      const Key prefix = pack(ci + 1, cj + 1, 0), lo = prefix + Key(std::max(base + 1, 0L));
+      std::uint32_t u =
+          std::uint32_t(std::lower_bound(G.keys.begin() + range[0], G.keys.begin() + range[1], lo) -
+                        G.keys.begin());
+      for (; u < range[1] && long(G.keys[u] - prefix) - 1 <= k_last + 1; ++u) {
+        const std::size_t at = std::size_t(long(G.keys[u] - prefix) - 1 - base);
+        P[at] += px * W[u].x() + py * W[u].y();
+        Q[at] += qz * W[u].z();
+      }
+    }
+    for (std::size_t v = first; v < last; ++v) {
+      if (want && !(*want)[v]) continue;
+      const long k = long(L.nodes[v] & kKeyMask);
+      const auto &vz = I.value[std::size_t(k)], &sz = I.slope[std::size_t(k)];
+      double sum = 0;
+      for (int oz = 0; oz < 4; ++oz) {
+        const std::size_t at = std::size_t(k - 2 + oz - base);
+        sum += P[at] * vz[std::size_t(oz)] + Q[at] * sz[std::size_t(oz)];
+      }
+      out[v] = sum;
+    }
+  });
+}
+
+}  // namespace sdfcontour::poisson

@@ -1,0 +1,65 @@
+// Internal: the normal field V splatted into quadratic B-splines at each point's depth, and its
+// divergence against the trilinear hats (the right-hand side of the Poisson system).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "keys.h"
+#include "octree.h"
+#include "points.h"
+
+namespace sdfcontour::poisson {
+
+/// A set of depth-d cells with indices -1..res per axis (the ring just outside the domain holds
+/// splat coefficients whose B-splines reach into it), keyed with a +1 offset.
+struct CellGrid {
+  std::vector<Key> keys;  ///< sorted, offset by +1 per axis
+  LineIndex lines;
+  int find(long i, long j, long k) const {
+    if (i < -1 || j < -1 || k < -1) return -1;
+    return lines.find(keys, pack(i + 1, j + 1, k + 1));
+  }
+};
+
+/// The active cells of a level that hold points, with their runs of Morton positions.
+struct CellRuns {
+  std::vector<std::array<std::uint32_t, 3>> cells;  ///< (cell index, first, last)
+  /// The cell's (i, j, k) of run r.
+  std::array<long, 3> cell(const OctreeLevel& L, std::size_t r) const {
+    return unpack(L.cells[cells[r][0]]);
+  }
+};
+CellRuns cell_runs(const OctreeLevel& L, const MortonRuns& runs);
+
+/// V = sum over depths d of quadratic B-splines of depth d with coefficients splat[d] on
+/// grids[d]: each point adds area * n * (its quadratic weights) / h_d^3 at its splat depth (a
+/// unit-integral kernel). grids[d] holds the depth-d cells within two cells of an active cell:
+/// every coefficient the solve reads, and every one that coarser ones prolong into exactly.
+struct NormalField {
+  std::vector<CellGrid> grids;
+  std::vector<std::vector<Eigen::Vector3d>> splat;
+  std::vector<char> splats_at;  ///< some point splats at this depth
+  /// finer[d][v] = int grad(phi_v) . (the part of V splatted at depth d or finer).
+  std::vector<std::vector<double>> finer;
+  /// Per depth, the cells holding points (kept for the screening terms).
+  std::vector<CellRuns> runs;
+};
+
+/// Splats the normals and computes the finer-splat divergence at every depth.
+NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
+                          const MortonRuns& runs);
+
+/// Quadratic B-spline coefficients on a finer grid from a coarser one's (exact where the finer
+/// grid holds every cell the coarser coefficients reach).
+std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
+                                             const std::vector<Eigen::Vector3d>& values);
+
+/// out[v] = int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set, W given by
+/// depth-d quadratic coefficients on `grid`.
+void divergence(const OctreeLevel& L, const CellGrid& grid, const std::vector<Eigen::Vector3d>& W,
+                std::vector<double>& out, const std::vector<char>* want);
+
+}  // namespace sdfcontour::poisson

@@ -1,0 +1,61 @@
+// Internal: the adaptive octree's topology, per depth: active cells, their corner nodes, and each
+// node's neighbours. Complete down to the full depth; below, a cell is refined where points want
+// that depth (within a dilation), so finer depths cover only a band around the points.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "keys.h"
+#include "points.h"
+
+namespace sdfcontour::poisson {
+
+/// One depth of the octree.
+struct OctreeLevel {
+  int depth = 0;
+  long res = 0;            ///< cells per axis
+  double h = 0;            ///< cell side (unit cube)
+  std::vector<Key> cells;  ///< sorted active cells
+  LineIndex cell_lines;
+  std::vector<char> refined;  ///< per active cell: its children are active
+  std::vector<Key> nodes;     ///< sorted corners of active cells
+  LineIndex node_lines;
+  /// Per node, the node at (i + dx, j + dy, k) for dx, dy in {-1, 0, 1} (index dx + 1 + 3 (dy +
+  /// 1)), or -1. Nodes sorted with k last put (.., k - 1) and (.., k + 1) right before and after.
+  std::vector<std::array<int, 9>> columns;
+
+  /// Index of node (i, j, k), or -1.
+  int node(long i, long j, long k) const {
+    if (i < 0 || j < 0 || k < 0 || i > res || j > res || k > res) return -1;
+    return node_lines.find(nodes, pack(i, j, k));
+  }
+  /// Index of the active cell with this key, or -1.
+  int cell(Key key) const { return cell_lines.find(cells, key); }
+  bool on_face(long i, long j, long k) const {
+    return i == 0 || j == 0 || k == 0 || i == res || j == res || k == res;
+  }
+};
+
+struct Octree {
+  int min_depth = 0;                ///< complete down to here
+  int finest = 0;                   ///< the finest depth with active cells
+  std::vector<OctreeLevel> levels;  ///< indexed by depth; empty below min_depth
+  OctreeLevel& level(int d) { return levels[std::size_t(d)]; }
+  const OctreeLevel& level(int d) const { return levels[std::size_t(d)]; }
+};
+
+/// The octree down to max_depth: complete to min_depth; a depth-(d-1) cell is refined when it
+/// holds a point splatted at depth d-1 or finer, dilated by two cells.
+Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
+                    int max_depth);
+
+/// Per node of L: whether it is solved for (every incident cell inside the domain is active, so
+/// its row of the system is complete; Dirichlet boundaries also fix the domain's faces).
+std::vector<char> solved_nodes(const OctreeLevel& L, PoissonBoundary boundary);
+
+/// Values on the finer level's nodes from the coarser level's (exact: trilinear functions nest).
+std::vector<double> prolong_values(const OctreeLevel& coarse, const OctreeLevel& fine,
+                                   const std::vector<double>& values);
+
+}  // namespace sdfcontour::poisson

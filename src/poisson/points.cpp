@@ -1,0 +1,55 @@
+#include "points.h"
+
+#include <cmath>
+#include <string>
+
+#include "bspline.h"
+
+namespace sdfcontour::poisson {
+
+void validate(const OrientedPoints& input, const PoissonOptions& o) {
+  const Eigen::Index n = input.points.rows();
+  if (n == 0) throw Error("poisson: no points to reconstruct from");
+  if (input.normals.rows() != n) throw Error("poisson: points and normals differ in count");
+  if (o.depth < 1 || o.depth > 16) throw Error("poisson: depth must be between 1 and 16");
+  if (o.full_depth < 1) throw Error("poisson: full depth must be at least 1");
+  if (!(o.scale >= 1.0) || !std::isfinite(o.scale))
+    throw Error("poisson: scale must be at least 1");
+  if (!(o.samples_per_node > 0) || !std::isfinite(o.samples_per_node))
+    throw Error("poisson: samples per node must be positive");
+  if (!(o.point_weight >= 0) || !std::isfinite(o.point_weight))
+    throw Error("poisson: the point weight must be >= 0");
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!input.points.row(i).allFinite() || !input.normals.row(i).allFinite())
+      throw Error("poisson: point " + std::to_string(i) +
+                  " has a NaN or infinite coordinate or normal");
+    if (!(input.normals.row(i).norm() > 0))
+      throw Error("poisson: point " + std::to_string(i) + " has a zero normal");
+  }
+}
+
+UnitPoints to_unit_cube(const OrientedPoints& input, double scale) {
+  UnitPoints unit;
+  const Eigen::Vector3d lo = input.points.colwise().minCoeff(),
+                        hi = input.points.colwise().maxCoeff();
+  unit.centre = 0.5 * (lo + hi);
+  unit.size = (hi - lo).maxCoeff() * scale;
+  if (!(unit.size > 0)) unit.size = 1.0;
+  unit.points.resize(std::size_t(input.points.rows()));
+  for (Eigen::Index i = 0; i < input.points.rows(); ++i) {
+    auto& s = unit.points[std::size_t(i)];
+    s.p = unit.to_unit(input.points.row(i).transpose());
+    s.n = input.normals.row(i).transpose().normalized();
+  }
+  return unit;
+}
+
+MortonRuns::MortonRuns(const std::vector<UnitPoint>& points, int depth)
+    : depth_(depth), order_(points.size()) {
+  tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t s) {
+    order_[s] = {morton(cell_of(points[s].p, 1L << depth)), std::uint32_t(s)};
+  });
+  tbb::parallel_sort(order_.begin(), order_.end());
+}
+
+}  // namespace sdfcontour::poisson

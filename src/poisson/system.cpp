@@ -1,0 +1,113 @@
+#include "system.h"
+
+#include "bspline.h"
+
+namespace sdfcontour::poisson {
+
+namespace {
+
+// h K summed over node (i, j, k)'s incident cells inside the domain.
+void stiffness_row(const OctreeLevel& L, long i, long j, long k, std::array<double, 27>& row) {
+  const TrilinearStiffness& K = trilinear_stiffness();
+  row.fill(0.0);
+  for (int c = 0; c < 8; ++c) {  // incident cells: offsets -1/0 per axis
+    const int ox = (c & 1) - 1, oy = (c >> 1 & 1) - 1, oz = (c >> 2 & 1) - 1;
+    if (i + ox < 0 || j + oy < 0 || k + oz < 0 || i + ox >= L.res || j + oy >= L.res ||
+        k + oz >= L.res)
+      continue;
+    const int a = (-ox) | (-oy) << 1 | (-oz) << 2;  // the node's corner in that cell
+    for (int corner = 0; corner < 8; ++corner)
+      row[std::size_t(slot(ox + (corner & 1), oy + (corner >> 1 & 1), oz + (corner >> 2 & 1)))] +=
+          L.h * K.entry[a][corner];
+  }
+}
+
+constexpr int kPairs = 36;  // corner pairs a <= b
+int pair_index(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return a * 8 - a * (a - 1) / 2 + (b - a);
+}
+
+// Screening moments per cell holding points: sums of w_a w_b (a <= b) and of w_a over its points,
+// w the trilinear weights of the cell's corners; and the cell's corner nodes.
+struct ScreeningMoments {
+  std::vector<std::array<double, kPairs + 8>> moments;
+  std::vector<std::array<int, 8>> corners;
+};
+
+ScreeningMoments screening_moments(const OctreeLevel& L, const CellRuns& runs,
+                                   const std::vector<UnitPoint>& points, const MortonRuns& morton) {
+  ScreeningMoments s;
+  s.moments.resize(runs.cells.size());
+  s.corners.resize(runs.cells.size());
+  tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
+    auto& m = s.moments[r];
+    m.fill(0.0);
+    const auto cell = runs.cell(L, r);
+    for (int a = 0; a < 8; ++a)
+      s.corners[r][std::size_t(a)] =
+          L.node(cell[0] + (a & 1), cell[1] + (a >> 1 & 1), cell[2] + (a >> 2 & 1));
+    for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
+      const auto w = corner_weights(points[morton.point(q)].p, cell, L.res);
+      for (int a = 0; a < 8; ++a) {
+        m[std::size_t(kPairs + a)] += w[std::size_t(a)];
+        for (int b = a; b < 8; ++b)
+          m[std::size_t(pair_index(a, b))] += w[std::size_t(a)] * w[std::size_t(b)];
+      }
+    }
+  });
+  return s;
+}
+
+}  // namespace
+
+LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solved,
+                            const LevelTerms& terms, const std::vector<UnitPoint>& points,
+                            const MortonRuns& morton) {
+  const std::size_t nn = L.nodes.size();
+  LevelSystem S;
+  stiffness_row(L, 1, 1, 1, S.interior_row);  // res >= 2, so (1, 1, 1) is off every face
+  // Divergence of the splatted normals: -int grad(phi_v) . V.
+  S.b.assign(nn, 0.0);
+  divergence(L, *terms.grid, *terms.coarser, S.b, &solved);
+  const auto& finer = *terms.finer;
+  tbb::parallel_for(std::size_t(0), nn,
+                    [&](std::size_t v) { S.b[v] = solved[v] ? -(S.b[v] + finer[v]) : 0.0; });
+  ScreeningMoments screen;
+  if (terms.screening > 0) screen = screening_moments(L, *terms.runs, points, morton);
+  // Nodes with their own row. For a fixed corner the cells' corner nodes are distinct, so one
+  // corner at a time writes without races, in the same order whatever the threads.
+  S.row_of.assign(nn, -1);
+  const std::size_t screened_cells = screen.corners.size();
+  for (int a = 0; a < 8; ++a)
+    tbb::parallel_for(std::size_t(0), screened_cells, [&](std::size_t r) {
+      S.row_of[std::size_t(screen.corners[r][std::size_t(a)])] = 0;
+    });
+  int own_rows = 0;
+  for (std::size_t v = 0; v < nn; ++v) {
+    const auto [i, j, k] = unpack(L.nodes[v]);
+    S.row_of[v] = solved[v] && (L.on_face(i, j, k) || S.row_of[v] == 0) ? own_rows++ : -1;
+  }
+  S.rows.resize(static_cast<std::size_t>(own_rows));
+  tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+    if (S.row_of[v] < 0) return;
+    const auto [i, j, k] = unpack(L.nodes[v]);
+    stiffness_row(L, i, j, k, S.rows[std::size_t(S.row_of[v])]);
+  });
+  // Screening: (chi(p) - 1/2)^2 for the points in this depth's active cells.
+  for (int a = 7; a >= 0; --a)
+    tbb::parallel_for(std::size_t(0), screened_cells, [&](std::size_t r) {
+      const std::size_t v = std::size_t(screen.corners[r][std::size_t(a)]);
+      if (S.row_of[v] < 0) return;
+      const auto& m = screen.moments[r];
+      auto& row = S.rows[std::size_t(S.row_of[v])];
+      S.b[v] += terms.screening * 0.5 * m[std::size_t(kPairs + a)];
+      const int ox = -(a & 1), oy = -(a >> 1 & 1), oz = -(a >> 2 & 1);
+      for (int q = 0; q < 8; ++q)
+        row[std::size_t(slot(ox + (q & 1), oy + (q >> 1 & 1), oz + (q >> 2 & 1)))] +=
+            terms.screening * m[std::size_t(pair_index(a, q))];
+    });
+  return S;
+}
+
+}  // namespace sdfcontour::poisson

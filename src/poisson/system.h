@@ -1,0 +1,43 @@
+// Internal: the screened Poisson system at one depth, over the nodes solved for there.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+#include "normal_field.h"
+#include "octree.h"
+#include "points.h"
+
+namespace sdfcontour::poisson {
+
+/// Rows (27 slots, slot(dx, dy, dz)) and right-hand side of one depth's system. Inside the domain
+/// and away from points a row is the constant stiffness stencil h K (`interior_row`); only nodes
+/// on the domain's faces (truncated stencil) and corners of cells holding points (screening) store
+/// their own row.
+struct LevelSystem {
+  std::array<double, 27> interior_row{};
+  std::vector<int> row_of;  ///< per node: its own row, or -1 (the interior row, or not solved)
+  std::vector<std::array<double, 27>> rows;
+  std::vector<double> b;  ///< per node; 0 on nodes not solved for
+  const double* row(std::size_t v) const {
+    return row_of[v] >= 0 ? rows[std::size_t(row_of[v])].data() : interior_row.data();
+  }
+};
+
+/// What the right-hand side at one depth is made of.
+struct LevelTerms {
+  const CellGrid* grid;                         ///< the depth's spline cells
+  const std::vector<Eigen::Vector3d>* coarser;  ///< V from coarser splats, on `grid`
+  const std::vector<double>* finer;             ///< NormalField::finer at this depth
+  const CellRuns* runs;                         ///< cells holding points
+  double screening;  ///< alpha * (mean area) * 2^d: the weight of (chi(p) - 1/2)^2 per point
+};
+
+/// Assembles  int grad phi_u . grad phi_v + screening * sum_p phi_u(p) phi_v(p)  (rows) and
+/// -int grad phi_v . V + screening * sum_p phi_v(p) / 2  (b) for the nodes with solved[v].
+LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solved,
+                            const LevelTerms& terms, const std::vector<UnitPoint>& points,
+                            const MortonRuns& morton);
+
+}  // namespace sdfcontour::poisson
