@@ -1,0 +1,139 @@
+// The Poisson solver's stages, each on a problem with a known answer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "poisson/conjugate_gradients.h"
+#include "poisson/density.h"
+#include "poisson/extraction.h"
+#include "poisson/indicator.h"
+#include "poisson/octree.h"
+#include "poisson/points.h"
+#include "poisson/system.h"
+#include "sdfcontour/mesh_properties.h"
+
+using namespace sdfcontour;
+using namespace sdfcontour::poisson;
+using Eigen::Vector3d;
+
+namespace {
+
+UnitPoint unit_point(const Vector3d& p) {
+  UnitPoint u;
+  u.p = p;
+  u.n = Vector3d::UnitZ();
+  return u;
+}
+
+// Points on a sphere (unit-cube coordinates), each splatted at `depth`.
+std::vector<UnitPoint> sphere_points(int count, int depth) {
+  std::vector<UnitPoint> points;
+  for (int i = 0; i < count; ++i) {
+    const double z = 1 - (2.0 * i + 1) / count, r = std::sqrt(1 - z * z),
+                 phi = i * M_PI * (3 - std::sqrt(5.0));
+    points.push_back(unit_point(Vector3d(0.5, 0.5, 0.5) +
+                                0.3 * Vector3d(r * std::cos(phi), r * std::sin(phi), z)));
+    points.back().depth = depth;
+  }
+  return points;
+}
+
+double linear(const Vector3d& p) {
+  return 0.3 + 0.7 * p.x() - 0.2 * p.y() + 0.45 * p.z();
+}
+
+Vector3d node_position(const OctreeLevel& L, Key key) {
+  const auto [i, j, k] = unpack(key);
+  return Vector3d(double(i), double(j), double(k)) / double(L.res);
+}
+
+}  // namespace
+
+// A discrete harmonic function with linear boundary values is that linear function (trilinear
+// elements reproduce it), so conjugate gradients must find it on the interior nodes.
+TEST(PoissonStages, ConjugateGradientsSolveALaplaceProblemExactly) {
+  const auto points = sphere_points(50, 3);
+  const MortonRuns runs(points, 3);
+  Octree tree = build_octree(points, runs, 3, 3);
+  const OctreeLevel& L = tree.level(3);
+  ASSERT_EQ(L.nodes.size(), 9u * 9u * 9u);
+  const std::vector<char> solved = solved_nodes(L, PoissonBoundary::Dirichlet);
+  const CellGrid empty_grid;
+  const std::vector<Eigen::Vector3d> no_field;
+  const std::vector<double> no_finer(L.nodes.size(), 0.0);
+  const CellRuns no_runs;
+  const LevelSystem system =
+      assemble_system(L, solved, {&empty_grid, &no_field, &no_finer, &no_runs, 0.0}, points, runs);
+  std::vector<double> x(L.nodes.size());
+  long unknowns = 0;
+  for (std::size_t v = 0; v < x.size(); ++v) {
+    x[v] = solved[v] ? 0.0 : linear(node_position(L, L.nodes[v]));
+    unknowns += solved[v];
+  }
+  EXPECT_EQ(unknowns, 7 * 7 * 7);
+  const CgState state = conjugate_gradients(L, solved, system, x, {1e-12, 500});
+  EXPECT_TRUE(state.converged);
+  EXPECT_GT(state.iterations, 1);
+  EXPECT_LE(state.relative_residual, 1e-12);
+  for (std::size_t v = 0; v < x.size(); ++v)
+    EXPECT_NEAR(x[v], linear(node_position(L, L.nodes[v])), 1e-9);
+  // Stopped early, it says so.
+  std::vector<double> y(L.nodes.size());
+  for (std::size_t v = 0; v < y.size(); ++v)
+    y[v] = solved[v] ? 0.0 : linear(node_position(L, L.nodes[v]));
+  const CgState early = conjugate_gradients(L, solved, system, y, {1e-12, 2});
+  EXPECT_FALSE(early.converged);
+  EXPECT_EQ(early.iterations, 2);
+  EXPECT_GT(early.relative_residual, 1e-12);
+}
+
+// On an adaptive octree, a linear function stored at every depth's nodes is read back exactly
+// anywhere (hanging nodes included), and its iso-surface is the plane, watertight against the
+// domain's ring of "outside".
+TEST(PoissonStages, IndicatorAndExtractionReproduceALinearField) {
+  const auto points = sphere_points(2000, 6);
+  const MortonRuns runs(points, 6);
+  const Octree tree = build_octree(points, runs, 3, 6);
+  ASSERT_EQ(tree.finest, 6);
+  ASSERT_LT(tree.level(6).cells.size(), std::size_t(64 * 64 * 64) / 2);  // adaptive
+  std::vector<std::vector<double>> values(tree.levels.size());
+  for (int d = tree.min_depth; d <= tree.finest; ++d)
+    for (Key key : tree.level(d).nodes)
+      values[std::size_t(d)].push_back(linear(node_position(tree.level(d), key)));
+  const Indicator chi(tree, values);
+  for (int i = 0; i < 200; ++i) {
+    const Vector3d p = 0.5 * (Vector3d::Random() + Vector3d::Ones());
+    EXPECT_NEAR(chi.at(p), linear(p), 1e-12);
+  }
+  for (long i = 0; i <= 64; i += 7)
+    EXPECT_NEAR(chi.at_finest_node(i, 64 - i, i / 2, -1.0),
+                linear(Vector3d(double(i), double(64 - i), double(i / 2)) / 64.0), 1e-12);
+  // chi = 0.8 is a plane through the cube: every vertex on it, in the frame's units.
+  UnitPoints frame;
+  frame.centre = Vector3d(1, 2, 3);
+  frame.size = 2;
+  const Mesh mesh = extract_iso_surface(chi, 0.8, frame);
+  ASSERT_GT(mesh.triangles.rows(), 0);
+  double worst = 0;
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
+    const Vector3d u =
+        (mesh.vertices.row(v).transpose() - frame.centre) / frame.size + Vector3d::Constant(0.5);
+    if ((u.array() > 1e-9).all() && (u.array() < 1 - 1e-9).all())
+      worst = std::max(worst, std::abs(linear(u) - 0.8));
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_TRUE(mesh_topology(mesh).closed);
+}
+
+// Points on a regular grid of a plane, spacing s, have density 1 / s^2 away from the edges.
+TEST(PoissonStages, DensityOfARegularGridIsOneOverSpacingSquared) {
+  std::vector<UnitPoint> points;
+  const double s = 1.0 / 128;
+  for (double x = 0.2; x < 0.8; x += s)
+    for (double y = 0.2; y < 0.8; y += s) points.push_back(unit_point(Vector3d(x, y, 0.51)));
+  const MortonRuns runs(points, 8);
+  const SamplingDensity density(points, runs, 6);
+  for (const Vector3d& p : {Vector3d(0.5, 0.5, 0.51), Vector3d(0.4, 0.6, 0.51)})
+    EXPECT_NEAR(density.points_per_area(p) * s * s, 1.0, 0.1) << p.transpose();
+  EXPECT_LT(density.points_per_area(Vector3d(0.5, 0.5, 0.9)), 1e-9);
+}
