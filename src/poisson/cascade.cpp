@@ -53,23 +53,40 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   result.values.resize(tree.levels.size());
   PoissonBoundary boundary = o.boundary;
   const CgOptions cg{o.solver_tolerance, o.max_iterations};
-  // V from coarser splats, expressed on the current depth's grid (quadratic B-splines nest).
+  // V from coarser splats, expressed on the current depth's spline grid (quadratic B-splines
+  // nest), and the coarser depth's grid it was prolonged from.
   std::vector<Eigen::Vector3d> coarser;
+  CellGrid grid, coarser_grid;
   for (int d = tree.min_depth; d <= tree.finest; ++d) {
     const auto level_start = Clock::now();
     OctreeLevel& L = tree.level(d);
     auto& x = result.values[std::size_t(d)];
+    grid = spline_grid(L);
     if (d == tree.min_depth) {
-      coarser.assign(field.grids[std::size_t(d)].keys.size(), Eigen::Vector3d::Zero());
+      coarser.assign(grid.keys.size(), Eigen::Vector3d::Zero());
     } else {
       x = prolong_values(tree.level(d - 1), L, result.values[std::size_t(d - 1)]);
-      coarser =
-          prolong_splines(field.grids[std::size_t(d - 1)], field.grids[std::size_t(d)], coarser);
-      field.grids[std::size_t(d - 1)] = CellGrid();
+      coarser = prolong_splines(coarser_grid, grid, coarser);
     }
-    const LevelTerms terms{&field.grids[std::size_t(d)], &coarser, &field.finer[std::size_t(d)],
+    coarser_grid = CellGrid();
+    const LevelTerms terms{&grid, &coarser, &field.finer[std::size_t(d)],
                            &field.runs[std::size_t(d)],
                            o.point_weight * area_per_point * std::ldexp(1.0, d)};
+    // Once this depth's terms are in its system: pass this depth's splats on to the next depth's
+    // field and free what the next depths do not need (before the solve: the largest at the end).
+    auto release_terms = [&]() {
+      if (d < tree.finest) {
+        add_on_grid(field.splat_cells[std::size_t(d)], field.splat[std::size_t(d)], grid, coarser);
+        coarser_grid = std::move(grid);
+      } else {
+        std::vector<Eigen::Vector3d>().swap(coarser);
+      }
+      grid = CellGrid();
+      field.splat_cells[std::size_t(d)] = CellGrid();
+      std::vector<Eigen::Vector3d>().swap(field.splat[std::size_t(d)]);
+      std::vector<double>().swap(field.finer[std::size_t(d)]);
+      field.runs[std::size_t(d)] = CellRuns();
+    };
     // Assembles and solves this depth with the current boundary; returns its statistics.
     const double prolong_seconds = seconds_since(level_start);
     auto solve = [&](std::vector<char>& solved) {
@@ -77,23 +94,11 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       if (d == tree.min_depth) x.assign(L.nodes.size(), 0.0);
       solved = solved_nodes(L, boundary);
       LevelSystem system = assemble_system(L, solved, terms, points, runs);
-      const bool last = d == tree.finest;
-      if (d > tree.min_depth) {
-        // The terms are in the system now: free them before the solve (the largest at the end).
-        if (!last) {
-          for (std::size_t g = 0; g < coarser.size(); ++g)
-            coarser[g] += field.splat[std::size_t(d)][g];
-        } else {
-          std::vector<Eigen::Vector3d>().swap(coarser);
-          field.grids[std::size_t(d)] = CellGrid();
-        }
-        std::vector<Eigen::Vector3d>().swap(field.splat[std::size_t(d)]);
-        std::vector<double>().swap(field.finer[std::size_t(d)]);
-        field.runs[std::size_t(d)] = CellRuns();
-      }
+      // The coarsest depth's terms are kept for a second solve (see below).
+      if (d > tree.min_depth) release_terms();
       const double assembly = seconds_since(start);
       const auto solve_start = Clock::now();
-      const CgState state = conjugate_gradients(L, solved, system, x, cg);
+      const CgState state = conjugate_gradients(L, solved, std::move(system), x, cg);
       long unknowns = 0;
       for (char u : solved) unknowns += u;
       return PoissonLevelStats{d,
@@ -116,16 +121,7 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
               "poisson: the far field came out inside; solving again with Dirichlet boundaries");
         stats = solve(solved);
       }
-      // The coarsest depth's terms were kept for a second solve; pass them on now.
-      if (d < tree.finest) {
-        for (std::size_t g = 0; g < coarser.size(); ++g)
-          coarser[g] += field.splat[std::size_t(d)][g];
-      } else {
-        std::vector<Eigen::Vector3d>().swap(coarser);
-      }
-      std::vector<Eigen::Vector3d>().swap(field.splat[std::size_t(d)]);
-      std::vector<double>().swap(field.finer[std::size_t(d)]);
-      field.runs[std::size_t(d)] = CellRuns();
+      release_terms();
     }
     if (!stats.converged && o.progress) {
       std::ostringstream message;
@@ -134,8 +130,6 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
               << " iterations (tolerance " << o.solver_tolerance << ")";
       o.progress(message.str());
     }
-    // Extraction needs only the values, nodes and cells: drop the solver's tables now.
-    std::vector<std::array<int, 9>>().swap(L.columns);
     result.levels.push_back(stats);
   }
   return result;

@@ -12,8 +12,9 @@ namespace {
 // out = A in on the unknowns (0 elsewhere); returns in . out. The search direction is zero on
 // fixed nodes, so products with it involve unknowns only. Every in-domain neighbour of an unknown
 // node exists (its incident cells are active), at columns[t] + dz.
-double apply(const OctreeLevel& L, const std::vector<char>& solved, const LevelSystem& S,
-             const std::vector<double>& in, std::vector<double>& out) {
+double apply(const OctreeLevel& L, const std::vector<std::array<int, 9>>& columns,
+             const std::vector<char>& solved, const LevelSystem& S, const std::vector<double>& in,
+             std::vector<double>& out) {
   const double kCentre = S.interior_row[13], kEdge = S.interior_row[std::size_t(slot(1, 1, 0))],
                kCorner = S.interior_row[std::size_t(slot(1, 1, 1))];
   return deterministic_sum(L.nodes.size(), [&](std::size_t v) {
@@ -21,7 +22,7 @@ double apply(const OctreeLevel& L, const std::vector<char>& solved, const LevelS
       out[v] = 0;
       return 0.0;
     }
-    const auto& column = L.columns[v];
+    const auto& column = columns[v];
     const long k = long(L.nodes[v] & kKeyMask);
     double sum = 0;
     if (S.row_of[v] < 0) {
@@ -53,43 +54,47 @@ double apply(const OctreeLevel& L, const std::vector<char>& solved, const LevelS
 
 }  // namespace
 
-CgState conjugate_gradients(const OctreeLevel& L, const std::vector<char>& solved,
-                            const LevelSystem& S, std::vector<double>& x, const CgOptions& o) {
+CgState conjugate_gradients(const OctreeLevel& L, const std::vector<char>& solved, LevelSystem S,
+                            std::vector<double>& x, const CgOptions& o) {
   const std::size_t nn = L.nodes.size();
-  const auto& b = S.b;
-  std::vector<double> r(nn), z(nn), p(nn), Ap(nn), diag(nn, 1.0);
-  apply(L, solved, S, x, Ap);
-  for (std::size_t v = 0; v < nn; ++v) {
-    r[v] = solved[v] ? b[v] - Ap[v] : 0.0;
-    if (solved[v] && S.row(v)[13] > 0) diag[v] = S.row(v)[13];
-  }
+  const std::vector<std::array<int, 9>> columns = node_columns(L);
+  // Jacobi preconditioner: z = r / diag, computed where used rather than stored.
+  auto diag = [&](std::size_t v) {
+    const double d = S.row(v)[13];
+    return solved[v] && d > 0 ? d : 1.0;
+  };
   const double b_norm = std::sqrt(
-      deterministic_sum(nn, [&](std::size_t v) { return solved[v] ? b[v] * b[v] : 0.0; }));
-  for (std::size_t v = 0; v < nn; ++v) p[v] = z[v] = r[v] / diag[v];
-  double rz = deterministic_sum(nn, [&](std::size_t v) { return r[v] * z[v]; });
+      deterministic_sum(nn, [&](std::size_t v) { return solved[v] ? S.b[v] * S.b[v] : 0.0; }));
+  // The residual takes over the right-hand side's storage.
+  std::vector<double> r = std::move(S.b), p(nn), Ap(nn);
+  apply(L, columns, solved, S, x, Ap);
+  for (std::size_t v = 0; v < nn; ++v) {
+    r[v] = solved[v] ? r[v] - Ap[v] : 0.0;
+    p[v] = r[v] / diag(v);
+  }
+  double rz = deterministic_sum(nn, [&](std::size_t v) { return r[v] * (r[v] / diag(v)); });
   double r_norm = std::sqrt(deterministic_sum(nn, [&](std::size_t v) { return r[v] * r[v]; }));
   CgState state;
   const double target = o.tolerance * std::max(b_norm, 1e-300);
   // Each iteration makes three passes over the nodes: the product (with p . Ap), the update (with
   // r . z and r . r) and the new direction.
   while (state.iterations < o.max_iterations && r_norm > target && rz > 0) {
-    const double pAp = apply(L, solved, S, p, Ap);
+    const double pAp = apply(L, columns, solved, S, p, Ap);
     if (!(pAp > 0)) break;
     const double step = rz / pAp;
     const auto sums = deterministic_sums<2>(nn, [&](std::size_t v, std::array<double, 2>& s) {
       if (solved[v]) {
         x[v] += step * p[v];
         r[v] -= step * Ap[v];
-        z[v] = r[v] / diag[v];
       }
-      s[0] += r[v] * z[v];
+      s[0] += r[v] * (r[v] / diag(v));
       s[1] += r[v] * r[v];
     });
     const double beta = sums[0] / rz;
     rz = sums[0];
     r_norm = std::sqrt(sums[1]);
     tbb::parallel_for(std::size_t(0), nn,
-                      [&](std::size_t v) { p[v] = solved[v] ? z[v] + beta * p[v] : 0.0; });
+                      [&](std::size_t v) { p[v] = solved[v] ? r[v] / diag(v) + beta * p[v] : 0.0; });
     ++state.iterations;
   }
   state.relative_residual = r_norm / std::max(b_norm, 1e-300);

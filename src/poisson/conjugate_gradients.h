@@ -22,8 +22,8 @@ struct CgState {
 
 /// Solves the system for the nodes with solved[v]; the other nodes keep their values in x, which
 /// also holds the initial guess. Sums are chunked, so x does not depend on the thread count.
+/// Takes the system by value: move it in, and its right-hand side becomes the residual's storage.
 CgState conjugate_gradients(const OctreeLevel& L, const std::vector<char>& solved,
-                            const LevelSystem& system, std::vector<double>& x,
-                            const CgOptions& options);
+                            LevelSystem system, std::vector<double>& x, const CgOptions& options);
 
 }  // namespace sdfcontour::poisson

@@ -17,11 +17,10 @@ CellRuns cell_runs(const OctreeLevel& L, const MortonRuns& runs) {
 
 namespace {
 
-// The depth-d splat coefficients on G, gathered from per-run sums over the 27 cells around each
-// run; returns whether any point splats at this depth.
-bool splat_depth(const OctreeLevel& L, const CellRuns& runs, const CellGrid& G,
-                 const std::vector<UnitPoint>& points, const MortonRuns& morton,
-                 std::vector<Eigen::Vector3d>& V) {
+// The depth-d splat coefficients on the cells they touch (G), gathered from per-run sums over
+// the 27 cells around each run.
+void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<UnitPoint>& points,
+                 const MortonRuns& morton, CellGrid& G, std::vector<Eigen::Vector3d>& V) {
   const int d = L.depth;
   std::vector<std::array<Eigen::Vector3d, 27>> cell_sums(runs.cells.size());
   std::vector<char> has_splat(runs.cells.size(), 0);
@@ -47,11 +46,20 @@ bool splat_depth(const OctreeLevel& L, const CellRuns& runs, const CellGrid& G,
                                                    w[2][std::size_t(dz + 1)] * weighted;
     }
   });
-  V.assign(G.keys.size(), Eigen::Vector3d::Zero());
-  // The runs holding depth-d splats, with the grid indices of their 27 target cells.
+  // The runs holding depth-d splats, the cells they touch, and the indices of their 27 targets.
   std::vector<std::uint32_t> splatting;
   for (std::size_t r = 0; r < runs.cells.size(); ++r)
     if (has_splat[r]) splatting.push_back(std::uint32_t(r));
+  G.keys.clear();
+  G.keys.reserve(27 * splatting.size());
+  for (std::uint32_t r : splatting) {
+    const auto c = runs.cell(L, r);
+    for (int q = 0; q < 27; ++q)
+      G.keys.push_back(pack(c[0] + q % 3, c[1] + q / 3 % 3, c[2] + q / 9));  // offset +1 keys
+  }
+  sort_unique(G.keys);
+  G.lines = LineIndex(G.keys);
+  V.assign(G.keys.size(), Eigen::Vector3d::Zero());
   std::vector<std::array<int, 27>> target(splatting.size());
   tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
     const auto c = runs.cell(L, splatting[t]);
@@ -66,7 +74,6 @@ bool splat_depth(const OctreeLevel& L, const CellRuns& runs, const CellGrid& G,
     tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
       V[std::size_t(target[t][std::size_t(q)])] += cell_sums[splatting[t]][std::size_t(q)];
     });
-  return !splatting.empty();
 }
 
 // e[v] += the restriction of the finer depth's finer-splat divergence: a depth-d hat is the sum of
@@ -98,33 +105,42 @@ void restrict_divergence(const OctreeLevel& L, const OctreeLevel& F,
 
 }  // namespace
 
+CellGrid spline_grid(const OctreeLevel& L) {
+  CellGrid G;
+  G.keys.resize(L.cells.size());
+  for (std::size_t c = 0; c < L.cells.size(); ++c) G.keys[c] = L.cells[c] + pack(1, 1, 1);
+  G.keys = dilate(std::move(G.keys), 2, L.res + 1);
+  G.lines = LineIndex(G.keys);
+  return G;
+}
+
+void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& values,
+                 const CellGrid& grid, std::vector<Eigen::Vector3d>& onto) {
+  // Both key lists are sorted: one merge walk.
+  for (std::size_t a = 0, g = 0; a < cells.keys.size(); ++a) {
+    while (grid.keys[g] < cells.keys[a]) ++g;
+    onto[g] += values[a];
+  }
+}
+
 NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
                           const MortonRuns& runs) {
   const std::size_t depths = tree.levels.size();
   NormalField field;
-  field.grids.resize(depths);
+  field.splat_cells.resize(depths);
   field.splat.resize(depths);
-  field.splats_at.assign(depths, 0);
   field.finer.resize(depths);
   field.runs.resize(depths);
-  for (int d = tree.min_depth; d <= tree.finest; ++d) {
-    const OctreeLevel& L = tree.level(d);
-    field.runs[std::size_t(d)] = cell_runs(L, runs);
-    CellGrid& G = field.grids[std::size_t(d)];
-    G.keys.resize(L.cells.size());
-    for (std::size_t c = 0; c < L.cells.size(); ++c) G.keys[c] = L.cells[c] + pack(1, 1, 1);
-    G.keys = dilate(std::move(G.keys), 2, L.res + 1);
-    G.lines = LineIndex(G.keys);
-    field.splats_at[std::size_t(d)] =
-        splat_depth(L, field.runs[std::size_t(d)], G, points, runs, field.splat[std::size_t(d)]);
-  }
   // Fine to coarse: finer[d] = S_d(V_d) + restriction of finer[d + 1].
   for (int d = tree.finest; d >= tree.min_depth; --d) {
     const OctreeLevel& L = tree.level(d);
+    field.runs[std::size_t(d)] = cell_runs(L, runs);
+    const CellGrid& G = field.splat_cells[std::size_t(d)];
+    splat_depth(L, field.runs[std::size_t(d)], points, runs, field.splat_cells[std::size_t(d)],
+                field.splat[std::size_t(d)]);
     auto& e = field.finer[std::size_t(d)];
     e.assign(L.nodes.size(), 0.0);
-    if (field.splats_at[std::size_t(d)])
-      divergence(L, field.grids[std::size_t(d)], field.splat[std::size_t(d)], e, nullptr);
+    if (!G.keys.empty()) divergence(L, G, field.splat[std::size_t(d)], e, nullptr);
     if (d < tree.finest)
       restrict_divergence(L, tree.level(d + 1), field.finer[std::size_t(d + 1)], e);
   }

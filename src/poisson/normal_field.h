@@ -35,18 +35,24 @@ struct CellRuns {
 CellRuns cell_runs(const OctreeLevel& L, const MortonRuns& runs);
 
 /// V = sum over depths d of quadratic B-splines of depth d with coefficients splat[d] on
-/// grids[d]: each point adds area * n * (its quadratic weights) / h_d^3 at its splat depth (a
-/// unit-integral kernel). grids[d] holds the depth-d cells within two cells of an active cell:
-/// every coefficient the solve reads, and every one that coarser ones prolong into exactly.
+/// splat_cells[d]: each point adds area * n * (its quadratic weights) / h_d^3 at its splat depth
+/// (a unit-integral kernel). Only the cells a depth's splats touch are stored.
 struct NormalField {
-  std::vector<CellGrid> grids;
+  std::vector<CellGrid> splat_cells;
   std::vector<std::vector<Eigen::Vector3d>> splat;
-  std::vector<char> splats_at;  ///< some point splats at this depth
   /// finer[d][v] = int grad(phi_v) . (the part of V splatted at depth d or finer).
   std::vector<std::vector<double>> finer;
   /// Per depth, the cells holding points (kept for the screening terms).
   std::vector<CellRuns> runs;
 };
+
+/// The depth's cells within two cells of an active cell: every spline coefficient the solve at
+/// that depth reads, and every one that coarser ones prolong into exactly.
+CellGrid spline_grid(const OctreeLevel& L);
+
+/// onto += the coefficients (cells, values) of a sub-grid of `grid` (onto is on `grid`).
+void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& values,
+                 const CellGrid& grid, std::vector<Eigen::Vector3d>& onto);
 
 /// Splats the normals and computes the finer-splat divergence at every depth.
 NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,

@@ -4,7 +4,7 @@ namespace sdfcontour::poisson {
 
 namespace {
 
-// Nodes, node lines and node columns of a level whose cells are set.
+// Nodes and node lines of a level whose cells are set.
 void build_nodes(OctreeLevel& L) {
   L.cell_lines = LineIndex(L.cells);
   // The corners are the union of the sorted cell keys shifted by each corner's offset, merged
@@ -17,19 +17,6 @@ void build_nodes(OctreeLevel& L) {
   });
   L.nodes = merge_sorted(std::move(lists));
   L.node_lines = LineIndex(L.nodes);
-  L.columns.resize(L.nodes.size());
-  // A line (fixed i, j) at a time: the nine neighbouring node lines are found once, then walked
-  // with cursors as k grows.
-  for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
-    LineCursor node_column[9];
-    for (int t = 0; t < 9; ++t)
-      node_column[t] = LineCursor(L.nodes, L.node_lines.line(i + t % 3 - 1, j + t / 3 - 1));
-    for (std::size_t v = first; v < last; ++v) {
-      const long k = long(L.nodes[v] & kKeyMask);
-      for (int t = 0; t < 9; ++t)
-        L.columns[v][std::size_t(t)] = node_column[t].find(pack(i + t % 3 - 1, j + t / 3 - 1, k));
-    }
-  });
 }
 
 // The depth-(d-1) cells to refine: those holding a point splatted at depth d-1 or finer (runs in
@@ -125,6 +112,23 @@ Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs
     tree.finest = d;
   }
   return tree;
+}
+
+std::vector<std::array<int, 9>> node_columns(const OctreeLevel& L) {
+  std::vector<std::array<int, 9>> columns(L.nodes.size());
+  // A line (fixed i, j) at a time: the nine neighbouring node lines are found once, then walked
+  // with cursors as k grows.
+  for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
+    LineCursor node_column[9];
+    for (int t = 0; t < 9; ++t)
+      node_column[t] = LineCursor(L.nodes, L.node_lines.line(i + t % 3 - 1, j + t / 3 - 1));
+    for (std::size_t v = first; v < last; ++v) {
+      const long k = long(L.nodes[v] & kKeyMask);
+      for (int t = 0; t < 9; ++t)
+        columns[v][std::size_t(t)] = node_column[t].find(pack(i + t % 3 - 1, j + t / 3 - 1, k));
+    }
+  });
+  return columns;
 }
 
 std::vector<char> solved_nodes(const OctreeLevel& L, PoissonBoundary boundary) {

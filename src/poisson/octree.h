@@ -21,9 +21,6 @@ struct OctreeLevel {
   std::vector<char> refined;  ///< per active cell: its children are active
   std::vector<Key> nodes;     ///< sorted corners of active cells
   LineIndex node_lines;
-  /// Per node, the node at (i + dx, j + dy, k) for dx, dy in {-1, 0, 1} (index dx + 1 + 3 (dy +
-  /// 1)), or -1. Nodes sorted with k last put (.., k - 1) and (.., k + 1) right before and after.
-  std::vector<std::array<int, 9>> columns;
 
   /// Index of node (i, j, k), or -1.
   int node(long i, long j, long k) const {
@@ -49,6 +46,10 @@ struct Octree {
 /// holds a point splatted at depth d-1 or finer, dilated by two cells.
 Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
                     int max_depth);
+
+/// Per node of L, the node at (i + dx, j + dy, k) for dx, dy in {-1, 0, 1} (index dx + 1 + 3 (dy +
+/// 1)), or -1. Nodes sorted with k last put (.., k - 1) and (.., k + 1) right before and after.
+std::vector<std::array<int, 9>> node_columns(const OctreeLevel& L);
 
 /// Per node of L: whether it is solved for (every incident cell inside the domain is active, so
 /// its row of the system is complete; Dirichlet boundaries also fix the domain's faces).
