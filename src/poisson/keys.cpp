@@ -1,6 +1,7 @@
 #include "keys.h"
 
 #include <iterator>
+#include <limits>
 
 namespace sdfcontour::poisson {
 
@@ -32,50 +33,95 @@ void sort_unique(std::vector<Key>& keys) {
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
 }
 
-std::vector<Key> merge_sorted(std::vector<std::vector<Key>> lists) {
-  while (lists.size() > 1) {
-    std::vector<std::vector<Key>> merged((lists.size() + 1) / 2);
-    tbb::parallel_for(std::size_t(0), lists.size() / 2, [&](std::size_t pair) {
-      const auto &a = lists[2 * pair], &b = lists[2 * pair + 1];
-      merged[pair].reserve(a.size() + b.size());
-      std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged[pair]));
-    });
-    if (lists.size() % 2) merged.back() = std::move(lists.back());
-    lists = std::move(merged);
-  }
-  return lists.empty() ? std::vector<Key>() : std::move(lists[0]);
+namespace {
+
+// The sorted union of the keys shifted by `from`..`to` along the axis at bit `shift` (i: 42, j:
+// 21), dropping keys whose coordinate leaves [0, limit]. A shifted copy of a sorted list stays
+// sorted (packing adds without carries), so this is a merge of cursors over one array, never
+// copied: chunks of the output key range run in parallel, counted first, then written in place.
+std::vector<Key> union_of_shifts(const std::vector<Key>& keys, int shift, long from, long to,
+                                 long limit) {
+  using Signed = std::int64_t;
+  const int ways = int(to - from + 1);
+  auto offset = [&](int w) { return Signed(from + w) * (Signed(1) << shift); };
+  auto valid = [&](Key key, int w) {
+    const long c = long((key >> shift) & kKeyMask) + from + w;
+    return c >= 0 && c <= limit;
+  };
+  // Chunk t covers output keys [bound[t], bound[t + 1]); bounds from the input's quantiles.
+  const std::size_t chunks = std::max<std::size_t>(1, std::min<std::size_t>(keys.size() / 4096, 256));
+  std::vector<Signed> bound(chunks + 1);
+  bound[0] = std::numeric_limits<Signed>::min();
+  bound[chunks] = std::numeric_limits<Signed>::max();
+  for (std::size_t t = 1; t < chunks; ++t) bound[t] = Signed(keys[keys.size() * t / chunks]);
+  // Runs chunk t's merge, calling emit(key) for each distinct output key in order.
+  auto merge_chunk = [&](std::size_t t, auto&& emit) {
+    std::vector<std::size_t> at(static_cast<std::size_t>(ways));
+    for (int w = 0; w < ways; ++w)
+      at[std::size_t(w)] = std::size_t(
+          std::lower_bound(keys.begin(), keys.end(), bound[t],
+                           [&](Key key, Signed b) { return Signed(key) + offset(w) < b; }) -
+          keys.begin());
+    bool any = false;
+    Signed last = 0;
+    for (;;) {
+      Signed best = bound[t + 1];
+      for (int w = 0; w < ways; ++w) {
+        std::size_t& a = at[std::size_t(w)];
+        while (a < keys.size() && !valid(keys[a], w)) ++a;
+        if (a < keys.size()) best = std::min(best, Signed(keys[a]) + offset(w));
+      }
+      if (best >= bound[t + 1]) break;
+      if (!any || best != last) emit(Key(best));
+      any = true, last = best;
+      for (int w = 0; w < ways; ++w) {
+        std::size_t& a = at[std::size_t(w)];
+        if (a < keys.size() && Signed(keys[a]) + offset(w) == best) ++a;
+      }
+    }
+  };
+  std::vector<std::size_t> start(chunks + 1, 0);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t t) {
+    std::size_t count = 0;
+    merge_chunk(t, [&](Key) { ++count; });
+    start[t + 1] = count;
+  });
+  for (std::size_t t = 0; t < chunks; ++t) start[t + 1] += start[t];
+  std::vector<Key> out(start[chunks]);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t t) {
+    std::size_t next = start[t];
+    merge_chunk(t, [&](Key key) { out[next++] = key; });
+  });
+  return out;
 }
 
-std::vector<Key> dilate(std::vector<Key> keys, long radius, long limit) {
-  // Along i and j: shifted copies of a sorted list stay sorted, so they are merged, not sorted.
-  for (int axis = 0; axis < 2; ++axis) {
-    const int shift = axis == 0 ? 2 * kKeyBits : kKeyBits;
-    std::vector<std::vector<Key>> lists(std::size_t(2 * radius + 1));
-    tbb::parallel_for(long(0), 2 * radius + 1, [&](long q) {
-      const long offset = q - radius;
-      auto& out = lists[std::size_t(q)];
-      out.reserve(keys.size());
-      for (Key key : keys) {
-        const long c = long((key >> shift) & kKeyMask) + offset;
-        if (c >= 0 && c <= limit)
-          out.push_back(offset >= 0 ? key + (Key(offset) << shift) : key - (Key(-offset) << shift));
-      }
-    });
-    keys = merge_sorted(std::move(lists));
-  }
-  // Along k, within a line, the union of the intervals [k - radius, k + radius] comes out sorted
-  // in one pass.
+// The sorted union, within each line (fixed i, j), of [k + from, k + to] over its keys, kept in
+// [0, limit]: one pass, since the intervals come in order.
+std::vector<Key> union_along_k(const std::vector<Key>& keys, long from, long to, long limit) {
   std::vector<Key> out;
   out.reserve(keys.size() + keys.size() / 2);
   for (std::size_t v = 0; v < keys.size(); ++v) {
     const Key line = keys[v] & ~kKeyMask;
     const long k = long(keys[v] & kKeyMask);
-    long from = std::max(k - radius, 0L);
+    long first = std::max(k + from, 0L);
     if (!out.empty() && (out.back() & ~kKeyMask) == line)
-      from = std::max(from, long(out.back() & kKeyMask) + 1);
-    for (long c = from; c <= std::min(k + radius, limit); ++c) out.push_back(line | Key(c));
+      first = std::max(first, long(out.back() & kKeyMask) + 1);
+    for (long c = first; c <= std::min(k + to, limit); ++c) out.push_back(line | Key(c));
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<Key> shifted_union(const std::vector<Key>& keys, const std::array<long, 3>& from,
+                               const std::array<long, 3>& to, long limit) {
+  std::vector<Key> out = union_along_k(keys, from[2], to[2], limit);
+  out = union_of_shifts(out, kKeyBits, from[1], to[1], limit);
+  return union_of_shifts(out, 2 * kKeyBits, from[0], to[0], limit);
+}
+
+std::vector<Key> dilate(const std::vector<Key>& keys, long radius, long limit) {
+  return shifted_union(keys, {-radius, -radius, -radius}, {radius, radius, radius}, limit);
 }
 
 namespace {

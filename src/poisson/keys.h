@@ -120,12 +120,15 @@ void for_each_line(const LineIndex& lines, const std::vector<Key>& keys, F&& f) 
 /// Sorts keys and drops repeats.
 void sort_unique(std::vector<Key>& keys);
 
-/// The union of sorted key lists, merged pairwise in parallel.
-std::vector<Key> merge_sorted(std::vector<std::vector<Key>> lists);
+/// The sorted union of keys + (a, b, c) over a in [from[0], to[0]], b in [from[1], to[1]], c in
+/// [from[2], to[2]], coordinates kept in [0, limit], for sorted keys. Memory: the output and one
+/// intermediate list, never a copy per shift.
+std::vector<Key> shifted_union(const std::vector<Key>& keys, const std::array<long, 3>& from,
+                               const std::array<long, 3>& to, long limit);
 
 /// The sorted keys of all cells within `radius` of the given sorted cells (a cube per cell), with
 /// coordinates kept in [0, limit].
-std::vector<Key> dilate(std::vector<Key> keys, long radius, long limit);
+std::vector<Key> dilate(const std::vector<Key>& keys, long radius, long limit);
 
 /// Morton code of a cell (interleaved index bits, x lowest): the cells of a coarser depth are runs
 /// of consecutive codes at a finer one.

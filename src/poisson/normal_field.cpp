@@ -107,9 +107,8 @@ void restrict_divergence(const OctreeLevel& L, const OctreeLevel& F,
 
 CellGrid spline_grid(const OctreeLevel& L) {
   CellGrid G;
-  G.keys.resize(L.cells.size());
-  for (std::size_t c = 0; c < L.cells.size(); ++c) G.keys[c] = L.cells[c] + pack(1, 1, 1);
-  G.keys = dilate(std::move(G.keys), 2, L.res + 1);
+  // Keys offset by +1: the cells shifted by -1..3 along each axis hold cells -2..+2 around them.
+  G.keys = shifted_union(L.cells, {-1, -1, -1}, {3, 3, 3}, L.res + 1);
   G.lines = LineIndex(G.keys);
   return G;
 }
