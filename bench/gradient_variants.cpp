@@ -4,8 +4,6 @@
 // kept points, median and mean |phi(c)| (in grid spacings) and n . grad phi(c).
 //
 // Usage: gradient_variants MESH... --res 32,64 > variants.csv
-#include <tbb/parallel_for.h>
-
 #include <iostream>
 #include <sstream>
 
@@ -14,7 +12,7 @@
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_sdf.h"
 #include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/statistics.h"
+#include "sdfcontour/contact_point_errors.h"
 
 using namespace sdfcontour;
 
@@ -60,15 +58,11 @@ int main(int argc, char** argv) {
           // The filter is the exact power-cell test on the regular triangulation for every
           // variant, so +FN's fallback tries the regular triangulation's tet gradients.
           const ContactPoints cp = gradient_contact_points(s.points, s.values, v.gradients, regular, o);
-          std::vector<double> err(std::size_t(cp.size())), align(std::size_t(cp.size()));
-          tbb::parallel_for(0, cp.size(), [&](int i) {
-            int t = 0;
-            err[std::size_t(i)] = sdf.unsigned_distance(cp.points.row(i).transpose(), nullptr, &t) / h;
-            align[std::size_t(i)] = cp.normals.row(i).dot(sdf.triangle_normal(t).transpose());
-          });
+          const ContactPointErrors e = contact_point_errors(cp.points, cp.normals, sdf);
+          const Summary value = summarize(e.abs_value), alignment = summarize(e.alignment);
           std::cout << name << "," << n << "," << v.name << "," << (fn ? 1 : 0) << "," << s.points.rows() << ","
-                    << cp.size() << "," << quantile(err, 0.5) << "," << mean(err) << "," << quantile(align, 0.5) << ","
-                    << mean(align) << std::endl;
+                    << cp.size() << "," << value.median / h << "," << value.mean / h << "," << alignment.median << ","
+                    << alignment.mean << std::endl;
         }
     }
   }

@@ -10,7 +10,22 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "enum_names.h"
+
 namespace sdfcontour {
+
+namespace {
+const detail::NameTable<GradientWeighting> kWeightings = {{"uniform", GradientWeighting::Uniform},
+                                                          {"volume", GradientWeighting::Volume},
+                                                          {"james", GradientWeighting::James}};
+}  // namespace
+
+GradientWeighting parse_gradient_weighting(const std::string& name) {
+  return detail::parse_name(kWeightings, "gradient weighting", name);
+}
+std::string gradient_weighting_name(GradientWeighting weighting) {
+  return detail::name_of(kWeightings, weighting);
+}
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <iomanip>
 #include <vector>
 
-#include "sdfcontour/atomic_file.h"
+#include "atomic_file.h"
 
 namespace sdfcontour {
 

@@ -15,7 +15,7 @@
 #include <limits>
 #include <sstream>
 
-#include "sdfcontour/atomic_file.h"
+#include "atomic_file.h"
 
 namespace sdfcontour {
 

@@ -4,34 +4,34 @@
 #include <chrono>
 #include <cmath>
 
+#include "enum_names.h"
 #include "sdfcontour/bricks.h"
 #include "sdfcontour/marching.h"
 
 namespace sdfcontour {
 
-Method parse_method(const std::string& name) {
-  if (name == "gcp") return Method::Gcp;
-  if (name == "gtcp") return Method::Gtcp;
-  if (name == "mc") return Method::Mc;
-  if (name == "mt-rt") return Method::MtRt;
-  if (name == "mt-dt") return Method::MtDt;
-  throw Error("unknown method '" + name + "' (known: gcp, gtcp, mc, mt-rt, mt-dt)");
-}
+namespace {
+const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
+                                            {"gtcp", Method::Gtcp},
+                                            {"mc", Method::Mc},
+                                            {"mt-rt", Method::MtRt},
+                                            {"mt-dt", Method::MtDt}};
+const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
+                                                            {"delaunay", GradientSource::Delaunay},
+                                                            {"knn", GradientSource::Knn}};
+}  // namespace
 
+Method parse_method(const std::string& name) {
+  return detail::parse_name(kMethods, "method", name);
+}
 std::string method_name(Method method) {
-  switch (method) {
-    case Method::Gcp:
-      return "gcp";
-    case Method::Gtcp:
-      return "gtcp";
-    case Method::Mc:
-      return "mc";
-    case Method::MtRt:
-      return "mt-rt";
-    case Method::MtDt:
-      return "mt-dt";
-  }
-  return "?";
+  return detail::name_of(kMethods, method);
+}
+GradientSource parse_gradient_source(const std::string& name) {
+  return detail::parse_name(kGradientSources, "gradient source", name);
+}
+std::string gradient_source_name(GradientSource source) {
+  return detail::name_of(kGradientSources, source);
 }
 
 int auto_poisson_depth(const PointMatrix& points, double spacing) {

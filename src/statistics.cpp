@@ -1,4 +1,4 @@
-#include "sdfcontour/statistics.h"
+#include "statistics.h"
 
 #include <algorithm>
 #include <cmath>

@@ -19,6 +19,9 @@ namespace sdfcontour {
 
 namespace {
 
+// Fills neighbour_* and incident_* from `tets` for `sample_count` samples.
+void build_adjacency(Triangulation& triangulation, int sample_count);
+
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Lock = CGAL::Spatial_lock_grid_3<CGAL::Tag_priority_blocking>;
 
@@ -100,8 +103,6 @@ Triangulation run(const std::vector<std::pair<Site, int>>& sites, const CGAL::Bb
   return out;
 }
 
-}  // namespace
-
 void build_adjacency(Triangulation& tri, int n) {
   const Eigen::Index m = tri.tets.rows();
   // Incident tets: counting sort by vertex, filled in tet order so each row is ascending.
@@ -150,6 +151,8 @@ void build_adjacency(Triangulation& tri, int n) {
     }
   });
 }
+
+}  // namespace
 
 Triangulation triangulate(const PointMatrix& points, const Eigen::VectorXd& values,
                           const TriangulationOptions& options) {

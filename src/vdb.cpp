@@ -9,7 +9,7 @@
 #include <fstream>
 #include <mutex>
 
-#include "sdfcontour/atomic_file.h"
+#include "atomic_file.h"
 
 namespace sdfcontour {
 

@@ -1,6 +1,6 @@
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/gradients.h"
-#include "sdfcontour/statistics.h"
+#include "statistics.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -3,6 +3,7 @@
 // k nearest neighbours.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "sdfcontour/triangulation.h"
@@ -14,6 +15,10 @@ enum class GradientWeighting {
   Volume,   ///< w_t = volume of tet t
   James,    ///< James (2020, Phong deformation) weights: the weighted tet centroids reproduce p
 };
+
+/// "uniform", "volume", "james" <-> GradientWeighting; parse throws Error for other names.
+GradientWeighting parse_gradient_weighting(const std::string& name);
+std::string gradient_weighting_name(GradientWeighting weighting);
 
 struct GradientOptions {
   GradientWeighting weighting = GradientWeighting::James;

@@ -25,6 +25,10 @@ std::string method_name(Method method);
 /// Where GCP's per-sample gradients come from.
 enum class GradientSource { Regular, Delaunay, Knn };
 
+/// "regular", "delaunay", "knn" <-> GradientSource; parse throws Error for other names.
+GradientSource parse_gradient_source(const std::string& name);
+std::string gradient_source_name(GradientSource source);
+
 struct ContourOptions {
   Method method = Method::Gcp;
   bool want_mesh = true;     ///< produce the method's mesh

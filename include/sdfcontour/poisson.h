@@ -22,6 +22,10 @@ enum class PoissonBoundary {
   Free,       ///< unmodified B-splines; for degree 1, the same space as Neumann
 };
 
+/// "neumann", "dirichlet", "free" <-> PoissonBoundary; parse throws Error for other names.
+PoissonBoundary parse_poisson_boundary(const std::string& name);
+std::string poisson_boundary_name(PoissonBoundary boundary);
+
 struct PoissonOptions {
   int depth = 8;                  ///< finest octree depth (the domain cube split 2^depth times)
   int full_depth = 5;             ///< the octree is complete down to this depth

@@ -41,7 +41,4 @@ struct Triangulation {
 Triangulation triangulate(const PointMatrix& points, const Eigen::VectorXd& values,
                           const TriangulationOptions& options = {});
 
-/// Fills neighbour_* and incident_* from `tets` for `sample_count` samples.
-void build_adjacency(Triangulation& triangulation, int sample_count);
-
 }  // namespace sdfcontour

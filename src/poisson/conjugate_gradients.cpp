@@ -93,8 +93,9 @@ CgState conjugate_gradients(const OctreeLevel& L, const std::vector<char>& solve
     const double beta = sums[0] / rz;
     rz = sums[0];
     r_norm = std::sqrt(sums[1]);
-    tbb::parallel_for(std::size_t(0), nn,
-                      [&](std::size_t v) { p[v] = solved[v] ? r[v] / diag(v) + beta * p[v] : 0.0; });
+    tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
+      p[v] = solved[v] ? r[v] / diag(v) + beta * p[v] : 0.0;
+    });
     ++state.iterations;
   }
   state.relative_residual = r_norm / std::max(b_norm, 1e-300);

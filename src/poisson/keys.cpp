@@ -49,7 +49,8 @@ std::vector<Key> union_of_shifts(const std::vector<Key>& keys, int shift, long f
     return c >= 0 && c <= limit;
   };
   // Chunk t covers output keys [bound[t], bound[t + 1]); bounds from the input's quantiles.
-  const std::size_t chunks = std::max<std::size_t>(1, std::min<std::size_t>(keys.size() / 4096, 256));
+  const std::size_t chunks =
+      std::max<std::size_t>(1, std::min<std::size_t>(keys.size() / 4096, 256));
   std::vector<Signed> bound(chunks + 1);
   bound[0] = std::numeric_limits<Signed>::min();
   bound[chunks] = std::numeric_limits<Signed>::max();

@@ -11,6 +11,7 @@
 //  indicator.h    chi anywhere; extraction.h  its iso-surface, watertight
 #include <chrono>
 
+#include "../enum_names.h"
 #include "cascade.h"
 #include "density.h"
 #include "deterministic_sum.h"
@@ -24,6 +25,10 @@
 namespace sdfcontour {
 
 namespace {
+
+const detail::NameTable<PoissonBoundary> kBoundaries = {{"neumann", PoissonBoundary::Neumann},
+                                                        {"dirichlet", PoissonBoundary::Dirichlet},
+                                                        {"free", PoissonBoundary::Free}};
 
 // Times named stages into PoissonResult::seconds and announces each one.
 class StageTimer {
@@ -51,6 +56,13 @@ class StageTimer {
 };
 
 }  // namespace
+
+PoissonBoundary parse_poisson_boundary(const std::string& name) {
+  return detail::parse_name(kBoundaries, "boundary", name);
+}
+std::string poisson_boundary_name(PoissonBoundary boundary) {
+  return detail::name_of(kBoundaries, boundary);
+}
 
 PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o) {
   using namespace poisson;

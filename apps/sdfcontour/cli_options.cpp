@@ -1,0 +1,192 @@
+#include "cli_options.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+
+#include "atomic_file.h"
+
+namespace sdfcontour::cli {
+
+std::optional<double> parse_finite(const std::string& text) {
+  std::size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(x)) return std::nullopt;
+  return x;
+}
+
+Bounds parse_bounds(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string token;
+  while (std::getline(ss, token, ',')) {
+    const std::optional<double> x = parse_finite(token);
+    if (!x) throw Error("--bounds: '" + token + "' is not a finite number");
+    v.push_back(*x);
+  }
+  Bounds b;
+  if (v.size() == 2) {
+    b.min.setConstant(v[0]);
+    b.max.setConstant(v[1]);
+  } else if (v.size() == 6) {
+    b.min = Eigen::Vector3d(v[0], v[1], v[2]);
+    b.max = Eigen::Vector3d(v[3], v[4], v[5]);
+  } else {
+    throw Error("--bounds takes MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!(b.min[a] < b.max[a])) throw Error("--bounds: min must be less than max on every axis");
+    if (!std::isfinite(b.max[a] - b.min[a]) || b.max[a] - b.min[a] > 1e150)
+      throw Error("--bounds: the box is too large to compute with");
+  }
+  return b;
+}
+
+void require_range(const std::string& option, double value, double lo, double hi) {
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    std::ostringstream m;
+    m << option << " must be a finite number between " << lo << " and " << hi << ", got " << value;
+    throw Error(m.str());
+  }
+}
+
+double parse_number_or(const std::string& option, const std::string& text,
+                       const std::vector<std::pair<std::string, double>>& words) {
+  for (const auto& [word, value] : words)
+    if (text == word) return value;
+  const std::optional<double> x = parse_finite(text);
+  std::string known;
+  for (const auto& w : words) known += " or '" + w.first + "'";
+  if (!x || !(*x > 0)) throw Error(option + ": '" + text + "' is not a positive number" + known);
+  return *x;
+}
+
+void require_writable_mesh(const Mesh& mesh, const std::string& what) {
+  if (mesh.triangles.rows() == 0 || mesh.vertices.rows() == 0)
+    throw Error(what + " is empty: no surface was found (check the input and options)");
+  if (!mesh.vertices.allFinite())
+    throw Error(what + " has non-finite vertices (the input's scale is out of range)");
+}
+
+BandOptions parse_band_options(const std::string& band, const std::string& truncation) {
+  BandOptions b;
+  b.band = parse_number_or("--band", band, {{"all", std::numeric_limits<double>::infinity()}});
+  if (truncation == "auto") {
+    b.truncation_mode = TruncationMode::Auto;
+  } else if (truncation == "none") {
+    b.truncation_mode = TruncationMode::None;
+  } else {
+    b.truncation_mode = TruncationMode::Given;
+    b.truncation = parse_number_or("--truncation (T, auto or none)", truncation, {});
+  }
+  return b;
+}
+
+void write_json(const nlohmann::json& json, const std::string& path) {
+  if (path.empty()) {
+    std::cout << json.dump(2) << std::endl;
+    return;
+  }
+  AtomicFile f(path);
+  f.stream() << json.dump(2) << "\n";
+  f.commit();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void RunOptions::add_to(CLI::App* app, const std::string& stats_help) {
+  app->add_option("--stats", stats, stats_help);
+  app->add_option("--threads", threads, "Worker threads (0: all cores)")->capture_default_str();
+  app->add_flag("--ascii", ascii, "Write ASCII PLY instead of binary");
+  app->add_flag("-q,--quiet", quiet, "No progress messages on stderr");
+}
+
+void RunOptions::say(const std::string& message) const {
+  if (!quiet) std::cerr << "[sdfcontour] " << message << "\n";
+}
+
+std::unique_ptr<tbb::global_control> RunOptions::limit_threads() const {
+  require_range("--threads", threads, 0, 4096);
+  if (threads == 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               std::size_t(threads));
+}
+
+ProgressBar::ProgressBar() : tty_(::isatty(2)) {}
+
+void ProgressBar::operator()(const std::string& stage, long done, long total) {
+  const auto now = std::chrono::steady_clock::now();
+  if (stage != stage_) stage_ = stage, start_ = now, last_tenth_ = -1;
+  const double fraction = total > 0 ? double(done) / double(total) : 1.0;
+  const int tenth = int(fraction * 10);
+  if (!tty_ && tenth == last_tenth_ && done != total) return;
+  last_tenth_ = tenth;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const int width = 24, filled = int(fraction * width);
+  std::ostringstream line;
+  line << "[sdfcontour] " << stage << " [" << std::string(std::size_t(filled), '=')
+       << std::string(std::size_t(width - filled), ' ') << "] " << done << "/" << total;
+  if (done > 0 && done < total)
+    line << ", ETA " << std::fixed << std::setprecision(0) << elapsed * (1 - fraction) / fraction
+         << " s";
+  std::cerr << (tty_ ? "\r" : "") << line.str() << (tty_ && done < total ? "" : "\n") << std::flush;
+}
+
+void PoissonArgs::add_to(CLI::App* app) {
+  app->add_option("--alpha", options.point_weight,
+                  "Screening weight (PoissonRecon's --pointWeight); 0 is plain Poisson")
+      ->capture_default_str();
+  app->add_option("--depth", depth,
+                  depth == "auto"
+                      ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 above "
+                        "(deeper needs more memory than a 512^3 run should take)"
+                      : "Finest octree depth")
+      ->capture_default_str();
+  app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
+      ->capture_default_str();
+  app->add_option("--samples-per-node", options.samples_per_node,
+                  "Splat each normal where an octree node holds about this many samples")
+      ->capture_default_str();
+  app->add_option("--scale", options.scale,
+                  "Domain = bounding cube of the points enlarged by this factor")
+      ->capture_default_str();
+  app->add_option("--boundary", boundary,
+                  "Boundary condition on the domain cube: neumann, dirichlet (chi = 0 on the "
+                  "faces) or free (for these degree-1 elements the same as neumann)")
+      ->capture_default_str();
+  app->add_option("--solver-tolerance", options.solver_tolerance,
+                  "Conjugate gradients stop at this relative residual at each depth")
+      ->capture_default_str();
+}
+
+PoissonOptions PoissonArgs::resolved() const {
+  PoissonOptions o = options;
+  require_range("--alpha", o.point_weight, 0, 1e4);
+  if (depth == "auto") {
+    o.depth = 0;  // the pipeline chooses
+    require_range("--full-depth", o.full_depth, 0, 8);
+  } else {
+    o.depth = int(parse_number_or("--depth", depth, {}));
+    require_range("--depth", o.depth, 1, 16);
+    if (std::to_string(o.depth) != depth) throw Error("--depth must be a whole number or 'auto'");
+    require_range("--full-depth", o.full_depth, 0, o.depth);
+  }
+  require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
+  require_range("--scale", o.scale, 1, 16);
+  require_range("--solver-tolerance", o.solver_tolerance, 1e-16, 0.5);
+  o.boundary = parse_poisson_boundary(boundary);
+  return o;
+}
+
+}  // namespace sdfcontour::cli

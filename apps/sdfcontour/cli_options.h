@@ -1,0 +1,86 @@
+// What the subcommands share: number and option parsing with one-line errors, the run options
+// (--stats, --threads, --ascii, --quiet), the progress bar, and the screened Poisson options.
+#pragma once
+
+#include <tbb/global_control.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sdfcontour/band.h"
+#include "sdfcontour/poisson.h"
+#include "sdfcontour/samples.h"
+#include "sdfcontour/types.h"
+
+namespace sdfcontour::cli {
+
+/// The whole of `text` as a finite number, or nothing.
+std::optional<double> parse_finite(const std::string& text);
+
+/// --bounds: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX.
+Bounds parse_bounds(const std::string& text);
+
+/// Throws Error unless value is finite and within [lo, hi].
+void require_range(const std::string& option, double value, double lo, double hi);
+
+/// A positive number, or one of `words` (returned as the word's value).
+double parse_number_or(const std::string& option, const std::string& text,
+                       const std::vector<std::pair<std::string, double>>& words);
+
+/// A mesh is written only if it has triangles and finite vertices; throws Error otherwise.
+void require_writable_mesh(const Mesh& mesh, const std::string& what);
+
+/// --band and --truncation.
+BandOptions parse_band_options(const std::string& band, const std::string& truncation);
+
+/// The JSON to `path` (atomically), or to stdout if path is empty.
+void write_json(const nlohmann::json& json, const std::string& path);
+
+/// Seconds since `start`.
+double seconds_since(std::chrono::steady_clock::time_point start);
+
+/// The options every mesh-writing command shares.
+struct RunOptions {
+  std::string stats;
+  int threads = 0;
+  bool ascii = false, quiet = false;
+
+  void add_to(CLI::App* app, const std::string& stats_help);
+  /// A stage message on stderr, unless --quiet.
+  void say(const std::string& message) const;
+  /// --threads: 0 for every core, else at most that many workers while the result lives.
+  std::unique_ptr<tbb::global_control> limit_threads() const;
+};
+
+/// A progress bar on stderr for long stages: "[sdfcontour] bricks [=====     ] 12/24, ETA 8 s".
+/// On a terminal it redraws one line; otherwise it prints a line per tenth.
+class ProgressBar {
+ public:
+  ProgressBar();
+  void operator()(const std::string& stage, long done, long total);
+
+ private:
+  bool tty_;
+  std::string stage_;
+  std::chrono::steady_clock::time_point start_;
+  int last_tenth_ = -1;
+};
+
+/// Screened Poisson options, shared by `contour` (gcp, gtcp) and `poisson`.
+struct PoissonArgs {
+  PoissonOptions options;
+  std::string boundary = "neumann";
+  std::string depth = "8";  ///< "auto" (contour only): from the grid's resolution
+
+  void add_to(CLI::App* app);
+  /// The options, range-checked; depth 0 for "auto".
+  PoissonOptions resolved() const;
+};
+
+}  // namespace sdfcontour::cli

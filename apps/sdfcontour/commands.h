@@ -1,0 +1,19 @@
+// The subcommands. Each adds itself (its options and help) to the app and returns how to run it.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace sdfcontour::cli {
+
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;  ///< returns the exit code; throws Error for bad input
+};
+
+Command add_contour_command(CLI::App& app);                      ///< sdfcontour contour
+Command add_poisson_command(CLI::App& app);                      ///< sdfcontour poisson
+Command add_sample_command(CLI::App& app);                       ///< sdfcontour sample
+Command add_eval_commands(CLI::App& app, Command& eval_points);  ///< eval and eval-points
+
+}  // namespace sdfcontour::cli

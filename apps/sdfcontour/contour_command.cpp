@@ -1,0 +1,305 @@
+// sdfcontour contour: SDF samples (a grid, scattered samples, a .vdb level set or a built-in
+// shape) -> a mesh and/or contact points, with a JSON summary.
+#include <iomanip>
+#include <iostream>
+#include <limits>
+
+#include "atomic_file.h"
+#include "cli_options.h"
+#include "commands.h"
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/contact_point_errors.h"
+#include "sdfcontour/io.h"
+#include "sdfcontour/npy.h"
+#include "sdfcontour/pipeline.h"
+#include "sdfcontour/vdb.h"
+
+namespace sdfcontour::cli {
+
+namespace {
+
+struct ContourArgs {
+  std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
+                                     weights = "james", band = "4", truncation = "auto", grid;
+  int knn = 18, brick_size = BrickOptions{}.size;
+  double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
+  double james_epsilon = GradientOptions{}.james_epsilon,
+         tie_tolerance = ContactPointOptions{}.tie_tolerance;
+  bool fn = false, serial_triangulation = false;
+  std::uint64_t seed = 0;
+  RunOptions run;
+  PoissonArgs poisson = [] {
+    PoissonArgs p;
+    p.depth = "auto";
+    return p;
+  }();
+};
+
+struct LoadedInput {
+  SdfInput input;
+  std::unique_ptr<AnalyticShape> shape;  // for built-in shapes
+  double vdb_background = 0;             // for OpenVDB level sets: the truncation distance
+};
+
+LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint64_t seed,
+                       const std::string& grid_name) {
+  LoadedInput loaded;
+  if (is_builtin_spec(spec)) {
+    const BuiltinSpec b = parse_builtin_spec(spec);
+    loaded.shape = make_builtin_shape(b.name);
+    if (b.random) {
+      loaded.input.samples = sample_random(*loaded.shape, b.count, bounds, seed);
+    } else {
+      loaded.input = SdfInput::from_grid(sample_grid(*loaded.shape, b.resolution, bounds));
+    }
+    return loaded;
+  }
+  if (is_vdb_path(spec)) {
+    VdbLevelSet level_set = read_vdb_level_set(spec, grid_name);
+    loaded.input.samples = std::move(level_set.samples);
+    loaded.input.spacing = level_set.voxel_size;
+    loaded.vdb_background = level_set.background;
+    return loaded;
+  }
+  loaded.input = sdf_input_from_npy(map_npy(spec), bounds);
+  return loaded;
+}
+
+ContourOptions contour_options(const ContourArgs& a) {
+  ContourOptions opt;
+  opt.method = parse_method(a.method);
+  opt.want_mesh = !a.output.empty();
+  opt.want_points = !a.points.empty();
+  opt.gradient_source = parse_gradient_source(a.gradient);
+  opt.gradient.weighting = parse_gradient_weighting(a.weights);
+  require_range("--knn", a.knn, 3, 1000);
+  require_range("--james-epsilon", a.james_epsilon, 0, 1e6);
+  require_range("--tie-tolerance", a.tie_tolerance, 0, 1);
+  opt.knn = a.knn;
+  opt.gradient.james_epsilon = a.james_epsilon;
+  opt.contact.tie_tolerance = a.tie_tolerance;
+  opt.contact.try_tet_gradients = a.fn;
+  opt.parallel = !a.serial_triangulation;
+  opt.poisson = a.poisson.resolved();
+  opt.band = parse_band_options(a.band, a.truncation);
+  if (a.brick_size < 0) throw Error("--brick-size must be at least 1 (or 0 for no bricks)");
+  opt.bricks.size = a.brick_size;
+  if (!(a.brick_halo >= 0) || !std::isfinite(a.brick_halo))
+    throw Error("--brick-halo must be a non-negative number of spacings (0: automatic)");
+  opt.bricks.halo = a.brick_halo;
+  opt.band.margin = a.margin;
+  return opt;
+}
+
+// |value| and normal alignment of contact points against an exact SDF.
+nlohmann::json errors_json(const ContactPoints& cp, const AnalyticShape& shape, double spacing) {
+  const ContactPointErrors e = contact_point_errors(cp.points, cp.normals, shape);
+  const Summary value = summarize(e.abs_value), alignment = summarize(e.alignment);
+  nlohmann::json j;
+  j["abs_value_median"] = value.median;
+  j["abs_value_p95"] = value.p95;
+  j["abs_value_mean"] = value.mean;
+  j["normal_alignment_median"] = alignment.median;
+  j["normal_alignment_mean"] = alignment.mean;
+  if (spacing > 0) {
+    j["spacing"] = spacing;
+    j["abs_value_median_in_spacing"] = value.median / spacing;
+    j["abs_value_p95_in_spacing"] = value.p95 / spacing;
+  }
+  return j;
+}
+
+nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, const LoadedInput& in,
+                            const ContourResult& r) {
+  nlohmann::json j;
+  j["input"] = a.input;
+  j["method"] = a.method;
+  j["samples"] = r.samples;
+  if (in.input.is_grid) j["grid"] = in.input.grid.dims;
+  if (r.band_samples > 0) {
+    nlohmann::json band = {{"band", a.band},
+                           {"spacing", r.band_spacing},
+                           {"samples", r.band_samples},
+                           {"truncation_detected", r.truncation.detected()}};
+    if (r.truncation.inside < std::numeric_limits<double>::infinity())
+      band["truncation_inside"] = r.truncation.inside;
+    if (r.truncation.outside < std::numeric_limits<double>::infinity())
+      band["truncation_outside"] = r.truncation.outside;
+    j["band"] = band;
+  }
+  if (r.bricks)
+    j["bricks"] = {{"size", a.brick_size},
+                   {"count", r.bricks->bricks},
+                   {"retries", r.bricks->retries},
+                   {"samples_triangulated", r.bricks->triangulated},
+                   {"largest_brick_samples", r.bricks->largest_brick}};
+  if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
+  if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;
+  if (r.mesh)
+    j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
+                 {"triangles", r.mesh->triangles.rows()},
+                 {"file", a.output}};
+  if (r.contact_points) {
+    const ContactPoints& cp = *r.contact_points;
+    nlohmann::json c = {{"kept", cp.size()},
+                        {"hidden", cp.hidden},
+                        {"zero_gradient", cp.zero_gradient},
+                        {"discarded", cp.discarded},
+                        {"rescued_fn", cp.rescued},
+                        {"file", a.points}};
+    if (opt.method != Method::Gtcp) {
+      c["gradient"] =
+          a.gradient == "knn" ? "knn" + std::to_string(a.knn) : a.gradient + "/" + a.weights;
+      c["tie_tolerance"] = a.tie_tolerance;
+      c["fn"] = a.fn;
+    }
+    if (in.shape)
+      c["error"] =
+          errors_json(cp, *in.shape, in.input.is_grid ? in.input.grid.spacing().maxCoeff() : 0.0);
+    j["contact_points"] = c;
+  }
+  double total = 0;
+  nlohmann::json stage_json = nlohmann::json::object();
+  for (const auto& s : r.stages) {
+    stage_json[s.name] = s.seconds;
+    total += s.seconds;
+  }
+  j["seconds"] = stage_json;
+  if (!r.poisson_stages.empty()) {
+    nlohmann::json poisson_json = nlohmann::json::object();
+    for (const auto& s : r.poisson_stages) poisson_json[s.name] = s.seconds;
+    j["poisson_seconds"] = poisson_json;
+  }
+  j["seconds_total"] = total;
+  return j;
+}
+
+void print_summary(const ContourResult& r, double total) {
+  std::cout << "samples " << r.samples;
+  if (r.band_samples > 0) std::cout << ", in band " << r.band_samples;
+  if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
+  if (r.contact_points) std::cout << ", contact points kept " << r.contact_points->size();
+  if (r.mesh)
+    std::cout << ", mesh " << r.mesh->vertices.rows() << " vertices / " << r.mesh->triangles.rows()
+              << " triangles";
+  std::cout << "\nseconds:" << std::fixed << std::setprecision(3);
+  for (const auto& s : r.stages) std::cout << " " << s.name << " " << s.seconds;
+  std::cout << " (total " << total << ")" << std::endl;
+}
+
+int run_contour(const ContourArgs& a) {
+  if (a.output.empty() && a.points.empty())
+    throw Error("nothing to write: give -o OUT and/or --points FILE");
+  for (const std::string* path : {&a.output, &a.points, &a.run.stats})
+    if (!path->empty()) require_writable(*path);
+  OutputBatch outputs;  // every file appears at the end, or none
+  const auto threads = a.run.limit_threads();
+  ContourOptions opt = contour_options(a);
+  opt.progress = [&](const std::string& m) { a.run.say(m); };
+  if (!a.run.quiet) opt.progress_fraction = ProgressBar();
+
+  const auto t0 = std::chrono::steady_clock::now();
+  a.run.say("reading " + a.input);
+  LoadedInput in = load_input(a.input, parse_bounds(a.bounds), a.seed, a.grid);
+  // A level set's background is its truncation distance, unless one is given.
+  if (in.vdb_background > 0 && opt.band.truncation_mode == TruncationMode::Auto) {
+    opt.band.truncation_mode = TruncationMode::Given;
+    opt.band.truncation = in.vdb_background;
+  }
+  const double load_seconds = seconds_since(t0);
+  ContourResult r = contour(in.input, in.shape.get(), opt);
+  r.stages.insert(r.stages.begin(), {"input", load_seconds});
+
+  const auto tw = std::chrono::steady_clock::now();
+  const PlyFormat format = a.run.ascii ? PlyFormat::Ascii : PlyFormat::Binary;
+  if (r.mesh) {
+    require_writable_mesh(*r.mesh, "the " + a.method + " mesh");
+    a.run.say("writing " + a.output);
+    write_mesh(a.output, *r.mesh, format);
+  }
+  if (r.contact_points && !a.points.empty()) {
+    a.run.say("writing " + a.points);
+    write_oriented_points(a.points, {r.contact_points->points, r.contact_points->normals}, format);
+  }
+  r.stages.push_back({"output", seconds_since(tw)});
+  const nlohmann::json summary = summary_json(a, opt, in, r);
+  if (!a.run.stats.empty()) write_json(summary, a.run.stats);
+  outputs.commit();
+  print_summary(r, summary["seconds_total"].get<double>());
+  return 0;
+}
+
+}  // namespace
+
+Command add_contour_command(CLI::App& app) {
+  auto a = std::make_shared<ContourArgs>();
+  CLI::App* c = app.add_subcommand(
+      "contour",
+      "Contour SDF samples (grid .npy, scattered .npy, OpenVDB level set .vdb or builtin:NAME@N)");
+  c->add_option("input", a->input,
+                "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
+                "x,y,z,value, an OpenVDB float level set .vdb (read sparse; its voxel size and "
+                "transform are used), or a built-in shape builtin:NAME@N (N^3 grid) / "
+                "builtin:NAME@random:COUNT; NAME is one of sphere, torus, box, plate, shell, csg")
+      ->required();
+  c->add_option("-o,--output", a->output, "Mesh to write (.ply binary by default, or .obj)");
+  c->add_option(
+      "--points", a->points,
+      "Contact points to write as PLY (x y z nx ny nz): GCP's, or GTCP's for --method gtcp");
+  c->add_option("-m,--method", a->method, "gcp, gtcp, mc, mt-rt or mt-dt")->capture_default_str();
+  c->add_option("--bounds", a->bounds,
+                "Grid bounds (positions of the first and last samples) MIN,MAX or "
+                "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX; also the box for random built-in samples")
+      ->capture_default_str();
+  c->add_option("--gradient", a->gradient,
+                "GCP gradients from the regular or delaunay triangulation, or knn least squares")
+      ->capture_default_str();
+  c->add_option("--weights", a->weights, "Averaging of tet gradients: uniform, volume or james")
+      ->capture_default_str();
+  c->add_option("--knn", a->knn, "k for --gradient knn (the paper uses 6, 18, 26)")
+      ->capture_default_str();
+  c->add_option("--james-epsilon", a->james_epsilon,
+                "Regularisation of the James weights' linear system")
+      ->capture_default_str();
+  c->add_option("--tie-tolerance", a->tie_tolerance,
+                "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; "
+                "0 is the strict test")
+      ->capture_default_str();
+  c->add_option("--band", a->band,
+                "Triangulation methods (all but mc) use only samples with |value| <= BAND "
+                "grid spacings (scattered samples: the side of a cube holding one sample); "
+                "'all' keeps every sample, as in the paper")
+      ->capture_default_str();
+  c->add_option("--grid", a->grid,
+                "For a .vdb input: the float level set grid to read (default: the first)");
+  c->add_option("--margin", a->margin,
+                "Samples up to this many spacings beyond the band are triangulated but give "
+                "no contact point: they close the band's stars")
+      ->capture_default_str();
+  c->add_option("--truncation", a->truncation,
+                "Values clamped at +-T carry no distance and are left out: T, 'none', or "
+                "'auto' (a sign is truncated at its largest |value| when >= 64 samples, and "
+                ">= 1% of that sign's samples, sit there)")
+      ->capture_default_str();
+  c->add_option("--brick-size", a->brick_size,
+                "GCP triangulates the band in bricks of this many spacings, each with a halo, "
+                "in parallel; memory follows a brick, the result equals one global "
+                "triangulation's; 0 triangulates the whole band at once (so does --band all)")
+      ->capture_default_str();
+  c->add_option("--brick-halo", a->brick_halo,
+                "First halo around a brick, in spacings (doubled where it does not suffice); "
+                "0: twice the largest |value| in the band and its margin")
+      ->capture_default_str();
+  c->add_flag("--fn", a->fn,
+              "+FN: if the averaged gradient's point is discarded, try each incident tet's "
+              "gradient");
+  c->add_option("--seed", a->seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
+  a->run.add_to(
+      c, "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
+  c->add_flag("--serial-triangulation", a->serial_triangulation,
+              "Insert points sequentially (same result, slower)");
+  a->poisson.add_to(c);
+  return {c, [a] { return run_contour(*a); }};
+}
+
+}  // namespace sdfcontour::cli

@@ -1,0 +1,143 @@
+// sdfcontour sample: a closed mesh -> its normalised copy, SDF samples (a grid, a truncated grid,
+// an OpenVDB level set or random points) and their exact contact points.
+#include <iostream>
+#include <limits>
+
+#include "atomic_file.h"
+#include "cli_options.h"
+#include "commands.h"
+#include "sdfcontour/contact_points.h"
+#include "sdfcontour/io.h"
+#include "sdfcontour/mesh_sdf.h"
+#include "sdfcontour/mesh_transform.h"
+#include "sdfcontour/npy.h"
+#include "sdfcontour/vdb.h"
+
+namespace sdfcontour::cli {
+
+namespace {
+
+struct SampleArgs {
+  std::string mesh, prefix, bounds = "-1,1";
+  int resolution = 0;
+  std::size_t random = 0;
+  std::uint64_t seed = 0;
+  double scale = 0.9, truncate = 0, half_width = 3;
+  bool quiet = false, float32 = false;
+};
+
+void check(const SampleArgs& a, bool vdb) {
+  if ((a.resolution > 0) == (a.random > 0))
+    throw Error("give exactly one of --res N and --random COUNT");
+  if (a.resolution == 1 || a.resolution > 1024) throw Error("--res must be between 2 and 1024");
+  require_range("--scale", a.scale, 1e-6, 1e6);
+  if (!(a.truncate >= 0) || !std::isfinite(a.truncate))
+    throw Error("--truncate must be a non-negative number of spacings");
+  if (a.truncate > 0 && a.resolution == 0) throw Error("--truncate needs a grid (--res N)");
+  if (vdb && a.resolution == 0) throw Error("a .vdb output needs a grid (--res N)");
+  if (vdb && !(a.half_width > 0 && std::isfinite(a.half_width)))
+    throw Error("--half-width must be a positive number of voxels");
+}
+
+// Samples the grid, writes it (.npy or .vdb) and returns the samples that carry a distance.
+Samples write_grid(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds, bool vdb) {
+  // A level set needs values only inside its band: sample truncated, fast.
+  const double truncate = vdb && a.truncate == 0 ? a.half_width + 1 : a.truncate;
+  const double h = (bounds.max - bounds.min).maxCoeff() / (a.resolution - 1);
+  const Grid grid = truncate > 0 ? sample_grid_truncated(sdf, a.resolution, bounds, truncate * h)
+                                 : sample_grid(sdf, a.resolution, bounds);
+  const std::size_t n = std::size_t(a.resolution);
+  if (vdb)
+    write_vdb_level_set(a.prefix, grid, a.half_width);
+  else if (a.float32)
+    write_npy_float32(
+        a.prefix + ".npy", {n, n, n},
+        std::vector<float>(grid.values.data(), grid.values.data() + grid.values.size()));
+  else
+    write_npy(a.prefix + ".npy", {n, n, n},
+              std::vector<double>(grid.values.data(), grid.values.data() + grid.values.size()));
+  // A truncated grid's exact contact points: those of the samples inside the truncation.
+  BandOptions all;
+  all.band = std::numeric_limits<double>::infinity();
+  all.margin = 0;
+  all.truncation_mode = truncate > 0 ? TruncationMode::Given : TruncationMode::None;
+  all.truncation = (vdb ? a.half_width : truncate) * h;
+  return select_band(grid, all).samples;
+}
+
+Samples write_random(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds) {
+  Samples samples = sample_random(sdf, a.random, bounds, a.seed);
+  std::vector<double> rows(a.random * 4);
+  for (std::size_t i = 0; i < a.random; ++i) {
+    for (int c = 0; c < 3; ++c) rows[4 * i + std::size_t(c)] = samples.points(Eigen::Index(i), c);
+    rows[4 * i + 3] = samples.values[Eigen::Index(i)];
+  }
+  write_npy(a.prefix + ".npy", {a.random, 4}, rows);
+  return samples;
+}
+
+int run_sample(const SampleArgs& a) {
+  const bool vdb = is_vdb_path(a.prefix);
+  check(a, vdb);
+  RunOptions run;
+  run.quiet = a.quiet;
+  const Bounds bounds = parse_bounds(a.bounds);
+  // x.vdb writes x.vdb, x_mesh.ply and x_gtcp.ply; a prefix writes PREFIX.npy and the rest.
+  const std::string stem = vdb ? a.prefix.substr(0, a.prefix.size() - 4) : a.prefix;
+  for (const std::string& path :
+       {vdb ? a.prefix : stem + ".npy", stem + "_gtcp.ply", stem + "_mesh.ply"})
+    require_writable(path);
+  OutputBatch outputs;
+  run.say("reading " + a.mesh);
+  const Mesh mesh = normalize_mesh(read_mesh(a.mesh), a.scale);
+  const MeshSdf sdf(mesh);
+  Samples samples;
+  if (a.resolution > 0) {
+    run.say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
+    samples = write_grid(a, sdf, bounds, vdb);
+  } else {
+    run.say("signed distances at " + std::to_string(a.random) + " random points");
+    samples = write_random(a, sdf, bounds);
+  }
+  run.say("exact contact points");
+  const ContactPoints gt = exact_contact_points(samples.points, sdf);
+  write_oriented_points(stem + "_gtcp.ply", {gt.points, gt.normals});
+  write_mesh(stem + "_mesh.ply", mesh);
+  outputs.commit();
+  std::cout << "samples " << samples.points.rows() << " -> " << (vdb ? a.prefix : stem + ".npy")
+            << ", " << stem << "_gtcp.ply, " << stem << "_mesh.ply" << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+Command add_sample_command(CLI::App& app) {
+  auto a = std::make_shared<SampleArgs>();
+  CLI::App* c = app.add_subcommand(
+      "sample", "Closed mesh -> normalised mesh, SDF samples and their exact contact points");
+  c->add_option("mesh", a->mesh, "Closed triangle mesh (OBJ, PLY or OFF)")->required();
+  c->add_option("-o,--output", a->prefix,
+                "Output prefix: PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
+                "mesh), PREFIX_gtcp.ply (exact contact points with normals); or X.vdb: an "
+                "OpenVDB level set (with X_mesh.ply and X_gtcp.ply)")
+      ->required();
+  c->add_option("--res", a->resolution, "Sample an N^3 grid over the bounds");
+  c->add_option("--random", a->random, "Sample COUNT uniform random points in the bounds instead");
+  c->add_option("--seed", a->seed, "Seed for --random")->capture_default_str();
+  c->add_option("--scale", a->scale, "The mesh's longest side is scaled to span [-scale, scale]")
+      ->capture_default_str();
+  c->add_option("--bounds", a->bounds, "Sampled box: MIN,MAX or XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX")
+      ->capture_default_str();
+  c->add_option("--truncate", a->truncate,
+                "Truncate the grid's distances at this many spacings (a TSDF, as OpenVDB "
+                "stores level sets); only blocks near the surface are evaluated, so large "
+                "grids sample fast. 0: exact everywhere")
+      ->capture_default_str();
+  c->add_flag("--float32", a->float32, "Write the grid as float32 (default float64)");
+  c->add_option("--half-width", a->half_width, "A .vdb level set's narrow band, in voxels")
+      ->capture_default_str();
+  c->add_flag("-q,--quiet", a->quiet, "No progress messages on stderr");
+  return {c, [a] { return run_sample(*a); }};
+}
+
+}  // namespace sdfcontour::cli
