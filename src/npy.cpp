@@ -281,13 +281,9 @@ void write_npy_float32(const std::string& path, const std::vector<std::size_t>& 
                   data.size() * sizeof(float));
 }
 
-SdfInput SdfInput::from_grid(Grid grid) {
+SdfInput grid_input(Grid grid) {
   auto owned = std::make_shared<Grid>(std::move(grid));
-  SdfInput input;
-  input.is_grid = true;
-  input.grid = view_of(*owned);
-  input.storage = owned;
-  return input;
+  return GridInput{view_of(*owned), owned};
 }
 
 namespace {
@@ -300,7 +296,7 @@ std::string shape_string(const std::vector<std::size_t>& shape) {
 
 template <class ValueAt>
 SdfInput scattered_input(std::size_t rows, ValueAt&& value_at) {
-  SdfInput input;
+  ScatteredInput input;
   const Eigen::Index n = Eigen::Index(rows);
   input.samples.points.resize(n, 3);
   input.samples.values.resize(n);
@@ -334,7 +330,7 @@ SdfInput sdf_input_from_array(const NpyArray& array, const Bounds& bounds) {
     grid.values =
         Eigen::Map<const Eigen::VectorXd>(array.data.data(), Eigen::Index(array.data.size()));
     validate_grid(grid);
-    return SdfInput::from_grid(std::move(grid));
+    return grid_input(std::move(grid));
   }
   if (array.shape.size() == 2 && array.shape[1] == 4)
     return scattered_input(array.shape[0], [&](std::size_t i) { return array.data[i]; });
@@ -353,14 +349,13 @@ SdfInput sdf_input_from_npy(std::shared_ptr<const MappedNpy> array, const Bounds
       for (std::size_t i = 0; i < array->count; ++i) copy.data[i] = array->value(i);
       return sdf_input_from_array(copy, bounds);
     }
-    SdfInput input;
-    input.is_grid = true;
-    for (int a = 0; a < 3; ++a) input.grid.dims[a] = int(array->shape[std::size_t(a)]);
-    input.grid.bounds = bounds;
-    input.grid.data = array->data;
-    input.grid.type = array->type;
+    GridInput input;
+    for (int a = 0; a < 3; ++a) input.view.dims[a] = int(array->shape[std::size_t(a)]);
+    input.view.bounds = bounds;
+    input.view.data = array->data;
+    input.view.type = array->type;
     input.storage = array;
-    validate_grid(input.grid);
+    validate_grid(input.view);
     return input;
   }
   if (array->shape.size() == 2 && array->shape[1] == 4)

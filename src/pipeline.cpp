@@ -75,35 +75,35 @@ class Stages {
 
 ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
                       const ContourOptions& options) {
-  if (input.is_grid)
-    validate_grid(input.grid);
-  else
-    validate_samples(input.samples);
-  if (input.is_grid)
-    require_sign_change(input.grid);
-  else
-    require_sign_change(input.samples.values);
+  const GridView* grid = grid_view_of(input);
+  const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
+  if (grid) {
+    validate_grid(*grid);
+    require_sign_change(*grid);
+  } else {
+    validate_samples(scattered->samples);
+    require_sign_change(scattered->samples.values);
+  }
   const Method method = options.method;
-  if (method == Method::Mc && !input.is_grid)
+  if (method == Method::Mc && !grid)
     throw Error("method mc needs a grid input, not scattered samples");
   if (method == Method::Gtcp && !shape)
     throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
   ContourResult result;
-  result.samples =
-      int(input.is_grid ? input.grid.size() : std::size_t(input.samples.points.rows()));
+  result.samples = int(grid ? grid->size() : std::size_t(scattered->samples.points.rows()));
   Stages stages(result, options);
 
   if (method == Method::Mc && options.want_mesh)
     result.mesh =
         stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
-                   [&] { return marching_cubes(input.grid); });
+                   [&] { return marching_cubes(*grid); });
   if (!options.want_points && method == Method::Mc) return result;
 
   // The other stages see the band's samples as scattered samples; a grid's positions are made
   // for the band only.
   BandSamples band = stages.run("band", "samples within the band", [&] {
-    return input.is_grid ? select_band(input.grid, options.band)
-                         : select_band(input.samples, options.band, input.spacing);
+    return grid ? select_band(*grid, options.band)
+                : select_band(scattered->samples, options.band, scattered->spacing);
   });
   result.band_samples = int(band.samples.values.size());
   result.band_spacing = band.spacing;

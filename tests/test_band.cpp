@@ -87,8 +87,8 @@ TEST(Band, DetectsTruncationOnlyWhereValuesAreClamped) {
 TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
   const Grid exact = torus_grid(32);
   const double h = exact.spacing().maxCoeff();
-  const SdfInput truncated = SdfInput::from_grid(clamped(exact, 2 * h));
-  const SdfInput exact_input = SdfInput::from_grid(exact);
+  const SdfInput truncated = grid_input(clamped(exact, 2 * h));
+  const SdfInput exact_input = grid_input(exact);
   // No exact value lies between the cut-offs compared, so both keep the same samples.
   for (Eigen::Index i = 0; i < exact.values.size(); ++i) {
     const double v = std::abs(exact.values[i]);
@@ -132,7 +132,7 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
       sum += std::abs(shape->distance(r.contact_points->points.row(i).transpose()));
     return sum / double(r.contact_points->points.rows());
   };
-  const SdfInput input = SdfInput::from_grid(grid);
+  const SdfInput input = grid_input(grid);
   const ContourResult band = contour(input, shape.get(), o);
   o.band.band = std::numeric_limits<double>::infinity();
   const ContourResult all = contour(input, shape.get(), o);

@@ -45,9 +45,9 @@ TEST(Npy, ReadsFloat32AndGridLayout) {
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = float(i) - 5.0f;
   write_raw_npy(path, "<f4", "False", "(2, 3, 4)", floats_bytes(v));
   const SdfInput in = sdf_input_from_npy(map_npy(path), Bounds{});
-  ASSERT_TRUE(in.is_grid);
+  ASSERT_NE(grid_view_of(in), nullptr);
   // Viewed in place, as float32.
-  const GridView& g = in.grid;
+  const GridView& g = *grid_view_of(in);
   EXPECT_EQ(g.type, ScalarType::Float32);
   EXPECT_EQ(g.value(g.index(1, 2, 3)), double(v[(1 * 3 + 2) * 4 + 3]));
   // a[i,j,k] is at min + (i*hx, j*hy, k*hz) with h = 2/(n-1).
@@ -64,10 +64,11 @@ TEST(Npy, ScatteredSamples) {
   const std::string path = (dir / "s.npy").string();
   write_npy(path, {4, 4}, {0, 0, 0, -1, 1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1});
   const SdfInput in = sdf_input_from_array(read_npy(path), Bounds{});
-  ASSERT_FALSE(in.is_grid);
-  EXPECT_EQ(in.samples.points.rows(), 4);
-  EXPECT_EQ(in.samples.points(2, 1), 1.0);
-  EXPECT_EQ(in.samples.values[0], -1.0);
+  ASSERT_TRUE(std::holds_alternative<ScatteredInput>(in));
+  const Samples& samples = std::get<ScatteredInput>(in).samples;
+  EXPECT_EQ(samples.points.rows(), 4);
+  EXPECT_EQ(samples.points(2, 1), 1.0);
+  EXPECT_EQ(samples.values[0], -1.0);
 }
 
 TEST(Npy, RejectsBadFiles) {

@@ -218,8 +218,8 @@ TEST(Poisson, GcpBeatsMarchingCubesOnSmoothShapes) {
   for (const std::string name : {"torus", "csg"}) {
     SCOPED_TRACE(name);
     const auto shape = make_builtin_shape(name);
-    const SdfInput input = SdfInput::from_grid(sample_grid(*shape, 24, Bounds{}));
-    const double h = input.grid.spacing()[0];
+    const SdfInput input = grid_input(sample_grid(*shape, 24, Bounds{}));
+    const double h = grid_view_of(input)->spacing()[0];
     ContourOptions o;
     double error[3];
     const Method methods[3] = {Method::Mc, Method::Gcp, Method::Gtcp};

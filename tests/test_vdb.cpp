@@ -57,9 +57,7 @@ TEST(Vdb, RoundTripKeepsTheBandSparse) {
               double(float(grid.values[Eigen::Index(grid.index(c[0], c[1], c[2]))])));
   }
   // GCP on the level set: its background is the truncation distance.
-  SdfInput input;
-  input.samples = ls.samples;
-  input.spacing = ls.voxel_size;
+  const SdfInput input = ScatteredInput{ls.samples, ls.voxel_size};
   ContourOptions o;
   o.band.truncation_mode = TruncationMode::Given;
   o.band.truncation = ls.background;

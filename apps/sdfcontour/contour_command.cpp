@@ -48,16 +48,15 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
     const BuiltinSpec b = parse_builtin_spec(spec);
     loaded.shape = make_builtin_shape(b.name);
     if (b.random) {
-      loaded.input.samples = sample_random(*loaded.shape, b.count, bounds, seed);
+      loaded.input = ScatteredInput{sample_random(*loaded.shape, b.count, bounds, seed), 0.0};
     } else {
-      loaded.input = SdfInput::from_grid(sample_grid(*loaded.shape, b.resolution, bounds));
+      loaded.input = grid_input(sample_grid(*loaded.shape, b.resolution, bounds));
     }
     return loaded;
   }
   if (is_vdb_path(spec)) {
     VdbLevelSet level_set = read_vdb_level_set(spec, grid_name);
-    loaded.input.samples = std::move(level_set.samples);
-    loaded.input.spacing = level_set.voxel_size;
+    loaded.input = ScatteredInput{std::move(level_set.samples), level_set.voxel_size};
     loaded.vdb_background = level_set.background;
     return loaded;
   }
@@ -115,7 +114,8 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   j["input"] = a.input;
   j["method"] = a.method;
   j["samples"] = r.samples;
-  if (in.input.is_grid) j["grid"] = in.input.grid.dims;
+  const GridView* grid = grid_view_of(in.input);
+  if (grid) j["grid"] = grid->dims;
   if (r.band_samples > 0) {
     nlohmann::json band = {{"band", a.band},
                            {"spacing", r.band_spacing},
@@ -153,9 +153,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
       c["tie_tolerance"] = a.tie_tolerance;
       c["fn"] = a.fn;
     }
-    if (in.shape)
-      c["error"] =
-          errors_json(cp, *in.shape, in.input.is_grid ? in.input.grid.spacing().maxCoeff() : 0.0);
+    if (in.shape) c["error"] = errors_json(cp, *in.shape, grid ? grid->spacing().maxCoeff() : 0.0);
     j["contact_points"] = c;
   }
   double total = 0;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sdfcontour/samples.h"
+#include "sdfcontour/sdf_input.h"
 
 namespace sdfcontour {
 
@@ -57,18 +58,6 @@ void write_npy_float32(const std::string& path, const std::vector<std::size_t>& 
                        const std::vector<float>& data);
 
 /// What an input holds: a grid of shape (nx, ny, nz) or scattered samples of shape (n, 4).
-struct SdfInput {
-  bool is_grid = false;
-  GridView grid;                        ///< valid when is_grid
-  std::shared_ptr<const void> storage;  ///< owns (or maps) the memory `grid` views
-  Samples samples;                      ///< the scattered samples, when !is_grid
-  /// The scattered samples' spacing when known (an OpenVDB voxel size); 0: estimated.
-  double spacing = 0;
-
-  /// An input that owns `grid`.
-  static SdfInput from_grid(Grid grid);
-};
-
 /// Interprets an array as a grid (3 dimensions; positions from `bounds`) or as scattered samples
 /// (shape (n, 4): x, y, z, value). Validates it (finite, enough samples) and throws Error
 /// otherwise.

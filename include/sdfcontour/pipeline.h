@@ -13,6 +13,7 @@
 #include "sdfcontour/gradients.h"
 #include "sdfcontour/npy.h"
 #include "sdfcontour/poisson.h"
+#include "sdfcontour/sdf_input.h"
 
 namespace sdfcontour {
 

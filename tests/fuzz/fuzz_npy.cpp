@@ -23,7 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // Refuse to interpret more than a small array: the fuzzer's inputs are small anyway.
     if (mapped->count <= (1u << 20)) {
       const sdfcontour::SdfInput input = sdfcontour::sdf_input_from_npy(mapped, {});
-      if (input.is_grid) sdfcontour::require_sign_change(input.grid);
+      if (const auto* grid = sdfcontour::grid_view_of(input))
+        sdfcontour::require_sign_change(*grid);
     }
   } catch (const sdfcontour::Error&) {
   }
