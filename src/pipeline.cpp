@@ -192,6 +192,10 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
     popt.progress = options.progress;
     if (popt.depth == 0) popt.depth = auto_poisson_depth(s.points, band.spacing);
     result.poisson_depth = popt.depth;
+    // Nothing after the reconstruction needs the samples or triangulations: free them first.
+    band = BandSamples();
+    regular.reset();
+    delaunay.reset();
     PoissonResult p = stages.run(
         "poisson", "screened Poisson reconstruction of " + std::to_string(cp.size()) + " points",
         [&] {

@@ -63,7 +63,8 @@ TEST(PoissonStages, ConjugateGradientsSolveALaplaceProblemExactly) {
   const std::vector<double> no_finer(L.nodes.size(), 0.0);
   const CellRuns no_runs;
   const LevelSystem system =
-      assemble_system(L, solved, {&empty_grid, &no_field, &no_finer, &no_runs, 0.0}, points, runs);
+      assemble_system(L, solved, splat_divergence(L, solved, empty_grid, no_field, no_finer),
+                      no_runs, 0.0, points, runs);
   std::vector<double> x(L.nodes.size());
   long unknowns = 0;
   for (std::size_t v = 0; v < x.size(); ++v) {

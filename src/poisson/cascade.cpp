@@ -69,12 +69,11 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       coarser = prolong_splines(coarser_grid, grid, coarser);
     }
     coarser_grid = CellGrid();
-    const LevelTerms terms{&grid, &coarser, &field.finer[std::size_t(d)],
-                           &field.runs[std::size_t(d)],
-                           o.point_weight * area_per_point * std::ldexp(1.0, d)};
-    // Once this depth's terms are in its system: pass this depth's splats on to the next depth's
-    // field and free what the next depths do not need (before the solve: the largest at the end).
-    auto release_terms = [&]() {
+    const double screening = o.point_weight * area_per_point * std::ldexp(1.0, d);
+    // Once this depth's right-hand side holds the normal field: pass this depth's splats on to
+    // the next depth's field and free what the next depths do not need (before the rows are
+    // built and the system solved, the largest at the end).
+    auto release_field = [&]() {
       if (d < tree.finest) {
         add_on_grid(field.splat_cells[std::size_t(d)], field.splat[std::size_t(d)], grid, coarser);
         coarser_grid = std::move(grid);
@@ -85,17 +84,20 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       field.splat_cells[std::size_t(d)] = CellGrid();
       std::vector<Eigen::Vector3d>().swap(field.splat[std::size_t(d)]);
       std::vector<double>().swap(field.finer[std::size_t(d)]);
-      field.runs[std::size_t(d)] = CellRuns();
     };
-    // Assembles and solves this depth with the current boundary; returns its statistics.
+    // Assembles and solves this depth with the current boundary; returns its statistics. The
+    // coarsest depth keeps its terms for a second solve (see below).
     const double prolong_seconds = seconds_since(level_start);
     auto solve = [&](std::vector<char>& solved) {
       const auto start = Clock::now();
       if (d == tree.min_depth) x.assign(L.nodes.size(), 0.0);
       solved = solved_nodes(L, boundary);
-      LevelSystem system = assemble_system(L, solved, terms, points, runs);
-      // The coarsest depth's terms are kept for a second solve (see below).
-      if (d > tree.min_depth) release_terms();
+      std::vector<double> b =
+          splat_divergence(L, solved, grid, coarser, field.finer[std::size_t(d)]);
+      if (d > tree.min_depth) release_field();
+      LevelSystem system = assemble_system(L, solved, std::move(b), field.runs[std::size_t(d)],
+                                           screening, points, runs);
+      if (d > tree.min_depth) field.runs[std::size_t(d)] = CellRuns();
       const double assembly = seconds_since(start);
       const auto solve_start = Clock::now();
       const CgState state = conjugate_gradients(L, solved, std::move(system), x, cg);
@@ -121,7 +123,8 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
               "poisson: the far field came out inside; solving again with Dirichlet boundaries");
         stats = solve(solved);
       }
-      release_terms();
+      release_field();
+      field.runs[std::size_t(d)] = CellRuns();
     }
     if (!stats.converged && o.progress) {
       std::ostringstream message;

@@ -61,20 +61,27 @@ ScreeningMoments screening_moments(const OctreeLevel& L, const CellRuns& runs,
 
 }  // namespace
 
+std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<char>& solved,
+                                     const CellGrid& grid,
+                                     const std::vector<Eigen::Vector3d>& coarser,
+                                     const std::vector<double>& finer) {
+  const std::size_t nn = L.nodes.size();
+  std::vector<double> b(nn, 0.0);
+  divergence(L, grid, coarser, b, &solved);
+  tbb::parallel_for(std::size_t(0), nn,
+                    [&](std::size_t v) { b[v] = solved[v] ? -(b[v] + finer[v]) : 0.0; });
+  return b;
+}
+
 LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solved,
-                            const LevelTerms& terms, const std::vector<UnitPoint>& points,
-                            const MortonRuns& morton) {
+                            std::vector<double> b, const CellRuns& runs, double screening,
+                            const std::vector<UnitPoint>& points, const MortonRuns& morton) {
   const std::size_t nn = L.nodes.size();
   LevelSystem S;
+  S.b = std::move(b);
   stiffness_row(L, 1, 1, 1, S.interior_row);  // res >= 2, so (1, 1, 1) is off every face
-  // Divergence of the splatted normals: -int grad(phi_v) . V.
-  S.b.assign(nn, 0.0);
-  divergence(L, *terms.grid, *terms.coarser, S.b, &solved);
-  const auto& finer = *terms.finer;
-  tbb::parallel_for(std::size_t(0), nn,
-                    [&](std::size_t v) { S.b[v] = solved[v] ? -(S.b[v] + finer[v]) : 0.0; });
   ScreeningMoments screen;
-  if (terms.screening > 0) screen = screening_moments(L, *terms.runs, points, morton);
+  if (screening > 0) screen = screening_moments(L, runs, points, morton);
   // Nodes with their own row. For a fixed corner the cells' corner nodes are distinct, so one
   // corner at a time writes without races, in the same order whatever the threads.
   S.row_of.assign(nn, -1);
@@ -101,11 +108,11 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
       if (S.row_of[v] < 0) return;
       const auto& m = screen.moments[r];
       auto& row = S.rows[std::size_t(S.row_of[v])];
-      S.b[v] += terms.screening * 0.5 * m[std::size_t(kPairs + a)];
+      S.b[v] += screening * 0.5 * m[std::size_t(kPairs + a)];
       const int ox = -(a & 1), oy = -(a >> 1 & 1), oz = -(a >> 2 & 1);
       for (int q = 0; q < 8; ++q)
         row[std::size_t(slot(ox + (q & 1), oy + (q >> 1 & 1), oz + (q >> 2 & 1)))] +=
-            terms.screening * m[std::size_t(pair_index(a, q))];
+            screening * m[std::size_t(pair_index(a, q))];
     });
   return S;
 }

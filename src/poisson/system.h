@@ -25,19 +25,19 @@ struct LevelSystem {
   }
 };
 
-/// What the right-hand side at one depth is made of.
-struct LevelTerms {
-  const CellGrid* grid;                         ///< the depth's spline cells
-  const std::vector<Eigen::Vector3d>* coarser;  ///< V from coarser splats, on `grid`
-  const std::vector<double>* finer;             ///< NormalField::finer at this depth
-  const CellRuns* runs;                         ///< cells holding points
-  double screening;  ///< alpha * (mean area) * 2^d: the weight of (chi(p) - 1/2)^2 per point
-};
+/// The normal field's part of one depth's right-hand side, -int grad phi_v . V, for the nodes
+/// with solved[v] (0 elsewhere): V from coarser splats given on `grid`, plus `finer` (the finer
+/// splats' part, NormalField::finer at this depth).
+std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<char>& solved,
+                                     const CellGrid& grid,
+                                     const std::vector<Eigen::Vector3d>& coarser,
+                                     const std::vector<double>& finer);
 
-/// Assembles  int grad phi_u . grad phi_v + screening * sum_p phi_u(p) phi_v(p)  (rows) and
-/// -int grad phi_v . V + screening * sum_p phi_v(p) / 2  (b) for the nodes with solved[v].
+/// Completes the system for the nodes with solved[v]: rows  int grad phi_u . grad phi_v +
+/// screening * sum_p phi_u(p) phi_v(p)  and  b += screening * sum_p phi_v(p) / 2, over the points
+/// in `runs` (the cells holding points); screening = alpha * (mean area) * 2^d.
 LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solved,
-                            const LevelTerms& terms, const std::vector<UnitPoint>& points,
-                            const MortonRuns& morton);
+                            std::vector<double> b, const CellRuns& runs, double screening,
+                            const std::vector<UnitPoint>& points, const MortonRuns& morton);
 
 }  // namespace sdfcontour::poisson
