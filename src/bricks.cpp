@@ -153,6 +153,7 @@ class BrickRunner {
   const BrickGrid& grid() const { return grid_; }
 
   BrickOutput run(int brick) const {
+    check_cancel(options_.cancel);
     BrickOutput out;
     std::vector<int> targets;
     const BrickGrid& g = grid_;
@@ -180,6 +181,7 @@ class BrickRunner {
     std::vector<int> failed;
     std::vector<char> keep(local.size(), 0);
     if (triangulate_local(local, everything, ls, tri)) {
+      check_cancel(options_.cancel);
       out.triangulated += long(local.size());
       out.largest = std::max(out.largest, long(local.size()));
       for (std::size_t r = 0, t = 0; r < local.size() && t < targets.size(); ++r) {

@@ -50,6 +50,7 @@ class Stages {
       : result_(result), options_(options) {}
   template <class F>
   auto run(const std::string& name, const std::string& message, F&& work) {
+    check_cancel(options_.cancel);
     if (options_.progress) options_.progress(message);
     const auto start = std::chrono::steady_clock::now();
     auto finish = [&] {
@@ -133,6 +134,7 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
                              options.bricks.size > 0 && bounded;
   BrickOptions bricks = options.bricks;
   if (bricks.halo == 0) bricks.halo = std::max(2 * largest / band.spacing, 1.0);
+  bricks.cancel = options.cancel;
   const bool need_regular =
       (need_gcp && !gcp_in_bricks) || (method == Method::MtRt && options.want_mesh);
   const bool need_delaunay = (method == Method::MtDt && options.want_mesh) ||
@@ -154,9 +156,10 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   if (gcp_in_bricks) {
     result.contact_points =
         stages.run("contact_points", "triangulation, gradients and contact points in bricks", [&] {
-          std::function<void(int, int)> report;
-          if (options.progress_fraction)
-            report = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
+          std::function<void(int, int)> report = [&](int done, int total) {
+            check_cancel(options.cancel);
+            if (options.progress_fraction) options.progress_fraction("bricks", done, total);
+          };
           BrickStats st;
           ContactPoints cp = brick_contact_points(s, band.spacing, options.gradient,
                                                   options.contact, bricks, &st, report, core);
@@ -190,6 +193,7 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
       throw Error("no contact point was kept, so there is nothing to reconstruct a surface from");
     PoissonOptions popt = options.poisson;
     popt.progress = options.progress;
+    popt.cancel = options.cancel;
     if (popt.depth == 0) popt.depth = auto_poisson_depth(s.points, band.spacing);
     result.poisson_depth = popt.depth;
     // Nothing after the reconstruction needs the samples or triangulations: free them first.

@@ -25,6 +25,8 @@ struct BrickOptions {
   /// |value| kept (the band and its margin), from measurement: orthocentres of band-edge tets
   /// lie up to about that far out, and their spheres reach as far again.
   double halo = 0;
+  /// When set and it becomes true, the bricks stop soon (throws Cancelled).
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 /// What the bricks did.

@@ -48,6 +48,9 @@ struct ContourOptions {
   std::function<void(const std::string&)> progress;
   /// Called as a long stage advances: (stage, done, total). Empty for silence.
   std::function<void(const std::string&, long, long)> progress_fraction;
+  /// When set and it becomes true, contouring stops soon (at the next stage, brick or solver
+  /// iteration) by throwing Cancelled.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct StageTime {

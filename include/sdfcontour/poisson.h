@@ -37,6 +37,9 @@ struct PoissonOptions {
   int max_iterations = 200;  ///< and after this many iterations per depth (then: not converged)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
+  /// When set and it becomes true, the reconstruction stops soon (at the next stage or solver
+  /// iteration) by throwing Cancelled.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 /// Per octree depth: size of the system solved there and how the solver fared.

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <atomic>
 #include <stdexcept>
 #include <string>
 
@@ -40,6 +41,17 @@ class IoError : public Error {
  public:
   explicit IoError(const std::string& message) : Error(message) {}
 };
+
+/// The caller asked to stop (ContourOptions::cancel or PoissonOptions::cancel became true).
+class Cancelled : public Error {
+ public:
+  Cancelled() : Error("cancelled") {}
+};
+
+/// Throws Cancelled if `flag` is set.
+inline void check_cancel(const std::atomic<bool>* flag) {
+  if (flag && flag->load(std::memory_order_relaxed)) throw Cancelled();
+}
 
 /// A broken invariant inside sdfcontour: a bug to report, not the user's fault.
 class InternalError : public Error {

@@ -52,7 +52,7 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   CascadeResult result;
   result.values.resize(tree.levels.size());
   PoissonBoundary boundary = o.boundary;
-  const CgOptions cg{o.solver_tolerance, o.max_iterations};
+  const CgOptions cg{o.solver_tolerance, o.max_iterations, o.cancel};
   // V from coarser splats, expressed on the current depth's spline grid (quadratic B-splines
   // nest), and the coarser depth's grid it was prolonged from.
   std::vector<Eigen::Vector3d> coarser;

@@ -79,6 +79,7 @@ CgState conjugate_gradients(const OctreeLevel& L, const std::vector<char>& solve
   // Each iteration makes three passes over the nodes: the product (with p . Ap), the update (with
   // r . z and r . r) and the new direction.
   while (state.iterations < o.max_iterations && r_norm > target && rz > 0) {
+    check_cancel(o.cancel);
     const double pAp = apply(L, columns, solved, S, p, Ap);
     if (!(pAp > 0)) break;
     const double step = rz / pAp;

@@ -11,6 +11,7 @@ namespace sdfcontour::poisson {
 struct CgOptions {
   double tolerance = 1e-4;  ///< stop at this residual relative to |b|
   int max_iterations = 200;
+  const std::atomic<bool>* cancel = nullptr;  ///< checked every iteration (throws Cancelled)
 };
 
 /// How the solve ended (as OpenVDB's pcg::State).

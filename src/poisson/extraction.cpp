@@ -45,13 +45,14 @@ class SurfaceCells {
   // Closes the candidates: a face with a sign change needs the cell across it. Returns the cells
   // with a sign change and their values.
   void close(const std::vector<Key>& candidates, std::vector<Key>& cells,
-             std::vector<std::array<double, 8>>& values) const {
+             std::vector<std::array<double, 8>>& values, const std::atomic<bool>* cancel) const {
     const long R = finest_.res;
     std::unordered_set<Key> visited(candidates.begin(), candidates.end());
     std::deque<Key> queue(candidates.begin(), candidates.end());
     while (!queue.empty()) {
       const Key key = queue.front();
       queue.pop_front();
+      if ((cells.size() & 0xffff) == 0) check_cancel(cancel);
       const auto u = unpack(key);
       const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
       std::array<double, 8> value;
@@ -145,11 +146,12 @@ struct CellPolygons {
 
 }  // namespace
 
-Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame) {
+Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame,
+                         const std::atomic<bool>* cancel) {
   const SurfaceCells surface(chi, iso);
   std::vector<Key> cells;
   std::vector<std::array<double, 8>> values;
-  surface.close(surface.candidates(), cells, values);
+  surface.close(surface.candidates(), cells, values, cancel);
   // Polygons per cell with their edges' global keys; vertices are deduplicated by edge.
   std::vector<CellPolygons> polygons(cells.size());
   tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {

@@ -12,6 +12,8 @@
 namespace sdfcontour::poisson {
 
 /// The surface chi = iso, outward (chi < iso outside), in the input's units (via frame).
-Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame);
+/// `cancel` (optional) is checked as the surface cells are gathered (throws Cancelled).
+Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame,
+                         const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace sdfcontour::poisson

@@ -123,7 +123,7 @@ void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& valu
 }
 
 NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
-                          const MortonRuns& runs) {
+                          const MortonRuns& runs, const std::atomic<bool>* cancel) {
   const std::size_t depths = tree.levels.size();
   NormalField field;
   field.splat_cells.resize(depths);
@@ -132,6 +132,7 @@ NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& poin
   field.runs.resize(depths);
   // Fine to coarse: finer[d] = S_d(V_d) + restriction of finer[d + 1].
   for (int d = tree.finest; d >= tree.min_depth; --d) {
+    check_cancel(cancel);
     const OctreeLevel& L = tree.level(d);
     field.runs[std::size_t(d)] = cell_runs(L, runs);
     const CellGrid& G = field.splat_cells[std::size_t(d)];

@@ -55,8 +55,9 @@ void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& valu
                  const CellGrid& grid, std::vector<Eigen::Vector3d>& onto);
 
 /// Splats the normals and computes the finer-splat divergence at every depth.
+/// `cancel` (optional) is checked at each depth (throws Cancelled).
 NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
-                          const MortonRuns& runs);
+                          const MortonRuns& runs, const std::atomic<bool>* cancel = nullptr);
 
 /// Quadratic B-spline coefficients on a finer grid from a coarser one's (exact where the finer
 /// grid holds every cell the coarser coefficients reach).

@@ -66,11 +66,12 @@ std::vector<Key> children_of(const std::vector<Key>& parents) {
 }  // namespace
 
 Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
-                    int max_depth) {
+                    int max_depth, const std::atomic<bool>* cancel) {
   Octree tree;
   tree.min_depth = tree.finest = min_depth;
   tree.levels.resize(std::size_t(max_depth + 1));
   for (int d = min_depth; d <= max_depth; ++d) {
+    check_cancel(cancel);
     OctreeLevel& L = tree.level(d);
     L.depth = d;
     L.res = 1L << d;

@@ -44,8 +44,9 @@ struct Octree {
 
 /// The octree down to max_depth: complete to min_depth; a depth-(d-1) cell is refined when it
 /// holds a point splatted at depth d-1 or finer, dilated by two cells.
+/// `cancel` (optional) is checked at each depth (throws Cancelled).
 Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
-                    int max_depth);
+                    int max_depth, const std::atomic<bool>* cancel = nullptr);
 
 /// Per node of L, the node at (i + dx, j + dy, k) for dx, dy in {-1, 0, 1} (index dx + 1 + 3 (dy +
 /// 1)), or -1. Nodes sorted with k last put (.., k - 1) and (.., k + 1) right before and after.

@@ -33,10 +33,11 @@ const detail::NameTable<PoissonBoundary> kBoundaries = {{"neumann", PoissonBound
 // Times named stages into PoissonResult::seconds and announces each one.
 class StageTimer {
  public:
-  StageTimer(PoissonResult& result, const std::function<void(const std::string&)>& progress)
-      : result_(result), progress_(progress) {}
+  StageTimer(PoissonResult& result, const PoissonOptions& options)
+      : result_(result), progress_(options.progress), cancel_(options.cancel) {}
   // Closes the running stage (if any) and starts the next.
   void start(const std::string& name) {
+    check_cancel(cancel_);
     stop();
     result_.seconds.push_back({name, 0.0});
     if (progress_) progress_("poisson: " + name);
@@ -52,6 +53,7 @@ class StageTimer {
   using Clock = std::chrono::steady_clock;
   PoissonResult& result_;
   const std::function<void(const std::string&)>& progress_;
+  const std::atomic<bool>* cancel_;
   Clock::time_point start_ = Clock::now();
 };
 
@@ -67,7 +69,7 @@ std::string poisson_boundary_name(PoissonBoundary boundary) {
 PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o) {
   using namespace poisson;
   PoissonResult result;
-  StageTimer stage(result, o.progress);
+  StageTimer stage(result, o);
   stage.start("setup");
   validate(input, o);
   const int D = o.depth, d_min = std::min(o.full_depth, o.depth);
@@ -80,10 +82,10 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
       assign_areas_and_depths(unit.points, density, o.samples_per_node, d_min, D);
 
   stage.start("octree");
-  Octree tree = build_octree(unit.points, runs, d_min, D);
+  Octree tree = build_octree(unit.points, runs, d_min, D, o.cancel);
 
   stage.start("splatting");
-  NormalField field = splat_normals(tree, unit.points, runs);
+  NormalField field = splat_normals(tree, unit.points, runs, o.cancel);
 
   stage.start("solve");
   CascadeResult solution = solve_coarse_to_fine(tree, field, unit.points, runs, area_per_point, o);
@@ -97,7 +99,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
                      double(unit.points.size());
 
   stage.start("extraction");
-  result.mesh = extract_iso_surface(chi, result.iso_value, unit);
+  result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
 
   // Sampling density at each vertex, in points per unit area of the input's units.
   const Mesh& mesh = result.mesh;

@@ -1,0 +1,312 @@
+// The Python binding: numpy arrays in (viewed in place where their layout allows), numpy arrays
+// out (the C++ buffers handed over, not copied), the GIL released while C++ works, and Ctrl-C
+// turned into a cancel request and a KeyboardInterrupt. The friendly API is sdfcontour/__init__.py.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "sdfcontour/contact_point_errors.h"
+#include "sdfcontour/mesh_properties.h"
+#include "sdfcontour/mesh_sdf.h"
+#include "sdfcontour/metrics.h"
+#include "sdfcontour/pipeline.h"
+#include "sdfcontour/signed_distance.h"
+
+namespace py = pybind11;
+using namespace sdfcontour;
+
+namespace {
+
+// Runs work() on a worker thread with the GIL released, polling for Ctrl-C every 50 ms: a signal
+// sets `cancel` (the library stops at its next stage, brick or solver iteration), and once the
+// worker has stopped the KeyboardInterrupt is raised.
+template <class Work>
+auto run_interruptible(Work&& work, std::atomic<bool>& cancel) {
+  using Result = decltype(work());
+  std::optional<Result> result;
+  std::exception_ptr error;
+  std::mutex mutex;
+  std::condition_variable finished;
+  bool done = false;
+  std::thread worker([&] {
+    try {
+      result.emplace(work());
+    } catch (...) {
+      error = std::current_exception();
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    done = true;
+    finished.notify_all();
+  });
+  std::optional<py::error_already_set> interrupt;
+  for (;;) {
+    {
+      py::gil_scoped_release release;
+      std::unique_lock<std::mutex> lock(mutex);
+      if (finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
+    }
+    if (!interrupt && PyErr_CheckSignals() != 0) {
+      interrupt.emplace();  // takes the KeyboardInterrupt (or the handler's error) for later
+      cancel = true;
+    }
+  }
+  worker.join();
+  if (interrupt) throw *interrupt;
+  if (error) std::rethrow_exception(error);
+  return std::move(*result);
+}
+
+// A C++ matrix handed to numpy without a copy: numpy's array owns the moved matrix.
+template <class Matrix>
+py::array to_numpy(Matrix&& m) {
+  using Scalar = typename std::decay_t<Matrix>::Scalar;
+  auto* owned = new std::decay_t<Matrix>(std::forward<Matrix>(m));
+  py::capsule owner(owned, [](void* p) { delete static_cast<std::decay_t<Matrix>*>(p); });
+  const py::ssize_t rows = owned->rows(), cols = owned->cols();
+  return py::array_t<Scalar>({rows, cols},
+                             {cols * py::ssize_t(sizeof(Scalar)), py::ssize_t(sizeof(Scalar))},
+                             owned->data(), owner);
+}
+
+PointMatrix points_from(const py::array_t<double, py::array::c_style | py::array::forcecast>& a,
+                        const char* what) {
+  if (a.ndim() != 2 || a.shape(1) != 3) throw Error(std::string(what) + " must have shape (n, 3)");
+  PointMatrix m(a.shape(0), 3);
+  std::copy(a.data(), a.data() + a.size(), m.data());
+  return m;
+}
+
+Mesh mesh_from(const py::array& V, const py::array& F) {
+  Mesh mesh;
+  mesh.vertices =
+      points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(V), "V");
+  auto f = py::array_t<int, py::array::c_style | py::array::forcecast>::ensure(F);
+  if (!f || f.ndim() != 2 || f.shape(1) != 3) throw Error("F must have shape (m, 3)");
+  mesh.triangles.resize(f.shape(0), 3);
+  std::copy(f.data(), f.data() + f.size(), mesh.triangles.data());
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (mesh.triangles(t, k) < 0 || mesh.triangles(t, k) >= mesh.vertices.rows())
+        throw Error("F indexes a vertex that V does not have");
+  return mesh;
+}
+
+template <class T>
+T get(const py::dict& options, const char* key, T fallback) {
+  return options.contains(key) ? options[key].cast<T>() : fallback;
+}
+
+PoissonOptions poisson_options(const py::dict& o) {
+  PoissonOptions p;
+  p.depth = get<int>(o, "depth", p.depth);
+  p.full_depth = get<int>(o, "full_depth", p.full_depth);
+  p.point_weight = get<double>(o, "alpha", p.point_weight);
+  p.samples_per_node = get<double>(o, "samples_per_node", p.samples_per_node);
+  p.scale = get<double>(o, "scale", p.scale);
+  p.boundary = parse_poisson_boundary(get<std::string>(o, "boundary", "neumann"));
+  p.solver_tolerance = get<double>(o, "solver_tolerance", p.solver_tolerance);
+  return p;
+}
+
+ContourOptions contour_options(const py::dict& o) {
+  ContourOptions c;
+  c.method = parse_method(get<std::string>(o, "method", "gcp"));
+  c.gradient_source = parse_gradient_source(get<std::string>(o, "gradient", "regular"));
+  c.gradient.weighting = parse_gradient_weighting(get<std::string>(o, "weights", "james"));
+  c.knn = get<int>(o, "knn", c.knn);
+  c.contact.try_tet_gradients = get<bool>(o, "fn", false);
+  c.contact.tie_tolerance = get<double>(o, "tie_tolerance", c.contact.tie_tolerance);
+  c.band.band = get<double>(o, "band", c.band.band);
+  c.band.margin = get<double>(o, "margin", c.band.margin);
+  const std::string truncation = get<std::string>(o, "truncation", "auto");
+  if (truncation == "none") {
+    c.band.truncation_mode = TruncationMode::None;
+  } else if (truncation != "auto") {
+    c.band.truncation_mode = TruncationMode::Given;
+    c.band.truncation = std::stod(truncation);
+  }
+  c.bricks.size = get<int>(o, "brick_size", c.bricks.size);
+  c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
+  c.poisson = poisson_options(o);
+  if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
+  if (get<bool>(o, "progress", false)) {
+    c.progress = [](const std::string& m) { std::cerr << "[sdfcontour] " << m << std::endl; };
+    c.progress_fraction = [](const std::string& stage, long done, long total) {
+      std::cerr << "[sdfcontour] " << stage << " " << done << "/" << total << std::endl;
+    };
+    c.poisson.progress = c.progress;
+  }
+  return c;
+}
+
+// The input as the library takes it: a 3D array is a grid over [lo, hi] viewed in place when it
+// is C-contiguous float32 or float64 (else converted once); an (n, 4) array holds scattered
+// samples. `keep` holds any converted copy.
+SdfInput sdf_input(const py::array& array, const Bounds& bounds, double spacing, py::object& keep) {
+  if (array.ndim() == 3) {
+    GridInput grid;
+    for (int a = 0; a < 3; ++a) grid.view.dims[a] = int(array.shape(a));
+    grid.view.bounds = bounds;
+    const bool contiguous = array.flags() & py::array::c_style;
+    if (contiguous && array.dtype().is(py::dtype::of<float>())) {
+      grid.view.type = ScalarType::Float32;
+      grid.view.data = array.data();
+    } else if (contiguous && array.dtype().is(py::dtype::of<double>())) {
+      grid.view.type = ScalarType::Float64;
+      grid.view.data = array.data();
+    } else {
+      auto copy = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+      if (!copy) throw Error("the grid's values must be numbers");
+      keep = copy;
+      grid.view.type = ScalarType::Float64;
+      grid.view.data = copy.data();
+    }
+    return grid;
+  }
+  if (array.ndim() == 2 && array.shape(1) == 4) {
+    auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+    if (!a) throw Error("the samples must be numbers");
+    ScatteredInput s;
+    s.spacing = spacing;
+    s.samples.points.resize(a.shape(0), 3);
+    s.samples.values.resize(a.shape(0));
+    for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+      for (int c = 0; c < 3; ++c) s.samples.points(i, c) = a.at(i, c);
+      s.samples.values[i] = a.at(i, 3);
+    }
+    return s;
+  }
+  std::string shape = "(";
+  for (py::ssize_t d = 0; d < array.ndim(); ++d)
+    shape += (d ? ", " : "") + std::to_string(array.shape(d));
+  throw Error("array of shape " + shape +
+              ") is neither a grid (nx, ny, nz) nor scattered samples (n, 4)");
+}
+
+py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
+                     const std::array<double, 3>& hi, double spacing, const py::dict& options,
+                     bool want_mesh, bool want_points) {
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  py::object keep;
+  const SdfInput input = sdf_input(array, bounds, spacing, keep);
+  const GridView* view = grid_view_of(input);
+  ContourOptions opt = contour_options(options);
+  opt.want_mesh = want_mesh;
+  opt.want_points = want_points;
+  std::atomic<bool> cancel{false};
+  opt.cancel = &cancel;
+  ContourResult r = run_interruptible([&] { return contour(input, nullptr, opt); }, cancel);
+  py::dict out;
+  if (r.mesh) {
+    if (r.mesh->triangles.rows() == 0)
+      throw Error("the " + method_name(opt.method) + " mesh is empty: no surface was found");
+    out["V"] = to_numpy(std::move(r.mesh->vertices));
+    out["F"] = to_numpy(std::move(r.mesh->triangles));
+  }
+  if (r.contact_points) {
+    out["P"] = to_numpy(std::move(r.contact_points->points));
+    out["N"] = to_numpy(std::move(r.contact_points->normals));
+  }
+  py::dict stats;
+  stats["samples"] = r.samples;
+  stats["band_samples"] = r.band_samples;
+  stats["hidden_samples"] = r.hidden;
+  stats["poisson_depth"] = r.poisson_depth;
+  // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
+  if (view) stats["grid_address"] = std::uintptr_t(view->data);
+  out["stats"] = stats;
+  return out;
+}
+
+py::tuple run_poisson(const py::array& P, const py::array& N, const py::dict& options) {
+  OrientedPoints points;
+  points.points =
+      points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(P), "P");
+  points.normals =
+      points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(N), "N");
+  PoissonOptions o = poisson_options(options);
+  std::atomic<bool> cancel{false};
+  o.cancel = &cancel;
+  PoissonResult r = run_interruptible([&] { return poisson_reconstruct(points, o); }, cancel);
+  return py::make_tuple(to_numpy(std::move(r.mesh.vertices)),
+                        to_numpy(std::move(r.mesh.triangles)));
+}
+
+py::array run_sample(const py::array& V, const py::array& F, int resolution,
+                     const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  if (resolution < 2 || resolution > 1024) throw Error("resolution must be between 2 and 1024");
+  const Mesh mesh = mesh_from(V, F);
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  std::atomic<bool> cancel{false};
+  Grid grid = run_interruptible(
+      [&] {
+        const MeshSdf sdf(mesh);
+        return sample_grid(sdf, resolution, bounds);
+      },
+      cancel);
+  auto* owned = new Eigen::VectorXd(std::move(grid.values));
+  py::capsule owner(owned, [](void* p) { delete static_cast<Eigen::VectorXd*>(p); });
+  const py::ssize_t n = resolution, d = sizeof(double);
+  return py::array_t<double>({n, n, n}, {n * n * d, n * d, d}, owned->data(), owner);
+}
+
+py::dict run_distances(const py::array& V, const py::array& F, const py::array& V_gt,
+                       const py::array& F_gt, std::size_t samples, std::uint64_t seed) {
+  if (samples == 0 || samples > 100000000) throw Error("samples must be between 1 and 1e8");
+  const Mesh recon = mesh_from(V, F), gt = mesh_from(V_gt, F_gt);
+  std::atomic<bool> cancel{false};
+  const SurfaceDistances d =
+      run_interruptible([&] { return surface_distances(recon, gt, samples, seed); }, cancel);
+  const MeshTopology t = mesh_topology(recon);
+  py::dict out;
+  out["L1"] = d.l1;
+  out["L2"] = d.l2;
+  out["L_inf"] = d.hausdorff;
+  out["recon_to_gt"] =
+      py::dict(py::arg("mean") = d.mean_ab, py::arg("rms") = d.rms_ab, py::arg("max") = d.max_ab);
+  out["gt_to_recon"] =
+      py::dict(py::arg("mean") = d.mean_ba, py::arg("rms") = d.rms_ba, py::arg("max") = d.max_ba);
+  out["closed"] = t.closed;
+  out["components"] = connected_components(recon);
+  return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_sdfcontour, m) {
+  m.doc() = "C++ core of sdfcontour; use the functions of the sdfcontour package.";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const IoError& e) {
+      PyErr_SetString(PyExc_OSError, e.what());
+    } catch (const Cancelled&) {
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+    } catch (const InternalError& e) {
+      PyErr_SetString(PyExc_RuntimeError,
+                      (std::string("internal error (please report it): ") + e.what()).c_str());
+    } catch (const Error& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const std::bad_alloc&) {
+      PyErr_SetString(PyExc_MemoryError, "out of memory (try a smaller band or brick size)");
+    }
+  });
+  m.def("contour", &run_contour, py::arg("array"), py::arg("lo"), py::arg("hi"), py::arg("spacing"),
+        py::arg("options"), py::arg("want_mesh"), py::arg("want_points"));
+  m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("options"));
+  m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
+        py::arg("hi"));
+  m.def("distances", &run_distances, py::arg("V"), py::arg("F"), py::arg("V_gt"), py::arg("F_gt"),
+        py::arg("samples"), py::arg("seed"));
+}

@@ -1,0 +1,308 @@
+"""sdfcontour: contour samples of a signed distance function into a triangle mesh.
+
+Numpy in, numpy out. The default method is GCP ("Contouring Signed Distance Fields by
+Approximating Gradients"): contact points from the regular triangulation of the samples near the
+surface, then screened Poisson reconstruction. Marching cubes (``method="mc"``), marching
+tetrahedra (``"mt-rt"``, ``"mt-dt"``) are there too.
+
+Conventions: a grid ``a`` of shape (nx, ny, nz) has ``a[i, j, k]`` at ``lo + (i*hx, j*hy, k*hz)``
+over ``bounds=(lo, hi)`` (default ``(-1, 1)``, samples at both ends); values are negative inside;
+normals point outward. Bad input raises ``ValueError`` (with the command-line tool's message),
+files ``OSError``; Ctrl-C raises ``KeyboardInterrupt``.
+
+Examples
+--------
+>>> import numpy as np, sdfcontour
+>>> x = np.linspace(-1, 1, 64)
+>>> grid = np.linalg.norm(np.stack(np.meshgrid(x, x, x, indexing="ij")), axis=0) - 0.6
+>>> V, F = sdfcontour.contour(grid)                    # GCP
+>>> V, F = sdfcontour.contour(grid, method="mc")       # marching cubes
+>>> V, F = sdfcontour.contour(lambda p: np.linalg.norm(p, axis=1) - 0.6, resolution=128)
+"""
+import numpy as np
+
+from . import _sdfcontour
+
+__all__ = ["contour", "contact_points", "poisson", "sample", "distances"]
+
+METHODS = ("gcp", "gtcp", "mc", "mt-rt", "mt-dt")
+
+
+def _bounds(bounds):
+    """(lo, hi) as two float arrays of 3, from scalars or 3-sequences."""
+    if bounds is None:
+        bounds = (-1.0, 1.0)
+    try:
+        lo, hi = bounds
+        lo = np.broadcast_to(np.asarray(lo, dtype=float), (3,)).copy()
+        hi = np.broadcast_to(np.asarray(hi, dtype=float), (3,)).copy()
+    except (TypeError, ValueError):
+        raise ValueError("bounds must be (lo, hi), each a number or 3 numbers") from None
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
+        raise ValueError("bounds: lo must be less than hi on every axis, all finite")
+    return lo, hi
+
+
+def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
+             brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
+             solver_tolerance, progress):
+    if method not in METHODS:
+        raise ValueError(f"unknown method '{method}' (known: {', '.join(METHODS)})")
+    if band == "all":
+        band = float("inf")
+    o = dict(method=method, band=float(band), margin=float(margin), truncation=str(truncation),
+             gradient=gradient, weights=weights, knn=int(knn), fn=bool(fn),
+             tie_tolerance=float(tie_tolerance), brick_size=int(brick_size),
+             brick_halo=float(brick_halo), full_depth=int(full_depth), alpha=float(alpha),
+             samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
+             solver_tolerance=float(solver_tolerance), progress=bool(progress))
+    if depth == "auto":
+        o["depth_text"] = "auto"
+    else:
+        o["depth"] = int(depth)
+    for name in ("band", "margin", "alpha", "samples_per_node", "scale", "solver_tolerance"):
+        if not o[name] == o[name]:  # NaN
+            raise ValueError(f"{name} must be a number, got NaN")
+    if not (o["band"] > 0):
+        raise ValueError("band must be positive (or 'all')")
+    if not (0 <= o["alpha"] <= 1e4):
+        raise ValueError("alpha must be between 0 and 10000")
+    if depth != "auto" and not (1 <= o["depth"] <= 16):
+        raise ValueError("depth must be between 1 and 16, or 'auto'")
+    return o
+
+
+def _input_array(sdf):
+    """The samples as an array the core reads: a grid, an (n, 4) array, or (points, values)."""
+    if isinstance(sdf, tuple) and len(sdf) == 2:
+        points, values = (np.asarray(a, dtype=float) for a in sdf)
+        if points.ndim != 2 or points.shape[1] != 3 or values.shape != (points.shape[0],):
+            raise ValueError("(points, values) must have shapes (n, 3) and (n,)")
+        return np.column_stack([points, values])
+    array = np.asarray(sdf)
+    if array.dtype.kind not in "fiu":
+        raise ValueError(f"the samples must be numbers, got an array of dtype {array.dtype}")
+    return array
+
+
+def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
+    lo, hi = _bounds(bounds)
+    stats = {}
+    if callable(sdf):
+        if resolution is None:
+            raise ValueError("a callable SDF needs a resolution (samples per axis)")
+        from ._callable import sample_callable
+        threshold = options["band"] + options["margin"]
+        if options["method"] == "mc":
+            threshold = 1.0  # marching cubes needs the signs right and the values at crossings
+        array, evaluations = sample_callable(sdf, lo, hi, int(resolution), threshold,
+                                             int(batch_size), options["progress"])
+        options = dict(options, truncation="none")
+        stats["evaluations"] = evaluations
+        stats["evaluated_fraction"] = evaluations / float(int(resolution) ** 3)
+    else:
+        if resolution is not None:
+            raise ValueError("resolution is for a callable SDF; a grid has its own shape")
+        array = _input_array(sdf)
+    out = _sdfcontour.contour(array, lo, hi, 0.0, options, want_mesh, want_points)
+    out["stats"].update(stats)
+    return out
+
+
+def contour(sdf, bounds=None, method="gcp", *, resolution=None, band=4.0, margin=1.0,
+            truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
+            tie_tolerance=1e-6, brick_size=64, brick_halo=0.0, depth="auto", full_depth=5,
+            alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
+            solver_tolerance=1e-4, batch_size=65536, progress=False, return_stats=False):
+    """Contour signed distance samples into a triangle mesh.
+
+    Parameters
+    ----------
+    sdf : ndarray (nx, ny, nz), ndarray (n, 4), tuple (points (n, 3), values (n,)), or callable
+        A grid of signed distances (float32 or float64; read in place when C-contiguous),
+        scattered samples (rows x, y, z, value), or a function ``f(points (k, 3)) -> (k,)``
+        that is sampled on a ``resolution``^3 grid only near the surface (see Notes).
+    bounds : (lo, hi), optional
+        The grid's box: positions of the first and last samples, each a number or 3 numbers.
+        Default (-1, 1). Ignored for scattered samples.
+    method : {"gcp", "mc", "mt-rt", "mt-dt"}
+        GCP (default), marching cubes (grids only), marching tetrahedra on the regular or the
+        Delaunay triangulation.
+    resolution : int, optional
+        Samples per axis for a callable ``sdf``.
+    band : float or "all"
+        Triangulation methods use the samples with ``|value| <= band`` grid spacings; "all"
+        keeps every sample (the paper's GCP, far slower).
+    margin : float
+        Samples up to this many spacings beyond the band close the band's stars.
+    truncation : "auto", "none" or a number as text
+        Values clamped at +-T (a TSDF) carry no distance: detect ("auto"), none, or given.
+    gradient : {"regular", "delaunay", "knn"}
+        Where GCP's gradients come from.
+    weights : {"james", "volume", "uniform"}
+        Averaging of the incident tetrahedra's gradients.
+    knn : int
+        k for ``gradient="knn"``.
+    fn : bool
+        +FN: retry a discarded contact point with each incident tet's gradient.
+    tie_tolerance : float
+        Contact point c is discarded only if it is inside another sample's sphere by more than
+        this relative tolerance.
+    brick_size : int
+        GCP triangulates the band in bricks of this many spacings (0: one triangulation).
+    brick_halo : float
+        First halo around a brick in spacings (0: automatic).
+    depth : int or "auto"
+        Poisson octree depth; "auto" follows the grid's resolution.
+    full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance
+        Screened Poisson options, as in :func:`poisson`.
+    batch_size : int
+        Points per call of a callable ``sdf``.
+    progress : bool
+        Show the stages on stderr.
+    return_stats : bool
+        Also return a dict of counts (samples, band samples, for a callable the evaluations).
+
+    Returns
+    -------
+    V : ndarray (n, 3) float64
+        Vertices.
+    F : ndarray (m, 3) int32
+        Triangles, counter-clockwise seen from outside.
+    stats : dict
+        Only with ``return_stats=True``.
+
+    Raises
+    ------
+    ValueError
+        NaN or infinite values, a wrong shape, an empty grid, no sign change, bad options.
+    KeyboardInterrupt
+        Ctrl-C (the computation stops at its next stage, brick or solver iteration).
+
+    Notes
+    -----
+    A callable is evaluated coarse to fine: on a coarse grid first, then at each finer level only
+    at points whose distance to the surface, bounded below from the coarser values (a distance
+    changes by at most the distance moved), may be within the band. The result is the mesh of the
+    full grid, from a small fraction of its evaluations (``stats["evaluated_fraction"]``).
+
+    Examples
+    --------
+    >>> V, F = sdfcontour.contour(grid, bounds=(-1, 1), method="mc")
+    >>> V, F = sdfcontour.contour(samples)                  # (n, 4) scattered samples
+    """
+    o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
+                 brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
+                 solver_tolerance, progress)
+    out = _run(sdf, bounds, resolution, batch_size, o, True, False)
+    if return_stats:
+        return out["V"], out["F"], out["stats"]
+    return out["V"], out["F"]
+
+
+def contact_points(sdf, bounds=None, *, resolution=None, band=4.0, margin=1.0, truncation="auto",
+                   gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
+                   brick_size=64, brick_halo=0.0, batch_size=65536, progress=False):
+    """GCP's contact points with their normals, without the surface reconstruction.
+
+    Parameters are those of :func:`contour`.
+
+    Returns
+    -------
+    P : ndarray (k, 3) float64
+        Contact points c = p - value * n.
+    N : ndarray (k, 3) float64
+        Unit outward normals.
+
+    Examples
+    --------
+    >>> P, N = sdfcontour.contact_points(grid, weights="james")
+    """
+    o = _options("gcp", band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
+                 brick_size, brick_halo, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, progress)
+    out = _run(sdf, bounds, resolution, batch_size, o, False, True)
+    return out["P"], out["N"]
+
+
+def poisson(P, N, *, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5, scale=1.1,
+            boundary="neumann", solver_tolerance=1e-4):
+    """Screened Poisson reconstruction of oriented points: a watertight mesh.
+
+    Parameters
+    ----------
+    P : ndarray (n, 3)
+        Points.
+    N : ndarray (n, 3)
+        Outward normals (any non-zero length).
+    depth : int
+        Finest octree depth (the domain cube split 2^depth times).
+    alpha : float
+        Screening weight (PoissonRecon's pointWeight); 0 is plain Poisson.
+    full_depth : int
+        The octree is complete down to this depth.
+    samples_per_node : float
+        Splat each normal where an octree node holds about this many points.
+    scale : float
+        The domain cube is the points' bounding cube enlarged by this factor.
+    boundary : {"neumann", "dirichlet", "free"}
+        Boundary condition on the domain cube.
+    solver_tolerance : float
+        Conjugate gradients stop at this relative residual at each depth.
+
+    Returns
+    -------
+    V : ndarray (n, 3) float64
+    F : ndarray (m, 3) int32
+
+    Examples
+    --------
+    >>> V, F = sdfcontour.poisson(P, N, depth=8, alpha=10)
+    """
+    o = dict(depth=int(depth), alpha=float(alpha), full_depth=int(full_depth),
+             samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
+             solver_tolerance=float(solver_tolerance))
+    return _sdfcontour.poisson(np.asarray(P), np.asarray(N), o)
+
+
+def sample(V, F, resolution=64, bounds=None):
+    """Signed distances of a closed mesh on a resolution^3 grid (negative inside).
+
+    Parameters
+    ----------
+    V : ndarray (n, 3)
+        Vertices.
+    F : ndarray (m, 3)
+        Triangles of a closed, consistently oriented mesh.
+    resolution : int
+        Samples per axis (2 to 1024).
+    bounds : (lo, hi), optional
+        The grid's box, default (-1, 1).
+
+    Returns
+    -------
+    grid : ndarray (resolution, resolution, resolution) float64
+
+    Examples
+    --------
+    >>> grid = sdfcontour.sample(V, F, resolution=64)
+    """
+    lo, hi = _bounds(bounds)
+    return _sdfcontour.sample(np.asarray(V), np.asarray(F), int(resolution), lo, hi)
+
+
+def distances(V, F, V_gt, F_gt, samples=200000, seed=1):
+    """Distances between a mesh and the ground truth, from area-uniform samples on both.
+
+    Returns
+    -------
+    dict
+        ``L1`` (mean of the two directed mean distances), ``L2``, ``L_inf`` (Hausdorff), the
+        directed ``recon_to_gt`` and ``gt_to_recon`` mean/rms/max, ``closed`` and
+        ``components`` of the first mesh.
+
+    Examples
+    --------
+    >>> sdfcontour.distances(V, F, V_gt, F_gt)["L1"]
+    """
+    return _sdfcontour.distances(np.asarray(V), np.asarray(F), np.asarray(V_gt),
+                                 np.asarray(F_gt), int(samples), int(seed))

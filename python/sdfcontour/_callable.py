@@ -1,0 +1,99 @@
+"""Sampling a callable signed distance only where the contouring needs it.
+
+Coarse to fine: level L holds the grid points whose indices are multiples of 2^L (and the last
+index), down to level 0, the full grid. The coarsest level is evaluated everywhere. At each finer
+level, a new point p gets a lower bound of |f(p)| from its (up to 8) parents on the coarser level:
+max over parents q of |f(q)| - |p - q| (a distance moves by at most the distance moved; a parent
+that was itself only bounded passes its bound on). p is evaluated when that bound is at most
+tau_l = threshold + sqrt(3) h (2^l - 1): then a point left out at level l has every descendant left
+out too, and at level 0 every point with |f| <= threshold is evaluated. A point left out keeps its
+signed bound (its sign is its parent's: f cannot change sign within the bound), so the grid handed
+on has the true value wherever the contouring reads one, and the right sign everywhere else.
+"""
+import sys
+
+import numpy as np
+
+
+def _axis_indices(n, step):
+    idx = np.arange(0, n, step)
+    if idx[-1] != n - 1:
+        idx = np.append(idx, n - 1)
+    return idx
+
+
+def _evaluate(f, points, batch_size, counter):
+    out = np.empty(len(points))
+    for start in range(0, len(points), batch_size):
+        chunk = points[start:start + batch_size]
+        values = np.asarray(f(chunk), dtype=float).reshape(-1)
+        if values.shape != (len(chunk),):
+            raise ValueError(f"the SDF returned {values.size} values for {len(chunk)} points")
+        if not np.all(np.isfinite(values)):
+            raise ValueError("the SDF returned NaN or infinite values")
+        out[start:start + len(chunk)] = values
+        counter[0] += len(chunk)
+    return out
+
+
+def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False):
+    """The n^3 grid of f over [lo, hi], exact where |f| <= threshold spacings (and wherever the
+    bounds could not exclude it), signed lower bounds elsewhere; and the number of evaluations."""
+    if not 2 <= n <= 2048:
+        raise ValueError("resolution must be between 2 and 2048")
+    if batch_size < 1:
+        raise ValueError("batch_size must be at least 1")
+    h = (hi - lo) / (n - 1)
+    threshold = threshold * float(h.max())
+    levels = 0
+    while levels < 6 and (n - 1) >> (levels + 1) >= 4:
+        levels += 1
+    grid = np.full((n, n, n), np.nan)
+    counter = [0]
+
+    def position(i, j, k):
+        return np.column_stack([lo[0] + i * h[0], lo[1] + j * h[1], lo[2] + k * h[2]])
+
+    # The coarsest level, everywhere.
+    coarse = _axis_indices(n, 1 << levels)
+    ci, cj, ck = (a.ravel() for a in np.meshgrid(coarse, coarse, coarse, indexing="ij"))
+    grid[ci, cj, ck] = _evaluate(f, position(ci, cj, ck), batch_size, counter)
+    for level in range(levels - 1, -1, -1):
+        parent_axis = _axis_indices(n, 1 << (level + 1))
+        axis = _axis_indices(n, 1 << level)
+        is_parent = np.isin(axis, parent_axis)
+        # Each index's parents below and above on the coarser level (equal when it is one).
+        above = parent_axis[np.minimum(np.searchsorted(parent_axis, axis), len(parent_axis) - 1)]
+        below = parent_axis[np.maximum(np.searchsorted(parent_axis, axis, side="right") - 1, 0)]
+        tau = threshold + np.sqrt(3.0) * float(h.max()) * ((1 << level) - 1)
+        if progress:
+            print(f"[sdfcontour] sampling level {level}: {counter[0]} evaluations so far",
+                  file=sys.stderr, flush=True)
+        # A slab of i at a time bounds the temporary arrays.
+        slab = max(1, (1 << 22) // (len(axis) ** 2))
+        for first in range(0, len(axis), slab):
+            ii = np.arange(first, min(first + slab, len(axis)))
+            a, b, c = np.meshgrid(ii, np.arange(len(axis)), np.arange(len(axis)), indexing="ij")
+            a, b, c = a.ravel(), b.ravel(), c.ravel()
+            new = ~(is_parent[a] & is_parent[b] & is_parent[c])
+            a, b, c = a[new], b[new], c[new]
+            i, j, k = axis[a], axis[b], axis[c]
+            bound = np.full(len(i), -np.inf)
+            sign = np.ones(len(i))
+            for corner in range(8):
+                qi = np.where(corner & 1, above[a], below[a])
+                qj = np.where(corner & 2, above[b], below[b])
+                qk = np.where(corner & 4, above[c], below[c])
+                value = grid[qi, qj, qk]
+                reach = np.sqrt(((i - qi) * h[0]) ** 2 + ((j - qj) * h[1]) ** 2 +
+                                ((k - qk) * h[2]) ** 2)
+                candidate = np.abs(value) - reach
+                better = candidate > bound
+                bound[better] = candidate[better]
+                sign[better] = np.sign(value[better])
+            evaluate = bound <= tau
+            grid[i[~evaluate], j[~evaluate], k[~evaluate]] = (sign * bound)[~evaluate]
+            ie, je, ke = i[evaluate], j[evaluate], k[evaluate]
+            if len(ie):
+                grid[ie, je, ke] = _evaluate(f, position(ie, je, ke), batch_size, counter)
+    return grid, counter[0]

@@ -1,0 +1,210 @@
+"""The Python module against the command-line tool, analytic surfaces and bad input.
+
+Run with the module installed (pip install --no-build-isolation .) and the CLI built:
+    SDFCONTOUR_CLI=build/sdfcontour python -m pytest tests/python
+"""
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import sdfcontour
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CLI = os.environ.get("SDFCONTOUR_CLI", os.path.join(ROOT, "build", "sdfcontour"))
+MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
+
+
+def sphere(p):
+    return np.linalg.norm(p, axis=1) - 0.6
+
+
+def torus(p):
+    q = np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 0.55
+    return np.sqrt(q ** 2 + p[:, 2] ** 2) - 0.25
+
+
+def full_grid(f, n, lo=-1.0, hi=1.0):
+    x = np.linspace(lo, hi, n)
+    return f(np.stack(np.meshgrid(x, x, x, indexing="ij"), -1).reshape(-1, 3)).reshape(n, n, n)
+
+
+def read_ply(path):
+    """Vertices and triangles of a binary little-endian PLY as the CLI writes it."""
+    with open(path, "rb") as f:
+        header = []
+        while True:
+            line = f.readline().decode().strip()
+            header.append(line)
+            if line == "end_header":
+                break
+        counts = {w[1]: int(w[2]) for w in (l.split() for l in header) if w[0] == "element"}
+        vertex_props = [l.split()[1] for l in header if l.startswith("property") and "list" not in l]
+        dtype = {"double": "<f8", "float": "<f4"}[vertex_props[0]]
+        V = np.frombuffer(f.read(counts["vertex"] * 3 * np.dtype(dtype).itemsize), dtype=dtype)
+        faces = np.frombuffer(f.read(counts["face"] * 13), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    return V.reshape(-1, 3).astype(float), faces["i"].copy()
+
+
+def read_obj(path):
+    V, F = [], []
+    for line in open(path):
+        w = line.split()
+        if w and w[0] == "v":
+            V.append([float(x) for x in w[1:4]])
+        elif w and w[0] == "f":
+            F.append([int(x.split("/")[0]) - 1 for x in w[1:4]])
+    return np.array(V), np.array(F)
+
+
+def mean_abs(f, V):
+    return float(np.mean(np.abs(f(V))))
+
+
+@pytest.mark.parametrize("method", ["gcp", "mc"])
+def test_same_mesh_as_the_cli_on_a_grid_file(tmp_path, method):
+    grid = full_grid(torus, 32)
+    np.save(tmp_path / "torus.npy", grid)
+    subprocess.run([CLI, "contour", str(tmp_path / "torus.npy"), "-o", str(tmp_path / "cli.ply"),
+                    "--method", method, "-q"], check=True, stdout=subprocess.DEVNULL)
+    V_cli, F_cli = read_ply(tmp_path / "cli.ply")
+    V, F = sdfcontour.contour(grid, method=method)
+    assert V.dtype == np.float64 and V.shape[1] == 3 and F.shape[1] == 3
+    np.testing.assert_array_equal(V, V_cli)
+    np.testing.assert_array_equal(F, F_cli)
+
+
+def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
+    mesh = os.path.join(MESHES, "bunny.obj")
+    if not os.path.exists(mesh):
+        pytest.skip("../shared/data/meshes is missing")
+    subprocess.run([CLI, "sample", mesh, "--res", "32", "-o", str(tmp_path / "b"), "-q"], check=True,
+                   stdout=subprocess.DEVNULL)
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "cli.ply"), "-q"],
+                   check=True, stdout=subprocess.DEVNULL)
+    V_cli, F_cli = read_ply(tmp_path / "cli.ply")
+    V, F = sdfcontour.contour(np.load(tmp_path / "b.npy"))
+    np.testing.assert_array_equal(V, V_cli)
+    np.testing.assert_array_equal(F, F_cli)
+    # And the mesh is close to the ground truth the CLI wrote.
+    V_gt, F_gt = read_ply(tmp_path / "b_mesh.ply")
+    d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)
+    assert d["closed"] and d["L1"] < 0.25 * 2 / 31
+
+
+def test_float32_and_float64_agree():
+    grid32 = full_grid(sphere, 40).astype(np.float32)
+    V32, F32 = sdfcontour.contour(grid32)
+    V64, F64 = sdfcontour.contour(grid32.astype(np.float64))
+    assert V32.shape == V64.shape
+    assert np.max(np.abs(V32 - V64)) <= 1e-6
+    np.testing.assert_array_equal(F32, F64)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_grid_is_read_in_place(dtype):
+    grid = full_grid(sphere, 24).astype(dtype)
+    _, _, stats = sdfcontour.contour(grid, method="mc", return_stats=True)
+    assert stats["grid_address"] == grid.ctypes.data  # the binding read the caller's buffer
+    # A non-contiguous view is copied once, and gives the same mesh as its contiguous copy.
+    view = np.swapaxes(grid, 0, 2)
+    V, F, stats = sdfcontour.contour(view, method="mc", return_stats=True)
+    assert stats["grid_address"] != view.ctypes.data
+    V2, F2 = sdfcontour.contour(np.ascontiguousarray(view), method="mc")
+    np.testing.assert_array_equal(V, V2)
+
+
+@pytest.mark.parametrize("f", [sphere, torus], ids=["sphere", "torus"])
+def test_callable_is_sampled_near_the_surface_only(f):
+    n = 128
+    V, F, stats = sdfcontour.contour(f, resolution=n, return_stats=True)
+    assert stats["evaluations"] == round(stats["evaluated_fraction"] * n ** 3)
+    assert stats["evaluated_fraction"] <= 0.15
+    Vg, Fg = sdfcontour.contour(full_grid(f, n))
+    assert abs(mean_abs(f, V) - mean_abs(f, Vg)) <= 0.05 * mean_abs(f, Vg)
+    assert mean_abs(f, V) < 0.05 * 2 / (n - 1)
+
+
+def test_callable_marching_cubes_equals_the_full_grid():
+    V, F = sdfcontour.contour(torus, resolution=48, method="mc")
+    Vg, Fg = sdfcontour.contour(full_grid(torus, 48), method="mc")
+    np.testing.assert_array_equal(V, Vg)
+    np.testing.assert_array_equal(F, Fg)
+
+
+def test_scattered_samples_contact_points_and_poisson():
+    rng = np.random.default_rng(0)
+    points = rng.uniform(-1, 1, (20000, 3))
+    values = sphere(points)
+    V, F = sdfcontour.contour((points, values))
+    V2, F2 = sdfcontour.contour(np.column_stack([points, values]))
+    np.testing.assert_array_equal(V, V2)
+    assert mean_abs(sphere, V) < 0.02
+    P, N = sdfcontour.contact_points(full_grid(sphere, 32))
+    assert np.max(np.abs(sphere(P))) < 0.01  # GCP is exact on a sphere up to its gradients
+    assert np.min(np.sum(N * P / np.linalg.norm(P, axis=1)[:, None], axis=1)) > 0.99
+    Vp, Fp = sdfcontour.poisson(P, N, depth=7)
+    assert mean_abs(sphere, Vp) < 0.01
+
+
+def test_sample_and_distances():
+    V, F = sdfcontour.contour(full_grid(sphere, 32), method="mc")
+    grid = sdfcontour.sample(V, F, resolution=20)
+    assert grid.shape == (20, 20, 20)
+    exact = full_grid(sphere, 20)
+    assert np.max(np.abs(grid - exact)) < 0.01  # the MC mesh is within 0.01 of the sphere
+    d = sdfcontour.distances(V, F, V, F, samples=5000)
+    assert d["L1"] < 1e-12 and d["L_inf"] < 1e-12 and d["components"] == 1
+
+
+@pytest.mark.parametrize("bad, message", [
+    (np.full((8, 8, 8), np.nan), "NaN"),
+    (np.zeros((3, 3)), "neither a grid"),
+    (np.ones((8, 8, 8)), "no surface"),
+    (np.zeros((0, 4, 4)), "0 samples"),
+    (np.array([["a"]]), "numbers"),
+])
+def test_bad_input_raises_value_error(bad, message):
+    with pytest.raises(ValueError, match=message):
+        sdfcontour.contour(bad)
+
+
+def test_bad_options_raise_value_error():
+    grid = full_grid(sphere, 16)
+    for kwargs, message in [({"method": "marching"}, "unknown method"), ({"band": -1}, "band"),
+                            ({"bounds": (1, -1)}, "bounds"), ({"weights": "heavy"}, "weighting"),
+                            ({"depth": 40}, "depth"), ({"resolution": 64}, "callable")]:
+        with pytest.raises(ValueError, match=message):
+            sdfcontour.contour(grid, **kwargs)
+    with pytest.raises(ValueError, match="resolution"):
+        sdfcontour.contour(sphere)
+    with pytest.raises(ValueError, match="NaN"):
+        sdfcontour.contour(lambda p: np.full(len(p), np.nan), resolution=16)
+    with pytest.raises(ValueError, match="values for"):
+        sdfcontour.contour(lambda p: np.zeros(3), resolution=16)
+    with pytest.raises(ValueError, match="closed"):
+        sdfcontour.sample(np.eye(3), np.array([[0, 1, 2]]))
+
+
+@pytest.mark.parametrize("at", [1.0, 4.0])
+def test_ctrl_c_interrupts_within_a_second(at):
+    grid = full_grid(torus, 160)  # GCP takes ~10 s: bricks first, then the reconstruction
+    sent = []
+    timer = threading.Timer(at, lambda: (sent.append(time.monotonic()),
+                                         os.kill(os.getpid(), signal.SIGINT)))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        sdfcontour.contour(grid)
+    stopped = time.monotonic()
+    timer.join()
+    assert sent and stopped - sent[0] < 1.0
+
+
+def test_help_explains_each_option():
+    doc = sdfcontour.contour.__doc__
+    for name in ["sdf", "bounds", "method", "resolution", "band", "depth", "progress", "Examples"]:
+        assert name in doc
