@@ -14,7 +14,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 import sdfcontour
 
@@ -38,20 +37,41 @@ def read_ply(path):
     return V.copy(), F.copy()
 
 
-def draw(ax, V, F, title):
+def render(V, F, size=420, points=1500000, seed=0):
+    """A shaded image of the mesh: area-uniform surface points with their face normals, seen
+    along a fixed direction through a z-buffer (exact occlusion, unlike painter's sorting)."""
+    rng = np.random.default_rng(seed)
     tris = V[F]
     n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-    light = np.array([0.4, -0.5, 0.75]) / np.linalg.norm([0.4, -0.5, 0.75])
-    shade = 0.25 + 0.75 * np.clip(n @ light, 0, 1)
-    colors = np.outer(shade, [0.62, 0.72, 0.86])
-    ax.add_collection3d(Poly3DCollection(tris, facecolors=colors, edgecolors="none"))
-    lo, hi = V.min(0), V.max(0)
-    c, r = (lo + hi) / 2, (hi - lo).max() / 2
-    ax.set_xlim(c[0] - r, c[0] + r)
-    ax.set_ylim(c[1] - r, c[1] + r)
-    ax.set_zlim(c[2] - r, c[2] + r)
-    ax.view_init(elev=15, azim=-60)
+    area = np.linalg.norm(n, axis=1)
+    n /= np.maximum(area, 1e-30)[:, None]
+    t = rng.choice(len(F), points, p=area / area.sum())
+    u = rng.random((points, 2))
+    flip = u.sum(1) > 1
+    u[flip] = 1 - u[flip]
+    P = tris[t, 0] + u[:, :1] * (tris[t, 1] - tris[t, 0]) + u[:, 1:] * (tris[t, 2] - tris[t, 0])
+    # Camera: y up, looking from the front-right and a little above.
+    yaw, pitch = np.radians(-35), np.radians(-20)
+    Ry = np.array([[np.cos(yaw), 0, np.sin(yaw)], [0, 1, 0], [-np.sin(yaw), 0, np.cos(yaw)]])
+    Rx = np.array([[1, 0, 0], [0, np.cos(pitch), -np.sin(pitch)], [0, np.sin(pitch), np.cos(pitch)]])
+    R = Rx @ Ry
+    Q, N = P @ R.T, n[t] @ R.T
+    lo, hi = Q[:, :2].min(0), Q[:, :2].max(0)
+    scale = (size - 10) / (hi - lo).max()
+    px = ((Q[:, 0] - lo[0]) * scale + 5).astype(int)
+    py = (size - 1 - ((Q[:, 1] - lo[1]) * scale + 5)).astype(int)
+    pixel = py * size + px
+    order = np.lexsort((-Q[:, 2], pixel))  # per pixel, the nearest (largest z) first
+    first = order[np.r_[True, pixel[order][1:] != pixel[order][:-1]]]
+    light = np.array([0.3, 0.5, 0.8]) / np.linalg.norm([0.3, 0.5, 0.8])
+    shade = 0.2 + 0.8 * np.clip(N[first] @ light, 0, 1)
+    image = np.ones((size * size, 3))
+    image[pixel[first]] = np.outer(shade, [0.62, 0.72, 0.86])
+    return image.reshape(size, size, 3)
+
+
+def draw(ax, V, F, title):
+    ax.imshow(render(V, F))
     ax.set_axis_off()
     ax.set_title(title, fontsize=10)
 
@@ -65,7 +85,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as d:
         # The normalised ground truth, from the CLI (sample scales it into [-0.9, 0.9]^3).
-        subprocess.run([CLI, "sample", os.path.join(MESHES, args.mesh + ".obj"), "--res", "2", "-o",
+        subprocess.run([CLI, "sample", os.path.join(MESHES, args.mesh + ".obj"), "--res", "16", "-o",
                         os.path.join(d, "m"), "-q"], check=True, stdout=subprocess.DEVNULL)
         V_gt, F_gt = read_ply(os.path.join(d, "m_mesh.ply"))
     grids = {}
@@ -81,7 +101,7 @@ def main():
         meshes.append((f"{method.upper()} {args.res}³, L1 {l1:.1e}", (V, F)))
     fig = plt.figure(figsize=(12, 4.2), dpi=110)
     for i, (title, (V, F)) in enumerate(meshes):
-        draw(fig.add_subplot(1, 3, i + 1, projection="3d"), V, F, title)
+        draw(fig.add_subplot(1, 3, i + 1), V, F, title)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "python_meshes.png"))
     sweep = [int(n) for n in args.sweep.split(",")]

@@ -12,6 +12,7 @@
 #include <optional>
 #include <thread>
 
+#include "progress_bar.h"
 #include "sdfcontour/contact_point_errors.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/mesh_sdf.h"
@@ -138,9 +139,7 @@ ContourOptions contour_options(const py::dict& o) {
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
   if (get<bool>(o, "progress", false)) {
     c.progress = [](const std::string& m) { std::cerr << "[sdfcontour] " << m << std::endl; };
-    c.progress_fraction = [](const std::string& stage, long done, long total) {
-      std::cerr << "[sdfcontour] " << stage << " " << done << "/" << total << std::endl;
-    };
+    c.progress_fraction = detail::ProgressBar();
     c.poisson.progress = c.progress;
   }
   return c;

@@ -1,9 +1,6 @@
 #include "cli_options.h"
 
-#include <unistd.h>
-
 #include <cmath>
-#include <iomanip>
 #include <iostream>
 #include <limits>
 #include <sstream>
@@ -121,26 +118,6 @@ std::unique_ptr<tbb::global_control> RunOptions::limit_threads() const {
   if (threads == 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                std::size_t(threads));
-}
-
-ProgressBar::ProgressBar() : tty_(::isatty(2)) {}
-
-void ProgressBar::operator()(const std::string& stage, long done, long total) {
-  const auto now = std::chrono::steady_clock::now();
-  if (stage != stage_) stage_ = stage, start_ = now, last_tenth_ = -1;
-  const double fraction = total > 0 ? double(done) / double(total) : 1.0;
-  const int tenth = int(fraction * 10);
-  if (!tty_ && tenth == last_tenth_ && done != total) return;
-  last_tenth_ = tenth;
-  const double elapsed = std::chrono::duration<double>(now - start_).count();
-  const int width = 24, filled = int(fraction * width);
-  std::ostringstream line;
-  line << "[sdfcontour] " << stage << " [" << std::string(std::size_t(filled), '=')
-       << std::string(std::size_t(width - filled), ' ') << "] " << done << "/" << total;
-  if (done > 0 && done < total)
-    line << ", ETA " << std::fixed << std::setprecision(0) << elapsed * (1 - fraction) / fraction
-         << " s";
-  std::cerr << (tty_ ? "\r" : "") << line.str() << (tty_ && done < total ? "" : "\n") << std::flush;
 }
 
 void PoissonArgs::add_to(CLI::App* app) {

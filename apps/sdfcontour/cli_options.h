@@ -58,20 +58,6 @@ struct RunOptions {
   std::unique_ptr<tbb::global_control> limit_threads() const;
 };
 
-/// A progress bar on stderr for long stages: "[sdfcontour] bricks [=====     ] 12/24, ETA 8 s".
-/// On a terminal it redraws one line; otherwise it prints a line per tenth.
-class ProgressBar {
- public:
-  ProgressBar();
-  void operator()(const std::string& stage, long done, long total);
-
- private:
-  bool tty_;
-  std::string stage_;
-  std::chrono::steady_clock::time_point start_;
-  int last_tenth_ = -1;
-};
-
 /// Screened Poisson options, shared by `contour` (gcp, gtcp) and `poisson`.
 struct PoissonArgs {
   PoissonOptions options;

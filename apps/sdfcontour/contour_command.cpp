@@ -7,6 +7,7 @@
 #include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
+#include "progress_bar.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_point_errors.h"
 #include "sdfcontour/io.h"
@@ -194,7 +195,7 @@ int run_contour(const ContourArgs& a) {
   const auto threads = a.run.limit_threads();
   ContourOptions opt = contour_options(a);
   opt.progress = [&](const std::string& m) { a.run.say(m); };
-  if (!a.run.quiet) opt.progress_fraction = ProgressBar();
+  if (!a.run.quiet) opt.progress_fraction = detail::ProgressBar();
 
   const auto t0 = std::chrono::steady_clock::now();
   a.run.say("reading " + a.input);
