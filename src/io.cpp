@@ -1,12 +1,5 @@
 #include "sdfcontour/io.h"
 
-#include <CGAL/IO/OBJ.h>
-#include <CGAL/IO/OFF.h>
-#include <CGAL/IO/PLY.h>
-#include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/IO/read_ply_points.h>
-#include <CGAL/Simple_cartesian.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -18,6 +11,7 @@
 #include <vector>
 
 #include "atomic_file.h"
+#include "mesh_files.h"
 
 namespace sdfcontour {
 
@@ -92,36 +86,35 @@ void write_mesh(const std::string& path, const Mesh& mesh, PlyFormat ply_format)
   file.commit();
 }
 
+namespace {
+
+// The whole file, or IoError.
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
+  return bytes;
+}
+
+}  // namespace
+
 Mesh read_mesh(const std::string& path) {
   const std::string ext = extension(path);
   if (ext != "obj" && ext != "ply" && ext != "off")
     throw Error("cannot read a mesh from '" + path + "': use a .obj, .ply or .off file");
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
-  }
-  using P = CGAL::Simple_cartesian<double>::Point_3;
-  std::vector<P> points;
-  std::vector<std::vector<std::size_t>> polygons;
-  bool ok = false;
-  try {
-    ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));
-  } catch (const std::exception&) {
-    ok = false;
-  }
-  if (!ok) throw Error("cannot parse '" + path + "' as a " + ext + " mesh");
+  const std::string bytes = file_bytes(path);
+  const detail::PolygonSoup soup = ext == "ply"   ? detail::parse_ply(bytes, path)
+                                   : ext == "off" ? detail::parse_off(bytes, path)
+                                                  : detail::parse_obj(bytes, path);
   Mesh mesh;
-  mesh.vertices.resize(Eigen::Index(points.size()), 3);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    mesh.vertices.row(Eigen::Index(i)) << points[i].x(), points[i].y(), points[i].z();
-    if (!std::isfinite(points[i].x()) || !std::isfinite(points[i].y()) ||
-        !std::isfinite(points[i].z()))
-      throw Error("'" + path + "' has a vertex with a NaN or infinite coordinate");
-  }
+  mesh.vertices.resize(Eigen::Index(soup.points.size()), 3);
+  for (std::size_t i = 0; i < soup.points.size(); ++i)
+    mesh.vertices.row(Eigen::Index(i)) << soup.points[i][0], soup.points[i][1], soup.points[i][2];
   std::vector<std::array<int, 3>> triangles;
-  for (const auto& poly : polygons) {
-    for (std::size_t v : poly)
-      if (v >= points.size())
+  for (const auto& poly : soup.polygons) {
+    for (long v : poly)
+      if (v < 0 || v >= long(soup.points.size()))
         throw Error("'" + path + "' has a face with an out-of-range vertex index");
     for (std::size_t q = 1; q + 1 < poly.size(); ++q)
       triangles.push_back({int(poly[0]), int(poly[q]), int(poly[q + 1])});
@@ -143,27 +136,15 @@ void write_oriented_points(const std::string& path, const OrientedPoints& points
 }
 
 OrientedPoints read_oriented_points(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
-  using K = CGAL::Simple_cartesian<double>;
-  using PN = std::pair<K::Point_3, K::Vector_3>;
-  std::vector<PN> pn;
-  bool ok = false;
-  try {
-    ok = CGAL::IO::read_PLY_with_properties(
-        in, std::back_inserter(pn),
-        CGAL::make_ply_point_reader(CGAL::First_of_pair_property_map<PN>()),
-        CGAL::make_ply_normal_reader(CGAL::Second_of_pair_property_map<PN>()));
-  } catch (const std::exception&) {
-    ok = false;
-  }
-  if (!ok) throw Error("cannot parse '" + path + "' as a PLY point cloud with x y z nx ny nz");
+  const detail::PolygonSoup soup = detail::parse_ply(file_bytes(path), path);
+  if (soup.normals.size() != soup.points.size() || (soup.points.empty() && soup.polygons.size()))
+    throw Error("cannot parse '" + path + "' as a PLY point cloud with x y z nx ny nz");
   OrientedPoints out;
-  out.points.resize(Eigen::Index(pn.size()), 3);
-  out.normals.resize(Eigen::Index(pn.size()), 3);
-  for (std::size_t i = 0; i < pn.size(); ++i) {
-    out.points.row(Eigen::Index(i)) << pn[i].first.x(), pn[i].first.y(), pn[i].first.z();
-    out.normals.row(Eigen::Index(i)) << pn[i].second.x(), pn[i].second.y(), pn[i].second.z();
+  out.points.resize(Eigen::Index(soup.points.size()), 3);
+  out.normals.resize(Eigen::Index(soup.points.size()), 3);
+  for (std::size_t i = 0; i < soup.points.size(); ++i) {
+    out.points.row(Eigen::Index(i)) << soup.points[i][0], soup.points[i][1], soup.points[i][2];
+    out.normals.row(Eigen::Index(i)) << soup.normals[i][0], soup.normals[i][1], soup.normals[i][2];
   }
   return out;
 }

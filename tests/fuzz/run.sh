@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the fuzz targets with clang's libFuzzer (+ ASan/UBSan) and runs each for SECONDS
 # (default 60), starting from the seed corpus in tests/fuzz/corpus/<target>/. Findings are written
-# to build-fuzz/findings/; a crash input becomes a regression test (tests/test_npy.cpp).
+# to build-fuzz/findings/; a crash input becomes a regression test (tests/test_npy.cpp,
+# tests/test_mesh_files.cpp).
 # Usage: bash tests/fuzz/run.sh [SECONDS]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -10,9 +11,10 @@ out=build-fuzz
 mkdir -p "$out/findings"
 flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
        -Iinclude -I/usr/include/eigen3)
-clang++ "${flags[@]}" tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp \
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp \
   -ltbb -o "$out/fuzz_npy"
-for target in npy; do
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/mesh_files.cpp -o "$out/fuzz_mesh_files"
+for target in npy mesh_files; do
   corpus="$out/corpus_$target"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/$target/* "$corpus/"
