@@ -23,20 +23,6 @@ MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
 CLI = os.path.join(ROOT, "build", "sdfcontour")
 
 
-def read_ply(path):
-    with open(path, "rb") as f:
-        header = []
-        while True:
-            line = f.readline().decode().strip()
-            header.append(line)
-            if line == "end_header":
-                break
-        counts = {w[1]: int(w[2]) for w in (l.split() for l in header) if w[0] == "element"}
-        V = np.frombuffer(f.read(counts["vertex"] * 24), dtype="<f8").reshape(-1, 3)
-        F = np.frombuffer(f.read(counts["face"] * 13), dtype=[("n", "u1"), ("i", "<i4", 3)])["i"]
-    return V.copy(), F.copy()
-
-
 def render(V, F, size=420, points=1500000, seed=0):
     """A shaded image of the mesh: area-uniform surface points with their face normals, seen
     along a fixed direction through a z-buffer (exact occlusion, unlike painter's sorting)."""
@@ -87,7 +73,7 @@ def main():
         # The normalised ground truth, from the CLI (sample scales it into [-0.9, 0.9]^3).
         subprocess.run([CLI, "sample", os.path.join(MESHES, args.mesh + ".obj"), "--res", "16", "-o",
                         os.path.join(d, "m"), "-q"], check=True, stdout=subprocess.DEVNULL)
-        V_gt, F_gt = read_ply(os.path.join(d, "m_mesh.ply"))
+        V_gt, F_gt = sdfcontour.read_mesh(os.path.join(d, "m_mesh.ply"))
     grids = {}
     def grid(n):
         if n not in grids:

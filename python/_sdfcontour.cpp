@@ -14,6 +14,7 @@
 
 #include "progress_bar.h"
 #include "sdfcontour/contact_point_errors.h"
+#include "sdfcontour/io.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/mesh_sdf.h"
 #include "sdfcontour/metrics.h"
@@ -281,6 +282,15 @@ py::dict run_distances(const py::array& V, const py::array& F, const py::array& 
   return out;
 }
 
+py::tuple run_read_mesh(const std::string& path) {
+  Mesh mesh = read_mesh(path);
+  return py::make_tuple(to_numpy(std::move(mesh.vertices)), to_numpy(std::move(mesh.triangles)));
+}
+
+void run_write_mesh(const std::string& path, const py::array& V, const py::array& F, bool ascii) {
+  write_mesh(path, mesh_from(V, F), ascii ? PlyFormat::Ascii : PlyFormat::Binary);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_sdfcontour, m) {
@@ -303,6 +313,9 @@ PYBIND11_MODULE(_sdfcontour, m) {
   });
   m.def("contour", &run_contour, py::arg("array"), py::arg("lo"), py::arg("hi"), py::arg("spacing"),
         py::arg("options"), py::arg("want_mesh"), py::arg("want_points"));
+  m.def("read_mesh", &run_read_mesh, py::arg("path"));
+  m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
+        py::arg("ascii"));
   m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("options"));
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
         py::arg("hi"));

@@ -23,7 +23,7 @@ import numpy as np
 
 from . import _sdfcontour
 
-__all__ = ["contour", "contact_points", "poisson", "sample", "distances"]
+__all__ = ["contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh"]
 
 METHODS = ("gcp", "gtcp", "mc", "mt-rt", "mt-dt")
 
@@ -306,3 +306,36 @@ def distances(V, F, V_gt, F_gt, samples=200000, seed=1):
     """
     return _sdfcontour.distances(np.asarray(V), np.asarray(F), np.asarray(V_gt),
                                  np.asarray(F_gt), int(samples), int(seed))
+
+
+def read_mesh(path):
+    """A triangle mesh from an OBJ, PLY (ASCII or binary) or OFF file; polygons are fan-split.
+
+    Returns
+    -------
+    V : ndarray (n, 3) float64
+    F : ndarray (m, 3) int32
+
+    Raises
+    ------
+    OSError
+        The file cannot be opened or read.
+    ValueError
+        The file is malformed, or has no faces, or a face indexes a missing vertex.
+
+    Examples
+    --------
+    >>> V_gt, F_gt = sdfcontour.read_mesh("bunny.obj")
+    """
+    return _sdfcontour.read_mesh(str(path))
+
+
+def write_mesh(path, V, F, ascii=False):
+    """Writes a mesh as PLY (binary unless ``ascii``) or OBJ, by the extension; atomically (a
+    failed write leaves no file).
+
+    Examples
+    --------
+    >>> sdfcontour.write_mesh("out.ply", V, F)
+    """
+    _sdfcontour.write_mesh(str(path), np.asarray(V), np.asarray(F), bool(ascii))

@@ -33,34 +33,6 @@ def full_grid(f, n, lo=-1.0, hi=1.0):
     return f(np.stack(np.meshgrid(x, x, x, indexing="ij"), -1).reshape(-1, 3)).reshape(n, n, n)
 
 
-def read_ply(path):
-    """Vertices and triangles of a binary little-endian PLY as the CLI writes it."""
-    with open(path, "rb") as f:
-        header = []
-        while True:
-            line = f.readline().decode().strip()
-            header.append(line)
-            if line == "end_header":
-                break
-        counts = {w[1]: int(w[2]) for w in (l.split() for l in header) if w[0] == "element"}
-        vertex_props = [l.split()[1] for l in header if l.startswith("property") and "list" not in l]
-        dtype = {"double": "<f8", "float": "<f4"}[vertex_props[0]]
-        V = np.frombuffer(f.read(counts["vertex"] * 3 * np.dtype(dtype).itemsize), dtype=dtype)
-        faces = np.frombuffer(f.read(counts["face"] * 13), dtype=[("n", "u1"), ("i", "<i4", 3)])
-    return V.reshape(-1, 3).astype(float), faces["i"].copy()
-
-
-def read_obj(path):
-    V, F = [], []
-    for line in open(path):
-        w = line.split()
-        if w and w[0] == "v":
-            V.append([float(x) for x in w[1:4]])
-        elif w and w[0] == "f":
-            F.append([int(x.split("/")[0]) - 1 for x in w[1:4]])
-    return np.array(V), np.array(F)
-
-
 def mean_abs(f, V):
     return float(np.mean(np.abs(f(V))))
 
@@ -71,7 +43,7 @@ def test_same_mesh_as_the_cli_on_a_grid_file(tmp_path, method):
     np.save(tmp_path / "torus.npy", grid)
     subprocess.run([CLI, "contour", str(tmp_path / "torus.npy"), "-o", str(tmp_path / "cli.ply"),
                     "--method", method, "-q"], check=True, stdout=subprocess.DEVNULL)
-    V_cli, F_cli = read_ply(tmp_path / "cli.ply")
+    V_cli, F_cli = sdfcontour.read_mesh(tmp_path / "cli.ply")
     V, F = sdfcontour.contour(grid, method=method)
     assert V.dtype == np.float64 and V.shape[1] == 3 and F.shape[1] == 3
     np.testing.assert_array_equal(V, V_cli)
@@ -86,12 +58,12 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
                    stdout=subprocess.DEVNULL)
     subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "cli.ply"), "-q"],
                    check=True, stdout=subprocess.DEVNULL)
-    V_cli, F_cli = read_ply(tmp_path / "cli.ply")
+    V_cli, F_cli = sdfcontour.read_mesh(tmp_path / "cli.ply")
     V, F = sdfcontour.contour(np.load(tmp_path / "b.npy"))
     np.testing.assert_array_equal(V, V_cli)
     np.testing.assert_array_equal(F, F_cli)
     # And the mesh is close to the ground truth the CLI wrote.
-    V_gt, F_gt = read_ply(tmp_path / "b_mesh.ply")
+    V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)
     assert d["closed"] and d["L1"] < 0.25 * 2 / 31
 
@@ -202,6 +174,22 @@ def test_ctrl_c_interrupts_within_a_second(at):
     stopped = time.monotonic()
     timer.join()
     assert sent and stopped - sent[0] < 1.0
+
+
+def test_files(tmp_path):
+    V, F = sdfcontour.contour(full_grid(sphere, 16), method="mc")
+    for name, ascii in [("m.ply", False), ("m.ply", True), ("m.obj", False)]:
+        sdfcontour.write_mesh(tmp_path / name, V, F, ascii=ascii)
+        V2, F2 = sdfcontour.read_mesh(tmp_path / name)
+        np.testing.assert_allclose(V2, V, rtol=1e-15 if name.endswith("ply") and not ascii else 1e-6)
+        np.testing.assert_array_equal(F2, F)
+    with pytest.raises(OSError):
+        sdfcontour.read_mesh(tmp_path / "missing.obj")
+    with pytest.raises(OSError):
+        sdfcontour.write_mesh(tmp_path / "no" / "dir" / "m.ply", V, F)
+    (tmp_path / "bad.ply").write_text("ply\nformat ascii 1.0\nproperty float x\n")
+    with pytest.raises(ValueError, match="before any element"):
+        sdfcontour.read_mesh(tmp_path / "bad.ply")
 
 
 def test_help_explains_each_option():
