@@ -214,6 +214,7 @@ int ply_header(std::string_view bytes, const std::string& name, std::vector<Elem
       continue;
     }
     if (key == "format") {
+      if (format >= 0) fail(name, kind, "two format lines");
       const std::string_view f = t.next();
       format = f == "ascii"                  ? 0
                : f == "binary_little_endian" ? 1
@@ -226,6 +227,9 @@ int ply_header(std::string_view bytes, const std::string& name, std::vector<Elem
       const std::optional<long> count = to_long(t.next());
       if (!count || *count < 0) fail(name, kind, "an element without a valid count");
       e.count = std::size_t(*count);
+      for (const Element& other : elements)
+        if (other.name == e.name && (e.name == "vertex" || e.name == "face"))
+          fail(name, kind, "two '" + e.name + "' elements");
       elements.push_back(e);
     } else if (key == "property") {
       if (elements.empty()) fail(name, kind, "a property before any element");

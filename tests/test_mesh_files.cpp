@@ -99,6 +99,13 @@ TEST(MeshFiles, HostilePlyIsRefused) {
                  "not a finite number");
   expect_refused(ply, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "end_header");
   expect_refused(ply, "PK\3\4", "start with 'ply'");
+  // Found by fuzzing: a second vertex element (without normals) after one with them.
+  expect_refused(ply,
+                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float "
+                 "y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float "
+                 "nz\nelement vertex 1\nproperty float x\nproperty float y\nproperty float "
+                 "z\nend_header\n0 0 0 0 0 1\n1 1 1\n",
+                 "two 'vertex' elements");
 }
 
 TEST(MeshFiles, OffWithColoursAndNormals) {
