@@ -221,6 +221,8 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["band_samples"] = r.band_samples;
   stats["hidden_samples"] = r.hidden;
   stats["poisson_depth"] = r.poisson_depth;
+  stats["value_scale"] = r.value_scale;
+  if (!r.fallback.empty()) stats["fallback"] = r.fallback;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

@@ -74,8 +74,16 @@ class Stages {
 
 }  // namespace
 
-ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
-                      const ContourOptions& options) {
+namespace {
+
+// GCP's mesh cannot be trusted on these values (they do not behave as distances).
+class NotDistances : public Error {
+ public:
+  using Error::Error;
+};
+
+ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
+                               const ContourOptions& options) {
   const GridView* grid = grid_view_of(input);
   const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
   if (grid) {
@@ -100,11 +108,30 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
                    [&] { return marching_cubes(*grid); });
   if (!options.want_points && method == Method::Mc) return result;
 
+  BandOptions band_options = options.band;
+  if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp) {
+    result.gradient_norm = gradient_norm_median(*grid);
+    const double m = result.gradient_norm;
+    if (std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.01) {
+      result.value_scale = band_options.value_scale = 1 / m;
+      if (options.progress)
+        options.progress("the values change by " + std::to_string(m) +
+                         " per unit length near the surface, not 1: rescaled to distances");
+    }
+  }
   // The other stages see the band's samples as scattered samples; a grid's positions are made
-  // for the band only.
+  // for the band only. A band that cannot be used means the values are not distances.
   BandSamples band = stages.run("band", "samples within the band", [&] {
-    return grid ? select_band(*grid, options.band)
-                : select_band(scattered->samples, options.band, scattered->spacing);
+    try {
+      return grid ? select_band(*grid, band_options)
+                  : select_band(scattered->samples, band_options, scattered->spacing);
+    } catch (const Cancelled&) {
+      throw;
+    } catch (const InternalError&) {
+      throw;
+    } catch (const Error& e) {
+      throw NotDistances(e.what());
+    }
   });
   result.band_samples = int(band.samples.values.size());
   result.band_spacing = band.spacing;
@@ -190,7 +217,12 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   if (contact_mesh) {
     const ContactPoints& cp = *result.contact_points;
     if (cp.size() == 0)
-      throw Error("no contact point was kept, so there is nothing to reconstruct a surface from");
+      throw NotDistances(
+          "no contact point was kept, so there is nothing to reconstruct a surface from");
+    const long core_count = std::count(band.core.begin(), band.core.end(), 1);
+    if (method == Method::Gcp && 5 * long(cp.size()) < core_count)
+      throw NotDistances("only " + std::to_string(cp.size()) + " of " + std::to_string(core_count) +
+                         " samples near the surface gave a contact point");
     PoissonOptions popt = options.poisson;
     popt.progress = options.progress;
     popt.cancel = options.cancel;
@@ -217,6 +249,30 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
         "marching", "marching tetrahedra on " + std::to_string(delaunay->tets.rows()) + " tets",
         [&] { return marching_tetrahedra(s.points, s.values, delaunay->tets); });
   return result;
+}
+
+}  // namespace
+
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
+                      const ContourOptions& options) {
+  try {
+    return contour_or_throw(input, shape, options);
+  } catch (const NotDistances& e) {
+    const GridView* grid = grid_view_of(input);
+    if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
+        !options.fallback_to_mc)
+      throw Error(e.what());
+    ContourResult result;
+    result.samples = int(grid->size());
+    result.fallback = std::string(e.what()) + ": the values do not behave as distances";
+    if (options.progress)
+      options.progress("GCP: " + result.fallback + "; this is marching cubes' mesh instead");
+    Stages stages(result, options);
+    result.mesh =
+        stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
+                   [&] { return marching_cubes(*grid); });
+    return result;
+  }
 }
 
 }  // namespace sdfcontour

@@ -29,6 +29,9 @@ struct BandOptions {
   /// With TruncationMode::Given: values with |value| >= truncation (to 1e-6 relative) are
   /// truncated and carry no distance.
   double truncation = 0;
+  /// The factor that turns the values into distances (1 for a signed distance; 1/m for a field
+  /// whose gradient norm is m). The band is measured, and the selected values returned, scaled.
+  double value_scale = 1.0;
 };
 
 /// Truncation distances found in (or given for) a field: values at or beyond them carry no
@@ -79,5 +82,11 @@ BandSamples select_band(const Samples& samples, const BandOptions& options, doub
 /// Throws Error unless `band` is positive (infinity allowed), `margin` non-negative and finite,
 /// and a given truncation positive and finite.
 void validate_band_options(const BandOptions& options);
+
+/// The median norm of the field's gradient at the grid points next to a sign change (central
+/// differences with steps h and 2h, Richardson-extrapolated so that curvature does not bias it):
+/// 1 for a signed distance, m for a distance scaled by m. NaN for fewer than 16 such points or a
+/// grid under 5 samples on an axis.
+double gradient_norm_median(const GridView& grid);
 
 }  // namespace sdfcontour

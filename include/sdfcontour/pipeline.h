@@ -51,6 +51,14 @@ struct ContourOptions {
   /// When set and it becomes true, contouring stops soon (at the next stage, brick or solver
   /// iteration) by throwing Cancelled.
   const std::atomic<bool>* cancel = nullptr;
+  /// Fields that are not distances (a distance times m, a smooth implicit): on a grid, measure
+  /// the gradient norm next to the surface and, if it is off 1 by more than 1%, rescale the values
+  /// by its inverse before the band is chosen (all methods but mc and gtcp).
+  bool normalize_values = true;
+  /// When GCP's mesh on a grid cannot be trusted (no usable band, no or too few contact points:
+  /// the values do not behave as distances), return marching cubes' mesh instead, and say why in
+  /// ContourResult::fallback. Without it, those cases throw Error.
+  bool fallback_to_mc = true;
 };
 
 struct StageTime {
@@ -70,6 +78,9 @@ struct ContourResult {
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
+  double gradient_norm = 0;  ///< median |grad value| next to the surface, when measured
+  double value_scale = 1;    ///< the factor the values were rescaled by (1: none)
+  std::string fallback;      ///< why marching cubes' mesh was returned instead of GCP's
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 8 up to 129 samples

@@ -1,0 +1,86 @@
+// Fields that are only approximately distances: GCP rescales a scaled distance and falls back to
+// marching cubes, saying why, where its contact points cannot be trusted; never a garbage mesh.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/marching.h"
+#include "sdfcontour/mesh_properties.h"
+#include "sdfcontour/pipeline.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+Grid transformed(const std::string& shape_name, int n, double (*f)(double, double, double)) {
+  const auto shape = make_builtin_shape(shape_name);
+  Grid g = sample_grid(*shape, n, Bounds{});
+  const double h = g.spacing()[0];
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (Eigen::Index i = 0; i < g.values.size(); ++i) g.values[i] = f(g.values[i], h, normal(rng));
+  return g;
+}
+
+double worst_distance(const Mesh& m, const std::string& shape_name) {
+  const auto shape = make_builtin_shape(shape_name);
+  double worst = 0;
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    worst = std::max(worst, std::abs(shape->distance(m.vertices.row(v).transpose())));
+  return worst;
+}
+
+ContourOptions gcp_options() {
+  ContourOptions o;
+  o.poisson.depth = 7;
+  return o;
+}
+
+}  // namespace
+
+TEST(Approximate, ScaledDistancesAreRescaled) {
+  for (const char* shape : {"sphere", "torus"}) {
+    const Grid exact = transformed(shape, 40, [](double v, double, double) { return v; });
+    const ContourResult reference = contour(grid_input(exact), nullptr, gcp_options());
+    for (double scale : {10.0, 0.1}) {
+      Grid g = exact;
+      g.values *= scale;
+      const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+      EXPECT_TRUE(r.fallback.empty()) << r.fallback;
+      EXPECT_NEAR(r.value_scale * scale, 1.0, 0.02);
+      const MeshTopology t = mesh_topology(*r.mesh);
+      EXPECT_TRUE(t.closed);
+      EXPECT_EQ(connected_components(*r.mesh), 1);
+      EXPECT_LT(worst_distance(*r.mesh, shape), 1.5 * worst_distance(*reference.mesh, shape))
+          << shape << " x" << scale;
+    }
+  }
+}
+
+TEST(Approximate, UntrustworthyFieldsFallBackToMarchingCubes) {
+  // Noise of half a spacing, and values clamped at one spacing: GCP cannot keep contact points.
+  const std::pair<const char*, double (*)(double, double, double)> cases[] = {
+      {"noise", [](double v, double h, double z) { return v + 0.5 * h * z; }},
+      {"clamp", [](double v, double h, double) { return std::clamp(v, -h, h); }},
+  };
+  for (const auto& [name, f] : cases) {
+    const Grid g = transformed("sphere", 40, f);
+    const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+    EXPECT_FALSE(r.fallback.empty()) << name;
+    const Mesh mc = marching_cubes(g);
+    EXPECT_TRUE(r.mesh->vertices == mc.vertices) << name;
+    EXPECT_TRUE(r.mesh->triangles == mc.triangles) << name;
+    ContourOptions strict = gcp_options();
+    strict.fallback_to_mc = false;
+    EXPECT_THROW(contour(grid_input(g), nullptr, strict), Error) << name;
+  }
+}
+
+TEST(Approximate, ExactDistancesAreLeftAlone) {
+  const Grid g = transformed("torus", 40, [](double v, double, double) { return v; });
+  const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+  EXPECT_EQ(r.value_scale, 1.0);
+  EXPECT_NEAR(r.gradient_norm, 1.0, 0.05);
+  EXPECT_TRUE(r.fallback.empty());
+}
