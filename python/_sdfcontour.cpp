@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <iostream>
@@ -26,43 +27,84 @@ using namespace sdfcontour;
 
 namespace {
 
-// Runs work() on a worker thread with the GIL released, polling for Ctrl-C every 50 ms: a signal
-// sets `cancel` (the library stops at its next stage, brick or solver iteration), and once the
-// worker has stopped the KeyboardInterrupt is raised.
-template <class Work>
-auto run_interruptible(Work&& work, std::atomic<bool>& cancel) {
-  using Result = decltype(work());
-  std::optional<Result> result;
-  std::exception_ptr error;
+// A computation on its own thread: its cancel flag and whether it has finished.
+struct Job {
+  std::atomic<bool> cancel{false};
   std::mutex mutex;
   std::condition_variable finished;
   bool done = false;
-  std::thread worker([&] {
+  // Waits up to `timeout` for the job to finish; true if it has.
+  bool wait(std::chrono::milliseconds timeout) {
+    std::unique_lock<std::mutex> lock(mutex);
+    return finished.wait_for(lock, timeout, [&] { return done; });
+  }
+};
+
+// Jobs left running after a Ctrl-C, with the Python objects whose memory they still read. Those
+// are released (GIL held) once the job has finished; never destroyed at exit without the GIL.
+std::vector<std::pair<std::shared_ptr<Job>, py::object>>& abandoned_jobs() {
+  static auto* jobs = new std::vector<std::pair<std::shared_ptr<Job>, py::object>>();
+  return *jobs;
+}
+
+void release_finished_jobs() {
+  auto& jobs = abandoned_jobs();
+  jobs.erase(std::remove_if(jobs.begin(), jobs.end(),
+                            [](auto& job) {
+                              std::lock_guard<std::mutex> lock(job.first->mutex);
+                              return job.first->done;
+                            }),
+             jobs.end());
+}
+
+// At exit, jobs still running are asked to stop and waited for.
+void stop_abandoned_jobs() {
+  for (auto& job : abandoned_jobs()) job.first->cancel = true;
+  py::gil_scoped_release release;
+  for (auto& job : abandoned_jobs()) job.first->wait(std::chrono::hours(1));
+}
+
+// Runs work(cancel) on a worker thread with the GIL released, polling for Ctrl-C every 50 ms.
+// work must own everything it reads (it may outlive this call); `keep_alive` holds the Python
+// objects whose memory it reads. On Ctrl-C the cancel flag is set (the library stops at its next
+// stage, brick or solver iteration) and KeyboardInterrupt is raised at once: a worker that has
+// not stopped within 0.2 s finishes in the background, its objects kept until then.
+template <class Work>
+auto run_interruptible(Work work, py::object keep_alive = py::none()) {
+  using Result = decltype(work(std::declval<std::atomic<bool>&>()));
+  release_finished_jobs();
+  auto job = std::make_shared<Job>();
+  auto result = std::make_shared<std::optional<Result>>();
+  auto error = std::make_shared<std::exception_ptr>();
+  std::thread([job, result, error, work = std::move(work)]() mutable {
     try {
-      result.emplace(work());
+      result->emplace(work(job->cancel));
     } catch (...) {
-      error = std::current_exception();
+      *error = std::current_exception();
     }
-    std::lock_guard<std::mutex> lock(mutex);
-    done = true;
-    finished.notify_all();
-  });
-  std::optional<py::error_already_set> interrupt;
+    std::lock_guard<std::mutex> lock(job->mutex);
+    job->done = true;
+    job->finished.notify_all();
+  }).detach();
   for (;;) {
     {
       py::gil_scoped_release release;
-      std::unique_lock<std::mutex> lock(mutex);
-      if (finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
+      if (job->wait(std::chrono::milliseconds(50))) break;
     }
-    if (!interrupt && PyErr_CheckSignals() != 0) {
-      interrupt.emplace();  // takes the KeyboardInterrupt (or the handler's error) for later
-      cancel = true;
+    if (PyErr_CheckSignals() != 0) {
+      py::error_already_set interrupt;  // the KeyboardInterrupt (or the handler's error)
+      job->cancel = true;
+      bool stopped = false;
+      {
+        py::gil_scoped_release release;
+        stopped = job->wait(std::chrono::milliseconds(200));
+      }
+      if (!stopped) abandoned_jobs().push_back({job, std::move(keep_alive)});
+      throw interrupt;
     }
   }
-  worker.join();
-  if (interrupt) throw *interrupt;
-  if (error) std::rethrow_exception(error);
-  return std::move(*result);
+  if (*error) std::rethrow_exception(*error);
+  return std::move(**result);
 }
 
 // A C++ matrix handed to numpy without a copy: numpy's array owns the moved matrix.
@@ -202,9 +244,12 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   ContourOptions opt = contour_options(options);
   opt.want_mesh = want_mesh;
   opt.want_points = want_points;
-  std::atomic<bool> cancel{false};
-  opt.cancel = &cancel;
-  ContourResult r = run_interruptible([&] { return contour(input, nullptr, opt); }, cancel);
+  ContourResult r = run_interruptible(
+      [input, opt](std::atomic<bool>& cancel) mutable {
+        opt.cancel = &cancel;
+        return contour(input, nullptr, opt);
+      },
+      py::make_tuple(array, keep ? keep : py::object(py::none())));
   py::dict out;
   if (r.mesh) {
     if (r.mesh->triangles.rows() == 0)
@@ -236,9 +281,10 @@ py::tuple run_poisson(const py::array& P, const py::array& N, const py::dict& op
   points.normals =
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(N), "N");
   PoissonOptions o = poisson_options(options);
-  std::atomic<bool> cancel{false};
-  o.cancel = &cancel;
-  PoissonResult r = run_interruptible([&] { return poisson_reconstruct(points, o); }, cancel);
+  PoissonResult r = run_interruptible([points, o](std::atomic<bool>& cancel) mutable {
+    o.cancel = &cancel;
+    return poisson_reconstruct(points, o);
+  });
   return py::make_tuple(to_numpy(std::move(r.mesh.vertices)),
                         to_numpy(std::move(r.mesh.triangles)));
 }
@@ -250,13 +296,10 @@ py::array run_sample(const py::array& V, const py::array& F, int resolution,
   Bounds bounds;
   bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
   bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
-  std::atomic<bool> cancel{false};
-  Grid grid = run_interruptible(
-      [&] {
-        const MeshSdf sdf(mesh);
-        return sample_grid(sdf, resolution, bounds);
-      },
-      cancel);
+  Grid grid = run_interruptible([mesh, resolution, bounds](std::atomic<bool>&) {
+    const MeshSdf sdf(mesh);
+    return sample_grid(sdf, resolution, bounds);
+  });
   auto* owned = new Eigen::VectorXd(std::move(grid.values));
   py::capsule owner(owned, [](void* p) { delete static_cast<Eigen::VectorXd*>(p); });
   const py::ssize_t n = resolution, d = sizeof(double);
@@ -267,9 +310,9 @@ py::dict run_distances(const py::array& V, const py::array& F, const py::array& 
                        const py::array& F_gt, std::size_t samples, std::uint64_t seed) {
   if (samples == 0 || samples > 100000000) throw Error("samples must be between 1 and 1e8");
   const Mesh recon = mesh_from(V, F), gt = mesh_from(V_gt, F_gt);
-  std::atomic<bool> cancel{false};
-  const SurfaceDistances d =
-      run_interruptible([&] { return surface_distances(recon, gt, samples, seed); }, cancel);
+  const SurfaceDistances d = run_interruptible([recon, gt, samples, seed](std::atomic<bool>&) {
+    return surface_distances(recon, gt, samples, seed);
+  });
   const MeshTopology t = mesh_topology(recon);
   py::dict out;
   out["L1"] = d.l1;
@@ -297,6 +340,7 @@ void run_write_mesh(const std::string& path, const py::array& V, const py::array
 
 PYBIND11_MODULE(_sdfcontour, m) {
   m.doc() = "C++ core of sdfcontour; use the functions of the sdfcontour package.";
+  py::module_::import("atexit").attr("register")(py::cpp_function(&stop_abandoned_jobs));
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -251,7 +251,30 @@ BandSamples select_band(const Samples& samples, const BandOptions& options, doub
   return out;
 }
 
-double gradient_norm_median(const GridView& grid) {
+long sign_change_edges(const GridView& grid) {
+  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  const std::size_t stride[3] = {std::size_t(ny) * std::size_t(nz), std::size_t(nz), 1};
+  std::vector<long> per_slab(static_cast<std::size_t>(nx), 0);
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(0, nx, [&](int i) {
+      long count = 0;
+      for (int j = 0; j < ny; ++j)
+        for (int k = 0; k < nz; ++k) {
+          const std::size_t p = grid.index(i, j, k);
+          const bool inside = f[p] < 0;
+          if (i + 1 < nx) count += (f[p + stride[0]] < 0) != inside;
+          if (j + 1 < ny) count += (f[p + stride[1]] < 0) != inside;
+          if (k + 1 < nz) count += (f[p + stride[2]] < 0) != inside;
+        }
+      per_slab[std::size_t(i)] = count;
+    });
+  });
+  long total = 0;
+  for (long c : per_slab) total += c;
+  return total;
+}
+
+double gradient_norm_median(const GridView& grid, const Truncation& truncation) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   if (nx < 5 || ny < 5 || nz < 5) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::Vector3d h = grid.spacing();
@@ -268,6 +291,11 @@ double gradient_norm_median(const GridView& grid) {
             crossing |=
                 (f[p - stride[a]] < 0) != (f[p] < 0) || (f[p + stride[a]] < 0) != (f[p] < 0);
           if (!crossing) continue;
+          bool clamped = false;
+          for (int a = 0; a < 3; ++a)
+            for (long o : {-2L, -1L, 1L, 2L})
+              clamped |= truncation.truncated(double(f[p + o * long(stride[a])]));
+          if (clamped) continue;
           // Central differences with steps h and 2h, extrapolated (Richardson): the curvature's
           // O(h^2) bias cancels, so an exact distance measures 1 to O(h^4).
           double near = 0, far = 0;

@@ -110,7 +110,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 
   BandOptions band_options = options.band;
   if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp) {
-    result.gradient_norm = gradient_norm_median(*grid);
+    result.gradient_norm = gradient_norm_median(*grid, resolve_truncation(*grid, band_options));
     const double m = result.gradient_norm;
     if (std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.01) {
       result.value_scale = band_options.value_scale = 1 / m;
@@ -130,7 +130,10 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     } catch (const InternalError&) {
       throw;
     } catch (const Error& e) {
-      throw NotDistances(e.what());
+      // No usable band in a truncated grid: values clamped too close to the surface to be
+      // distances (a band the user narrowed stays the user's error).
+      if (grid && resolve_truncation(*grid, band_options).detected()) throw NotDistances(e.what());
+      throw;
     }
   });
   result.band_samples = int(band.samples.values.size());
@@ -219,10 +222,15 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     if (cp.size() == 0)
       throw NotDistances(
           "no contact point was kept, so there is nothing to reconstruct a surface from");
-    const long core_count = std::count(band.core.begin(), band.core.end(), 1);
-    if (method == Method::Gcp && 5 * long(cp.size()) < core_count)
-      throw NotDistances("only " + std::to_string(cp.size()) + " of " + std::to_string(core_count) +
-                         " samples near the surface gave a contact point");
+    // An exact distance keeps at least about one contact point per grid cell the surface
+    // crosses (flat faces aligned with the grid hide the rest); far fewer means the values are
+    // not distances.
+    if (method == Method::Gcp && grid) {
+      const long crossings = sign_change_edges(*grid);
+      if (10 * long(cp.size()) < crossings)
+        throw NotDistances("only " + std::to_string(cp.size()) + " contact points for " +
+                           std::to_string(crossings) + " grid edges crossing the surface");
+    }
     PoissonOptions popt = options.poisson;
     popt.progress = options.progress;
     popt.cancel = options.cancel;

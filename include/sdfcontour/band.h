@@ -87,6 +87,10 @@ void validate_band_options(const BandOptions& options);
 /// differences with steps h and 2h, Richardson-extrapolated so that curvature does not bias it):
 /// 1 for a signed distance, m for a distance scaled by m. NaN for fewer than 16 such points or a
 /// grid under 5 samples on an axis.
-double gradient_norm_median(const GridView& grid);
+/// The number of grid edges whose ends differ in sign: about the surface's area over h^2.
+long sign_change_edges(const GridView& grid);
+
+/// Stencils touching a truncated value (see `truncation`) are left out.
+double gradient_norm_median(const GridView& grid, const Truncation& truncation = {});
 
 }  // namespace sdfcontour

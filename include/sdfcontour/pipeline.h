@@ -55,8 +55,9 @@ struct ContourOptions {
   /// the gradient norm next to the surface and, if it is off 1 by more than 1%, rescale the values
   /// by its inverse before the band is chosen (all methods but mc and gtcp).
   bool normalize_values = true;
-  /// When GCP's mesh on a grid cannot be trusted (no usable band, no or too few contact points:
-  /// the values do not behave as distances), return marching cubes' mesh instead, and say why in
+  /// When GCP's mesh on a grid cannot be trusted (no usable band in a truncated grid, no contact
+  /// point, or fewer than a tenth as many as grid edges crossing the surface: the values do not
+  /// behave as distances), return marching cubes' mesh instead, and say why in
   /// ContourResult::fallback. Without it, those cases throw Error.
   bool fallback_to_mc = true;
 };

@@ -162,18 +162,24 @@ def test_bad_options_raise_value_error():
         sdfcontour.sample(np.eye(3), np.array([[0, 1, 2]]))
 
 
-@pytest.mark.parametrize("at", [1.0, 4.0])
-def test_ctrl_c_interrupts_within_a_second(at):
-    grid = full_grid(torus, 160)  # GCP takes ~10 s: bricks first, then the reconstruction
+@pytest.mark.parametrize("at, options", [(1.0, {}), (4.0, {}),
+                                         (1.0, {"band": "all", "brick_size": 0})])
+def test_ctrl_c_interrupts_within_a_second(at, options):
+    # GCP takes ~10 s: bricks first, then the reconstruction; the last case is one long global
+    # triangulation with no checkpoint inside, left to finish in the background.
+    grid = full_grid(torus, 160 if not options else 96)
     sent = []
     timer = threading.Timer(at, lambda: (sent.append(time.monotonic()),
                                          os.kill(os.getpid(), signal.SIGINT)))
     timer.start()
     with pytest.raises(KeyboardInterrupt):
-        sdfcontour.contour(grid)
+        sdfcontour.contour(grid, **options)
     stopped = time.monotonic()
     timer.join()
     assert sent and stopped - sent[0] < 1.0
+    # The module works on after an interrupt.
+    V, F = sdfcontour.contour(full_grid(sphere, 16), method="mc")
+    assert len(F) > 0
 
 
 def test_files(tmp_path):
