@@ -112,7 +112,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp) {
     result.gradient_norm = gradient_norm_median(*grid, resolve_truncation(*grid, band_options));
     const double m = result.gradient_norm;
-    if (std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.01) {
+    if (std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1) {
       result.value_scale = band_options.value_scale = 1 / m;
       if (options.progress)
         options.progress("the values change by " + std::to_string(m) +
