@@ -7,6 +7,7 @@
 #include "bspline.h"
 #include "conjugate_gradients.h"
 #include "deterministic_sum.h"
+#include "indicator.h"
 #include "system.h"
 
 namespace sdfcontour::poisson {
@@ -25,15 +26,7 @@ bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
   const double iso =
       deterministic_sum(points.size(),
                         [&](std::size_t s) {
-                          const auto c = cell_of(points[s].p, C.res);
-                          const auto w = corner_weights(points[s].p, c, C.res);
-                          double v = 0;
-                          for (int q = 0; q < 8; ++q)
-                            if (w[std::size_t(q)] != 0)
-                              v += w[std::size_t(q)] *
-                                   x[std::size_t(C.node(c[0] + (q & 1), c[1] + (q >> 1 & 1),
-                                                        c[2] + (q >> 2 & 1)))];
-                          return v;
+                          return interpolate(C, x, cell_of(points[s].p, C.res), points[s].p);
                         }) /
       double(points.size());
   long inside = 0, count = 0;

@@ -4,9 +4,8 @@
 
 namespace sdfcontour::poisson {
 
-double Indicator::interpolate(const OctreeLevel& L, const std::array<long, 3>& cell,
-                              const Eigen::Vector3d& p) const {
-  const auto& x = values_[std::size_t(L.depth)];
+double interpolate(const OctreeLevel& L, const std::vector<double>& x,
+                   const std::array<long, 3>& cell, const Eigen::Vector3d& p) {
   const auto w = corner_weights(p, cell, L.res);
   double v = 0;
   for (int c = 0; c < 8; ++c)
@@ -21,7 +20,7 @@ double Indicator::at(const Eigen::Vector3d& p) const {
   for (int d = tree_.finest; d >= tree_.min_depth; --d) {
     const OctreeLevel& L = tree_.level(d);
     const auto c = cell_of(p, L.res);
-    if (L.cell(pack(c[0], c[1], c[2])) >= 0) return interpolate(L, c, p);
+    if (L.cell(pack(c[0], c[1], c[2])) >= 0) return interpolate(L, values_[std::size_t(d)], c, p);
   }
   return 0.0;
 }
@@ -41,7 +40,7 @@ double Indicator::at_finest_node(long i, long j, long k, double outside) const {
                                 std::min(k >> shift, L.res - 1)};
     if (L.cell(pack(c[0], c[1], c[2])) >= 0) {
       const Eigen::Vector3d p(double(i) / double(R), double(j) / double(R), double(k) / double(R));
-      return interpolate(L, c, p);
+      return interpolate(L, values_[std::size_t(d)], c, p);
     }
   }
   return outside;

@@ -9,6 +9,11 @@
 
 namespace sdfcontour::poisson {
 
+/// The trilinear interpolant of node values x (one per node of L) at unit-cube point p in L's
+/// active cell `cell`.
+double interpolate(const OctreeLevel& L, const std::vector<double>& x,
+                   const std::array<long, 3>& cell, const Eigen::Vector3d& p);
+
 /// chi on the octree: values[d] holds chi at depth d's nodes. A point takes its value from the
 /// finest depth whose active cell holds it (trilinear there).
 class Indicator {
@@ -28,8 +33,6 @@ class Indicator {
   const std::vector<double>& values(int depth) const { return values_[std::size_t(depth)]; }
 
  private:
-  double interpolate(const OctreeLevel& L, const std::array<long, 3>& cell,
-                     const Eigen::Vector3d& p) const;
   const Octree& tree_;
   std::vector<std::vector<double>> values_;
 };
