@@ -39,11 +39,16 @@ Eigen::Vector3d row(const PointMatrix& m, Eigen::Index i) {
 }  // namespace
 
 PointMatrix tet_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
-                          const TetMatrix& tets, std::vector<char>* degenerate) {
+                          const TetMatrix& tets, std::vector<char>* degenerate,
+                          const std::vector<char>* wanted) {
   const Eigen::Index m = tets.rows();
   PointMatrix g(m, 3);
   if (degenerate) degenerate->assign(std::size_t(m), 0);
   tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index t) {
+    if (wanted && !(*wanted)[std::size_t(t)]) {
+      g.row(t).setZero();
+      return;
+    }
     const Eigen::Vector3d p0 = row(points, tets(t, 0));
     Eigen::Matrix3d E;
     Eigen::Vector3d dv;
@@ -99,9 +104,18 @@ Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centr
 PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
                              const Triangulation& tri, const GradientOptions& options,
                              const std::vector<char>* only) {
-  std::vector<char> degenerate;
-  const PointMatrix tet_g = tet_gradients(points, values, tri.tets, &degenerate);
   const Eigen::Index n = points.rows();
+  std::vector<char> degenerate, wanted;
+  if (only) {  // only the stars of the samples asked for
+    wanted.assign(std::size_t(tri.tets.rows()), 0);
+    for (Eigen::Index i = 0; i < n; ++i)
+      if ((*only)[std::size_t(i)])
+        for (int o = tri.incident_offsets[std::size_t(i)];
+             o < tri.incident_offsets[std::size_t(i) + 1]; ++o)
+          wanted[std::size_t(tri.incident_tets[std::size_t(o)])] = 1;
+  }
+  const PointMatrix tet_g =
+      tet_gradients(points, values, tri.tets, &degenerate, only ? &wanted : nullptr);
   PointMatrix g = PointMatrix::Zero(n, 3);
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     if (only && !(*only)[std::size_t(i)]) return;

@@ -30,9 +30,11 @@ struct GradientOptions {
 };
 
 /// Gradient of the linear interpolant of `values` on each tet (m x 3). `degenerate` receives one
-/// flag per tet: 1 where the tet is too flat for a gradient (its row is then zero).
+/// flag per tet: 1 where the tet is too flat for a gradient (its row is then zero). `wanted`
+/// (optional, one flag per tet): only those tets are computed, the other rows are zero.
 PointMatrix tet_gradients(const PointMatrix& points, const Eigen::VectorXd& values,
-                          const TetMatrix& tets, std::vector<char>* degenerate = nullptr);
+                          const TetMatrix& tets, std::vector<char>* degenerate = nullptr,
+                          const std::vector<char>* wanted = nullptr);
 
 /// Signed volume of each tet (m); positive for positively oriented tets.
 Eigen::VectorXd tet_volumes(const PointMatrix& points, const TetMatrix& tets);
