@@ -5,11 +5,15 @@
 #include <openvdb/tools/SignedFloodFill.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <vector>
 
 #include "atomic_file.h"
+#include "isolated_call.h"
 
 namespace sdfcontour {
 
@@ -38,15 +42,18 @@ bool is_vdb_path(const std::string& path) {
   return path.size() >= 4 && path.compare(path.size() - 4, 4, ".vdb") == 0;
 }
 
-VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_name) {
-  initialise();
-  check_magic(path);
+namespace {
+
+// Reads the level set with OpenVDB (in the isolated child: see read_vdb_level_set).
+VdbLevelSet read_with_openvdb(const std::string& path, const std::string& grid_name) {
   openvdb::GridPtrVecPtr grids;
   try {
     openvdb::io::File file(path);
     file.open(/*delayLoad=*/false);
     grids = file.getGrids();
     file.close();
+  } catch (const std::bad_alloc&) {
+    throw;  // reported as too much memory for the file
   } catch (const std::exception& e) {
     throw IoError("cannot read '" + path + "' as OpenVDB: " + e.what());
   }
@@ -77,20 +84,92 @@ VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_
   out.background = std::abs(double(grid->background()));
   if (!(out.voxel_size > 0) || !std::isfinite(out.voxel_size))
     throw Error("grid '" + out.grid_name + "' has a degenerate transform");
-  const openvdb::Index64 count = grid->activeVoxelCount();
-  if (count == 0)
-    throw Error("grid '" + out.grid_name + "' in '" + path + "' has no active voxels");
-  // Active tiles would stand for many voxels; a level set has none, and we do not densify them.
-  if (grid->tree().activeTileCount() > 0)
-    throw Error("grid '" + out.grid_name + "' has active tiles; a narrow-band level set has none");
-  out.samples.points.resize(Eigen::Index(count), 3);
-  out.samples.values.resize(Eigen::Index(count));
-  Eigen::Index at = 0;
+  // One sequential pass (the child has no thread pool): voxels, and no active tiles, which
+  // would stand for many voxels (a level set has none, and we do not densify them).
+  std::vector<openvdb::Vec3d> points;
+  std::vector<double> values;
   for (auto it = grid->cbeginValueOn(); it; ++it) {
-    const openvdb::Vec3d p = xform.indexToWorld(it.getCoord());
-    out.samples.points.row(at) = Eigen::RowVector3d(p[0], p[1], p[2]);
-    out.samples.values[at++] = double(*it);
+    if (!it.isVoxelValue())
+      throw Error("grid '" + out.grid_name +
+                  "' has active tiles; a narrow-band level set has none");
+    points.push_back(xform.indexToWorld(it.getCoord()));
+    values.push_back(double(*it));
   }
+  if (points.empty())
+    throw Error("grid '" + out.grid_name + "' in '" + path + "' has no active voxels");
+  out.samples.points.resize(Eigen::Index(points.size()), 3);
+  out.samples.values.resize(Eigen::Index(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    out.samples.points.row(Eigen::Index(i)) =
+        Eigen::RowVector3d(points[i][0], points[i][1], points[i][2]);
+    out.samples.values[Eigen::Index(i)] = values[i];
+  }
+  return out;
+}
+
+// The level set as bytes for the trip from the child: name length, name, voxel size, background,
+// count, then the points (row-major) and the values.
+std::string serialise(const VdbLevelSet& s) {
+  const std::uint64_t name_size = s.grid_name.size(), n = std::uint64_t(s.samples.values.size());
+  std::string out;
+  auto put = [&](const void* data, std::size_t size) {
+    out.append(static_cast<const char*>(data), size);
+  };
+  put(&name_size, 8);
+  put(s.grid_name.data(), name_size);
+  put(&s.voxel_size, 8);
+  put(&s.background, 8);
+  put(&n, 8);
+  put(s.samples.points.data(), 24 * n);
+  put(s.samples.values.data(), 8 * n);
+  return out;
+}
+
+VdbLevelSet deserialise(const std::string& bytes) {
+  std::size_t at = 0;
+  auto take = [&](void* data, std::size_t size) {
+    if (size > bytes.size() - at) throw InternalError("the .vdb reader's reply is cut short");
+    std::memcpy(data, bytes.data() + at, size);
+    at += size;
+  };
+  VdbLevelSet s;
+  std::uint64_t name_size = 0, n = 0;
+  take(&name_size, 8);
+  if (name_size > bytes.size()) throw InternalError("the .vdb reader's reply is cut short");
+  s.grid_name.resize(name_size);
+  take(s.grid_name.data(), name_size);
+  take(&s.voxel_size, 8);
+  take(&s.background, 8);
+  take(&n, 8);
+  if (n > (bytes.size() - at) / 32 || (bytes.size() - at) != 32 * n)
+    throw InternalError("the .vdb reader's reply has the wrong size");
+  s.samples.points.resize(Eigen::Index(n), 3);
+  s.samples.values.resize(Eigen::Index(n));
+  take(s.samples.points.data(), 24 * n);
+  take(s.samples.values.data(), 8 * n);
+  return s;
+}
+
+}  // namespace
+
+VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_name) {
+  initialise();
+  check_magic(path);
+  // OpenVDB trusts its input (a 10 KB file can make it allocate gigabytes or read past its
+  // buffers), so it reads in a child process with bounded memory and time: a hostile file ends
+  // as an error. The allowance is generous for real files: their voxels are stored at >= 2
+  // bytes each, and a voxel costs ~100 bytes while read.
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError("cannot read '" + path + "': " + ec.message());
+  detail::IsolationLimits limits;
+  limits.memory_bytes = std::size_t(1) << 30;
+  limits.memory_bytes +=
+      std::size_t(std::min<std::uintmax_t>(file_size, std::uintmax_t(1) << 36)) * 64;
+  limits.seconds = 5 + double(file_size) / 5e6;
+  VdbLevelSet out = deserialise(
+      detail::run_isolated([&] { return serialise(read_with_openvdb(path, grid_name)); },
+                           "cannot read '" + path + "' as OpenVDB", limits));
   validate_samples(out.samples);
   return out;
 }

@@ -100,3 +100,34 @@ TEST(Vdb, RejectsWhatIsNotAFloatLevelSet) {
   std::ofstream(d + "cut.vdb", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   expect_error(d + "cut.vdb", "", "cannot read");
 }
+
+// OpenVDB trusts its input; its reader runs isolated, so hostile files end as IoError. The two
+// files are fuzz findings (tests/fuzz/fuzz_vdb.cpp): a string length of 1.7 GB that OpenVDB
+// allocated, and a byte read as a bool (undefined behaviour in OpenVDB's RootNode). Then every
+// 61st byte of a real level set is flipped, one at a time: each read succeeds or throws Error.
+TEST(Vdb, HostileFilesEndAsErrors) {
+  const std::string corpus = SDFCONTOUR_SOURCE_DIR "/tests/fuzz/corpus/vdb/";
+  for (const char* name : {"huge_string_length.vdb", "invalid_bool.vdb"})
+    EXPECT_THROW(read_vdb_level_set(corpus + name), IoError) << name;
+  const auto dir = test::temp_dir("vdb_hostile");
+  const std::string path = dir.string() + "/x.vdb";
+  const Grid grid = sample_grid(*make_builtin_shape("sphere"), 12, Bounds{});
+  write_vdb_level_set(path, grid, 2.0);
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  int refused = 0, read = 0;
+  for (std::size_t at = 8; at < bytes.size(); at += 61) {
+    std::string bad = bytes;
+    bad[at] = char(~bad[at]);
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bad;
+    try {
+      const VdbLevelSet s = read_vdb_level_set(path);
+      EXPECT_GT(s.samples.values.size(), 0);
+      ++read;
+    } catch (const Error&) {
+      ++refused;
+    }
+  }
+  EXPECT_GT(refused, 0);
+  EXPECT_GT(read + refused, 100);
+}
