@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,13 @@ BandTest make_test(const BandOptions& options, double h, const Truncation& trunc
   return {(options.band + options.margin) * h, options.band * h, options.margin * h, truncation};
 }
 
+// 4 as "4", 2.5 as "2.5" (std::to_string writes 4.000000).
+std::string shortest(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
 void require_usable(const BandSamples& b, const BandOptions& options) {
   const Eigen::Index n = b.samples.values.size();
   bool inside = false, outside = false;
@@ -46,7 +54,7 @@ void require_usable(const BandSamples& b, const BandOptions& options) {
     if (b.core[std::size_t(i)]) (b.samples.values[i] < 0 ? inside : outside) = true;
   if (n < 4 || !(inside && outside))
     throw Error("only " + std::to_string(n) + " samples lie within the band of " +
-                std::to_string(options.band) + " spacings" +
+                shortest(options.band) + " spacings" +
                 (b.truncation.detected() ? " and inside the truncation distance" : "") +
                 (n >= 4 ? ", and they have no sign change" : "") +
                 "; widen it with --band (or --band all)");
@@ -274,9 +282,10 @@ long sign_change_edges(const GridView& grid) {
   return total;
 }
 
-double gradient_norm_median(const GridView& grid, const Truncation& truncation) {
+GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-  if (nx < 5 || ny < 5 || nz < 5) return std::numeric_limits<double>::quiet_NaN();
+  GradientNormSummary summary;
+  if (nx < 5 || ny < 5 || nz < 5) return summary;
   const Eigen::Vector3d h = grid.spacing();
   const std::size_t stride[3] = {std::size_t(ny) * std::size_t(nz), std::size_t(nz), 1};
   std::vector<std::vector<double>> per_slab(static_cast<std::size_t>(nx));
@@ -311,9 +320,17 @@ double gradient_norm_median(const GridView& grid, const Truncation& truncation) 
   });
   std::vector<double> norms;
   for (const auto& s : per_slab) norms.insert(norms.end(), s.begin(), s.end());
-  if (norms.size() < 16) return std::numeric_limits<double>::quiet_NaN();
-  std::nth_element(norms.begin(), norms.begin() + long(norms.size() / 2), norms.end());
-  return norms[norms.size() / 2];
+  summary.count = long(norms.size());
+  if (norms.size() < 16) return summary;
+  auto percentile = [&](std::size_t q) {
+    const auto at = norms.begin() + long(norms.size() * q / 100);
+    std::nth_element(norms.begin(), at, norms.end());
+    return *at;
+  };
+  summary.low = percentile(10);
+  summary.median = percentile(50);
+  summary.high = percentile(90);
+  return summary;
 }
 
 }  // namespace sdfcontour

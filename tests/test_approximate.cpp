@@ -77,6 +77,32 @@ TEST(Approximate, UntrustworthyFieldsFallBackToMarchingCubes) {
   }
 }
 
+// A smooth implicit whose gradient norm varies along the surface (0.3 to 0.8 around a torus'
+// tube) passes the rescale and contact-point checks; its GCP mesh came in ~2000 pieces. Its
+// vertices lie off the field's zero set, so GCP falls back.
+TEST(Approximate, MeshesOffTheZeroSetFallBack) {
+  const double R = 0.55, r = 0.25;
+  const int n = 64;
+  Grid g = sample_grid(*make_builtin_shape("torus"), n, Bounds{});
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) {
+        const Eigen::Vector3d p = g.point(i, j, k);
+        const double q = p.squaredNorm() + R * R - r * r;
+        g.values[Eigen::Index(g.index(i, j, k))] =
+            q * q - 4 * R * R * (p.x() * p.x() + p.y() * p.y());
+      }
+  const ContourResult r1 = contour(grid_input(g), nullptr, gcp_options());
+  EXPECT_NE(r1.fallback.find("off the field's zero set"), std::string::npos) << r1.fallback;
+  EXPECT_EQ(connected_components(*r1.mesh), 1);
+  EXPECT_TRUE(r1.mesh->vertices == marching_cubes(g).vertices);
+  // Exact distances stay on it.
+  const Grid exact = transformed("torus", 40, [](double v, double, double) { return v; });
+  const ContourResult r2 = contour(grid_input(exact), nullptr, gcp_options());
+  EXPECT_TRUE(r2.fallback.empty());
+  EXPECT_EQ(r2.off_zero_set, 0.0);
+}
+
 TEST(Approximate, ExactDistancesAreLeftAlone) {
   const Grid g = transformed("torus", 40, [](double v, double, double) { return v; });
   const ContourResult r = contour(grid_input(g), nullptr, gcp_options());

@@ -135,7 +135,12 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                    {"samples_triangulated", r.bricks->triangulated},
                    {"largest_brick_samples", r.bricks->largest_brick}};
   if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
-  if (r.gradient_norm > 0) j["gradient_norm"] = r.gradient_norm;
+  if (r.gradient_norm > 0) {
+    j["gradient_norm"] = r.gradient_norm;
+    j["gradient_norm_percentiles"] = {r.gradient_norms.low, r.gradient_norms.median,
+                                      r.gradient_norms.high};
+  }
+  if (r.fallback.empty() && a.method == "gcp") j["off_zero_set"] = r.off_zero_set;
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
   if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;

@@ -4,6 +4,7 @@
 // all: both are left out before the triangulation.
 #pragma once
 
+#include <cmath>
 #include <limits>
 #include <vector>
 
@@ -83,14 +84,20 @@ BandSamples select_band(const Samples& samples, const BandOptions& options, doub
 /// and a given truncation positive and finite.
 void validate_band_options(const BandOptions& options);
 
-/// The median norm of the field's gradient at the grid points next to a sign change (central
-/// differences with steps h and 2h, Richardson-extrapolated so that curvature does not bias it):
-/// 1 for a signed distance, m for a distance scaled by m. NaN for fewer than 16 such points or a
-/// grid under 5 samples on an axis.
 /// The number of grid edges whose ends differ in sign: about the surface's area over h^2.
 long sign_change_edges(const GridView& grid);
 
-/// Stencils touching a truncated value (see `truncation`) are left out.
-double gradient_norm_median(const GridView& grid, const Truncation& truncation = {});
+/// The norm of the field's gradient at the grid points next to a sign change: 1 for a signed
+/// distance, m for a distance scaled by m, and spread out for a field that is no distance (a
+/// smooth implicit: |grad| varies along the surface). Central differences with steps h and 2h,
+/// Richardson-extrapolated so that curvature does not bias them; stencils touching a truncated
+/// value (see `truncation`) are left out.
+struct GradientNormSummary {
+  double low = NAN;     ///< 10th percentile
+  double median = NAN;  ///< 50th percentile
+  double high = NAN;    ///< 90th percentile
+  long count = 0;       ///< points measured; the percentiles are NaN for fewer than 16
+};
+GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation = {});
 
 }  // namespace sdfcontour

@@ -81,9 +81,13 @@ struct ContourResult {
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
-  double gradient_norm = 0;  ///< median |grad value| next to the surface, when measured
-  double value_scale = 1;    ///< the factor the values were rescaled by (1: none)
-  std::string fallback;      ///< why marching cubes' mesh was returned instead of GCP's
+  double gradient_norm = 0;            ///< median |grad value| next to the surface, when measured
+  GradientNormSummary gradient_norms;  ///< its 10th, 50th and 90th percentiles
+  /// GCP on a grid: the fraction of the mesh's vertices more than a spacing off the field's zero
+  /// set (trilinear; after rescaling). Over 1% means the values are no distances: see fallback.
+  double off_zero_set = 0;
+  double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
+  std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 8 up to 129 samples
