@@ -101,6 +101,9 @@ def main():
                     e = np.abs(dist(v[:, 0], v[:, 1], v[:, 2])) / h
                     did = ("MC: " + s["fallback"]["reason"].split(": the values")[0]
                            if s.get("fallback") else "")
+                    if s.get("smoothed"):
+                        did = ("smoothed (noise %.2f h)" % s["noise_level"]
+                               + ("; " + did if did else ""))
                     if not did and abs(s.get("value_scale", 1) - 1) > 1e-12:
                         did = "rescaled x%.3g" % s["value_scale"]
                     rows.append((shape, name, method, did or "-", comps, "yes" if closed else "no",

@@ -268,6 +268,9 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["poisson_depth"] = r.poisson_depth;
   stats["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) stats["fallback"] = r.fallback;
+  stats["noise_level"] = r.noise_level;
+  stats["smoothed"] = r.smoothed;
+  stats["pieces_removed"] = r.pieces_removed;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

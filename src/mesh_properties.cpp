@@ -1,6 +1,7 @@
 #include "sdfcontour/mesh_properties.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -41,7 +42,7 @@ MeshTopology mesh_topology(const Mesh& mesh) {
   return t;
 }
 
-int connected_components(const Mesh& mesh) {
+std::vector<int> component_labels(const Mesh& mesh) {
   std::vector<int> parent(std::size_t(mesh.vertices.rows()));
   std::vector<char> used(parent.size(), 0);
   for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = int(i);
@@ -56,9 +57,62 @@ int connected_components(const Mesh& mesh) {
       const int a = find(mesh.triangles(f, k)), b = find(mesh.triangles(f, (k + 1) % 3));
       if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
     }
-  int components = 0;
-  for (std::size_t i = 0; i < parent.size(); ++i) components += used[i] && find(int(i)) == int(i);
-  return components;
+  // Roots are the smallest vertex of their piece: numbering roots in order numbers the pieces
+  // by their first vertex.
+  std::vector<int> label(parent.size(), -1);
+  int pieces = 0;
+  for (std::size_t i = 0; i < parent.size(); ++i)
+    if (used[i] && find(int(i)) == int(i)) label[i] = pieces++;
+  for (std::size_t i = 0; i < parent.size(); ++i)
+    if (used[i]) label[i] = label[std::size_t(find(int(i)))];
+  return label;
+}
+
+int connected_components(const Mesh& mesh) {
+  int pieces = 0;
+  for (int l : component_labels(mesh)) pieces = std::max(pieces, l + 1);
+  return pieces;
+}
+
+int remove_small_pieces(Mesh& mesh, double min_extent) {
+  const std::vector<int> label = component_labels(mesh);
+  int pieces = 0;
+  for (int l : label) pieces = std::max(pieces, l + 1);
+  if (pieces <= 1) return 0;
+  std::vector<Eigen::Vector3d> lo(std::size_t(pieces), Eigen::Vector3d::Constant(INFINITY)),
+      hi(std::size_t(pieces), Eigen::Vector3d::Constant(-INFINITY));
+  for (std::size_t v = 0; v < label.size(); ++v)
+    if (label[v] >= 0) {
+      const Eigen::Vector3d p = mesh.vertices.row(Eigen::Index(v)).transpose();
+      lo[std::size_t(label[v])] = lo[std::size_t(label[v])].cwiseMin(p);
+      hi[std::size_t(label[v])] = hi[std::size_t(label[v])].cwiseMax(p);
+    }
+  auto small = std::vector<char>(std::size_t(pieces));
+  int removed = 0;
+  for (std::size_t c = 0; c < small.size(); ++c)
+    removed += small[c] = (hi[c] - lo[c]).maxCoeff() < min_extent;
+  if (removed == 0 || removed == pieces) return 0;
+  // Keep the other pieces' vertices and triangles, in their order.
+  std::vector<int> new_index(label.size(), -1);
+  int kept = 0;
+  for (std::size_t v = 0; v < label.size(); ++v)
+    if (label[v] >= 0 && !small[std::size_t(label[v])]) new_index[v] = kept++;
+  Mesh out;
+  out.vertices.resize(kept, 3);
+  for (std::size_t v = 0; v < label.size(); ++v)
+    if (new_index[v] >= 0) out.vertices.row(new_index[v]) = mesh.vertices.row(Eigen::Index(v));
+  Eigen::Index triangles = 0;
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+    triangles += new_index[std::size_t(mesh.triangles(f, 0))] >= 0;
+  out.triangles.resize(triangles, 3);
+  for (Eigen::Index f = 0, t = 0; f < mesh.triangles.rows(); ++f)
+    if (new_index[std::size_t(mesh.triangles(f, 0))] >= 0) {
+      for (int k = 0; k < 3; ++k)
+        out.triangles(t, k) = new_index[std::size_t(mesh.triangles(f, k))];
+      ++t;
+    }
+  mesh = std::move(out);
+  return removed;
 }
 
 static Eigen::Vector3d vertex(const Mesh& m, Eigen::Index f, int k) {

@@ -141,6 +141,10 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                                       r.gradient_norms.high};
   }
   if (r.fallback.empty() && a.method == "gcp") j["off_zero_set"] = r.off_zero_set;
+  if (r.noise_level > 0) j["noise_level"] = r.noise_level;
+  if (r.fallback.empty() && (a.method == "gcp" || a.method == "gtcp"))
+    j["pieces_removed"] = r.pieces_removed;
+  if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
   if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;

@@ -1,6 +1,8 @@
 // Basic properties of triangle meshes: closedness, orientation, area, enclosed volume.
 #pragma once
 
+#include <vector>
+
 #include "sdfcontour/types.h"
 
 namespace sdfcontour {
@@ -17,6 +19,11 @@ struct MeshTopology {
 MeshTopology mesh_topology(const Mesh& mesh);
 /// Number of connected components (triangles sharing a vertex are connected).
 int connected_components(const Mesh& mesh);
+/// Per vertex, its connected component (numbered by first vertex), or -1 if no triangle uses it.
+std::vector<int> component_labels(const Mesh& mesh);
+/// Removes the pieces (connected components) whose bounding box is under `min_extent` on every
+/// axis, unless that would remove every piece; unused vertices go too. Returns how many pieces.
+int remove_small_pieces(Mesh& mesh, double min_extent);
 /// Total triangle area.
 double surface_area(const Mesh& mesh);
 /// Signed enclosed volume (divergence theorem): positive for a closed, outward-oriented mesh.

@@ -11,6 +11,7 @@
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/gradients.h"
+#include "sdfcontour/noise.h"
 #include "sdfcontour/npy.h"
 #include "sdfcontour/poisson.h"
 #include "sdfcontour/sdf_input.h"
@@ -62,6 +63,11 @@ struct ContourOptions {
   /// behave as distances), return marching cubes' mesh instead, and say why in
   /// ContourResult::fallback. Without it, those cases throw Error.
   bool fallback_to_mc = true;
+  /// GCP on a noisy grid (noise_level() above 5% of a spacing, times the gradient norm): the
+  /// values are smoothed with a Gaussian of one sample first, and everything after runs on the
+  /// smoothed grid (ContourResult::noise_level, smoothed). Noise of 0.1 h already leaves GCP
+  /// almost no contact point, and 0.5 h gives marching cubes ~60 bubbles on a sphere.
+  bool smooth_noise = true;
 };
 
 struct StageTime {
@@ -86,6 +92,9 @@ struct ContourResult {
   /// GCP on a grid: the fraction of the mesh's vertices more than a spacing off the field's zero
   /// set (trilinear; after rescaling). Over 1% means the values are no distances: see fallback.
   double off_zero_set = 0;
+  double noise_level = 0;  ///< GCP on a grid: the values' noise_level(), in spacings
+  int pieces_removed = 0;  ///< gcp, gtcp: pieces of the mesh smaller than a spacing, removed
+  bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
 };
