@@ -49,7 +49,9 @@ bool write_all(int fd, const char* data, std::size_t size) {
   // the parent's crash handlers (a fuzzer's would file it as its own finding).
   for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) ::signal(sig, SIG_DFL);
   if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);
-#ifndef SDFCONTOUR_ASAN  // ASan reserves its shadow memory up front: a data limit breaks it
+#ifdef SDFCONTOUR_ASAN  // ASan reserves its shadow memory up front: a data limit breaks it
+  (void)limits.memory_bytes;
+#else
   if (limits.memory_bytes > 0) {
     const rlimit limit{rlim_t(limits.memory_bytes), rlim_t(limits.memory_bytes)};
     ::setrlimit(RLIMIT_DATA, &limit);

@@ -16,7 +16,8 @@ clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp 
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/mesh_files.cpp -o "$out/fuzz_mesh_files"
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_vdb.cpp src/vdb.cpp src/isolated_call.cpp src/samples.cpp \
   src/atomic_file.cpp -lopenvdb -lImath-3_1 -ltbb -o "$out/fuzz_vdb"
-# OpenVDB reads in a child process (src/isolated_call.h), which inherits libFuzzer's malloc limit:
+# OpenVDB reads in a child process (src/isolated_call.h; its sanitizer reports on hostile files are
+# printed but end only the child, which the parent reports as an error), which inherits libFuzzer's malloc limit:
 # a huge allocation there is the child's failure, which the parent turns into an error, so only
 # ASan's own size limit applies to it.
 declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000")
