@@ -212,3 +212,16 @@ TEST(Bricks, RejectBadOptions) {
   o.halo = 0;
   EXPECT_THROW(brick_contact_points(band.samples, band.spacing, {}, {}, o), Error);
 }
+
+// The automatic Poisson depth follows the samples per axis across the band's extent: the octree's
+// finest cells stay at most about half a spacing wide up to depth 10.
+TEST(Band, AutoPoissonDepthFollowsTheResolution) {
+  PointMatrix corners(2, 3);
+  corners << -0.9, -0.9, -0.9, 0.9, 0.9, 0.9;
+  const double extent = 1.8;
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 100), 8);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 200), 9);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 460), 10);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 2000), 10);  // deeper is the user's choice
+  EXPECT_EQ(auto_poisson_depth(PointMatrix(0, 3), 0.01), 8);
+}

@@ -126,8 +126,8 @@ void PoissonArgs::add_to(CLI::App* app) {
       ->capture_default_str();
   app->add_option("--depth", depth,
                   depth == "auto"
-                      ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 above "
-                        "(deeper needs more memory than a 512^3 run should take)"
+                      ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 up to "
+                        "256, 10 above (a 512^3 grid: 4-6 GB)"
                       : "Finest octree depth")
       ->capture_default_str();
   app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")

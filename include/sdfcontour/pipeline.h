@@ -100,9 +100,10 @@ struct ContourResult {
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 8 up to 129 samples
-/// per axis, 9 above. Measured (bench/scale.py, docs/scale.md): at 256^3 depth 8 is coarser than
-/// the grid (GCP's L1 1.27x MC's), depth 9 gives 0.68x MC's on the bunny in 2.2 GB, depth 10
-/// 0.51x in 6.7 GB: too much memory until the Poisson solver's high-depth memory is reduced.
+/// per axis, 9 up to 257, 10 above. Measured (bench/scale.py, docs/scale.md): at 256^3 depth 8 is
+/// coarser than the grid (GCP's L1 1.27x MC's) and depth 9 gives 0.59x; at 512^3 depth 9 gives
+/// 1.3-1.9x MC's L1 (bunny, spot, armadillo) and depth 10 0.57-0.95x, in 4.1-5.7 GB instead of
+/// 2.5-3.4 GB. Deeper than 10 is left to the user (--depth): a 1024^3 band would need ~4x that.
 int auto_poisson_depth(const PointMatrix& points, double spacing);
 
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
