@@ -48,6 +48,9 @@ def main():
                     if t is None:
                         raise RuntimeError(f"{name} {res} band {band} failed: {err}")
                     s = json.load(open(stats))
+                    if "fallback" in s:  # GCP fell back to marching cubes: no band to compare
+                        print(f"{name} {res} band {band}: {s['fallback']['reason']}", flush=True)
+                        continue
                     rows.append({"mesh": name, "res": res, "band": band, "seconds": t, "rss_mb": rss,
                                  "samples": s["band"]["samples"], "kept": s["contact_points"]["kept"],
                                  "L1": l1(args.cli, out, prefix + "_mesh.ply")})
@@ -57,8 +60,10 @@ def main():
     for res in sorted({r["res"] for r in rows}):
         ref = {r["mesh"]: r for r in rows if r["res"] == res and r["band"] == "all"}
         for band in bands:
-            sel = [r for r in rows if r["res"] == res and r["band"] == band]
+            sel = [r for r in rows if r["res"] == res and r["band"] == band and r["mesh"] in ref]
             ratio = lambda key: [r[key] / ref[r["mesh"]][key] for r in sel]
+            if not sel:
+                continue
             frac = 100 * sum(r["samples"] for r in sel) / (len(sel) * res**3)
             lines.append(f"| {res}³ | {band} | {frac:.1f} | {geomean(ratio('L1')):.3f} | {max(ratio('L1')):.3f} | "
                          f"{geomean(ratio('seconds')):.2f} | {geomean(ratio('rss_mb')):.2f} |")

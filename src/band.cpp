@@ -151,6 +151,7 @@ template <class Values>
 BandTest begin_band(BandSamples& out, const Values& values, const BandOptions& options, double h) {
   validate_band_options(options);
   out.spacing = h;
+  out.band = options.band;
   out.truncation = resolve(values, options);
   return make_test(options, h / options.value_scale, out.truncation);
 }
@@ -173,9 +174,13 @@ Truncation resolve_truncation(const GridView& grid, const BandOptions& options) 
   return resolve(grid, options);
 }
 
+double auto_band(double samples_per_axis) {
+  return samples_per_axis < 128 ? 8.0 : 4.0;
+}
+
 void validate_band_options(const BandOptions& options) {
-  if (!(options.band > 0))
-    throw Error("the band must be a positive number of spacings (or 'all'), got " +
+  if (!(options.band >= 0))
+    throw Error("the band must be a positive number of spacings (or 'all' or 'auto'), got " +
                 std::to_string(options.band));
   if (!(options.margin >= 0) || !std::isfinite(options.margin))
     throw Error("the band's margin must be a non-negative number of spacings");
@@ -186,7 +191,10 @@ void validate_band_options(const BandOptions& options) {
     throw Error("the value scale must be positive and finite");
 }
 
-BandSamples select_band(const GridView& grid, const BandOptions& options) {
+BandSamples select_band(const GridView& grid, const BandOptions& given) {
+  BandOptions options = given;
+  if (options.band == 0)
+    options.band = auto_band(double(*std::max_element(grid.dims.begin(), grid.dims.end())));
   BandSamples out;
   const BandTest keep = begin_band(out, grid, options, grid.spacing().maxCoeff());
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
@@ -230,7 +238,7 @@ BandSamples select_band(const Grid& grid, const BandOptions& options) {
   return select_band(view_of(grid), options);
 }
 
-BandSamples select_band(const Samples& samples, const BandOptions& options, double spacing) {
+BandSamples select_band(const Samples& samples, const BandOptions& given, double spacing) {
   const Eigen::Index n = samples.points.rows();
   const Eigen::Vector3d extent =
       samples.points.colwise().maxCoeff() - samples.points.colwise().minCoeff();
@@ -239,6 +247,8 @@ BandSamples select_band(const Samples& samples, const BandOptions& options, doub
   const double h = spacing > 0  ? spacing
                    : volume > 0 ? std::cbrt(volume / double(n))
                                 : extent.maxCoeff() / std::cbrt(n);
+  BandOptions options = given;
+  if (options.band == 0) options.band = auto_band(extent.maxCoeff() / h + 1);
   BandSamples out;
   const BandTest keep = begin_band(out, samples.values, options, h);
   std::vector<Eigen::Index> kept;

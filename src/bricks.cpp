@@ -106,13 +106,9 @@ bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, con
     a.row(r) = 2 * d.transpose();
     b[r] = d.squaredNorm() - w(v[r + 1]) + w(v[0]);
   }
-  // Cramer's rule: x = (b0 (a1 x a2) + b1 (a2 x a0) + b2 (a0 x a1)) / det.
-  const Vector3d c12 = a.row(1).cross(a.row(2)), c20 = a.row(2).cross(a.row(0)),
-                 c01 = a.row(0).cross(a.row(1));
-  const double det = a.row(0).dot(c12);
-  const double scale = a.row(0).norm() * a.row(1).norm() * a.row(2).norm();
-  if (!(std::abs(det) > 1e-12 * scale)) return false;  // flat: not certifiable
-  const Vector3d x = (b[0] * c12 + b[1] * c20 + b[2] * c01) / det;
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(a);
+  if (!lu.isInvertible()) return false;  // flat: not certifiable
+  const Vector3d x = lu.solve(b);
   // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
   const double reach2 = x.squaredNorm() - w(v[0]) + max_weight;
   if (!std::isfinite(reach2)) return false;

@@ -182,6 +182,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   });
   result.band_samples = int(band.samples.values.size());
   result.band_spacing = band.spacing;
+  result.band_spacings = band.band;
   result.truncation = band.truncation;
   const Samples& s = band.samples;
   const std::string n = std::to_string(result.band_samples);

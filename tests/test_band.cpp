@@ -53,7 +53,7 @@ TEST(Band, KeepsExactlyTheSamplesWithinTheBand) {
 TEST(Band, RejectsBadBandsAndEmptyBands) {
   const Grid grid = torus_grid(12);
   BandOptions o;
-  o.band = 0;
+  o.band = -1;
   EXPECT_THROW(select_band(grid, o), Error);
   o.band = std::nan("");
   EXPECT_THROW(select_band(grid, o), Error);
@@ -126,6 +126,7 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
   ContourOptions o;
   o.want_points = true;
   o.poisson.depth = 7;
+  o.band.band = 4;
   auto mean_error = [&](const ContourResult& r) {
     double sum = 0;
     for (Eigen::Index i = 0; i < r.contact_points->points.rows(); ++i)
@@ -211,6 +212,24 @@ TEST(Bricks, RejectBadOptions) {
   o.size = 8;
   o.halo = 0;
   EXPECT_THROW(brick_contact_points(band.samples, band.spacing, {}, {}, o), Error);
+}
+
+// The automatic band: 8 spacings below 128 samples per axis, 4 from 128 (as the result says).
+TEST(Band, AutoBandFollowsTheResolution) {
+  EXPECT_EQ(auto_band(32), 8);
+  EXPECT_EQ(auto_band(127), 8);
+  EXPECT_EQ(auto_band(128), 4);
+  EXPECT_EQ(auto_band(512), 4);
+  const Grid grid = torus_grid(40);
+  const BandSamples b = select_band(grid, BandOptions{});
+  EXPECT_EQ(b.band, 8);
+  const double h = grid.spacing().maxCoeff();
+  for (Eigen::Index i = 0; i < b.samples.values.size(); ++i)
+    EXPECT_LE(std::abs(b.samples.values[i]), (8 + 1) * h * (1 + 1e-12));
+  ContourOptions o;
+  o.want_mesh = false;
+  o.want_points = true;
+  EXPECT_EQ(contour(grid_input(grid), nullptr, o).band_spacings, 8);
 }
 
 // The automatic Poisson depth follows the samples per axis across the band's extent: the octree's

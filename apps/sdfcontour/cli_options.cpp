@@ -76,7 +76,10 @@ void require_writable_mesh(const Mesh& mesh, const std::string& what) {
 
 BandOptions parse_band_options(const std::string& band, const std::string& truncation) {
   BandOptions b;
-  b.band = parse_number_or("--band", band, {{"all", std::numeric_limits<double>::infinity()}});
+  b.band = parse_number_or("--band", band,
+                           {{"all", std::numeric_limits<double>::infinity()}, {"auto", 0.0}});
+  if (band != "auto" && !(b.band > 0))
+    throw Error("the band must be a positive number of spacings (or 'all' or 'auto'), got " + band);
   if (truncation == "auto") {
     b.truncation_mode = TruncationMode::Auto;
   } else if (truncation == "none") {

@@ -21,7 +21,7 @@ namespace {
 
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
-                                     weights = "james", band = "4", truncation = "auto", grid;
+                                     weights = "james", band = "auto", truncation = "auto", grid;
   int knn = 18, brick_size = BrickOptions{}.size;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
@@ -119,6 +119,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   if (grid) j["grid"] = grid->dims;
   if (r.band_samples > 0) {
     nlohmann::json band = {{"band", a.band},
+                           {"band_spacings", r.band_spacings},
                            {"spacing", r.band_spacing},
                            {"samples", r.band_samples},
                            {"truncation_detected", r.truncation.detected()}};
@@ -279,7 +280,8 @@ Command add_contour_command(CLI::App& app) {
   c->add_option("--band", a->band,
                 "Triangulation methods (all but mc) use only samples with |value| <= BAND "
                 "grid spacings (scattered samples: the side of a cube holding one sample); "
-                "'all' keeps every sample, as in the paper")
+                "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
+                "axis, 4 from 128")
       ->capture_default_str();
   c->add_option("--grid", a->grid,
                 "For a .vdb input: the float level set grid to read (default: the first)");

@@ -20,8 +20,9 @@ enum class TruncationMode {
 };
 
 struct BandOptions {
-  /// Keep samples with |value| <= band * spacing. Infinity keeps every sample (the paper's).
-  double band = 4.0;
+  /// Keep samples with |value| <= band * spacing. Infinity keeps every sample (the paper's);
+  /// 0 (the default) is auto_band() of the samples per axis.
+  double band = 0;
   /// Samples up to `margin` spacings beyond the band (or inside a truncation distance) are
   /// triangulated too but give no contact point: they close the band's samples' stars, which
   /// would otherwise reach across the empty space beyond the band (and not be local).
@@ -67,8 +68,16 @@ struct BandSamples {
   std::vector<long> source;  ///< for each kept sample, its index in the input (C order for grids)
   std::vector<char> core;    ///< for each kept sample, 1 if in the band proper (not the margin)
   double spacing = 0;        ///< the spacing h the band is measured in
+  double band = 0;           ///< the band used, in spacings (auto resolved)
   Truncation truncation;
 };
+
+/// The automatic band, in spacings, for samples `samples_per_axis` across: 8 below 128, 4 from
+/// 128. Measured against every sample (`bench/band.py`, docs/band.md, 6 shared meshes, geometric
+/// mean of L1 / L1 with all samples): band 4 gives 1.068 at 32^3, 1.084 at 64^3, 1.120 at 96^3
+/// and 0.875 at 128^3; band 8 gives 1.017, 1.045 and 1.021 at 32^3, 64^3 and 96^3 for 31-60%
+/// more time there. From 128 on, band 4 is as accurate as all samples and twice as fast as 8.
+double auto_band(double samples_per_axis);
 
 /// The grid's samples with |value| <= (band + margin) * h (h the largest grid spacing) that are
 /// not truncated, in C order; core flags those with |value| <= band * h and a margin inside the

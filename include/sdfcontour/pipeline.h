@@ -92,11 +92,12 @@ struct ContourResult {
   /// GCP on a grid: the fraction of the mesh's vertices more than a spacing off the field's zero
   /// set (trilinear; after rescaling). Over 1% means the values are no distances: see fallback.
   double off_zero_set = 0;
-  double noise_level = 0;  ///< GCP on a grid: the values' noise_level(), in spacings
-  int pieces_removed = 0;  ///< gcp, gtcp: pieces of the mesh smaller than a spacing, removed
-  bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
-  double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
-  std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
+  double noise_level = 0;    ///< GCP on a grid: the values' noise_level(), in spacings
+  double band_spacings = 0;  ///< the band used (auto resolved), in spacings
+  int pieces_removed = 0;    ///< gcp, gtcp: pieces of the mesh smaller than a spacing, removed
+  bool smoothed = false;     ///< the values were smoothed (see ContourOptions::smooth_noise)
+  double value_scale = 1;    ///< the factor the values were rescaled by (1: none)
+  std::string fallback;      ///< why marching cubes' mesh was returned instead of GCP's
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 8 up to 129 samples

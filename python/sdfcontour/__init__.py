@@ -48,8 +48,11 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
              solver_tolerance, progress):
     if method not in METHODS:
         raise ValueError(f"unknown method '{method}' (known: {', '.join(METHODS)})")
+    auto_band = isinstance(band, str) and band == "auto"
     if band == "all":
         band = float("inf")
+    elif auto_band:
+        band = 0.0  # the core picks it from the resolution
     o = dict(method=method, band=float(band), margin=float(margin), truncation=str(truncation),
              gradient=gradient, weights=weights, knn=int(knn), fn=bool(fn),
              tie_tolerance=float(tie_tolerance), brick_size=int(brick_size),
@@ -63,8 +66,8 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
     for name in ("band", "margin", "alpha", "samples_per_node", "scale", "solver_tolerance"):
         if not o[name] == o[name]:  # NaN
             raise ValueError(f"{name} must be a number, got NaN")
-    if not (o["band"] > 0):
-        raise ValueError("band must be positive (or 'all')")
+    if not (o["band"] > 0 or auto_band):
+        raise ValueError("band must be positive (or 'all' or 'auto')")
     if not (0 <= o["alpha"] <= 1e4):
         raise ValueError("alpha must be between 0 and 10000")
     if depth != "auto" and not (1 <= o["depth"] <= 16):
@@ -92,7 +95,9 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
         if resolution is None:
             raise ValueError("a callable SDF needs a resolution (samples per axis)")
         from ._callable import sample_callable
-        threshold = options["band"] + options["margin"]
+        # The band the core will use (auto: 8 spacings below 128 samples per axis, 4 from 128).
+        band = options["band"] or (8.0 if int(resolution) < 128 else 4.0)
+        threshold = band + options["margin"]
         if options["method"] == "mc":
             threshold = 1.0  # marching cubes needs the signs right and the values at crossings
         array, evaluations = sample_callable(sdf, lo, hi, int(resolution), threshold,
@@ -109,7 +114,7 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
     return out
 
 
-def contour(sdf, bounds=None, method="gcp", *, resolution=None, band=4.0, margin=1.0,
+def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", margin=1.0,
             truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
             tie_tolerance=1e-6, brick_size=64, brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
@@ -130,9 +135,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band=4.0, margin
         Delaunay triangulation.
     resolution : int, optional
         Samples per axis for a callable ``sdf``.
-    band : float or "all"
-        Triangulation methods use the samples with ``|value| <= band`` grid spacings; "all"
-        keeps every sample (the paper's GCP, far slower).
+    band : float, "auto" or "all"
+        Triangulation methods use the samples with ``|value| <= band`` grid spacings; "auto"
+        is 8 below 128 samples per axis and 4 from 128 (docs/band.md); "all" keeps every sample
+        (the paper's GCP, far slower).
     margin : float
         Samples up to this many spacings beyond the band close the band's stars.
     truncation : "auto", "none" or a number as text
@@ -200,7 +206,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band=4.0, margin
     return out["V"], out["F"]
 
 
-def contact_points(sdf, bounds=None, *, resolution=None, band=4.0, margin=1.0, truncation="auto",
+def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
                    gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
                    brick_size=64, brick_halo=0.0, batch_size=65536, progress=False):
     """GCP's contact points with their normals, without the surface reconstruction.
