@@ -139,48 +139,39 @@ class PlyBody {
     double x = 0;
     switch (type) {
       case Scalar::Int8:
-        x = double(std::int8_t(b[0]));
+        x = load<std::int8_t>(b);
         break;
       case Scalar::Uint8:
-        x = double(b[0]);
+        x = load<std::uint8_t>(b);
         break;
-      case Scalar::Int16: {
-        std::int16_t v;
-        std::memcpy(&v, b, 2);
-        x = v;
+      case Scalar::Int16:
+        x = load<std::int16_t>(b);
         break;
-      }
-      case Scalar::Uint16: {
-        std::uint16_t v;
-        std::memcpy(&v, b, 2);
-        x = v;
+      case Scalar::Uint16:
+        x = load<std::uint16_t>(b);
         break;
-      }
-      case Scalar::Int32: {
-        std::int32_t v;
-        std::memcpy(&v, b, 4);
-        x = v;
+      case Scalar::Int32:
+        x = load<std::int32_t>(b);
         break;
-      }
-      case Scalar::Uint32: {
-        std::uint32_t v;
-        std::memcpy(&v, b, 4);
-        x = v;
+      case Scalar::Uint32:
+        x = load<std::uint32_t>(b);
         break;
-      }
-      case Scalar::Float32: {
-        float v;
-        std::memcpy(&v, b, 4);
-        x = v;
+      case Scalar::Float32:
+        x = load<float>(b);
         break;
-      }
-      case Scalar::Float64: {
-        std::memcpy(&x, b, 8);
+      case Scalar::Float64:
+        x = load<double>(b);
         break;
-      }
     }
     if (!std::isfinite(x)) fail(name_, "a PLY file", "a NaN or infinite number");
     return x;
+  }
+  // The value of type T in the first sizeof(T) bytes of b (already in host order).
+  template <class T>
+  static double load(const unsigned char* b) {
+    T v;
+    std::memcpy(&v, b, sizeof v);
+    return double(v);
   }
   // Bytes left: a bound on how many items can still follow (at least one byte each).
   std::size_t remaining() const { return format_ == 0 ? tokens_.remaining() : body_.size() - at_; }
