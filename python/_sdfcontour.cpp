@@ -368,6 +368,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("options"));
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
         py::arg("hi"));
+  m.def("auto_band", &sdfcontour::auto_band, py::arg("samples_per_axis"));
   m.def("distances", &run_distances, py::arg("V"), py::arg("F"), py::arg("V_gt"), py::arg("F_gt"),
         py::arg("samples"), py::arg("seed"));
 }

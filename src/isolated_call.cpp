@@ -124,8 +124,9 @@ std::string run_isolated(const std::function<std::string()>& work, const std::st
     throw IoError(what + ": the file made the reader fail" +
                   (WIFSIGNALED(status) ? " (signal " + std::to_string(WTERMSIG(status)) + ")"
                                        : std::string()));
-  const std::string payload = reply.substr(1);
-  switch (reply[0]) {
+  const char status_byte = reply[0];
+  std::string payload = std::move(reply.erase(0, 1));  // no copy of a large reply
+  switch (status_byte) {
     case kResult:
       return payload;
     case kInputError:

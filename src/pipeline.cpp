@@ -107,30 +107,45 @@ void check_on_zero_set(const GridView& grid, ContourResult& result) {
   }
   // Nor more pieces than marching cubes finds in the same field: the extra ones are bubbles
   // around contact points that strayed (noise of 0.5 h, smoothed, left 6 on a torus).
+  // Marching cubes finds at least one piece in a field with a sign change, so it runs (on the
+  // whole grid) only when GCP's mesh has more.
   const int pieces = connected_components(*result.mesh);
+  if (pieces <= 1) return;
   const int mc_pieces = connected_components(marching_cubes(grid));
   if (pieces > mc_pieces)
     throw NotDistances("the mesh has " + std::to_string(pieces) +
                        " connected pieces where marching cubes finds " + std::to_string(mc_pieces));
 }
 
-// The noise on a grid's values near the surface, in spacings. A distance scaled by m has its
-// noise scaled by m too, so the noise is divided by the gradient norm when that is far from 1
-// (by more than half: noise itself inflates the measured norm, 1.25 at 0.5 h).
-double noise_in_spacings(const GridView& grid, const ContourOptions& options) {
+// What contour() measures of a grid before choosing to smooth it, handed on so that the
+// pipeline does not measure it again.
+struct GridMeasures {
+  GradientNormSummary gradient_norms;  // with the truncation of the options' band
+  double noise = 0;                    // in spacings, see noise_in_spacings
+};
+
+// The grid validated, its gradient norms, and the noise on its values near the surface, in
+// spacings. A distance scaled by m has its noise scaled by m too, so the noise is divided by the
+// gradient norm when that is far from 1 (by more than half: noise itself inflates the measured
+// norm, 1.25 at 0.5 h).
+GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
   validate_grid(grid);
   const Truncation truncation = resolve_truncation(grid, options.band);
-  const double slope = gradient_norm_summary(grid, truncation).median;
+  GridMeasures m;
+  m.gradient_norms = gradient_norm_summary(grid, truncation);
+  const double slope = m.gradient_norms.median;
   const double scale = std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.5 ? slope : 1;
-  return noise_level(grid, truncation) / scale / grid.spacing().maxCoeff();
+  m.noise = noise_level(grid, truncation) / scale / grid.spacing().maxCoeff();
+  return m;
 }
 
+// `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
-                               const ContourOptions& options) {
+                               const ContourOptions& options, const GridMeasures* measured) {
   const GridView* grid = grid_view_of(input);
   const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
   if (grid) {
-    validate_grid(*grid);
+    if (!measured) validate_grid(*grid);
     require_sign_change(*grid);
   } else {
     validate_samples(scattered->samples);
@@ -153,7 +168,9 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 
   BandOptions band_options = options.band;
   if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp) {
-    result.gradient_norms = gradient_norm_summary(*grid, resolve_truncation(*grid, band_options));
+    result.gradient_norms =
+        measured ? measured->gradient_norms
+                 : gradient_norm_summary(*grid, resolve_truncation(*grid, band_options));
     result.gradient_norm = result.gradient_norms.median;
     const double m = result.gradient_norm;
     if (std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1) {
@@ -315,9 +332,10 @@ namespace {
 
 // contour_or_throw, or marching cubes' mesh when GCP's cannot be trusted.
 ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* shape,
-                                    const ContourOptions& options) {
+                                    const ContourOptions& options,
+                                    const GridMeasures* measured = nullptr) {
   try {
-    return contour_or_throw(input, shape, options);
+    return contour_or_throw(input, shape, options, measured);
   } catch (const NotDistances& e) {
     const GridView* grid = grid_view_of(input);
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
@@ -343,21 +361,21 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
   const GridView* grid = grid_view_of(input);
   if (!grid || options.method != Method::Gcp || !options.smooth_noise)
     return contour_with_fallback(input, shape, options);
-  const double noise = noise_in_spacings(*grid, options);
-  if (!(noise > kNoisy)) {
-    ContourResult result = contour_with_fallback(input, shape, options);
-    result.noise_level = noise;
+  const GridMeasures measured = measure_grid(*grid, options);
+  if (!(measured.noise > kNoisy)) {
+    ContourResult result = contour_with_fallback(input, shape, options, &measured);
+    result.noise_level = measured.noise;
     return result;
   }
   if (options.progress) {
     std::ostringstream message;
-    message << std::setprecision(2) << "the values are noisy (about " << noise
+    message << std::setprecision(2) << "the values are noisy (about " << measured.noise
             << " spacings): smoothed with a Gaussian of one sample";
     options.progress(message.str());
   }
   ContourResult result =
       contour_with_fallback(grid_input(gaussian_smoothed(*grid, 1.0)), shape, options);
-  result.noise_level = noise;
+  result.noise_level = measured.noise;
   result.smoothed = true;
   return result;
 }

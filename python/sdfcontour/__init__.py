@@ -95,8 +95,8 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
         if resolution is None:
             raise ValueError("a callable SDF needs a resolution (samples per axis)")
         from ._callable import sample_callable
-        # The band the core will use (auto: 8 spacings below 128 samples per axis, 4 from 128).
-        band = options["band"] or (8.0 if int(resolution) < 128 else 4.0)
+        # The band the core will use (0: auto, from the samples per axis).
+        band = options["band"] or _sdfcontour.auto_band(int(resolution))
         threshold = band + options["margin"]
         if options["method"] == "mc":
             threshold = 1.0  # marching cubes needs the signs right and the values at crossings
