@@ -277,12 +277,19 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   return out;
 }
 
-py::tuple run_poisson(const py::array& P, const py::array& N, const py::dict& options) {
+py::tuple run_poisson(const py::array& P, const py::array& N, const py::object& W,
+                      const py::dict& options) {
   OrientedPoints points;
   points.points =
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(P), "P");
   points.normals =
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(N), "N");
+  if (!W.is_none()) {
+    const auto w = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(W);
+    if (!w || w.ndim() != 1 || w.shape(0) != points.points.rows())
+      throw Error("W must have shape (n,), one weight per point");
+    points.weights = Eigen::Map<const Eigen::VectorXd>(w.data(), w.shape(0));
+  }
   PoissonOptions o = poisson_options(options);
   PoissonResult r = run_interruptible([points, o](std::atomic<bool>& cancel) mutable {
     o.cancel = &cancel;
@@ -365,7 +372,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
         py::arg("ascii"));
-  m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("options"));
+  m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("W"), py::arg("options"));
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
         py::arg("hi"));
   m.def("auto_band", &sdfcontour::auto_band, py::arg("samples_per_axis"));

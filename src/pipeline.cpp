@@ -305,7 +305,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     PoissonResult p = stages.run(
         "poisson", "screened Poisson reconstruction of " + std::to_string(cp.size()) + " points",
         [&] {
-          return poisson_reconstruct({cp.points, cp.normals}, popt);
+          return poisson_reconstruct({cp.points, cp.normals, {}}, popt);
         });
     result.mesh = std::move(p.mesh);
     for (const auto& [name, seconds] : p.seconds) result.poisson_stages.push_back({name, seconds});

@@ -137,6 +137,48 @@ TEST(Poisson, ScreeningWeightsAndBoundaries) {
   EXPECT_LT(error_screened, error_plain);  // screening pulls the surface onto the samples
 }
 
+// Point weights: all ones give the unweighted mesh bit for bit; a second, biased copy of the
+// sphere (radius 0.6 + 0.02) pulls the surface out, less when its points weigh 0.05.
+TEST(Poisson, PointWeightsScaleEachPointsPull) {
+  const auto shape = make_builtin_shape("sphere");
+  const OrientedPoints exact = even_points("sphere", 8000);
+  PoissonOptions o;
+  o.depth = 7;
+  OrientedPoints ones = exact;
+  ones.weights = Eigen::VectorXd::Ones(exact.points.rows());
+  const Mesh plain = poisson_reconstruct(exact, o).mesh, weighted = poisson_reconstruct(ones, o).mesh;
+  EXPECT_TRUE(plain.vertices == weighted.vertices);
+  EXPECT_TRUE(plain.triangles == weighted.triangles);
+
+  OrientedPoints both;
+  const Eigen::Index n = exact.points.rows();
+  both.points.resize(2 * n, 3);
+  both.normals.resize(2 * n, 3);
+  both.points << exact.points, exact.points * (0.62 / 0.6);
+  both.normals << exact.normals, exact.normals;
+  // Signed mean offset of the mesh from the true sphere.
+  auto offset = [&](const OrientedPoints& p) {
+    const Mesh m = poisson_reconstruct(p, o).mesh;
+    double sum = 0;
+    for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+      sum += shape->distance(m.vertices.row(v).transpose());
+    return sum / double(m.vertices.rows());
+  };
+  const double equal = offset(both);
+  both.weights = Eigen::VectorXd::Ones(2 * n);
+  both.weights.tail(n).setConstant(0.05);
+  const double down = offset(both);
+  std::cout << "mean offset: equal weights " << equal << ", light copy " << down << "\n";
+  EXPECT_GT(equal, 0.007);       // about halfway between the two spheres
+  EXPECT_LT(down, 0.4 * equal);  // the light copy pulls less
+  EXPECT_GT(down, -0.002);
+
+  both.weights[3] = 0;
+  EXPECT_THROW(poisson_reconstruct(both, o), Error);
+  both.weights.resize(5);
+  EXPECT_THROW(poisson_reconstruct(both, o), Error);
+}
+
 TEST(Poisson, SameMeshWhateverTheThreadCount) {
   const OrientedPoints points = even_points("torus", 20000);
   PoissonOptions o;

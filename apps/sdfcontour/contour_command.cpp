@@ -231,7 +231,8 @@ int run_contour(const ContourArgs& a) {
   }
   if (r.contact_points && !a.points.empty()) {
     a.run.say("writing " + a.points);
-    write_oriented_points(a.points, {r.contact_points->points, r.contact_points->normals}, format);
+    write_oriented_points(a.points, {r.contact_points->points, r.contact_points->normals, {}},
+                          format);
   }
   r.stages.push_back({"output", seconds_since(tw)});
   const nlohmann::json summary = summary_json(a, opt, in, r);

@@ -101,7 +101,7 @@ int run_sample(const SampleArgs& a) {
   }
   run.say("exact contact points");
   const ContactPoints gt = exact_contact_points(samples.points, sdf);
-  write_oriented_points(stem + "_gtcp.ply", {gt.points, gt.normals});
+  write_oriented_points(stem + "_gtcp.ply", {gt.points, gt.normals, {}});
   write_mesh(stem + "_mesh.ply", mesh);
   outputs.commit();
   std::cout << "samples " << samples.points.rows() << " -> " << (vdb ? a.prefix : stem + ".npy")

@@ -25,8 +25,11 @@ struct Mesh {
 
 /// Points with unit normals, row i of `normals` belonging to row i of `points`.
 struct OrientedPoints {
-  PointMatrix points;
-  PointMatrix normals;
+  PointMatrix points;   ///< k x 3 positions
+  PointMatrix normals;  ///< k x 3 outward normals (any length but zero)
+  /// Empty (every point counts as 1) or k confidences in (0, 1]: a point's normal and screening
+  /// terms are scaled by it, so a less reliable point pulls the surface less.
+  Eigen::VectorXd weights;
 };
 
 /// Every error the library reports: a one-line, user-facing message. Thrown as is, it blames the

@@ -230,8 +230,8 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
     return out["P"], out["N"]
 
 
-def poisson(P, N, *, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5, scale=1.1,
-            boundary="neumann", solver_tolerance=1e-4):
+def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5,
+            scale=1.1, boundary="neumann", solver_tolerance=1e-4):
     """Screened Poisson reconstruction of oriented points: a watertight mesh.
 
     Parameters
@@ -240,6 +240,9 @@ def poisson(P, N, *, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5, sc
         Points.
     N : ndarray (n, 3)
         Outward normals (any non-zero length).
+    weights : ndarray (n,), optional
+        Confidence of each point in (0, 1]: its normal and screening terms are scaled by it, so a
+        less reliable point pulls the surface less. None: every point weighs 1.
     depth : int
         Finest octree depth (the domain cube split 2^depth times).
     alpha : float
@@ -267,7 +270,8 @@ def poisson(P, N, *, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5, sc
     o = dict(depth=int(depth), alpha=float(alpha), full_depth=int(full_depth),
              samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
              solver_tolerance=float(solver_tolerance))
-    return _sdfcontour.poisson(np.asarray(P), np.asarray(N), o)
+    W = None if weights is None else np.asarray(weights, dtype=np.float64)
+    return _sdfcontour.poisson(np.asarray(P), np.asarray(N), W, o)
 
 
 def sample(V, F, resolution=64, bounds=None):

@@ -37,7 +37,7 @@ void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<U
       for (int a = 0; a < 3; ++a)
         w[a] = quadratic_weights(
             std::clamp(s.p[a] * double(L.res) - double(cell[std::size_t(a)]), 0.0, 1.0));
-      const Eigen::Vector3d weighted = s.area * inverse_volume * s.n;
+      const Eigen::Vector3d weighted = s.area * s.weight * inverse_volume * s.n;
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx)

@@ -19,6 +19,11 @@ void validate(const OrientedPoints& input, const PoissonOptions& o) {
     throw Error("poisson: samples per node must be positive");
   if (!(o.point_weight >= 0) || !std::isfinite(o.point_weight))
     throw Error("poisson: the point weight must be >= 0");
+  if (input.weights.size() != 0 && input.weights.size() != n)
+    throw Error("poisson: points and weights differ in count");
+  for (Eigen::Index i = 0; i < input.weights.size(); ++i)
+    if (!(input.weights[i] > 0 && input.weights[i] <= 1))
+      throw Error("poisson: point " + std::to_string(i) + " has a weight outside (0, 1]");
   for (Eigen::Index i = 0; i < n; ++i) {
     if (!input.points.row(i).allFinite() || !input.normals.row(i).allFinite())
       throw Error("poisson: point " + std::to_string(i) +
@@ -40,6 +45,7 @@ UnitPoints to_unit_cube(const OrientedPoints& input, double scale) {
     auto& s = unit.points[std::size_t(i)];
     s.p = unit.to_unit(input.points.row(i).transpose());
     s.n = input.normals.row(i).transpose().normalized();
+    if (input.weights.size()) s.weight = input.weights[i];
   }
   return unit;
 }

@@ -18,6 +18,7 @@ struct UnitPoint {
   Eigen::Vector3d p;  ///< position in the unit cube
   Eigen::Vector3d n;  ///< unit normal
   double area = 0;    ///< surface area it stands for (unit-cube units), set from the density
+  double weight = 1;  ///< confidence in (0, 1]: scales its normal and screening terms
   int depth = 0;      ///< the depth its normal is splatted at
 };
 

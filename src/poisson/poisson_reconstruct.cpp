@@ -94,9 +94,11 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   const Indicator chi(tree, std::move(solution.values));
 
   stage.start("iso-value");
-  result.iso_value = deterministic_sum(unit.points.size(),
-                                       [&](std::size_t s) { return chi.at(unit.points[s].p); }) /
-                     double(unit.points.size());
+  // The weighted mean of chi at the points (with unit weights, the plain mean).
+  const auto& pts = unit.points;
+  result.iso_value =
+      deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight * chi.at(pts[s].p); }) /
+      deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight; });
 
   stage.start("extraction");
   result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);

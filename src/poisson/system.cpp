@@ -48,11 +48,12 @@ ScreeningMoments screening_moments(const OctreeLevel& L, const CellRuns& runs,
       s.corners[r][std::size_t(a)] =
           L.node(cell[0] + (a & 1), cell[1] + (a >> 1 & 1), cell[2] + (a >> 2 & 1));
     for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
-      const auto w = corner_weights(points[morton.point(q)].p, cell, L.res);
+      const UnitPoint& s = points[morton.point(q)];
+      const auto w = corner_weights(s.p, cell, L.res);
       for (int a = 0; a < 8; ++a) {
-        m[std::size_t(kPairs + a)] += w[std::size_t(a)];
-        for (int b = a; b < 8; ++b)
-          m[std::size_t(pair_index(a, b))] += w[std::size_t(a)] * w[std::size_t(b)];
+        const double sw = s.weight * w[std::size_t(a)];
+        m[std::size_t(kPairs + a)] += sw;
+        for (int b = a; b < 8; ++b) m[std::size_t(pair_index(a, b))] += sw * w[std::size_t(b)];
       }
     }
   });

@@ -121,6 +121,16 @@ def test_scattered_samples_contact_points_and_poisson():
     assert np.min(np.sum(N * P / np.linalg.norm(P, axis=1)[:, None], axis=1)) > 0.99
     Vp, Fp = sdfcontour.poisson(P, N, depth=7)
     assert mean_abs(sphere, Vp) < 0.01
+    # Unit weights change nothing; a light, shifted copy pulls the surface less than a full one.
+    Vw, Fw = sdfcontour.poisson(P, N, weights=np.ones(len(P)), depth=7)
+    np.testing.assert_array_equal(Vp, Vw)
+    P2, N2 = np.vstack([P, 1.05 * P]), np.vstack([N, N])
+    V_full, _ = sdfcontour.poisson(P2, N2, depth=7)
+    V_light, _ = sdfcontour.poisson(P2, N2, weights=np.r_[np.ones(len(P)), np.full(len(P), 0.05)],
+                                    depth=7)
+    assert mean_abs(sphere, V_light) < 0.5 * mean_abs(sphere, V_full)
+    with pytest.raises(ValueError, match="weight"):
+        sdfcontour.poisson(P, N, weights=np.ones(3))
 
 
 def test_sample_and_distances():
