@@ -146,7 +146,8 @@ TEST(Poisson, PointWeightsScaleEachPointsPull) {
   o.depth = 7;
   OrientedPoints ones = exact;
   ones.weights = Eigen::VectorXd::Ones(exact.points.rows());
-  const Mesh plain = poisson_reconstruct(exact, o).mesh, weighted = poisson_reconstruct(ones, o).mesh;
+  const Mesh plain = poisson_reconstruct(exact, o).mesh,
+             weighted = poisson_reconstruct(ones, o).mesh;
   EXPECT_TRUE(plain.vertices == weighted.vertices);
   EXPECT_TRUE(plain.triangles == weighted.triangles);
 

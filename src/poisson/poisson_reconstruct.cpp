@@ -97,7 +97,8 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   // The weighted mean of chi at the points (with unit weights, the plain mean).
   const auto& pts = unit.points;
   result.iso_value =
-      deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight * chi.at(pts[s].p); }) /
+      deterministic_sum(pts.size(),
+                        [&](std::size_t s) { return pts[s].weight * chi.at(pts[s].p); }) /
       deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight; });
 
   stage.start("extraction");
