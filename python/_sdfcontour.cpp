@@ -271,6 +271,9 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["noise_level"] = r.noise_level;
   stats["smoothed"] = r.smoothed;
   stats["pieces_removed"] = r.pieces_removed;
+  stats["sign_violations"] = r.sign_violations;
+  stats["sign_violations_left"] = r.sign_violations_left;
+  stats["sign_constraints_dropped"] = r.sign_constraints_dropped;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

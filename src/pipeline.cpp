@@ -298,6 +298,20 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     popt.cancel = options.cancel;
     if (popt.depth == 0) popt.depth = auto_poisson_depth(s.points, band.spacing);
     result.poisson_depth = popt.depth;
+    // GCP's mesh keeps the samples next to the surface on their sides.
+    SignedSamples sides;
+    if (method == Method::Gcp && options.enforce_signs) {
+      const double reach = options.sign_band * band.spacing;
+      std::vector<Eigen::Index> near;
+      for (Eigen::Index i = 0; i < s.values.size(); ++i)
+        if (band.core[std::size_t(i)] && std::abs(s.values[i]) <= reach) near.push_back(i);
+      sides.points.resize(Eigen::Index(near.size()), 3);
+      sides.values.resize(Eigen::Index(near.size()));
+      for (std::size_t q = 0; q < near.size(); ++q) {
+        sides.points.row(Eigen::Index(q)) = s.points.row(near[q]);
+        sides.values[Eigen::Index(q)] = s.values[near[q]];
+      }
+    }
     // Nothing after the reconstruction needs the samples or triangulations: free them first.
     band = BandSamples();
     regular.reset();
@@ -305,9 +319,14 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     PoissonResult p = stages.run(
         "poisson", "screened Poisson reconstruction of " + std::to_string(cp.size()) + " points",
         [&] {
-          return poisson_reconstruct({cp.points, cp.normals, {}}, popt);
+          SignConstraintOptions sopt = options.sign_constraints;
+          sopt.radius = options.sign_radius * result.band_spacing;
+          return poisson_reconstruct({cp.points, cp.normals, {}}, popt, sides, sopt);
         });
     result.mesh = std::move(p.mesh);
+    result.sign_violations = p.sign_violations;
+    result.sign_violations_left = p.sign_violations_left;
+    result.sign_constraints_dropped = p.sign_constraints_dropped;
     for (const auto& [name, seconds] : p.seconds) result.poisson_stages.push_back({name, seconds});
     // The iso-surface closes tiny bubbles where chi grazes the iso-value next to the surface
     // (~100 of extent < 0.5 h on the shared meshes at 32^3): no piece that small comes from

@@ -26,7 +26,9 @@ struct ContourArgs {
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
-  bool fn = false, serial_triangulation = false;
+  bool fn = false, serial_triangulation = false, no_sign_constraints = false;
+  double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
+         sign_margin = SignConstraintOptions{}.margin;
   std::uint64_t seed = 0;
   RunOptions run;
   PoissonArgs poisson = [] {
@@ -88,6 +90,13 @@ ContourOptions contour_options(const ContourArgs& a) {
     throw Error("--brick-halo must be a non-negative number of spacings (0: automatic)");
   opt.bricks.halo = a.brick_halo;
   opt.band.margin = a.margin;
+  require_range("--sign-band", a.sign_band, 0, 1e6);
+  require_range("--sign-margin", a.sign_margin, 0, 4);
+  opt.enforce_signs = !a.no_sign_constraints;
+  opt.sign_band = a.sign_band;
+  require_range("--sign-radius", a.sign_radius, 0, 16);
+  opt.sign_radius = a.sign_radius;
+  opt.sign_constraints.margin = a.sign_margin;
   return opt;
 }
 
@@ -145,6 +154,11 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   if (r.noise_level > 0) j["noise_level"] = r.noise_level;
   if (r.fallback.empty() && (a.method == "gcp" || a.method == "gtcp"))
     j["pieces_removed"] = r.pieces_removed;
+  if (r.fallback.empty() && a.method == "gcp") {
+    j["sign_violations"] = r.sign_violations;
+    j["sign_violations_left"] = r.sign_violations_left;
+    j["sign_constraints_dropped"] = r.sign_constraints_dropped;
+  }
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
@@ -283,6 +297,19 @@ Command add_contour_command(CLI::App& app) {
                 "grid spacings (scattered samples: the side of a cube holding one sample); "
                 "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
                 "axis, 4 from 128")
+      ->capture_default_str();
+  c->add_flag("--no-sign-constraints", a->no_sign_constraints,
+              "GCP: do not correct the indicator where samples next to the surface would end "
+              "on the wrong side of the mesh (the paper's reconstruction)");
+  c->add_option("--sign-band", a->sign_band,
+                "GCP: samples within this many spacings of the surface keep their side")
+      ->capture_default_str();
+  c->add_option("--sign-radius", a->sign_radius,
+                "GCP: a correction is a smooth bump of this many spacings around the sample")
+      ->capture_default_str();
+  c->add_option("--sign-margin", a->sign_margin,
+                "GCP: and lie at least this fraction of their distance inside (outside) the mesh, "
+                "as the indicator's slope there measures it")
       ->capture_default_str();
   c->add_option("--grid", a->grid,
                 "For a .vdb input: the float level set grid to read (default: the first)");

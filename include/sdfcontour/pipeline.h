@@ -44,7 +44,13 @@ struct ContourOptions {
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
   PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes; depth 0: automatic
-  bool parallel = true;    ///< parallel triangulation (other stages follow TBB's thread limit)
+  /// GCP: the samples within sign_band spacings of the surface (in the band proper) constrain the
+  /// indicator so that each ends on its own side of the mesh (poisson.h, SignedSamples).
+  bool enforce_signs = true;
+  double sign_band = 2.0;
+  double sign_radius = 1.5;  ///< the correction's radius, in spacings (SignConstraintOptions)
+  SignConstraintOptions sign_constraints;
+  bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
   /// Called as a long stage advances: (stage, done, total). Empty for silence.
@@ -95,9 +101,13 @@ struct ContourResult {
   double noise_level = 0;    ///< GCP on a grid: the values' noise_level(), in spacings
   double band_spacings = 0;  ///< the band used (auto resolved), in spacings
   int pieces_removed = 0;    ///< gcp, gtcp: pieces of the mesh smaller than a spacing, removed
-  bool smoothed = false;     ///< the values were smoothed (see ContourOptions::smooth_noise)
-  double value_scale = 1;    ///< the factor the values were rescaled by (1: none)
-  std::string fallback;      ///< why marching cubes' mesh was returned instead of GCP's
+  /// gcp with enforce_signs: samples on the wrong side of the indicator before its correction,
+  /// and after it (0 unless the sweeps ran out).
+  long sign_violations = 0, sign_violations_left = 0;
+  bool sign_constraints_dropped = false;  ///< they changed the topology: the solved surface kept
+  bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
+  double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
+  std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 8 up to 129 samples

@@ -64,6 +64,32 @@ struct PoissonResult {
   bool boundary_fallback = false;
   std::vector<PoissonLevelStats> levels;
   std::vector<std::pair<std::string, double>> seconds;  ///< per stage
+  /// With SignedSamples: how many disagreed with chi (before correction) and after the last
+  /// sweep (0 unless the sweeps ran out).
+  long sign_violations = 0, sign_violations_left = 0;
+  /// With SignedSamples: true when the corrected surface's topology (Euler characteristic,
+  /// pieces) differed from the solved one's, so the solved one was kept.
+  bool sign_constraints_dropped = false;
+};
+
+/// Samples whose side of the surface is known: value < 0 inside, > 0 outside, |value| their
+/// distance to it (a signed distance's samples next to the surface).
+struct SignedSamples {
+  PointMatrix points;      ///< m x 3
+  Eigen::VectorXd values;  ///< m signed distances
+};
+
+/// How the indicator is made to agree with SignedSamples before extraction.
+struct SignConstraintOptions {
+  /// Each sample must lie on its side with chi off the iso-value by at least
+  /// margin * |value| * |grad chi| there (measured on the solved chi): 1 asks the surface to keep
+  /// the sample's distance to the first order, 0 only its side.
+  double margin = 1.0;
+  int max_sweeps = 20;  ///< passes over the samples (each sequential, so deterministic)
+  /// A correction is a smooth bump of this radius (input units) around the sample, so that the
+  /// surface moves past it; 0 changes only its cell's corners, which next to a coarse sampling
+  /// punches a bubble around the sample instead.
+  double radius = 0;
 };
 
 /// Reconstructs a surface from points (n x 3) and normals (n x 3, any length > 0, outward).
@@ -72,5 +98,12 @@ struct PoissonResult {
 /// mean), solved coarse to fine, and extracts chi = (average of chi at the samples).
 /// Throws Error for no points, NaN or infinite values, or a zero normal.
 PoissonResult poisson_reconstruct(const OrientedPoints& points, const PoissonOptions& options = {});
+
+/// The same, then chi is corrected where `sides` disagree with it (see enforce_signs in
+/// src/poisson/sign_constraints.h), so the extracted surface keeps the samples on their sides;
+/// unless that changes the surface's topology (PoissonResult::sign_constraints_dropped).
+PoissonResult poisson_reconstruct(const OrientedPoints& points, const PoissonOptions& options,
+                                  const SignedSamples& sides,
+                                  const SignConstraintOptions& sign_options = {});
 
 }  // namespace sdfcontour

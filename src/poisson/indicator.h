@@ -31,6 +31,7 @@ class Indicator {
 
   const Octree& tree() const { return tree_; }
   const std::vector<double>& values(int depth) const { return values_[std::size_t(depth)]; }
+  std::vector<double>& values(int depth) { return values_[std::size_t(depth)]; }
 
  private:
   const Octree& tree_;

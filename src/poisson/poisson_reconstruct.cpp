@@ -9,6 +9,9 @@
 //  conjugate_gradients.h   the solve at one depth, returning its state
 //  cascade.h      coarse to fine, each depth starting from the coarser one; boundary fallback
 //  indicator.h    chi anywhere; extraction.h  its iso-surface, watertight
+//  sign_constraints.h  optionally, chi corrected to keep samples of known side on their side
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 
 #include "../enum_names.h"
@@ -20,11 +23,33 @@
 #include "normal_field.h"
 #include "octree.h"
 #include "points.h"
+#include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/poisson.h"
+#include "sign_constraints.h"
 
 namespace sdfcontour {
 
 namespace {
+
+// The pieces of a closed triangle mesh wider than `min_extent` along some axis: how many, and
+// twice their Euler characteristic in all (2V - F). Smaller pieces are the extraction's bubbles.
+std::pair<long, long> significant_topology(const Mesh& m, double min_extent) {
+  const std::vector<int> label = component_labels(m);
+  const int pieces = label.empty() ? 0 : 1 + *std::max_element(label.begin(), label.end());
+  std::vector<Eigen::AlignedBox3d> box(std::size_t(std::max(pieces, 0)));
+  std::vector<long> twice_euler(box.size(), 0);
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    if (label[std::size_t(v)] >= 0) {
+      box[std::size_t(label[std::size_t(v)])].extend(m.vertices.row(v).transpose());
+      twice_euler[std::size_t(label[std::size_t(v)])] += 2;
+    }
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t)
+    twice_euler[std::size_t(label[std::size_t(m.triangles(t, 0))])] -= 1;
+  std::pair<long, long> r{0, 0};
+  for (std::size_t c = 0; c < box.size(); ++c)
+    if (box[c].sizes().maxCoeff() >= min_extent) ++r.first, r.second += twice_euler[c];
+  return r;
+}
 
 const detail::NameTable<PoissonBoundary> kBoundaries = {{"neumann", PoissonBoundary::Neumann},
                                                         {"dirichlet", PoissonBoundary::Dirichlet},
@@ -67,6 +92,12 @@ std::string poisson_boundary_name(PoissonBoundary boundary) {
 }
 
 PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o) {
+  return poisson_reconstruct(input, o, SignedSamples{}, SignConstraintOptions{});
+}
+
+PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o,
+                                  const SignedSamples& sides,
+                                  const SignConstraintOptions& sign_options) {
   using namespace poisson;
   PoissonResult result;
   StageTimer stage(result, o);
@@ -91,7 +122,7 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   CascadeResult solution = solve_coarse_to_fine(tree, field, unit.points, runs, area_per_point, o);
   result.levels = std::move(solution.levels);
   result.boundary_fallback = solution.boundary_fallback;
-  const Indicator chi(tree, std::move(solution.values));
+  Indicator chi(tree, std::move(solution.values));
 
   stage.start("iso-value");
   // The weighted mean of chi at the points (with unit weights, the plain mean).
@@ -101,8 +132,32 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
                         [&](std::size_t s) { return pts[s].weight * chi.at(pts[s].p); }) /
       deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight; });
 
-  stage.start("extraction");
-  result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
+  if (sides.points.rows() > 0) {
+    if (sides.values.size() != sides.points.rows())
+      throw Error("poisson: signed samples and values differ in count");
+    stage.start("sign constraints");
+    std::vector<std::vector<double>> solved;
+    for (int d = 0; d <= tree.finest; ++d) solved.push_back(chi.values(d));
+    const poisson::SignCorrection c =
+        poisson::enforce_signs(chi, result.iso_value, sides, unit, sign_options);
+    result.sign_violations = c.violations;
+    result.sign_violations_left = c.violations_left;
+    stage.start("extraction");
+    result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
+    // The corrections move the surface by a fraction of a sample spacing; where they would change
+    // its topology (a handle across a crease, a piece; bubbles smaller than the correction's
+    // radius aside), the solved chi's surface is kept.
+    Mesh unconstrained =
+        extract_iso_surface(Indicator(tree, std::move(solved)), result.iso_value, unit, o.cancel);
+    if (significant_topology(result.mesh, sign_options.radius) !=
+        significant_topology(unconstrained, sign_options.radius)) {
+      result.mesh = std::move(unconstrained);
+      result.sign_constraints_dropped = true;
+    }
+  } else {
+    stage.start("extraction");
+    result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
+  }
 
   // Sampling density at each vertex, in points per unit area of the input's units.
   const Mesh& mesh = result.mesh;

@@ -1,0 +1,133 @@
+#include "sign_constraints.h"
+
+#include <cmath>
+
+#include "bspline.h"
+
+namespace sdfcontour::poisson {
+
+namespace {
+
+// Where a unit-cube point takes chi from: its depth, cell and the indices of the cell's corners.
+struct Location {
+  int depth = -1;
+  std::array<long, 3> cell{};
+  std::array<int, 8> nodes{};
+};
+
+Location locate(const Octree& tree, const Eigen::Vector3d& p) {
+  Location at;
+  for (int d = tree.finest; d >= tree.min_depth; --d) {
+    const OctreeLevel& L = tree.level(d);
+    const auto c = cell_of(p, L.res);
+    if (L.cell(pack(c[0], c[1], c[2])) < 0) continue;
+    at.depth = d;
+    at.cell = c;
+    for (int a = 0; a < 8; ++a)
+      at.nodes[std::size_t(a)] = L.node(c[0] + (a & 1), c[1] + (a >> 1 & 1), c[2] + (a >> 2 & 1));
+    return at;
+  }
+  return at;
+}
+
+}  // namespace
+
+SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& sides,
+                             const UnitPoints& frame, const SignConstraintOptions& options) {
+  SignCorrection result;
+  const Octree& tree = chi.tree();
+  const Eigen::Index m = sides.points.rows();
+  std::vector<Location> where(static_cast<std::size_t>(m));
+  std::vector<Eigen::Vector3d> unit(static_cast<std::size_t>(m));
+  for (Eigen::Index s = 0; s < m; ++s) {
+    unit[std::size_t(s)] = frame.to_unit(sides.points.row(s).transpose());
+    const Eigen::Vector3d& u = unit[std::size_t(s)];
+    if ((u.array() >= 0).all() && (u.array() < 1).all()) where[std::size_t(s)] = locate(tree, u);
+  }
+  const double radius_unit = options.radius / frame.size;
+  // Adds gap * k(|node - p|) / sum_c w_c k_c to the nodes within the radius, k(d) = (1 -
+  // d^2/r^2)^2: chi(p) moves by exactly gap, its surroundings smoothly less.
+  auto bump = [&](const OctreeLevel& L, std::vector<double>& x, const Eigen::Vector3d& p,
+                  const Location& at, const std::array<double, 8>& w, double gap) {
+    const double r = radius_unit * double(L.res);  // in cells of L
+    auto kernel = [&](long i, long j, long k) {
+      const double d2 =
+          (Eigen::Vector3d(double(i), double(j), double(k)) - p * double(L.res)).squaredNorm() /
+          (r * r);
+      return d2 < 1 ? (1 - d2) * (1 - d2) : 0.0;
+    };
+    double at_p = 0;
+    for (int c = 0; c < 8; ++c)
+      at_p += w[std::size_t(c)] *
+              kernel(at.cell[0] + (c & 1), at.cell[1] + (c >> 1 & 1), at.cell[2] + (c >> 2 & 1));
+    if (!(at_p > 0)) return;
+    const double scale = gap / at_p;
+    const long reach = long(std::ceil(r));
+    for (long i = at.cell[0] - reach; i <= at.cell[0] + 1 + reach; ++i)
+      for (long j = at.cell[1] - reach; j <= at.cell[1] + 1 + reach; ++j)
+        for (long k = at.cell[2] - reach; k <= at.cell[2] + 1 + reach; ++k) {
+          const double kv = kernel(i, j, k);
+          if (kv == 0) continue;
+          const int node = L.node(i, j, k);
+          if (node >= 0) x[std::size_t(node)] += scale * kv;
+        }
+  };
+  // Each margin is measured once, on the solved chi: measured on the corrected chi it would
+  // chase its own corrections.
+  std::vector<double> margin(static_cast<std::size_t>(m), -1.0);
+  // Whether sample s is off its side; with `fix`, its cell's corners move so that it is not.
+  auto visit = [&](Eigen::Index s, bool fix) {
+    const Location& at = where[std::size_t(s)];
+    const double value = sides.values[s];
+    if (at.depth < 0 || value == 0 || !std::isfinite(value)) return false;
+    const OctreeLevel& L = tree.level(at.depth);
+    std::vector<double>& x = chi.values(at.depth);
+    const Eigen::Vector3d& p = unit[std::size_t(s)];
+    const auto w = corner_weights(p, at.cell, L.res);
+    Eigen::Vector3d t;
+    for (int a = 0; a < 3; ++a) t[a] = p[a] * double(L.res) - double(at.cell[std::size_t(a)]);
+    // chi and its gradient in the cell (trilinear).
+    double v = 0;
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 8; ++c) {
+      const double xc = x[std::size_t(at.nodes[std::size_t(c)])];
+      v += w[std::size_t(c)] * xc;
+      for (int a = 0; a < 3; ++a) {
+        double d = (c >> a & 1) ? 1.0 : -1.0;
+        for (int b = 0; b < 3; ++b)
+          if (b != a) d *= (c >> b & 1) ? t[b] : 1.0 - t[b];
+        g[a] += d * xc * double(L.res);
+      }
+    }
+    double& ms = margin[std::size_t(s)];
+    if (ms < 0) ms = options.margin * std::abs(value) / frame.size * g.norm();
+    // Inside: chi >= iso + margin; outside: chi <= iso - margin.
+    const double gap = (value < 0 ? iso + ms : iso - ms) - v;
+    if (value < 0 ? gap <= 0 : gap >= 0) return false;
+    if (fix) {
+      if (radius_unit <= 0) {
+        double sum_w2 = 0;
+        for (const double wc : w) sum_w2 += wc * wc;
+        for (int c = 0; c < 8; ++c)
+          x[std::size_t(at.nodes[std::size_t(c)])] += gap * w[std::size_t(c)] / sum_w2;
+      } else {
+        bump(L, x, p, at, w, gap);
+      }
+    }
+    return true;
+  };
+  auto count = [&](bool fix) {
+    long n = 0;
+    for (Eigen::Index s = 0; s < m; ++s) n += visit(s, fix);
+    return n;
+  };
+  result.violations = result.violations_left = count(false);
+  while (result.violations_left > 0 && result.sweeps < options.max_sweeps) {
+    count(true);
+    ++result.sweeps;
+    result.violations_left = count(false);
+  }
+  return result;
+}
+
+}  // namespace sdfcontour::poisson
