@@ -301,16 +301,17 @@ Command add_contour_command(CLI::App& app) {
   c->add_flag("--no-sign-constraints", a->no_sign_constraints,
               "GCP: do not correct the indicator where samples next to the surface would end "
               "on the wrong side of the mesh (the paper's reconstruction)");
-  c->add_option("--sign-band", a->sign_band,
-                "GCP: samples within this many spacings of the surface keep their side")
-      ->capture_default_str();
-  c->add_option("--sign-radius", a->sign_radius,
-                "GCP: a correction is a smooth bump of this many spacings around the sample")
-      ->capture_default_str();
-  c->add_option("--sign-margin", a->sign_margin,
-                "GCP: and lie at least this fraction of their distance inside (outside) the mesh, "
-                "as the indicator's slope there measures it")
-      ->capture_default_str();
+  const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
+                                                          {"--sign-radius", &a->sign_radius},
+                                                          {"--sign-margin", &a->sign_margin}};
+  const char* sign_help[] = {
+      "GCP: samples within this many spacings of the surface keep their side",
+      "GCP: a correction is a smooth bump of this many spacings around the sample",
+      "GCP: and lie at least this fraction of their distance inside (outside) the mesh, as the "
+      "indicator's slope there measures it"};
+  for (int i = 0; i < 3; ++i)
+    c->add_option(sign_options[i].first, *sign_options[i].second, sign_help[i])
+        ->capture_default_str();
   c->add_option("--grid", a->grid,
                 "For a .vdb input: the float level set grid to read (default: the first)");
   c->add_option("--margin", a->margin,
