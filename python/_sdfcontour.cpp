@@ -177,6 +177,7 @@ ContourOptions contour_options(const py::dict& o) {
     c.band.truncation = std::stod(truncation);
   }
   c.bricks.size = get<int>(o, "brick_size", c.bricks.size);
+  c.enforce_signs = get<bool>(o, "enforce_signs", c.enforce_signs);
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;

@@ -59,9 +59,16 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "cli.ply"), "-q"],
                    check=True, stdout=subprocess.DEVNULL)
     V_cli, F_cli = sdfcontour.read_mesh(tmp_path / "cli.ply")
-    V, F = sdfcontour.contour(np.load(tmp_path / "b.npy"))
+    V, F, stats = sdfcontour.contour(np.load(tmp_path / "b.npy"), return_stats=True)
     np.testing.assert_array_equal(V, V_cli)
     np.testing.assert_array_equal(F, F_cli)
+    assert stats["sign_violations"] > 0 and not stats["sign_constraints_dropped"]
+    # Without the sign constraints: the CLI's --no-sign-constraints mesh, a different one.
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "free.ply"), "-q",
+                    "--no-sign-constraints"], check=True, stdout=subprocess.DEVNULL)
+    V_free, F_free = sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints=False)
+    np.testing.assert_array_equal(V_free, sdfcontour.read_mesh(tmp_path / "free.ply")[0])
+    assert V_free.shape != V.shape or not np.array_equal(V_free, V)
     # And the mesh is close to the ground truth the CLI wrote.
     V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)
