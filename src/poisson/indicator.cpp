@@ -16,13 +16,19 @@ double interpolate(const OctreeLevel& L, const std::vector<double>& x,
   return v;
 }
 
-double Indicator::at(const Eigen::Vector3d& p) const {
+Indicator::Location Indicator::locate(const Eigen::Vector3d& p) const {
   for (int d = tree_.finest; d >= tree_.min_depth; --d) {
     const OctreeLevel& L = tree_.level(d);
     const auto c = cell_of(p, L.res);
-    if (L.cell(pack(c[0], c[1], c[2])) >= 0) return interpolate(L, values_[std::size_t(d)], c, p);
+    if (L.cell(pack(c[0], c[1], c[2])) >= 0) return {d, c};
   }
-  return 0.0;
+  return {};
+}
+
+double Indicator::at(const Eigen::Vector3d& p) const {
+  const Location at = locate(p);
+  if (at.depth < 0) return 0.0;
+  return interpolate(tree_.level(at.depth), values_[std::size_t(at.depth)], at.cell, p);
 }
 
 double Indicator::at_finest_node(long i, long j, long k, double outside) const {

@@ -21,6 +21,13 @@ class Indicator {
   Indicator(const Octree& tree, std::vector<std::vector<double>> values)
       : tree_(tree), values_(std::move(values)) {}
 
+  /// Where p takes chi from: the finest depth whose active cell holds it, and that cell.
+  struct Location {
+    int depth = -1;  ///< -1: no active cell holds p
+    std::array<long, 3> cell{};
+  };
+  Location locate(const Eigen::Vector3d& p) const;
+
   /// chi at unit-cube point p (0, "outside", if no active cell holds it).
   double at(const Eigen::Vector3d& p) const;
 

@@ -27,6 +27,13 @@ struct OctreeLevel {
     if (i < 0 || j < 0 || k < 0 || i > res || j > res || k > res) return -1;
     return node_lines.find(nodes, pack(i, j, k));
   }
+  /// Indices of the corner nodes of cell c (corner bits x=1, y=2, z=4).
+  std::array<int, 8> corner_nodes(const std::array<long, 3>& c) const {
+    std::array<int, 8> n;
+    for (int a = 0; a < 8; ++a)
+      n[std::size_t(a)] = node(c[0] + (a & 1), c[1] + (a >> 1 & 1), c[2] + (a >> 2 & 1));
+    return n;
+  }
   /// Index of the active cell with this key, or -1.
   int cell(Key key) const { return cell_lines.find(cells, key); }
   bool on_face(long i, long j, long k) const {

@@ -8,27 +8,10 @@ namespace sdfcontour::poisson {
 
 namespace {
 
-// Where a unit-cube point takes chi from: its depth, cell and the indices of the cell's corners.
-struct Location {
-  int depth = -1;
-  std::array<long, 3> cell{};
+// Where a unit-cube point takes chi from (Indicator::locate), with the cell's corner nodes.
+struct Location : Indicator::Location {
   std::array<int, 8> nodes{};
 };
-
-Location locate(const Octree& tree, const Eigen::Vector3d& p) {
-  Location at;
-  for (int d = tree.finest; d >= tree.min_depth; --d) {
-    const OctreeLevel& L = tree.level(d);
-    const auto c = cell_of(p, L.res);
-    if (L.cell(pack(c[0], c[1], c[2])) < 0) continue;
-    at.depth = d;
-    at.cell = c;
-    for (int a = 0; a < 8; ++a)
-      at.nodes[std::size_t(a)] = L.node(c[0] + (a & 1), c[1] + (a >> 1 & 1), c[2] + (a >> 2 & 1));
-    return at;
-  }
-  return at;
-}
 
 }  // namespace
 
@@ -42,7 +25,10 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
   for (Eigen::Index s = 0; s < m; ++s) {
     unit[std::size_t(s)] = frame.to_unit(sides.points.row(s).transpose());
     const Eigen::Vector3d& u = unit[std::size_t(s)];
-    if ((u.array() >= 0).all() && (u.array() < 1).all()) where[std::size_t(s)] = locate(tree, u);
+    if (!(u.array() >= 0).all() || !(u.array() < 1).all()) continue;
+    Location& at = where[std::size_t(s)];
+    static_cast<Indicator::Location&>(at) = chi.locate(u);
+    if (at.depth >= 0) at.nodes = tree.level(at.depth).corner_nodes(at.cell);
   }
   const double radius_unit = options.radius / frame.size;
   // Adds gap * k(|node - p|) / sum_c w_c k_c to the nodes within the radius, k(d) = (1 -

@@ -44,9 +44,7 @@ ScreeningMoments screening_moments(const OctreeLevel& L, const CellRuns& runs,
     auto& m = s.moments[r];
     m.fill(0.0);
     const auto cell = runs.cell(L, r);
-    for (int a = 0; a < 8; ++a)
-      s.corners[r][std::size_t(a)] =
-          L.node(cell[0] + (a & 1), cell[1] + (a >> 1 & 1), cell[2] + (a >> 2 & 1));
+    s.corners[r] = L.corner_nodes(cell);
     for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
       const UnitPoint& s = points[morton.point(q)];
       const auto w = corner_weights(s.p, cell, L.res);
