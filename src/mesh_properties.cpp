@@ -1,7 +1,6 @@
 #include "sdfcontour/mesh_properties.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -68,29 +67,37 @@ std::vector<int> component_labels(const Mesh& mesh) {
   return label;
 }
 
-int connected_components(const Mesh& mesh) {
+namespace {
+
+int piece_count(const std::vector<int>& labels) {
   int pieces = 0;
-  for (int l : component_labels(mesh)) pieces = std::max(pieces, l + 1);
+  for (int l : labels) pieces = std::max(pieces, l + 1);
   return pieces;
+}
+
+}  // namespace
+
+int connected_components(const Mesh& mesh) {
+  return piece_count(component_labels(mesh));
+}
+
+std::vector<Eigen::AlignedBox3d> component_boxes(const Mesh& mesh, const std::vector<int>& labels) {
+  std::vector<Eigen::AlignedBox3d> boxes(std::size_t(piece_count(labels)));
+  for (std::size_t v = 0; v < labels.size(); ++v)
+    if (labels[v] >= 0)
+      boxes[std::size_t(labels[v])].extend(mesh.vertices.row(Eigen::Index(v)).transpose());
+  return boxes;
 }
 
 int remove_small_pieces(Mesh& mesh, double min_extent) {
   const std::vector<int> label = component_labels(mesh);
-  int pieces = 0;
-  for (int l : label) pieces = std::max(pieces, l + 1);
+  const std::vector<Eigen::AlignedBox3d> boxes = component_boxes(mesh, label);
+  const int pieces = int(boxes.size());
   if (pieces <= 1) return 0;
-  std::vector<Eigen::Vector3d> lo(std::size_t(pieces), Eigen::Vector3d::Constant(INFINITY)),
-      hi(std::size_t(pieces), Eigen::Vector3d::Constant(-INFINITY));
-  for (std::size_t v = 0; v < label.size(); ++v)
-    if (label[v] >= 0) {
-      const Eigen::Vector3d p = mesh.vertices.row(Eigen::Index(v)).transpose();
-      lo[std::size_t(label[v])] = lo[std::size_t(label[v])].cwiseMin(p);
-      hi[std::size_t(label[v])] = hi[std::size_t(label[v])].cwiseMax(p);
-    }
   auto small = std::vector<char>(std::size_t(pieces));
   int removed = 0;
   for (std::size_t c = 0; c < small.size(); ++c)
-    removed += small[c] = (hi[c] - lo[c]).maxCoeff() < min_extent;
+    removed += small[c] = boxes[c].sizes().maxCoeff() < min_extent;
   if (removed == 0 || removed == pieces) return 0;
   // Keep the other pieces' vertices and triangles, in their order.
   std::vector<int> new_index(label.size(), -1);

@@ -1,6 +1,7 @@
 // Basic properties of triangle meshes: closedness, orientation, area, enclosed volume.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <vector>
 
 #include "sdfcontour/types.h"
@@ -21,6 +22,8 @@ MeshTopology mesh_topology(const Mesh& mesh);
 int connected_components(const Mesh& mesh);
 /// Per vertex, its connected component (numbered by first vertex), or -1 if no triangle uses it.
 std::vector<int> component_labels(const Mesh& mesh);
+/// Per component of `labels` (component_labels of `mesh`), the bounding box of its vertices.
+std::vector<Eigen::AlignedBox3d> component_boxes(const Mesh& mesh, const std::vector<int>& labels);
 /// Removes the pieces (connected components) whose bounding box is under `min_extent` on every
 /// axis, unless that would remove every piece; unused vertices go too. Returns how many pieces.
 int remove_small_pieces(Mesh& mesh, double min_extent);

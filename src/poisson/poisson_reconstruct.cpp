@@ -10,8 +10,6 @@
 //  cascade.h      coarse to fine, each depth starting from the coarser one; boundary fallback
 //  indicator.h    chi anywhere; extraction.h  its iso-surface, watertight
 //  sign_constraints.h  optionally, chi corrected to keep samples of known side on their side
-#include <Eigen/Geometry>
-#include <algorithm>
 #include <chrono>
 
 #include "../enum_names.h"
@@ -35,14 +33,10 @@ namespace {
 // twice their Euler characteristic in all (2V - F). Smaller pieces are the extraction's bubbles.
 std::pair<long, long> significant_topology(const Mesh& m, double min_extent) {
   const std::vector<int> label = component_labels(m);
-  const int pieces = label.empty() ? 0 : 1 + *std::max_element(label.begin(), label.end());
-  std::vector<Eigen::AlignedBox3d> box(std::size_t(std::max(pieces, 0)));
+  const std::vector<Eigen::AlignedBox3d> box = component_boxes(m, label);
   std::vector<long> twice_euler(box.size(), 0);
-  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
-    if (label[std::size_t(v)] >= 0) {
-      box[std::size_t(label[std::size_t(v)])].extend(m.vertices.row(v).transpose());
-      twice_euler[std::size_t(label[std::size_t(v)])] += 2;
-    }
+  for (const int l : label)
+    if (l >= 0) twice_euler[std::size_t(l)] += 2;
   for (Eigen::Index t = 0; t < m.triangles.rows(); ++t)
     twice_euler[std::size_t(label[std::size_t(m.triangles(t, 0))])] -= 1;
   std::pair<long, long> r{0, 0};
