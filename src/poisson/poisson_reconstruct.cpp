@@ -140,13 +140,16 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
     result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
     // The corrections move the surface by a fraction of a sample spacing; where they would change
     // its topology (a handle across a crease, a piece; bubbles smaller than the correction's
-    // radius aside), the solved chi's surface is kept.
-    Mesh unconstrained =
-        extract_iso_surface(Indicator(tree, std::move(solved)), result.iso_value, unit, o.cancel);
-    if (significant_topology(result.mesh, sign_options.radius) !=
-        significant_topology(unconstrained, sign_options.radius)) {
-      result.mesh = std::move(unconstrained);
-      result.sign_constraints_dropped = true;
+    // radius aside), the solved chi's surface is kept. Without a correction there is nothing to
+    // compare.
+    if (c.sweeps > 0) {
+      Mesh unconstrained =
+          extract_iso_surface(Indicator(tree, std::move(solved)), result.iso_value, unit, o.cancel);
+      if (significant_topology(result.mesh, sign_options.radius) !=
+          significant_topology(unconstrained, sign_options.radius)) {
+        result.mesh = std::move(unconstrained);
+        result.sign_constraints_dropped = true;
+      }
     }
   } else {
     stage.start("extraction");

@@ -61,7 +61,8 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
   // Each margin is measured once, on the solved chi: measured on the corrected chi it would
   // chase its own corrections.
   std::vector<double> margin(static_cast<std::size_t>(m), -1.0);
-  // Whether sample s is off its side; with `fix`, its cell's corners move so that it is not.
+  // Whether sample s is off its side; with `fix`, chi moves (a bump, or its cell's corners) so
+  // that it is not.
   auto visit = [&](Eigen::Index s, bool fix) {
     const Location& at = where[std::size_t(s)];
     const double value = sides.values[s];

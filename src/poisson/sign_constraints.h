@@ -20,9 +20,10 @@ struct SignCorrection {
 
 /// Corrects chi's node values so that every sample of `sides` (in the input's units; `frame`
 /// maps them to the unit cube) lies on its side: chi >= iso + m inside, chi <= iso - m outside,
-/// with m = margin * |value| * |grad chi| (unit-cube units). A violated sample's cell's corner
-/// values move by the least change that meets it exactly. Samples are visited in order, sweep
-/// after sweep, until none is violated or max_sweeps.
+/// with m = margin * |value| * |grad chi| (unit-cube units, measured once on the solved chi). A
+/// violated sample is met exactly by a smooth bump of options.radius around it (radius 0: the
+/// least change of its cell's corner values). Samples are visited in order, sweep after sweep,
+/// until none is violated or max_sweeps.
 SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& sides,
                              const UnitPoints& frame, const SignConstraintOptions& options);
 
