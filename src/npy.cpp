@@ -281,6 +281,20 @@ void write_npy_float32(const std::string& path, const std::vector<std::size_t>& 
                   data.size() * sizeof(float));
 }
 
+void release_resident_pages(const SdfInput& input) {
+  const GridInput* grid = std::get_if<GridInput>(&input);
+  if (!grid || !grid->file_mapped || !grid->view.data) return;
+  // Whole pages only; the mapping is page-aligned and covers the view, so the rounded range
+  // stays inside it. MADV_DONTNEED on a private, never-written file mapping only drops clean
+  // pages (advice, so a failure changes nothing).
+  const auto page = std::uintptr_t(::sysconf(_SC_PAGESIZE));
+  const std::size_t item = grid->view.type == ScalarType::Float32 ? 4 : 8;
+  const auto begin = reinterpret_cast<std::uintptr_t>(grid->view.data);
+  const std::uintptr_t first = begin / page * page,
+                       last = (begin + grid->view.size() * item + page - 1) / page * page;
+  ::madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
+}
+
 SdfInput grid_input(Grid grid) {
   auto owned = std::make_shared<Grid>(std::move(grid));
   return GridInput{view_of(*owned), owned};
@@ -355,6 +369,7 @@ SdfInput sdf_input_from_npy(std::shared_ptr<const MappedNpy> array, const Bounds
     input.view.data = array->data;
     input.view.type = array->type;
     input.storage = array;
+    input.file_mapped = true;
     validate_grid(input.view);
     return input;
   }

@@ -316,13 +316,20 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     band = BandSamples();
     regular.reset();
     delaunay.reset();
+    release_resident_pages(input);
+    // The points and normals are lent to the reconstruction rather than copied (at 512^3 a copy
+    // is ~180 MB on top of its peak), and given back after.
+    ContactPoints& lent = *result.contact_points;
+    OrientedPoints oriented{std::move(lent.points), std::move(lent.normals), {}};
     PoissonResult p = stages.run(
         "poisson", "screened Poisson reconstruction of " + std::to_string(cp.size()) + " points",
         [&] {
           SignConstraintOptions sopt = options.sign_constraints;
           sopt.radius = options.sign_radius * result.band_spacing;
-          return poisson_reconstruct({cp.points, cp.normals, {}}, popt, sides, sopt);
+          return poisson_reconstruct(oriented, popt, sides, sopt);
         });
+    lent.points = std::move(oriented.points);
+    lent.normals = std::move(oriented.normals);
     result.mesh = std::move(p.mesh);
     result.sign_violations = p.sign_violations;
     result.sign_violations_left = p.sign_violations_left;

@@ -13,6 +13,7 @@ namespace sdfcontour {
 struct GridInput {
   GridView view;
   std::shared_ptr<const void> storage;  ///< keeps view.data alive
+  bool file_mapped = false;  ///< view.data lies in a read-only mapping of a file (map_npy)
 };
 
 /// Scattered samples: points (n x 3) and their values (n).
@@ -25,6 +26,11 @@ using SdfInput = std::variant<GridInput, ScatteredInput>;
 
 /// An input that owns `grid`.
 SdfInput grid_input(Grid grid);
+
+/// For a grid viewed in a read-only file mapping, drops the pages read so far from memory: they
+/// are read from the file again when next used. Stages that have taken what they need from a grid
+/// (the band's samples) call it before allocating more. Otherwise nothing.
+void release_resident_pages(const SdfInput& input);
 
 /// The input's grid view, or nullptr for scattered samples.
 inline const GridView* grid_view_of(const SdfInput& input) {

@@ -7,6 +7,7 @@
 #include "bspline.h"
 #include "conjugate_gradients.h"
 #include "deterministic_sum.h"
+#include "free_memory.h"
 #include "indicator.h"
 #include "system.h"
 
@@ -54,14 +55,16 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     const auto level_start = Clock::now();
     OctreeLevel& L = tree.level(d);
     auto& x = result.values[std::size_t(d)];
-    grid = spline_grid(L);
+    // The finest depth reads the coarser splats from the coarser grid, a slab at a time.
+    const bool from_coarser = d == tree.finest && d > tree.min_depth;
+    if (!from_coarser) grid = spline_grid(L);
     if (d == tree.min_depth) {
       coarser.assign(grid.keys.size(), Eigen::Vector3d::Zero());
     } else {
       x = prolong_values(tree.level(d - 1), L, result.values[std::size_t(d - 1)]);
-      coarser = prolong_splines(coarser_grid, grid, coarser);
+      if (!from_coarser) coarser = prolong_splines(coarser_grid, grid, coarser);
     }
-    coarser_grid = CellGrid();
+    if (!from_coarser) coarser_grid = CellGrid();
     const double screening = o.point_weight * area_per_point * std::ldexp(1.0, d);
     // Once this depth's right-hand side holds the normal field: pass this depth's splats on to
     // the next depth's field and free what the next depths do not need (before the rows are
@@ -72,6 +75,7 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
         coarser_grid = std::move(grid);
       } else {
         std::vector<Eigen::Vector3d>().swap(coarser);
+        coarser_grid = CellGrid();
       }
       grid = CellGrid();
       field.splat_cells[std::size_t(d)] = CellGrid();
@@ -85,13 +89,17 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       const auto start = Clock::now();
       if (d == tree.min_depth) x.assign(L.nodes.size(), 0.0);
       solved = solved_nodes(L, boundary);
+      const auto& finer = field.finer[std::size_t(d)];
       std::vector<double> b =
-          splat_divergence(L, solved, grid, coarser, field.finer[std::size_t(d)]);
+          from_coarser ? splat_divergence_from_coarser(L, solved, coarser_grid, coarser, finer)
+                       : splat_divergence(L, solved, grid, coarser, finer);
       if (d > tree.min_depth) release_field();
+      return_free_memory();
       LevelSystem system = assemble_system(L, solved, std::move(b), field.runs[std::size_t(d)],
                                            screening, points, runs);
       if (d > tree.min_depth) field.runs[std::size_t(d)] = CellRuns();
       const double assembly = seconds_since(start);
+      return_free_memory();
       const auto solve_start = Clock::now();
       const CgState state = conjugate_gradients(L, solved, std::move(system), x, cg);
       long unknowns = 0;

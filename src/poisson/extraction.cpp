@@ -1,7 +1,6 @@
 #include "extraction.h"
 
-#include <deque>
-#include <unordered_set>
+#include <algorithm>
 
 #include "../cube_polygons.h"
 
@@ -43,39 +42,78 @@ class SurfaceCells {
   }
 
   // Closes the candidates: a face with a sign change needs the cell across it. Returns the cells
-  // with a sign change and their values.
-  void close(const std::vector<Key>& candidates, std::vector<Key>& cells,
+  // with a sign change, sorted by key, and their values. Round after round, in parallel: the
+  // cells across the sign-changing faces of the last round's new cells, not yet seen.
+  void close(std::vector<Key> frontier, std::vector<Key>& cells,
              std::vector<std::array<double, 8>>& values, const std::atomic<bool>* cancel) const {
-    const long R = finest_.res;
-    std::unordered_set<Key> visited(candidates.begin(), candidates.end());
-    std::deque<Key> queue(candidates.begin(), candidates.end());
-    while (!queue.empty()) {
-      const Key key = queue.front();
-      queue.pop_front();
-      if ((cells.size() & 0xffff) == 0) check_cancel(cancel);
-      const auto u = unpack(key);
-      const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
-      std::array<double, 8> value;
-      cell_values(i, j, k, value.data());
-      if (!mixed(value.data())) continue;
-      cells.push_back(key);
-      values.push_back(value);
-      for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side) {
-          int inside = 0;
-          for (int c = 0; c < 8; ++c)
-            if ((c >> axis & 1) == side) inside += value[std::size_t(c)] < 0;
-          if (inside == 0 || inside == 4) continue;
-          long ni = i, nj = j, nk = k;
-          (axis == 0 ? ni : axis == 1 ? nj : nk) += side ? 1 : -1;
-          if (ni < -1 || nj < -1 || nk < -1 || ni > R || nj > R || nk > R) continue;
-          const Key next = cell_key(ni, nj, nk);
-          if (visited.insert(next).second) queue.push_back(next);
-        }
+    std::vector<Key> seen;
+    while (!frontier.empty()) {
+      check_cancel(cancel);
+      sort_unique(frontier);
+      std::vector<std::array<double, 8>> value(frontier.size());
+      std::vector<char> keep(frontier.size());
+      std::vector<std::array<Key, 6>> across(frontier.size());
+      tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t c) {
+        const auto u = unpack(frontier[c]);
+        cell_values(u[0] - 1, u[1] - 1, u[2] - 1, value[c].data());
+        keep[c] = mixed(value[c].data());
+        across[c].fill(kNone);
+        if (keep[c]) neighbours_across_sign_changes(frontier[c], value[c], across[c]);
+      });
+      std::vector<Key> next;
+      for (std::size_t c = 0; c < frontier.size(); ++c) {
+        if (!keep[c]) continue;
+        cells.push_back(frontier[c]);
+        values.push_back(value[c]);
+        for (const Key n : across[c])
+          if (n != kNone) next.push_back(n);
+      }
+      // Cells seen so far (kept or not) are not visited again.
+      std::vector<Key> merged(seen.size() + frontier.size());
+      std::merge(seen.begin(), seen.end(), frontier.begin(), frontier.end(), merged.begin());
+      seen = std::move(merged);
+      sort_unique(next);
+      frontier.clear();
+      for (const Key n : next)
+        if (!std::binary_search(seen.begin(), seen.end(), n)) frontier.push_back(n);
     }
+    // One order whatever the rounds: by key.
+    std::vector<std::size_t> order(cells.size());
+    for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return cells[a] < cells[b]; });
+    std::vector<Key> sorted_cells(cells.size());
+    std::vector<std::array<double, 8>> sorted_values(cells.size());
+    for (std::size_t c = 0; c < order.size(); ++c) {
+      sorted_cells[c] = cells[order[c]];
+      sorted_values[c] = values[order[c]];
+    }
+    cells = std::move(sorted_cells);
+    values = std::move(sorted_values);
   }
 
  private:
+  static constexpr Key kNone = ~Key(0);
+
+  // The cells across the faces of `cell` with a sign change (kNone elsewhere).
+  void neighbours_across_sign_changes(Key cell, const std::array<double, 8>& value,
+                                      std::array<Key, 6>& out) const {
+    const long R = finest_.res;
+    const auto u = unpack(cell);
+    const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        int inside = 0;
+        for (int c = 0; c < 8; ++c)
+          if ((c >> axis & 1) == side) inside += value[std::size_t(c)] < 0;
+        if (inside == 0 || inside == 4) continue;
+        long ni = i, nj = j, nk = k;
+        (axis == 0 ? ni : axis == 1 ? nj : nk) += side ? 1 : -1;
+        if (ni < -1 || nj < -1 || nk < -1 || ni > R || nj > R || nk > R) continue;
+        out[std::size_t(2 * axis + side)] = cell_key(ni, nj, nk);
+      }
+  }
+
   void leaf_candidates(const OctreeLevel& L, std::vector<Key>& out) const {
     const int shift = chi_.tree().finest - L.depth;
     std::vector<std::vector<Key>> found(L.cells.size());

@@ -113,6 +113,22 @@ CellGrid spline_grid(const OctreeLevel& L) {
   return G;
 }
 
+CellGrid spline_grid(const OctreeLevel& L, long first, long last) {
+  // The active cells within two of [first, last] make those grid cells (and a few more, dropped).
+  const auto from =
+      std::lower_bound(L.cells.begin(), L.cells.end(), pack(std::max(first - 2, 0L), 0, 0));
+  const auto to = std::lower_bound(L.cells.begin(), L.cells.end(), pack(last + 3, 0, 0));
+  CellGrid G;
+  G.keys = shifted_union(std::vector<Key>(from, to), {-1, -1, -1}, {3, 3, 3}, L.res + 1);
+  // Offset keys: first index i + 1.
+  const auto keep_from =
+      std::lower_bound(G.keys.begin(), G.keys.end(), pack(std::max(first + 1, 0L), 0, 0));
+  const auto keep_to = std::lower_bound(G.keys.begin(), G.keys.end(), pack(last + 2, 0, 0));
+  G.keys = std::vector<Key>(keep_from, keep_to);
+  G.lines = LineIndex(G.keys);
+  return G;
+}
+
 void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& values,
                  const CellGrid& grid, std::vector<Eigen::Vector3d>& onto) {
   // Both key lists are sorted: one merge walk.
@@ -185,13 +201,14 @@ std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellG
 }
 
 void divergence(const OctreeLevel& L, const CellGrid& G, const std::vector<Eigen::Vector3d>& W,
-                std::vector<double>& out, const std::vector<char>* want) {
+                std::vector<double>& out, const std::vector<char>* want, std::array<long, 2> rows) {
   // Over the 4 x 4 x 4 cells whose B-splines overlap node v's hat. The integrals are products of
   // 1D ones, so a line of nodes (fixed i, j) first folds its 16 cell columns into two values per
   // cell height k', P(k') (the x and y terms) and Q(k') (the z term), and each node then sums
   // four heights.
   const HatQuadraticIntegrals I(L.res);
   for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
+    if (i < rows[0] || i >= rows[1]) return;
     const long k_last = long(L.nodes[last - 1] & kKeyMask);
     // Heights k' = k_first - 2 .. k_last + 1, stored from index 0.
     const long k_first = long(L.nodes[first] & kKeyMask), base = k_first - 2;

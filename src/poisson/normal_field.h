@@ -13,6 +13,8 @@
 
 namespace sdfcontour::poisson {
 
+constexpr long kAllRows = 1L << 40;
+
 /// A set of depth-d cells with indices -1..res per axis (the ring just outside the domain holds
 /// splat coefficients whose B-splines reach into it), keyed with a +1 offset.
 struct CellGrid {
@@ -49,6 +51,8 @@ struct NormalField {
 /// The depth's cells within two cells of an active cell: every spline coefficient the solve at
 /// that depth reads, and every one that coarser ones prolong into exactly.
 CellGrid spline_grid(const OctreeLevel& L);
+/// The cells of spline_grid(L) whose first index lies in [first, last].
+CellGrid spline_grid(const OctreeLevel& L, long first, long last);
 
 /// onto += the coefficients (cells, values) of a sub-grid of `grid` (onto is on `grid`).
 void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& values,
@@ -64,9 +68,11 @@ NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& poin
 std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
                                              const std::vector<Eigen::Vector3d>& values);
 
-/// out[v] = int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set, W given by
-/// depth-d quadratic coefficients on `grid`.
+/// out[v] = int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set and first
+/// index in [rows[0], rows[1]), W given by depth-d quadratic coefficients on `grid` (which needs
+/// the cells with first index in [rows[0] - 2, rows[1]]).
 void divergence(const OctreeLevel& L, const CellGrid& grid, const std::vector<Eigen::Vector3d>& W,
-                std::vector<double>& out, const std::vector<char>* want);
+                std::vector<double>& out, const std::vector<char>* want,
+                std::array<long, 2> rows = {0, kAllRows});
 
 }  // namespace sdfcontour::poisson

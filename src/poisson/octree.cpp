@@ -108,23 +108,6 @@ Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs
   return tree;
 }
 
-std::vector<std::array<int, 9>> node_columns(const OctreeLevel& L) {
-  std::vector<std::array<int, 9>> columns(L.nodes.size());
-  // A line (fixed i, j) at a time: the nine neighbouring node lines are found once, then walked
-  // with cursors as k grows.
-  for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
-    LineCursor node_column[9];
-    for (int t = 0; t < 9; ++t)
-      node_column[t] = LineCursor(L.nodes, L.node_lines.line(i + t % 3 - 1, j + t / 3 - 1));
-    for (std::size_t v = first; v < last; ++v) {
-      const long k = long(L.nodes[v] & kKeyMask);
-      for (int t = 0; t < 9; ++t)
-        columns[v][std::size_t(t)] = node_column[t].find(pack(i + t % 3 - 1, j + t / 3 - 1, k));
-    }
-  });
-  return columns;
-}
-
 std::vector<char> solved_nodes(const OctreeLevel& L, PoissonBoundary boundary) {
   std::vector<char> solved(L.nodes.size(), 0);
   for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {

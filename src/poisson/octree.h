@@ -55,10 +55,6 @@ struct Octree {
 Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
                     int max_depth, const std::atomic<bool>* cancel = nullptr);
 
-/// Per node of L, the node at (i + dx, j + dy, k) for dx, dy in {-1, 0, 1} (index dx + 1 + 3 (dy +
-/// 1)), or -1. Nodes sorted with k last put (.., k - 1) and (.., k + 1) right before and after.
-std::vector<std::array<int, 9>> node_columns(const OctreeLevel& L);
-
 /// Per node of L: whether it is solved for (every incident cell inside the domain is active, so
 /// its row of the system is complete; Dirichlet boundaries also fix the domain's faces).
 std::vector<char> solved_nodes(const OctreeLevel& L, PoissonBoundary boundary);

@@ -1,5 +1,8 @@
 #include "sign_constraints.h"
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cmath>
 
 #include "bspline.h"
@@ -22,14 +25,23 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
   const Eigen::Index m = sides.points.rows();
   std::vector<Location> where(static_cast<std::size_t>(m));
   std::vector<Eigen::Vector3d> unit(static_cast<std::size_t>(m));
-  for (Eigen::Index s = 0; s < m; ++s) {
+  tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index s) {
     unit[std::size_t(s)] = frame.to_unit(sides.points.row(s).transpose());
     const Eigen::Vector3d& u = unit[std::size_t(s)];
-    if (!(u.array() >= 0).all() || !(u.array() < 1).all()) continue;
+    if (!(u.array() >= 0).all() || !(u.array() < 1).all()) return;
     Location& at = where[std::size_t(s)];
     static_cast<Indicator::Location&>(at) = chi.locate(u);
     if (at.depth >= 0) at.nodes = tree.level(at.depth).corner_nodes(at.cell);
-  }
+  });
+  // Per depth, the nodes a correction moved during the current sweep.
+  std::vector<std::vector<char>> moved(tree.levels.size());
+  std::vector<std::pair<int, int>> moved_list;
+  auto mark_moved = [&](int depth, int node) {
+    auto& flags = moved[std::size_t(depth)];
+    if (flags.empty()) flags.assign(tree.level(depth).nodes.size(), 0);
+    if (!flags[std::size_t(node)])
+      flags[std::size_t(node)] = 1, moved_list.push_back({depth, node});
+  };
   const double radius_unit = options.radius / frame.size;
   // Adds gap * k(|node - p|) / sum_c w_c k_c to the nodes within the radius, k(d) = (1 -
   // d^2/r^2)^2: chi(p) moves by exactly gap, its surroundings smoothly less.
@@ -49,14 +61,21 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
     if (!(at_p > 0)) return;
     const double scale = gap / at_p;
     const long reach = long(std::ceil(r));
-    for (long i = at.cell[0] - reach; i <= at.cell[0] + 1 + reach; ++i)
-      for (long j = at.cell[1] - reach; j <= at.cell[1] + 1 + reach; ++j)
-        for (long k = at.cell[2] - reach; k <= at.cell[2] + 1 + reach; ++k) {
-          const double kv = kernel(i, j, k);
+    // A line of nodes (fixed i, j) at a time: one search for its first node in reach.
+    for (long i = std::max(at.cell[0] - reach, 0L); i <= at.cell[0] + 1 + reach; ++i)
+      for (long j = std::max(at.cell[1] - reach, 0L); j <= at.cell[1] + 1 + reach; ++j) {
+        const auto line = L.node_lines.line(i, j);
+        const Key first = pack(i, j, std::max(at.cell[2] - reach, 0L)),
+                  last = pack(i, j, at.cell[2] + 1 + reach);
+        for (auto it =
+                 std::lower_bound(L.nodes.begin() + line[0], L.nodes.begin() + line[1], first);
+             it != L.nodes.begin() + line[1] && *it <= last; ++it) {
+          const double kv = kernel(i, j, long(*it & kKeyMask));
           if (kv == 0) continue;
-          const int node = L.node(i, j, k);
-          if (node >= 0) x[std::size_t(node)] += scale * kv;
+          const int node = int(it - L.nodes.begin());
+          x[std::size_t(node)] += scale * kv, mark_moved(L.depth, node);
         }
+      }
   };
   // Each margin is measured once, on the solved chi: measured on the corrected chi it would
   // chase its own corrections.
@@ -95,24 +114,50 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
       if (radius_unit <= 0) {
         double sum_w2 = 0;
         for (const double wc : w) sum_w2 += wc * wc;
-        for (int c = 0; c < 8; ++c)
+        for (int c = 0; c < 8; ++c) {
           x[std::size_t(at.nodes[std::size_t(c)])] += gap * w[std::size_t(c)] / sum_w2;
+          mark_moved(at.depth, at.nodes[std::size_t(c)]);
+        }
       } else {
         bump(L, x, p, at, w, gap);
       }
     }
     return true;
   };
-  auto count = [&](bool fix) {
-    long n = 0;
-    for (Eigen::Index s = 0; s < m; ++s) n += visit(s, fix);
-    return n;
+  // Whether any corner of sample s's cell was moved during the current sweep. A sample none of
+  // whose corners moved is exactly as violated (or not) as before.
+  auto corners_moved = [&](Eigen::Index s) {
+    const Location& at = where[std::size_t(s)];
+    if (at.depth < 0) return false;
+    const auto& flags = moved[std::size_t(at.depth)];
+    if (flags.empty()) return false;
+    for (int c = 0; c < 8; ++c)
+      if (flags[std::size_t(at.nodes[std::size_t(c)])]) return true;
+    return false;
   };
-  result.violations = result.violations_left = count(false);
+  // Which samples are violated, in parallel (chi is only read; each sample writes only its own
+  // margin and flag); with `all` unset, only those whose corners moved are looked at again.
+  std::vector<char> violated(static_cast<std::size_t>(m), 0);
+  auto count = [&](bool all) {
+    tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index s) {
+      if (all || corners_moved(s)) violated[std::size_t(s)] = visit(s, false);
+    });
+    return std::count(violated.begin(), violated.end(), 1);
+  };
+  // A sweep visits the samples in order and corrects each that is violated when its turn comes
+  // (a sample not violated before the sweep and with no corner moved since is skipped: visiting
+  // it would find it satisfied).
+  auto sweep = [&]() {
+    for (Eigen::Index s = 0; s < m; ++s)
+      if (violated[std::size_t(s)] || corners_moved(s)) visit(s, true);
+  };
+  result.violations = result.violations_left = count(true);
   while (result.violations_left > 0 && result.sweeps < options.max_sweeps) {
-    count(true);
+    sweep();
     ++result.sweeps;
     result.violations_left = count(false);
+    for (const auto& [depth, node] : moved_list) moved[std::size_t(depth)][std::size_t(node)] = 0;
+    moved_list.clear();
   }
   return result;
 }

@@ -72,6 +72,25 @@ std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<cha
   return b;
 }
 
+std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
+                                                  const std::vector<char>& solved,
+                                                  const CellGrid& coarser_grid,
+                                                  const std::vector<Eigen::Vector3d>& coarser,
+                                                  const std::vector<double>& finer) {
+  const std::size_t nn = L.nodes.size();
+  std::vector<double> b(nn, 0.0);
+  // Sixteen slabs: each prolongs about a sixteenth of the grid (plus its 3-row margin).
+  const long thickness = std::max(8L, (L.res + 1) / 16);
+  for (long first = 0; first <= L.res; first += thickness) {
+    const long last = std::min(first + thickness, L.res + 1);
+    const CellGrid slab = spline_grid(L, first - 2, last);
+    divergence(L, slab, prolong_splines(coarser_grid, slab, coarser), b, &solved, {first, last});
+  }
+  tbb::parallel_for(std::size_t(0), nn,
+                    [&](std::size_t v) { b[v] = solved[v] ? -(b[v] + finer[v]) : 0.0; });
+  return b;
+}
+
 LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solved,
                             std::vector<double> b, const CellRuns& runs, double screening,
                             const std::vector<UnitPoint>& points, const MortonRuns& morton) {

@@ -33,6 +33,15 @@ std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<cha
                                      const std::vector<Eigen::Vector3d>& coarser,
                                      const std::vector<double>& finer);
 
+/// The same with the coarser splats given on the coarser depth's spline grid, prolonged a slab of
+/// rows at a time: the finest depth's whole spline grid (holding every cell within two of an
+/// active cell) is the largest array of a reconstruction, and never exists.
+std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
+                                                  const std::vector<char>& solved,
+                                                  const CellGrid& coarser_grid,
+                                                  const std::vector<Eigen::Vector3d>& coarser,
+                                                  const std::vector<double>& finer);
+
 /// Completes the system for the nodes with solved[v]: rows  int grad phi_u . grad phi_v +
 /// screening * sum_p phi_u(p) phi_v(p)  and  b += screening * sum_p phi_v(p) / 2, over the points
 /// in `runs` (the cells holding points); screening = alpha * (mean area) * 2^d.
