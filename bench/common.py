@@ -8,7 +8,7 @@ import subprocess
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 MESHES = os.path.join(HERE, "..", "..", "shared", "data", "meshes")
-CLI = os.path.join(HERE, "..", "build", "sdfcontour")
+CLI = os.environ.get("SDFCONTOUR_CLI", os.path.join(HERE, "..", "build", "sdfcontour"))
 
 
 def timed(cmd):

@@ -177,7 +177,8 @@ ContourOptions contour_options(const py::dict& o) {
     c.band.truncation = std::stod(truncation);
   }
   c.bricks.size = get<int>(o, "brick_size", c.bricks.size);
-  c.enforce_signs = get<bool>(o, "enforce_signs", c.enforce_signs);
+  const std::string signs = get<std::string>(o, "sign_constraints", "auto");
+  c.enforce_signs = signs == "on" ? Switch::On : signs == "off" ? Switch::Off : Switch::Auto;
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
@@ -272,6 +273,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["noise_level"] = r.noise_level;
   stats["smoothed"] = r.smoothed;
   stats["pieces_removed"] = r.pieces_removed;
+  stats["sign_constraints"] = r.sign_constraints;
   stats["sign_violations"] = r.sign_violations;
   stats["sign_violations_left"] = r.sign_violations_left;
   stats["sign_constraints_dropped"] = r.sign_constraints_dropped;

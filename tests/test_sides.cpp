@@ -3,6 +3,7 @@
 // mesh at 64^3 end on the wrong side of the Poisson surface (bench/wrong_side.py).
 #include <gtest/gtest.h>
 
+#include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_sdf.h"
 #include "sdfcontour/mesh_transform.h"
@@ -49,10 +50,12 @@ TEST(Sides, SamplesStayOnTheirSide) {
       const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
       const Grid grid = sample_grid(sdf, n, Bounds{});
       ContourOptions with, without;
-      without.enforce_signs = false;
+      without.enforce_signs = Switch::Off;
       const ContourResult held = contour(grid_input(grid), nullptr, with);
       const ContourResult free = contour(grid_input(grid), nullptr, without);
       ASSERT_TRUE(held.fallback.empty()) << held.fallback;
+      EXPECT_TRUE(held.sign_constraints);  // automatic below 128 samples per axis
+      EXPECT_FALSE(free.sign_constraints);
       const Sides a = wrong_sides(grid, *held.mesh), b = wrong_sides(grid, *free.mesh);
       std::cout << name << " " << n << "^3: wrong side " << b.wrong << " (deepest " << b.deepest
                 << " h) -> " << a.wrong << " (deepest " << a.deepest << " h); chi disagreed at "
@@ -62,4 +65,21 @@ TEST(Sides, SamplesStayOnTheirSide) {
       EXPECT_LE(3 * a.wrong, b.wrong);
       EXPECT_LT(5 * held.sign_violations_left, held.sign_violations);
     }
+}
+
+// From 128 samples per axis the solved surface is already within the samples' noise, and the
+// corrections cost accuracy (docs/sides.md): by default they are off there, unless asked for.
+TEST(Sides, ConstraintsAutomaticOnlyBelow128SamplesPerAxis) {
+  // A small sphere in a wide box: few samples near the surface, quick.
+  const auto sphere = make_builtin_shape("sphere");
+  const Bounds wide{Eigen::Vector3d::Constant(-4.0), Eigen::Vector3d::Constant(4.0)};
+  ContourOptions automatic, on;
+  on.enforce_signs = Switch::On;
+  const Grid fine = sample_grid(*sphere, 128, wide);
+  const ContourResult a = contour(grid_input(fine), nullptr, automatic);
+  EXPECT_FALSE(a.sign_constraints);
+  EXPECT_EQ(a.sign_violations, 0);
+  EXPECT_TRUE(contour(grid_input(fine), nullptr, on).sign_constraints);
+  EXPECT_TRUE(
+      contour(grid_input(sample_grid(*sphere, 127, wide)), nullptr, automatic).sign_constraints);
 }

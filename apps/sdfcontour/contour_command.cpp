@@ -26,9 +26,11 @@ struct ContourArgs {
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
-  bool fn = false, serial_triangulation = false, no_sign_constraints = false;
+  bool fn = false, serial_triangulation = false, no_sign_constraints = false,
+       sign_constraints = false;
   double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
-         sign_margin = SignConstraintOptions{}.margin;
+         sign_margin = SignConstraintOptions{}.margin,
+         sign_trigger = SignConstraintOptions{}.trigger;
   std::uint64_t seed = 0;
   RunOptions run;
   PoissonArgs poisson = [] {
@@ -92,11 +94,17 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.band.margin = a.margin;
   require_range("--sign-band", a.sign_band, 0, 1e6);
   require_range("--sign-margin", a.sign_margin, 0, 4);
-  opt.enforce_signs = !a.no_sign_constraints;
+  if (a.sign_constraints && a.no_sign_constraints)
+    throw Error("--sign-constraints and --no-sign-constraints contradict each other");
+  opt.enforce_signs = a.sign_constraints      ? Switch::On
+                      : a.no_sign_constraints ? Switch::Off
+                                              : Switch::Auto;
   opt.sign_band = a.sign_band;
   require_range("--sign-radius", a.sign_radius, 0, 16);
   opt.sign_radius = a.sign_radius;
   opt.sign_constraints.margin = a.sign_margin;
+  require_range("--sign-trigger", a.sign_trigger, 0, 1);
+  opt.sign_constraints.trigger = a.sign_trigger;
   return opt;
 }
 
@@ -155,6 +163,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   if (r.fallback.empty() && (a.method == "gcp" || a.method == "gtcp"))
     j["pieces_removed"] = r.pieces_removed;
   if (r.fallback.empty() && a.method == "gcp") {
+    j["sign_constraints"] = r.sign_constraints;
     j["sign_violations"] = r.sign_violations;
     j["sign_violations_left"] = r.sign_violations_left;
     j["sign_constraints_dropped"] = r.sign_constraints_dropped;
@@ -298,18 +307,24 @@ Command add_contour_command(CLI::App& app) {
                 "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
                 "axis, 4 from 128")
       ->capture_default_str();
+  c->add_flag("--sign-constraints", a->sign_constraints,
+              "GCP: correct the indicator where samples next to the surface would end on the "
+              "wrong side of the mesh (default: below 128 samples per axis, where it is more "
+              "accurate; finer grids are more accurate without)");
   c->add_flag("--no-sign-constraints", a->no_sign_constraints,
-              "GCP: do not correct the indicator where samples next to the surface would end "
-              "on the wrong side of the mesh (the paper's reconstruction)");
+              "GCP: do not correct the indicator (the paper's reconstruction)");
   const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
                                                           {"--sign-radius", &a->sign_radius},
-                                                          {"--sign-margin", &a->sign_margin}};
+                                                          {"--sign-margin", &a->sign_margin},
+                                                          {"--sign-trigger", &a->sign_trigger}};
   const char* sign_help[] = {
       "GCP: samples within this many spacings of the surface keep their side",
       "GCP: a correction is a smooth bump of this many spacings around the sample",
       "GCP: and lie at least this fraction of their distance inside (outside) the mesh, as the "
-      "indicator's slope there measures it"};
-  for (int i = 0; i < 3; ++i)
+      "indicator's slope there measures it",
+      "GCP: a sample is corrected once it keeps less than this fraction of that margin (0: only "
+      "samples on the wrong side)"};
+  for (int i = 0; i < 4; ++i)
     c->add_option(sign_options[i].first, *sign_options[i].second, sign_help[i])
         ->capture_default_str();
   c->add_option("--grid", a->grid,

@@ -31,6 +31,15 @@ enum class GradientSource { Regular, Delaunay, Knn };
 GradientSource parse_gradient_source(const std::string& name);
 std::string gradient_source_name(GradientSource source);
 
+/// An option that is on, off, or chosen from the input.
+enum class Switch { Auto, On, Off };
+
+/// Whether GCP constrains the samples' sides by default, for samples `samples_per_axis` across:
+/// below 128. Measured (docs/sides.md): on the shared meshes they lower GCP's L1 to 0.958x at
+/// 32^3 and 0.974x at 64^3; on bunny, spot and armadillo they raise it by 1.5-9% at 128^3 and
+/// 3.5-8% at 256^3 and 512^3, where the solved surface is already within the samples' noise.
+bool auto_sign_constraints(double samples_per_axis);
+
 struct ContourOptions {
   Method method = Method::Gcp;
   bool want_mesh = true;     ///< produce the method's mesh
@@ -45,8 +54,9 @@ struct ContourOptions {
   BrickOptions bricks;
   PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes; depth 0: automatic
   /// GCP: the samples within sign_band spacings of the surface (in the band proper) constrain the
-  /// indicator so that each ends on its own side of the mesh (poisson.h, SignedSamples).
-  bool enforce_signs = true;
+  /// indicator so that each ends on its own side of the mesh (poisson.h, SignedSamples). Auto:
+  /// where auto_sign_constraints says so.
+  Switch enforce_signs = Switch::Auto;
   double sign_band = 2.0;
   double sign_radius = 1.5;  ///< the correction's radius, in spacings (SignConstraintOptions)
   SignConstraintOptions sign_constraints;
@@ -105,6 +115,7 @@ struct ContourResult {
   /// and after it (0 unless the sweeps ran out).
   long sign_violations = 0, sign_violations_left = 0;
   bool sign_constraints_dropped = false;  ///< they changed the topology: the solved surface kept
+  bool sign_constraints = false;          ///< gcp: the samples' sides constrained the indicator
   bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's

@@ -85,6 +85,10 @@ struct SignConstraintOptions {
   /// margin * |value| * |grad chi| there (measured on the solved chi): 1 asks the surface to keep
   /// the sample's distance to the first order, 0 only its side.
   double margin = 1.0;
+  /// A sample is corrected (to the full margin) only once chi is off the iso-value by less than
+  /// trigger * margin * |value| * |grad chi| on its side: 1 corrects every sample short of the
+  /// margin, 0 only samples on the wrong side.
+  double trigger = 1.0;
   int max_sweeps = 20;  ///< passes over the samples (each sequential, so deterministic)
   /// A correction is a smooth bump of this radius (input units) around the sample, so that the
   /// surface moves past it; 0 changes only its cell's corners, which next to a coarse sampling

@@ -118,7 +118,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
             tie_tolerance=1e-6, brick_size=64, brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
-            solver_tolerance=1e-4, sign_constraints=True, batch_size=65536, progress=False,
+            solver_tolerance=1e-4, sign_constraints="auto", batch_size=65536, progress=False,
             return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
@@ -155,10 +155,11 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     tie_tolerance : float
         Contact point c is discarded only if it is inside another sample's sphere by more than
         this relative tolerance.
-    sign_constraints : bool
+    sign_constraints : bool or "auto"
         GCP: correct the reconstruction where samples within 2 spacings of the surface would end
-        on the wrong side of the mesh (False: the paper's reconstruction; CLI
-        ``--no-sign-constraints``).
+        on the wrong side of the mesh. "auto": below 128 samples per axis, where it is more
+        accurate (finer grids are more accurate without); False: the paper's reconstruction
+        (CLI ``--sign-constraints`` / ``--no-sign-constraints``).
     brick_size : int
         GCP triangulates the band in bricks of this many spacings (0: one triangulation).
     brick_halo : float
@@ -205,7 +206,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
                  solver_tolerance, progress)
-    o["enforce_signs"] = bool(sign_constraints)
+    if isinstance(sign_constraints, str):
+        if sign_constraints != "auto":
+            raise ValueError(f"sign_constraints must be True, False or 'auto', got {sign_constraints!r}")
+        o["sign_constraints"] = "auto"
+    else:
+        o["sign_constraints"] = "on" if sign_constraints else "off"
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if return_stats:
         return out["V"], out["F"], out["stats"]

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <queue>
 
 #include "bspline.h"
 
@@ -14,6 +15,43 @@ namespace {
 // Where a unit-cube point takes chi from (Indicator::locate), with the cell's corner nodes.
 struct Location : Indicator::Location {
   std::array<int, 8> nodes{};
+};
+
+// The located samples by cube of side `reach`: the samples within reach of one.
+class SampleBuckets {
+ public:
+  SampleBuckets(const std::vector<Eigen::Vector3d>& unit, const std::vector<Location>& where,
+                double reach)
+      : unit_(unit), reach_(reach * (1 + 1e-6)) {  // slack for the bump's rounding
+    for (std::size_t s = 0; s < unit.size(); ++s)
+      if (where[s].depth >= 0) sorted_.push_back({key(bucket(unit[s])), int(s)});
+    std::sort(sorted_.begin(), sorted_.end());
+  }
+  /// Calls f(q) for every located sample q within reach of sample s (s included).
+  template <class F>
+  void near(int s, F&& f) const {
+    const auto b = bucket(unit_[std::size_t(s)]);
+    for (long i = b[0] - 1; i <= b[0] + 1; ++i)
+      for (long j = b[1] - 1; j <= b[1] + 1; ++j)
+        for (long k = b[2] - 1; k <= b[2] + 1; ++k) {
+          if (i < 0 || j < 0 || k < 0) continue;
+          const Key at = key({i, j, k});
+          for (auto it =
+                   std::lower_bound(sorted_.begin(), sorted_.end(), std::pair<Key, int>{at, -1});
+               it != sorted_.end() && it->first == at; ++it)
+            if ((unit_[std::size_t(it->second)] - unit_[std::size_t(s)]).norm() <= reach_)
+              f(it->second);
+        }
+  }
+
+ private:
+  std::array<long, 3> bucket(const Eigen::Vector3d& u) const {
+    return {long(u[0] / reach_), long(u[1] / reach_), long(u[2] / reach_)};
+  }
+  static Key key(const std::array<long, 3>& b) { return pack(b[0], b[1], b[2]); }
+  const std::vector<Eigen::Vector3d>& unit_;
+  double reach_;
+  std::vector<std::pair<Key, int>> sorted_;
 };
 
 }  // namespace
@@ -33,15 +71,6 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
     static_cast<Indicator::Location&>(at) = chi.locate(u);
     if (at.depth >= 0) at.nodes = tree.level(at.depth).corner_nodes(at.cell);
   });
-  // Per depth, the nodes a correction moved during the current sweep.
-  std::vector<std::vector<char>> moved(tree.levels.size());
-  std::vector<std::pair<int, int>> moved_list;
-  auto mark_moved = [&](int depth, int node) {
-    auto& flags = moved[std::size_t(depth)];
-    if (flags.empty()) flags.assign(tree.level(depth).nodes.size(), 0);
-    if (!flags[std::size_t(node)])
-      flags[std::size_t(node)] = 1, moved_list.push_back({depth, node});
-  };
   const double radius_unit = options.radius / frame.size;
   // Adds gap * k(|node - p|) / sum_c w_c k_c to the nodes within the radius, k(d) = (1 -
   // d^2/r^2)^2: chi(p) moves by exactly gap, its surroundings smoothly less.
@@ -73,7 +102,7 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
           const double kv = kernel(i, j, long(*it & kKeyMask));
           if (kv == 0) continue;
           const int node = int(it - L.nodes.begin());
-          x[std::size_t(node)] += scale * kv, mark_moved(L.depth, node);
+          x[std::size_t(node)] += scale * kv;
         }
       }
   };
@@ -108,56 +137,62 @@ SignCorrection enforce_signs(Indicator& chi, double iso, const SignedSamples& si
     double& ms = margin[std::size_t(s)];
     if (ms < 0) ms = options.margin * std::abs(value) / frame.size * g.norm();
     // Inside: chi >= iso + margin; outside: chi <= iso - margin.
+    const double slack = (1 - options.trigger) * ms;  // of the margin, tolerated
     const double gap = (value < 0 ? iso + ms : iso - ms) - v;
-    if (value < 0 ? gap <= 0 : gap >= 0) return false;
+    if (value < 0 ? gap <= slack : gap >= -slack) return false;
     if (fix) {
       if (radius_unit <= 0) {
         double sum_w2 = 0;
         for (const double wc : w) sum_w2 += wc * wc;
-        for (int c = 0; c < 8; ++c) {
+        for (int c = 0; c < 8; ++c)
           x[std::size_t(at.nodes[std::size_t(c)])] += gap * w[std::size_t(c)] / sum_w2;
-          mark_moved(at.depth, at.nodes[std::size_t(c)]);
-        }
       } else {
         bump(L, x, p, at, w, gap);
       }
     }
     return true;
   };
-  // Whether any corner of sample s's cell was moved during the current sweep. A sample none of
-  // whose corners moved is exactly as violated (or not) as before.
-  auto corners_moved = [&](Eigen::Index s) {
-    const Location& at = where[std::size_t(s)];
-    if (at.depth < 0) return false;
-    const auto& flags = moved[std::size_t(at.depth)];
-    if (flags.empty()) return false;
-    for (int c = 0; c < 8; ++c)
-      if (flags[std::size_t(at.nodes[std::size_t(c)])]) return true;
-    return false;
-  };
+  // A correction at sample s moves nodes within the bump's radius of it (radius 0: its cell's
+  // corners), so it can change the verdict only of samples within that plus a cell diagonal.
+  double diagonal = 0;
+  for (const Location& at : where)
+    if (at.depth >= 0) diagonal = std::max(diagonal, std::sqrt(3.0) * tree.level(at.depth).h);
+  const SampleBuckets buckets(unit, where, (radius_unit > 0 ? radius_unit : diagonal) + diagonal);
   // Which samples are violated, in parallel (chi is only read; each sample writes only its own
-  // margin and flag); with `all` unset, only those whose corners moved are looked at again.
+  // margin and flag).
   std::vector<char> violated(static_cast<std::size_t>(m), 0);
-  auto count = [&](bool all) {
-    tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index s) {
-      if (all || corners_moved(s)) violated[std::size_t(s)] = visit(s, false);
+  auto recount = [&](const std::vector<int>& samples) {
+    tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t q) {
+      violated[std::size_t(samples[q])] = visit(samples[q], false);
     });
     return std::count(violated.begin(), violated.end(), 1);
   };
-  // A sweep visits the samples in order and corrects each that is violated when its turn comes
-  // (a sample not violated before the sweep and with no corner moved since is skipped: visiting
-  // it would find it satisfied).
-  auto sweep = [&]() {
-    for (Eigen::Index s = 0; s < m; ++s)
-      if (violated[std::size_t(s)] || corners_moved(s)) visit(s, true);
-  };
-  result.violations = result.violations_left = count(true);
+  std::vector<int> all(static_cast<std::size_t>(m));
+  for (std::size_t q = 0; q < all.size(); ++q) all[q] = int(q);
+  result.violations = result.violations_left = recount(all);
+  // A sweep corrects, in sample order, each sample violated when its turn comes. Only samples
+  // violated before the sweep or near one corrected earlier in it can be: a queue in sample
+  // order holds just those (the same corrections as visiting every sample).
+  std::vector<char> queued(static_cast<std::size_t>(m), 0);
   while (result.violations_left > 0 && result.sweeps < options.max_sweeps) {
-    sweep();
+    std::priority_queue<int, std::vector<int>, std::greater<int>> queue;
+    for (Eigen::Index s = 0; s < m; ++s)
+      if (violated[std::size_t(s)]) queue.push(int(s)), queued[std::size_t(s)] = 1;
+    std::vector<int> touched;  // samples whose verdict a correction may have changed
+    while (!queue.empty()) {
+      const int s = queue.top();
+      queue.pop();
+      queued[std::size_t(s)] = 0;
+      if (!visit(s, true)) continue;
+      buckets.near(s, [&](int q) {
+        touched.push_back(q);
+        if (q > s && !queued[std::size_t(q)]) queue.push(q), queued[std::size_t(q)] = 1;
+      });
+    }
     ++result.sweeps;
-    result.violations_left = count(false);
-    for (const auto& [depth, node] : moved_list) moved[std::size_t(depth)][std::size_t(node)] = 0;
-    moved_list.clear();
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    result.violations_left = recount(touched);
   }
   return result;
 }
