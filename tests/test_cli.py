@@ -243,6 +243,9 @@ with tempfile.TemporaryDirectory() as d:
         check("sample runs", r.returncode == 0, r.stderr)
         grid = np.load(prefix + ".npy")
         check("sample grid", grid.shape == (24, 24, 24) and (grid < 0).any() and (grid > 0).any(), grid.shape)
+        # The sword's blade is thinner than a spacing at 8^3: no sample inside.
+        expect_error("sample too coarse", ["sample", os.path.join(meshes, "sword.obj"), "--res", "8", "-o", p("sword")],
+                     "thinner than a spacing", [p("sword.npy"), p("sword_gtcp.ply"), p("sword_mesh.ply")])
         r = run("sample", os.path.join(meshes, "spot.obj"), "--random", "3000", "--seed", "2", "-o", p("spot_random"), "-q")
         check("sample random", r.returncode == 0 and np.load(p("spot_random.npy")).shape == (3000, 4), r.stderr)
         r = run("contour", prefix + ".npy", "-o", p("spot_mc.ply"), "--method", "mc", "-q")

@@ -46,6 +46,11 @@ Samples write_grid(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds
   const double h = (bounds.max - bounds.min).maxCoeff() / (a.resolution - 1);
   const Grid grid = truncate > 0 ? sample_grid_truncated(sdf, a.resolution, bounds, truncate * h)
                                  : sample_grid(sdf, a.resolution, bounds);
+  // A shape thinner than a spacing can fall between the samples.
+  if (grid.values.minCoeff() >= 0 || grid.values.maxCoeff() < 0)
+    throw Error("no sample of the " + std::to_string(a.resolution) +
+                "^3 grid lies inside the mesh (or none outside): it is thinner than a spacing "
+                "there; sample with a larger --res");
   const std::size_t n = std::size_t(a.resolution);
   if (vdb)
     write_vdb_level_set(a.prefix, grid, a.half_width);

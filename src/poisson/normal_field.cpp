@@ -46,34 +46,39 @@ void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<U
                                                    w[2][std::size_t(dz + 1)] * weighted;
     }
   });
-  // The runs holding depth-d splats, the cells they touch, and the indices of their 27 targets.
-  std::vector<std::uint32_t> splatting;
+  // The cells holding depth-d splats, sorted, with their runs.
+  std::vector<std::pair<Key, std::uint32_t>> splatting;
   for (std::size_t r = 0; r < runs.cells.size(); ++r)
-    if (has_splat[r]) splatting.push_back(std::uint32_t(r));
-  G.keys.clear();
-  G.keys.reserve(27 * splatting.size());
-  for (std::uint32_t r : splatting) {
-    const auto c = runs.cell(L, r);
-    for (int q = 0; q < 27; ++q)
-      G.keys.push_back(pack(c[0] + q % 3, c[1] + q / 3 % 3, c[2] + q / 9));  // offset +1 keys
-  }
-  sort_unique(G.keys);
+    if (has_splat[r]) splatting.push_back({L.cells[runs.cells[r][0]], std::uint32_t(r)});
+  tbb::parallel_sort(splatting.begin(), splatting.end());
+  std::vector<Key> source(splatting.size());
+  for (std::size_t t = 0; t < source.size(); ++t) source[t] = splatting[t].first;
+  const LineIndex source_lines(source);
+  // The cells they touch: each shifted by -1..1 per axis, i.e. by 0..2 in offset (+1) keys.
+  G.keys = shifted_union(source, {0, 0, 0}, {2, 2, 2}, L.res + 1);
   G.lines = LineIndex(G.keys);
   V.assign(G.keys.size(), Eigen::Vector3d::Zero());
-  std::vector<std::array<int, 27>> target(splatting.size());
-  tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
-    const auto c = runs.cell(L, splatting[t]);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx)
-          target[t][std::size_t(slot(dx, dy, dz))] = G.find(c[0] + dx, c[1] + dy, c[2] + dz);
+  // Each cell gathers, offset by offset in slot order, the sum of the source cell that offset
+  // away: a fixed order whatever the threads. Source lines are walked with cursors.
+  for_each_line(G.lines, G.keys, [&](long gi, long gj, std::size_t first, std::size_t last) {
+    LineCursor from[9];  // source line (gi - 1 - dx, gj - 1 - dy) at (dx + 1) + 3 (dy + 1)
+    for (int t = 0; t < 9; ++t)
+      from[t] = LineCursor(source, source_lines.line(gi - 1 - (t % 3 - 1), gj - 1 - (t / 3 - 1)));
+    for (std::size_t g = first; g < last; ++g) {
+      const long gk = long(G.keys[g] & kKeyMask);
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int t = (dx + 1) + 3 * (dy + 1);
+            if (gk - 1 - dz < 0) continue;
+            const int at = from[t].find(pack(gi - 1 - dx, gj - 1 - dy, gk - 1 - dz));
+            if (at >= 0)
+              sum += cell_sums[splatting[std::size_t(at)].second][std::size_t(slot(dx, dy, dz))];
+          }
+      V[g] = sum;
+    }
   });
-  // One offset at a time: for a fixed offset the runs' target cells are distinct, so the writes
-  // do not race and every cell adds its terms in the same order whatever the threads.
-  for (int q = 0; q < 27; ++q)
-    tbb::parallel_for(std::size_t(0), splatting.size(), [&](std::size_t t) {
-      V[std::size_t(target[t][std::size_t(q)])] += cell_sums[splatting[t]][std::size_t(q)];
-    });
 }
 
 // e[v] += the restriction of the finer depth's finer-splat divergence: a depth-d hat is the sum of
