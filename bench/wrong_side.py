@@ -47,8 +47,11 @@ def main():
             ratios = {v: [] for v in variants or []}
             for name in names:
                 prefix = os.path.join(tmp, name)
-                subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
-                                str(n), "-o", prefix, "--quiet"], check=True, capture_output=True)
+                r = subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
+                                    str(n), "-o", prefix, "--quiet"], capture_output=True, text=True)
+                if r.returncode != 0:  # e.g. a shape thinner than a spacing
+                    print(f"| {name} | {n}³ | no grid: {r.stderr.strip()} |", flush=True)
+                    continue
                 grid = np.load(prefix + ".npy")
                 h = 2.0 / (n - 1)
                 cells = []
