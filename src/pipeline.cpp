@@ -337,8 +337,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     regular.reset();
     delaunay.reset();
     release_resident_pages(input);
-    // The points and normals are lent to the reconstruction rather than copied (at 512^3 a copy
-    // is ~180 MB on top of its peak), and given back after.
+    // The points and normals go to the reconstruction rather than a copy of them (at 512^3,
+    // 180 MB): freed there once mapped into its own copy unless asked for, else given back.
     ContactPoints& lent = *result.contact_points;
     OrientedPoints oriented{std::move(lent.points), std::move(lent.normals), {}};
     PoissonResult p = stages.run(
@@ -346,6 +346,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
         [&] {
           SignConstraintOptions sopt = options.sign_constraints;
           sopt.radius = options.sign_radius * result.band_spacing;
+          if (!options.want_points)
+            return poisson_reconstruct(std::move(oriented), popt, sides, sopt);
           return poisson_reconstruct(oriented, popt, sides, sopt);
         });
     lent.points = std::move(oriented.points);

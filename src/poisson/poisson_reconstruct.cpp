@@ -11,6 +11,7 @@
 //  indicator.h    chi anywhere; extraction.h  its iso-surface, watertight
 //  sign_constraints.h  optionally, chi corrected to keep samples of known side on their side
 #include <chrono>
+#include <functional>
 
 #include "../enum_names.h"
 #include "cascade.h"
@@ -89,16 +90,19 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   return poisson_reconstruct(input, o, SignedSamples{}, SignConstraintOptions{});
 }
 
-PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o,
-                                  const SignedSamples& sides,
-                                  const SignConstraintOptions& sign_options) {
+namespace {
+
+// The reconstruction from the points in the unit cube that `unit_points` makes (after checking
+// the input); see poisson_reconstruct.
+PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_points,
+                          const PoissonOptions& o, const SignedSamples& sides,
+                          const SignConstraintOptions& sign_options) {
   using namespace poisson;
   PoissonResult result;
   StageTimer stage(result, o);
   stage.start("setup");
-  validate(input, o);
   const int D = o.depth, d_min = std::min(o.full_depth, o.depth);
-  UnitPoints unit = to_unit_cube(input, o.scale);
+  UnitPoints unit = unit_points();
 
   stage.start("density");
   const MortonRuns runs(unit.points, D);
@@ -166,6 +170,32 @@ PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOpti
   });
   stage.stop();
   return result;
+}
+
+}  // namespace
+
+PoissonResult poisson_reconstruct(const OrientedPoints& input, const PoissonOptions& o,
+                                  const SignedSamples& sides,
+                                  const SignConstraintOptions& sign_options) {
+  return reconstruct(
+      [&] {
+        poisson::validate(input, o);
+        return poisson::to_unit_cube(input, o.scale);
+      },
+      o, sides, sign_options);
+}
+
+PoissonResult poisson_reconstruct(OrientedPoints&& input, const PoissonOptions& o,
+                                  const SignedSamples& sides,
+                                  const SignConstraintOptions& sign_options) {
+  return reconstruct(
+      [&] {
+        poisson::validate(input, o);
+        poisson::UnitPoints unit = poisson::to_unit_cube(input, o.scale);
+        input = OrientedPoints();
+        return unit;
+      },
+      o, sides, sign_options);
 }
 
 }  // namespace sdfcontour
