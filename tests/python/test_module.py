@@ -62,7 +62,13 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     V, F, stats = sdfcontour.contour(np.load(tmp_path / "b.npy"), return_stats=True)
     np.testing.assert_array_equal(V, V_cli)
     np.testing.assert_array_equal(F, F_cli)
-    assert stats["sign_violations"] > 0 and not stats["sign_constraints_dropped"]
+    # At 32^3 the automatic setting turns the sign constraints on; forcing them gives the same mesh.
+    assert stats["sign_constraints"] and stats["sign_violations"] > 0
+    assert not stats["sign_constraints_dropped"]
+    V_on, _ = sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints=True)
+    np.testing.assert_array_equal(V_on, V)
+    with pytest.raises(ValueError, match="sign_constraints"):
+        sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints="sometimes")
     # Without the sign constraints: the CLI's --no-sign-constraints mesh, a different one.
     subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "free.ply"), "-q",
                     "--no-sign-constraints"], check=True, stdout=subprocess.DEVNULL)
