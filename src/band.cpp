@@ -193,9 +193,9 @@ void validate_band_options(const BandOptions& options) {
 
 BandSamples select_band(const GridView& grid, const BandOptions& given) {
   BandOptions options = given;
-  if (options.band == 0)
-    options.band = auto_band(double(*std::max_element(grid.dims.begin(), grid.dims.end())));
   BandSamples out;
+  out.samples_per_axis = double(*std::max_element(grid.dims.begin(), grid.dims.end()));
+  if (options.band == 0) options.band = auto_band(out.samples_per_axis);
   const BandTest keep = begin_band(out, grid, options, grid.spacing().maxCoeff());
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   // Per-slab counts, then each slab fills its own rows: C order for any thread count.
@@ -248,8 +248,9 @@ BandSamples select_band(const Samples& samples, const BandOptions& given, double
                    : volume > 0 ? std::cbrt(volume / double(n))
                                 : extent.maxCoeff() / std::cbrt(n);
   BandOptions options = given;
-  if (options.band == 0) options.band = auto_band(extent.maxCoeff() / h + 1);
   BandSamples out;
+  out.samples_per_axis = extent.maxCoeff() / h + 1;
+  if (options.band == 0) options.band = auto_band(out.samples_per_axis);
   const BandTest keep = begin_band(out, samples.values, options, h);
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < n; ++i)

@@ -38,19 +38,10 @@ std::string gradient_source_name(GradientSource source) {
   return detail::name_of(kGradientSources, source);
 }
 
-namespace {
-
-// Samples across the points' longest side, `spacing` apart.
-double samples_across(const PointMatrix& points, double spacing) {
-  const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
-  return extent / spacing + 1;
-}
-
-}  // namespace
-
 int auto_poisson_depth(const PointMatrix& points, double spacing) {
   if (points.rows() == 0 || !(spacing > 0)) return 8;
-  const double samples_per_axis = samples_across(points, spacing);
+  const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
+  const double samples_per_axis = extent / spacing + 1;
   return samples_per_axis > 257 ? 10 : samples_per_axis > 129 ? 9 : 8;
 }
 
@@ -315,11 +306,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     SignedSamples sides;
     result.sign_constraints =
         method == Method::Gcp &&
-        (options.enforce_signs == Switch::Auto
-             ? auto_sign_constraints(
-                   grid ? double(*std::max_element(grid->dims.begin(), grid->dims.end()))
-                        : samples_across(scattered->samples.points, band.spacing))
-             : options.enforce_signs == Switch::On);
+        (options.enforce_signs == Switch::Auto ? auto_sign_constraints(band.samples_per_axis)
+                                               : options.enforce_signs == Switch::On);
     if (result.sign_constraints) {
       const double reach = options.sign_band * band.spacing;
       std::vector<Eigen::Index> near;

@@ -69,6 +69,9 @@ struct BandSamples {
   std::vector<char> core;    ///< for each kept sample, 1 if in the band proper (not the margin)
   double spacing = 0;        ///< the spacing h the band is measured in
   double band = 0;           ///< the band used, in spacings (auto resolved)
+  /// Samples across the input's longest side (a grid's largest dimension): what the automatic
+  /// choices (auto_band, auto_sign_constraints) go by.
+  double samples_per_axis = 0;
   Truncation truncation;
 };
 

@@ -93,6 +93,8 @@ struct StageTime {
 
 struct ContourResult {
   std::optional<Mesh> mesh;
+  /// GCP's or GTCP's contact points. Without want_points, a GCP mesh's reconstruction takes
+  /// their points and normals (freed there): only the counts and sample indices remain.
   std::optional<ContactPoints> contact_points;
   int samples = 0;                   ///< samples in the input
   int band_samples = 0;              ///< of those, in the band (triangulated); 0 for mc alone

@@ -111,25 +111,27 @@ void restrict_divergence(const OctreeLevel& L, const OctreeLevel& F,
 }  // namespace
 
 CellGrid spline_grid(const OctreeLevel& L) {
-  CellGrid G;
-  // Keys offset by +1: the cells shifted by -1..3 along each axis hold cells -2..+2 around them.
-  G.keys = shifted_union(L.cells, {-1, -1, -1}, {3, 3, 3}, L.res + 1);
-  G.lines = LineIndex(G.keys);
-  return G;
+  return spline_grid(L, -1, L.res);  // every index a grid cell can have
 }
 
 CellGrid spline_grid(const OctreeLevel& L, long first, long last) {
-  // The active cells within two of [first, last] make those grid cells (and a few more, dropped).
+  // The active cells within two of [first, last] make those grid cells (and a few more, dropped);
+  // the whole level is used in place.
   const auto from =
       std::lower_bound(L.cells.begin(), L.cells.end(), pack(std::max(first - 2, 0L), 0, 0));
   const auto to = std::lower_bound(L.cells.begin(), L.cells.end(), pack(last + 3, 0, 0));
+  const bool whole = from == L.cells.begin() && to == L.cells.end();
+  std::vector<Key> part;
+  if (!whole) part.assign(from, to);
+  const std::vector<Key>& cells = whole ? L.cells : part;
   CellGrid G;
-  G.keys = shifted_union(std::vector<Key>(from, to), {-1, -1, -1}, {3, 3, 3}, L.res + 1);
-  // Offset keys: first index i + 1.
+  // Keys offset by +1: the cells shifted by -1..3 along each axis hold cells -2..+2 around them.
+  G.keys = shifted_union(cells, {-1, -1, -1}, {3, 3, 3}, L.res + 1);
   const auto keep_from =
       std::lower_bound(G.keys.begin(), G.keys.end(), pack(std::max(first + 1, 0L), 0, 0));
   const auto keep_to = std::lower_bound(G.keys.begin(), G.keys.end(), pack(last + 2, 0, 0));
-  G.keys = std::vector<Key>(keep_from, keep_to);
+  if (keep_from != G.keys.begin() || keep_to != G.keys.end())
+    G.keys = std::vector<Key>(keep_from, keep_to);
   G.lines = LineIndex(G.keys);
   return G;
 }

@@ -58,17 +58,23 @@ ScreeningMoments screening_moments(const OctreeLevel& L, const CellRuns& runs,
   return s;
 }
 
+// b = -(b + finer) on the solved nodes, 0 elsewhere: the right-hand side from the coarser splats'
+// divergence b.
+void add_finer_and_negate(const std::vector<char>& solved, const std::vector<double>& finer,
+                          std::vector<double>& b) {
+  tbb::parallel_for(std::size_t(0), b.size(),
+                    [&](std::size_t v) { b[v] = solved[v] ? -(b[v] + finer[v]) : 0.0; });
+}
+
 }  // namespace
 
 std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<char>& solved,
                                      const CellGrid& grid,
                                      const std::vector<Eigen::Vector3d>& coarser,
                                      const std::vector<double>& finer) {
-  const std::size_t nn = L.nodes.size();
-  std::vector<double> b(nn, 0.0);
+  std::vector<double> b(L.nodes.size(), 0.0);
   divergence(L, grid, coarser, b, &solved);
-  tbb::parallel_for(std::size_t(0), nn,
-                    [&](std::size_t v) { b[v] = solved[v] ? -(b[v] + finer[v]) : 0.0; });
+  add_finer_and_negate(solved, finer, b);
   return b;
 }
 
@@ -77,8 +83,7 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   const CellGrid& coarser_grid,
                                                   const std::vector<Eigen::Vector3d>& coarser,
                                                   const std::vector<double>& finer) {
-  const std::size_t nn = L.nodes.size();
-  std::vector<double> b(nn, 0.0);
+  std::vector<double> b(L.nodes.size(), 0.0);
   // Sixteen slabs: each prolongs about a sixteenth of the grid (plus its 3-row margin).
   const long thickness = std::max(8L, (L.res + 1) / 16);
   for (long first = 0; first <= L.res; first += thickness) {
@@ -86,8 +91,7 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
     const CellGrid slab = spline_grid(L, first - 2, last);
     divergence(L, slab, prolong_splines(coarser_grid, slab, coarser), b, &solved, {first, last});
   }
-  tbb::parallel_for(std::size_t(0), nn,
-                    [&](std::size_t v) { b[v] = solved[v] ? -(b[v] + finer[v]) : 0.0; });
+  add_finer_and_negate(solved, finer, b);
   return b;
 }
 
