@@ -2,7 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <mutex>
@@ -99,16 +99,19 @@ bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, con
                         const Box& box, double max_weight, double margin, Box& need) {
   auto w = [&](int i) { return values[i] * values[i]; };
   const Vector3d p0 = p.row(v[0]).transpose();
-  Eigen::Matrix3d a;
-  Vector3d b;
+  // The orthocentre c = p0 + x solves 2 d_r . x = |d_r|^2 - w_r + w_0 (r = 1..3), by Cramer's
+  // rule with cross products.
+  Vector3d d[3];
+  double b[3];
   for (int r = 0; r < 3; ++r) {
-    const Vector3d d = p.row(v[r + 1]).transpose() - p0;
-    a.row(r) = 2 * d.transpose();
-    b[r] = d.squaredNorm() - w(v[r + 1]) + w(v[0]);
+    d[r] = p.row(v[r + 1]).transpose() - p0;
+    b[r] = (d[r].squaredNorm() - w(v[r + 1]) + w(v[0])) / 2;
   }
-  const Eigen::FullPivLU<Eigen::Matrix3d> lu(a);
-  if (!lu.isInvertible()) return false;  // flat: not certifiable
-  const Vector3d x = lu.solve(b);
+  const Vector3d c12 = d[1].cross(d[2]), c20 = d[2].cross(d[0]), c01 = d[0].cross(d[1]);
+  const double det = d[0].dot(c12);
+  if (!(std::abs(det) > 1e-12 * d[0].norm() * d[1].norm() * d[2].norm()))
+    return false;  // flat: not certifiable
+  const Vector3d x = (b[0] * c12 + b[1] * c20 + b[2] * c01) / det;
   // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
   const double reach2 = x.squaredNorm() - w(v[0]) + max_weight;
   if (!std::isfinite(reach2)) return false;
@@ -184,10 +187,11 @@ class BrickRunner {
       check_cancel(options_.cancel);
       out.triangulated += long(local.size());
       out.largest = std::max(out.largest, long(local.size()));
+      std::vector<signed char> tet_inside(std::size_t(tri.tets.rows()), -1);
       for (std::size_t r = 0, t = 0; r < local.size() && t < targets.size(); ++r) {
         if (local[r] != targets[t]) continue;
         ++t;
-        if (everything || tri.hidden[r] || certified(ls, tri, r, box, need))
+        if (everything || tri.hidden[r] || certified(ls, tri, r, box, need, tet_inside))
           keep[r] = 1;
         else
           failed.push_back(local[r]);
@@ -227,15 +231,20 @@ class BrickRunner {
   }
 
   // Local row r's star is the global one: not on the hull, every orthosphere inside `box`.
-  // Failing orthospheres grow `need`.
+  // Failing orthospheres grow `need`. `tet_inside` caches each tet's verdict (-1: not yet), as a
+  // tet is in up to four stars.
   bool certified(const Samples& ls, const Triangulation& tri, std::size_t r, const Box& box,
-                 Box& need) const {
+                 Box& need, std::vector<signed char>& tet_inside) const {
     if (tri.on_hull[r]) return false;
     bool ok = true;
-    for (int o = tri.incident_offsets[r]; o < tri.incident_offsets[r + 1]; ++o)
-      ok &= orthosphere_inside(ls.points, ls.values,
-                               tri.tets.row(tri.incident_tets[std::size_t(o)]).data(), box,
-                               max_weight_, margin_, need);
+    for (int o = tri.incident_offsets[r]; o < tri.incident_offsets[r + 1]; ++o) {
+      const int t = tri.incident_tets[std::size_t(o)];
+      signed char& inside = tet_inside[std::size_t(t)];
+      if (inside < 0)
+        inside = orthosphere_inside(ls.points, ls.values, tri.tets.row(t).data(), box, max_weight_,
+                                    margin_, need);
+      ok &= inside == 1;
+    }
     return ok;
   }
 

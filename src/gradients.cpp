@@ -5,6 +5,7 @@
 #include <CGAL/Search_traits_adapter.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/property_map.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Dense>
@@ -81,23 +82,49 @@ Eigen::VectorXd tet_volumes(const PointMatrix& points, const TetMatrix& tets) {
   return v;
 }
 
+namespace {
+
+// James et al.'s weights of the centroids centroid(0..k-1) around p, written to w[0..k):
+// w_t = (1 + lambda . u_t) / |c_t - p|, u_t the unit vector to centroid t and lambda the solution
+// of (epsilon I + sum u u^T) lambda = -sum u. `unit` and `length` are scratch of size k.
+template <class Centroid>
+void james_weights_into(const Eigen::Vector3d& p, Eigen::Index k, const Centroid& centroid,
+                        double epsilon, double* w, Eigen::Vector3d* unit, double* length) {
+  Eigen::Matrix3d A = epsilon * Eigen::Matrix3d::Identity();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (Eigen::Index t = 0; t < k; ++t) {
+    const Eigen::Vector3d r = centroid(t) - p;
+    length[t] = r.norm();
+    unit[t] = r / length[t];
+    A += unit[t] * unit[t].transpose();
+    b -= unit[t];
+  }
+  const Eigen::Vector3d lambda = A.ldlt().solve(b);
+  for (Eigen::Index t = 0; t < k; ++t) w[t] = (1.0 + lambda.dot(unit[t])) / length[t];
+}
+
+// Per-thread scratch for one star, reused from sample to sample.
+struct StarScratch {
+  std::vector<int> tets;
+  std::vector<double> weights, lengths;
+  std::vector<Eigen::Vector3d> units;
+  void resize(std::size_t k) {
+    weights.resize(k);
+    lengths.resize(k);
+    units.resize(k);
+  }
+};
+
+}  // namespace
+
 Eigen::VectorXd james_weights(const Eigen::Vector3d& p, const PointMatrix& centroids,
                               double epsilon) {
   const Eigen::Index k = centroids.rows();
-  Eigen::Matrix3d A = epsilon * Eigen::Matrix3d::Identity();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
-  Eigen::VectorXd length(k);
-  PointMatrix unit(k, 3);
-  for (Eigen::Index t = 0; t < k; ++t) {
-    const Eigen::Vector3d r = row(centroids, t) - p;
-    length[t] = r.norm();
-    unit.row(t) = (r / length[t]).transpose();
-    A += row(unit, t) * row(unit, t).transpose();
-    b -= row(unit, t);
-  }
-  const Eigen::Vector3d lambda = A.ldlt().solve(b);
-  Eigen::VectorXd w(k);
-  for (Eigen::Index t = 0; t < k; ++t) w[t] = (1.0 + lambda.dot(row(unit, t))) / length[t];
+  Eigen::VectorXd w(k), length(k);
+  std::vector<Eigen::Vector3d> unit(static_cast<std::size_t>(k));
+  james_weights_into(
+      p, k, [&](Eigen::Index t) { return row(centroids, t); }, epsilon, w.data(), unit.data(),
+      length.data());
   return w;
 }
 
@@ -117,15 +144,20 @@ PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& v
   const PointMatrix tet_g =
       tet_gradients(points, values, tri.tets, &degenerate, only ? &wanted : nullptr);
   PointMatrix g = PointMatrix::Zero(n, 3);
+  tbb::enumerable_thread_specific<StarScratch> scratch;
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     if (only && !(*only)[std::size_t(i)]) return;
-    std::vector<int> ts;
+    StarScratch& star = scratch.local();
+    std::vector<int>& ts = star.tets;
+    ts.clear();
     for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
          ++o)
       if (!degenerate[std::size_t(tri.incident_tets[std::size_t(o)])])
         ts.push_back(tri.incident_tets[std::size_t(o)]);
     if (ts.empty()) return;
-    Eigen::VectorXd w(Eigen::Index(ts.size()));
+    star.resize(ts.size());
+    const Eigen::Index k = Eigen::Index(ts.size());
+    Eigen::Map<Eigen::VectorXd> w(star.weights.data(), k);
     if (options.weighting == GradientWeighting::Uniform) {
       w.setOnes();
     } else if (options.weighting == GradientWeighting::Volume) {
@@ -138,13 +170,13 @@ PointMatrix vertex_gradients(const PointMatrix& points, const Eigen::VectorXd& v
                              6.0;
       }
     } else {
-      PointMatrix centroids(Eigen::Index(ts.size()), 3);
-      for (std::size_t a = 0; a < ts.size(); ++a) {
+      auto centroid = [&](Eigen::Index a) {
         Eigen::Vector3d c = Eigen::Vector3d::Zero();
-        for (int k = 0; k < 4; ++k) c += row(points, tri.tets(ts[a], k));
-        centroids.row(Eigen::Index(a)) = (c / 4.0).transpose();
-      }
-      w = james_weights(row(points, i), centroids, options.james_epsilon);
+        for (int v = 0; v < 4; ++v) c += row(points, tri.tets(ts[std::size_t(a)], v));
+        return Eigen::Vector3d(c / 4.0);
+      };
+      james_weights_into(row(points, i), k, centroid, options.james_epsilon, w.data(),
+                         star.units.data(), star.lengths.data());
     }
     const double total = w.sum();
     // James weights may cancel; an average with no net weight falls back to uniform weights.
