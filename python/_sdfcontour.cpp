@@ -156,6 +156,7 @@ PoissonOptions poisson_options(const py::dict& o) {
   p.scale = get<double>(o, "scale", p.scale);
   p.boundary = parse_poisson_boundary(get<std::string>(o, "boundary", "neumann"));
   p.solver_tolerance = get<double>(o, "solver_tolerance", p.solver_tolerance);
+  p.finest_solver_tolerance = get<double>(o, "finest_solver_tolerance", p.finest_solver_tolerance);
   return p;
 }
 

@@ -1,6 +1,7 @@
 #include "sdfcontour/bricks.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -273,17 +274,37 @@ class BrickRunner {
 
 }  // namespace
 
+int auto_brick_size(const PointMatrix& points, double spacing, int threads) {
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
+  for (int side : {256, 192, 160, 128, 96}) {
+    const BrickGrid grid = bucket(points, side * spacing);
+    int active = 0;
+    long largest = 0;
+    for (int b = 0; b < grid.count(); ++b) {
+      const long own = grid.offsets[std::size_t(b) + 1] - grid.offsets[std::size_t(b)];
+      active += own > 0;
+      largest = std::max(largest, own);
+    }
+    if (active >= 4 * std::max(threads, 1) && largest <= kMaxBrickSamples) return side;
+  }
+  return 64;
+}
+
 ContactPoints brick_contact_points(const Samples& samples, double spacing,
                                    const GradientOptions& gradient,
                                    const ContactPointOptions& contact, const BrickOptions& options,
                                    BrickStats* stats, const std::function<void(int, int)>& progress,
                                    const std::vector<char>* only) {
-  if (options.size < 1)
+  if (options.size < 1 && options.size != BrickOptions::kAutoSize)
     throw Error("the brick size must be at least 1 spacing, got " + std::to_string(options.size));
   if (!(options.halo > 0) || !std::isfinite(options.halo))
     throw Error("the brick halo must be a positive number of spacings (resolve 0 first)");
   if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
-  const BrickRunner runner(samples, spacing, gradient, contact, options, only);
+  BrickOptions resolved = options;
+  if (resolved.size == BrickOptions::kAutoSize)
+    resolved.size =
+        auto_brick_size(samples.points, spacing, tbb::this_task_arena::max_concurrency());
+  const BrickRunner runner(samples, spacing, gradient, contact, resolved, only);
   const BrickGrid& grid = runner.grid();
   std::vector<int> active;
   for (int b = 0; b < grid.count(); ++b)
@@ -304,6 +325,7 @@ ContactPoints brick_contact_points(const Samples& samples, double spacing,
   std::vector<std::pair<int, std::pair<std::size_t, Eigen::Index>>> order;
   BrickStats st;
   st.bricks = int(active.size());
+  st.size = resolved.size;
   for (std::size_t a = 0; a < outputs.size(); ++a) {
     const BrickOutput& o = outputs[a];
     for (std::size_t r = 0; r < o.kept.samples.size(); ++r)

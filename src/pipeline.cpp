@@ -227,7 +227,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   const bool bounded = std::isfinite(options.band.band) || (std::isfinite(band.truncation.inside) &&
                                                             std::isfinite(band.truncation.outside));
   const bool gcp_in_bricks = need_gcp && options.gradient_source == GradientSource::Regular &&
-                             options.bricks.size > 0 && bounded;
+                             options.bricks.size != 0 && bounded;
   BrickOptions bricks = options.bricks;
   if (bricks.halo == 0) bricks.halo = std::max(2 * largest / band.spacing, 1.0);
   bricks.cancel = options.cancel;

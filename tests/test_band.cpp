@@ -203,6 +203,28 @@ TEST(Bricks, EqualTheGlobalTriangulation) {
   EXPECT_GT(stats.bricks, 8);
 }
 
+// The automatic side: the largest candidate that still gives 4 bricks per thread, and the
+// automatic bricks' contact points are the global ones.
+TEST(Bricks, AutomaticSizeKeepsFourBricksPerThread) {
+  // A plane of points 1000 spacings wide (spacing 1): 256-spacing bricks make 4 x 4 of them.
+  PointMatrix plane(200 * 200, 3);
+  for (int i = 0; i < 200; ++i)
+    for (int j = 0; j < 200; ++j) plane.row(i * 200 + j) << 5.0 * i, 5.0 * j, 0.0;
+  EXPECT_EQ(auto_brick_size(plane, 1.0, 1), 256);  // 16 bricks
+  EXPECT_EQ(auto_brick_size(plane, 1.0, 8), 192);  // 6 x 6 = 36 >= 32
+  EXPECT_EQ(auto_brick_size(plane, 1.0, 64), 64);  // no candidate makes 256 bricks
+  EXPECT_THROW(auto_brick_size(plane, 0.0, 1), Error);
+
+  const Grid grid = sample_grid(*make_builtin_shape("torus"), 32, Bounds{});
+  const BandSamples band = select_band(grid, BandOptions{});
+  BrickOptions o;  // size automatic
+  o.halo = 2 * band.samples.values.cwiseAbs().maxCoeff() / band.spacing;
+  BrickStats stats;
+  expect_same(brick_contact_points(band.samples, band.spacing, {}, {}, o, &stats, {}, &band.core),
+              global_contact_points(band, {}));
+  EXPECT_EQ(stats.size, 64);  // a 32^3 band is one brick of any candidate size
+}
+
 TEST(Bricks, RejectBadOptions) {
   const Grid grid = sample_grid(*make_builtin_shape("sphere"), 12, Bounds{});
   const BandSamples band = select_band(grid, BandOptions{});

@@ -146,7 +146,10 @@ void PoissonArgs::add_to(CLI::App* app) {
                   "faces) or free (for these degree-1 elements the same as neumann)")
       ->capture_default_str();
   app->add_option("--solver-tolerance", options.solver_tolerance,
-                  "Conjugate gradients stop at this relative residual at each depth")
+                  "Conjugate gradients stop at this relative residual at each depth but the finest")
+      ->capture_default_str();
+  app->add_option("--finest-solver-tolerance", options.finest_solver_tolerance,
+                  "... and at this one at the finest depth (most of the solve's time)")
       ->capture_default_str();
 }
 
@@ -165,6 +168,7 @@ PoissonOptions PoissonArgs::resolved() const {
   require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
   require_range("--scale", o.scale, 1, 16);
   require_range("--solver-tolerance", o.solver_tolerance, 1e-16, 0.5);
+  require_range("--finest-solver-tolerance", o.finest_solver_tolerance, 1e-16, 0.5);
   o.boundary = parse_poisson_boundary(boundary);
   return o;
 }

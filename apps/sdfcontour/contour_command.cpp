@@ -1,5 +1,6 @@
 // sdfcontour contour: SDF samples (a grid, scattered samples, a .vdb level set or a built-in
 // shape) -> a mesh and/or contact points, with a JSON summary.
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -21,8 +22,9 @@ namespace {
 
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
-                                     weights = "james", band = "auto", truncation = "auto", grid;
-  int knn = 18, brick_size = BrickOptions{}.size;
+                                     weights = "james", band = "auto", truncation = "auto", grid,
+                                     brick_size = "auto";
+  int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
@@ -86,8 +88,15 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.parallel = !a.serial_triangulation;
   opt.poisson = a.poisson.resolved();
   opt.band = parse_band_options(a.band, a.truncation);
-  if (a.brick_size < 0) throw Error("--brick-size must be at least 1 (or 0 for no bricks)");
-  opt.bricks.size = a.brick_size;
+  if (a.brick_size == "auto") {
+    opt.bricks.size = BrickOptions::kAutoSize;
+  } else {
+    const std::optional<double> size = parse_finite(a.brick_size);
+    if (!size || *size < 0 || *size != std::floor(*size) || *size > 1e6)
+      throw Error(
+          "--brick-size must be a whole number of spacings >= 1, 0 for no bricks, or 'auto'");
+    opt.bricks.size = int(*size);
+  }
   if (!(a.brick_halo >= 0) || !std::isfinite(a.brick_halo))
     throw Error("--brick-halo must be a non-negative number of spacings (0: automatic)");
   opt.bricks.halo = a.brick_halo;
@@ -147,7 +156,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["band"] = band;
   }
   if (r.bricks)
-    j["bricks"] = {{"size", a.brick_size},
+    j["bricks"] = {{"size", r.bricks->size},
                    {"count", r.bricks->bricks},
                    {"retries", r.bricks->retries},
                    {"samples_triangulated", r.bricks->triangulated},
@@ -338,10 +347,13 @@ Command add_contour_command(CLI::App& app) {
                 "'auto' (a sign is truncated at its largest |value| when >= 64 samples, and "
                 ">= 1% of that sign's samples, sit there)")
       ->capture_default_str();
-  c->add_option("--brick-size", a->brick_size,
-                "GCP triangulates the band in bricks of this many spacings, each with a halo, "
-                "in parallel; memory follows a brick, the result equals one global "
-                "triangulation's; 0 triangulates the whole band at once (so does --band all)")
+  c->add_option(
+       "--brick-size", a->brick_size,
+       "GCP triangulates the band in bricks of this many spacings, each with a halo, "
+       "in parallel; memory follows a brick, the result equals one global "
+       "triangulation's; 0 triangulates the whole band at once (so does --band all); "
+       "'auto': the largest of 256 down to 96 that makes >= 4 bricks per thread of <= 1.5M "
+       "samples each, else 64")
       ->capture_default_str();
   c->add_option("--brick-halo", a->brick_halo,
                 "First halo around a brick, in spacings (doubled where it does not suffice); "

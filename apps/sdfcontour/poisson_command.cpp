@@ -33,7 +33,8 @@ nlohmann::json summary_json(const PoissonCommandArgs& a, const PoissonOptions& o
                   {"samples_per_node", o.samples_per_node},
                   {"scale", o.scale},
                   {"boundary", poisson_boundary_name(o.boundary)},
-                  {"solver_tolerance", o.solver_tolerance}};
+                  {"solver_tolerance", o.solver_tolerance},
+                  {"finest_solver_tolerance", o.finest_solver_tolerance}};
   nlohmann::json seconds = {{"read", read_seconds}};
   for (const auto& [name, sec] : r.seconds) seconds[name] = sec;
   j["seconds"] = seconds;

@@ -20,7 +20,9 @@
 namespace sdfcontour {
 
 struct BrickOptions {
-  int size = 64;  ///< brick side in spacings; 0: one triangulation of every sample
+  static constexpr int kAutoSize = -1;
+  /// Brick side in spacings; 0: one triangulation of every sample; kAutoSize: auto_brick_size.
+  int size = kAutoSize;
   /// First halo width in spacings (doubled where a star is not certified); 0: twice the largest
   /// |value| kept (the band and its margin), from measurement: orthocentres of band-edge tets
   /// lie up to about that far out, and their spheres reach as far again.
@@ -35,7 +37,16 @@ struct BrickStats {
   int retries = 0;         ///< bricks redone with a wider halo
   long triangulated = 0;   ///< samples triangulated over all bricks (halos counted again)
   long largest_brick = 0;  ///< samples in the largest triangulation
+  int size = 0;            ///< the brick side used, in spacings
 };
+
+/// The brick side (in spacings) for `points` (n x 3) at `spacing` when `threads` run them: the
+/// largest of 256, 192, 160, 128, 96 that still makes at least 4 bricks per thread with at most
+/// kMaxBrickSamples samples of their own each, else 64. Larger bricks triangulate fewer halo
+/// samples again (bunny 512³ on 2 threads: 64 → 48 s, 128 → 32 s, 256 → 29 s for the contact
+/// points; docs/scale.md), and 4 bricks per thread keep the threads busy to the end.
+int auto_brick_size(const PointMatrix& points, double spacing, int threads);
+constexpr long kMaxBrickSamples = 1'500'000;
 
 /// GCP contact points of `samples` (positions n x 3, values n), computed brick by brick with the
 /// regular triangulation, `gradient` and `contact` options: equal to

@@ -43,9 +43,19 @@ def _bounds(bounds):
     return lo, hi
 
 
+def _brick_size(brick_size):
+    if isinstance(brick_size, str):
+        if brick_size != "auto":
+            raise ValueError(f"brick_size must be a whole number or 'auto', got {brick_size!r}")
+        return -1  # the core chooses
+    if int(brick_size) < 0:
+        raise ValueError("brick_size must be >= 1, 0 for no bricks, or 'auto'")
+    return int(brick_size)
+
+
 def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
              brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
-             solver_tolerance, progress):
+             solver_tolerance, progress, finest_solver_tolerance=1e-3):
     if method not in METHODS:
         raise ValueError(f"unknown method '{method}' (known: {', '.join(METHODS)})")
     auto_band = isinstance(band, str) and band == "auto"
@@ -55,15 +65,17 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
         band = 0.0  # the core picks it from the resolution
     o = dict(method=method, band=float(band), margin=float(margin), truncation=str(truncation),
              gradient=gradient, weights=weights, knn=int(knn), fn=bool(fn),
-             tie_tolerance=float(tie_tolerance), brick_size=int(brick_size),
+             tie_tolerance=float(tie_tolerance), brick_size=_brick_size(brick_size),
              brick_halo=float(brick_halo), full_depth=int(full_depth), alpha=float(alpha),
              samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
-             solver_tolerance=float(solver_tolerance), progress=bool(progress))
+             solver_tolerance=float(solver_tolerance),
+             finest_solver_tolerance=float(finest_solver_tolerance), progress=bool(progress))
     if depth == "auto":
         o["depth_text"] = "auto"
     else:
         o["depth"] = int(depth)
-    for name in ("band", "margin", "alpha", "samples_per_node", "scale", "solver_tolerance"):
+    for name in ("band", "margin", "alpha", "samples_per_node", "scale", "solver_tolerance",
+                 "finest_solver_tolerance"):
         if not o[name] == o[name]:  # NaN
             raise ValueError(f"{name} must be a number, got NaN")
     if not (o["band"] > 0 or auto_band):
@@ -116,10 +128,10 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
 
 def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", margin=1.0,
             truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
-            tie_tolerance=1e-6, brick_size=64, brick_halo=0.0, depth="auto", full_depth=5,
+            tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
-            solver_tolerance=1e-4, sign_constraints="auto", batch_size=65536, progress=False,
-            return_stats=False):
+            solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
+            batch_size=65536, progress=False, return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -160,13 +172,14 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         on the wrong side of the mesh. "auto": below 128 samples per axis, where it is more
         accurate (finer grids are more accurate without); False: the paper's reconstruction
         (CLI ``--sign-constraints`` / ``--no-sign-constraints``).
-    brick_size : int
-        GCP triangulates the band in bricks of this many spacings (0: one triangulation).
+    brick_size : int or "auto"
+        GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
+        the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
     brick_halo : float
         First halo around a brick in spacings (0: automatic).
     depth : int or "auto"
         Poisson octree depth; "auto" follows the grid's resolution.
-    full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance
+    full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance, finest_solver_tolerance
         Screened Poisson options, as in :func:`poisson`.
     batch_size : int
         Points per call of a callable ``sdf``.
@@ -205,7 +218,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     """
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
-                 solver_tolerance, progress)
+                 solver_tolerance, progress, finest_solver_tolerance)
     if isinstance(sign_constraints, str):
         if sign_constraints != "auto":
             raise ValueError(f"sign_constraints must be True, False or 'auto', got {sign_constraints!r}")
@@ -220,7 +233,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
 
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
                    gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
-                   brick_size=64, brick_halo=0.0, batch_size=65536, progress=False):
+                   brick_size="auto", brick_halo=0.0, batch_size=65536, progress=False):
     """GCP's contact points with their normals, without the surface reconstruction.
 
     Parameters are those of :func:`contour`.
@@ -243,7 +256,7 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
 
 
 def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5,
-            scale=1.1, boundary="neumann", solver_tolerance=1e-4):
+            scale=1.1, boundary="neumann", solver_tolerance=1e-4, finest_solver_tolerance=1e-3):
     """Screened Poisson reconstruction of oriented points: a watertight mesh.
 
     Parameters
@@ -268,7 +281,9 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     boundary : {"neumann", "dirichlet", "free"}
         Boundary condition on the domain cube.
     solver_tolerance : float
-        Conjugate gradients stop at this relative residual at each depth.
+        Conjugate gradients stop at this relative residual at each depth but the finest.
+    finest_solver_tolerance : float
+        ... and at this one at the finest depth (most of the solve's time).
 
     Returns
     -------
@@ -281,7 +296,8 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     """
     o = dict(depth=int(depth), alpha=float(alpha), full_depth=int(full_depth),
              samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
-             solver_tolerance=float(solver_tolerance))
+             solver_tolerance=float(solver_tolerance),
+             finest_solver_tolerance=float(finest_solver_tolerance))
     W = None if weights is None else np.asarray(weights, dtype=np.float64)
     return _sdfcontour.poisson(np.asarray(P), np.asarray(N), W, o)
 

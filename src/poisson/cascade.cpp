@@ -46,7 +46,8 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   CascadeResult result;
   result.values.resize(tree.levels.size());
   PoissonBoundary boundary = o.boundary;
-  const CgOptions cg{o.solver_tolerance, o.max_iterations, o.cancel};
+  const CgOptions cg{o.solver_tolerance, o.max_iterations, o.cancel},
+      cg_finest{o.finest_solver_tolerance, o.max_iterations, o.cancel};
   // V from coarser splats, expressed on the current depth's spline grid (quadratic B-splines
   // nest), and the coarser depth's grid it was prolonged from.
   std::vector<Eigen::Vector3d> coarser;
@@ -101,7 +102,8 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       const double assembly = seconds_since(start);
       return_free_memory();
       const auto solve_start = Clock::now();
-      const CgState state = conjugate_gradients(L, solved, std::move(system), x, cg);
+      const CgState state =
+          conjugate_gradients(L, solved, std::move(system), x, d == tree.finest ? cg_finest : cg);
       long unknowns = 0;
       for (char u : solved) unknowns += u;
       return PoissonLevelStats{d,
@@ -131,7 +133,8 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       std::ostringstream message;
       message << "poisson: depth " << d << " stopped at relative residual "
               << stats.relative_residual << " after " << stats.iterations
-              << " iterations (tolerance " << o.solver_tolerance << ")";
+              << " iterations (tolerance "
+              << (d == tree.finest ? o.finest_solver_tolerance : o.solver_tolerance) << ")";
       o.progress(message.str());
     }
     result.levels.push_back(stats);

@@ -19,6 +19,8 @@ void validate(const OrientedPoints& input, const PoissonOptions& o) {
     throw Error("poisson: samples per node must be positive");
   if (!(o.point_weight >= 0) || !std::isfinite(o.point_weight))
     throw Error("poisson: the point weight must be >= 0");
+  for (double t : {o.solver_tolerance, o.finest_solver_tolerance})
+    if (!(t > 0 && t < 1)) throw Error("poisson: solver tolerances must lie in (0, 1)");
   if (input.weights.size() != 0 && input.weights.size() != n)
     throw Error("poisson: points and weights differ in count");
   for (Eigen::Index i = 0; i < input.weights.size(); ++i)
