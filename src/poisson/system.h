@@ -3,6 +3,8 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "normal_field.h"
@@ -11,6 +13,27 @@
 
 namespace sdfcontour::poisson {
 
+/// Leaves trivial elements uninitialised on resize, so that a large array is first touched (its
+/// pages faulted in and zeroed by the system) by the parallel loop that fills it, not serially.
+template <class T>
+struct UninitialisedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitialisedAllocator<U>;
+  };
+  UninitialisedAllocator() = default;
+  template <class U>
+  UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
 /// Rows (27 slots, slot(dx, dy, dz)) and right-hand side of one depth's system. Inside the domain
 /// and away from points a row is the constant stiffness stencil h K (`interior_row`); only nodes
 /// on the domain's faces (truncated stencil) and corners of cells holding points (screening) store
@@ -18,7 +41,7 @@ namespace sdfcontour::poisson {
 struct LevelSystem {
   std::array<double, 27> interior_row{};
   std::vector<int> row_of;  ///< per node: its own row, or -1 (the interior row, or not solved)
-  std::vector<std::array<double, 27>> rows;
+  std::vector<std::array<double, 27>, UninitialisedAllocator<std::array<double, 27>>> rows;
   std::vector<double> b;  ///< per node; 0 on nodes not solved for
   const double* row(std::size_t v) const {
     return row_of[v] >= 0 ? rows[std::size_t(row_of[v])].data() : interior_row.data();
