@@ -32,9 +32,13 @@ class SurfaceCells {
   }
 
   // Candidates: finest active cells with a sign change, and subcells of coarser leaves whose
-  // corners straddle iso.
-  std::vector<Key> candidates() const {
-    std::vector<Key> found;
+  // corners straddle iso; all distinct, with their corner values.
+  struct Candidates {
+    std::vector<Key> cells;
+    std::vector<std::array<double, 8>> values;
+  };
+  Candidates candidates() const {
+    Candidates found;
     const Octree& tree = chi_.tree();
     for (int d = tree.min_depth; d < tree.finest; ++d) leaf_candidates(tree.level(d), found);
     finest_candidates(found);
@@ -43,22 +47,32 @@ class SurfaceCells {
 
   // Closes the candidates: a face with a sign change needs the cell across it. Returns the cells
   // with a sign change, sorted by key, and their values. Round after round, in parallel: the
-  // cells across the sign-changing faces of the last round's new cells, not yet seen.
-  void close(std::vector<Key> frontier, std::vector<Key>& cells,
-             std::vector<std::array<double, 8>>& values, const std::atomic<bool>* cancel) const {
-    std::vector<Key> seen;
+  // cells across the sign-changing faces of the last round's new cells, not yet seen. The first
+  // round's values are the candidates' own.
+  void close(Candidates first, std::vector<Key>& cells, std::vector<std::array<double, 8>>& values,
+             const std::atomic<bool>* cancel) const {
+    std::vector<Key> seen, frontier;
+    std::vector<std::array<double, 8>> value;
+    sort_by_key(first, frontier, value);
     while (!frontier.empty()) {
       check_cancel(cancel);
-      sort_unique(frontier);
-      std::vector<std::array<double, 8>> value(frontier.size());
+      // Cells seen so far (kept or not) are not visited again.
+      std::vector<Key> merged(seen.size() + frontier.size());
+      std::merge(seen.begin(), seen.end(), frontier.begin(), frontier.end(), merged.begin());
+      seen = std::move(merged);
+      const bool evaluate = value.empty();
+      if (evaluate) value.resize(frontier.size());
       std::vector<char> keep(frontier.size());
       std::vector<std::array<Key, 6>> across(frontier.size());
       tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t c) {
         const auto u = unpack(frontier[c]);
-        cell_values(u[0] - 1, u[1] - 1, u[2] - 1, value[c].data());
+        if (evaluate) cell_values(u[0] - 1, u[1] - 1, u[2] - 1, value[c].data());
         keep[c] = mixed(value[c].data());
         across[c].fill(kNone);
-        if (keep[c]) neighbours_across_sign_changes(frontier[c], value[c], across[c]);
+        if (!keep[c]) return;
+        neighbours_across_sign_changes(frontier[c], value[c], across[c]);
+        for (Key& n : across[c])
+          if (n != kNone && std::binary_search(seen.begin(), seen.end(), n)) n = kNone;
       });
       std::vector<Key> next;
       for (std::size_t c = 0; c < frontier.size(); ++c) {
@@ -68,16 +82,12 @@ class SurfaceCells {
         for (const Key n : across[c])
           if (n != kNone) next.push_back(n);
       }
-      // Cells seen so far (kept or not) are not visited again.
-      std::vector<Key> merged(seen.size() + frontier.size());
-      std::merge(seen.begin(), seen.end(), frontier.begin(), frontier.end(), merged.begin());
-      seen = std::move(merged);
       sort_unique(next);
-      frontier.clear();
-      for (const Key n : next)
-        if (!std::binary_search(seen.begin(), seen.end(), n)) frontier.push_back(n);
+      frontier = std::move(next);
+      value.clear();
     }
-    // One order whatever the rounds: by key.
+    // One order whatever the rounds: by key (a single round's cells already are).
+    if (std::is_sorted(cells.begin(), cells.end())) return;
     std::vector<std::size_t> order(cells.size());
     for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
     std::sort(order.begin(), order.end(),
@@ -90,6 +100,22 @@ class SurfaceCells {
     }
     cells = std::move(sorted_cells);
     values = std::move(sorted_values);
+  }
+
+  // The candidates' keys, ascending, and their values in the same order.
+  static void sort_by_key(Candidates& found, std::vector<Key>& keys,
+                          std::vector<std::array<double, 8>>& values) {
+    std::vector<std::size_t> order(found.cells.size());
+    for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return found.cells[a] < found.cells[b]; });
+    keys.resize(order.size());
+    values.resize(order.size());
+    for (std::size_t c = 0; c < order.size(); ++c) {
+      keys[c] = found.cells[order[c]];
+      values[c] = found.values[order[c]];
+    }
+    found = Candidates();
   }
 
  private:
@@ -114,9 +140,9 @@ class SurfaceCells {
       }
   }
 
-  void leaf_candidates(const OctreeLevel& L, std::vector<Key>& out) const {
+  void leaf_candidates(const OctreeLevel& L, Candidates& out) const {
     const int shift = chi_.tree().finest - L.depth;
-    std::vector<std::vector<Key>> found(L.cells.size());
+    std::vector<Candidates> found(L.cells.size());
     tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
       if (L.refined[c]) return;
       const auto [i, j, k] = unpack(L.cells[c]);
@@ -130,38 +156,60 @@ class SurfaceCells {
       for (long a = 0; a < n; ++a)
         for (long b = 0; b < n; ++b)
           for (long e = 0; e < n; ++e) {
-            double value[8];
+            std::array<double, 8> value;
             const long fi = (i << shift) + a, fj = (j << shift) + b, fk = (k << shift) + e;
-            cell_values(fi, fj, fk, value);
-            if (mixed(value)) found[c].push_back(cell_key(fi, fj, fk));
+            cell_values(fi, fj, fk, value.data());
+            if (!mixed(value.data())) continue;
+            found[c].cells.push_back(cell_key(fi, fj, fk));
+            found[c].values.push_back(value);
           }
     });
-    for (auto& f : found) out.insert(out.end(), f.begin(), f.end());
+    for (auto& f : found) {
+      out.cells.insert(out.cells.end(), f.cells.begin(), f.cells.end());
+      out.values.insert(out.values.end(), f.values.begin(), f.values.end());
+    }
   }
 
-  // Finest cells, a line at a time: their corners are finest nodes, found by cursors.
-  void finest_candidates(std::vector<Key>& out) const {
+  // Finest cells, a line at a time: their corners are finest nodes, found by cursors. A first pass
+  // flags the cells with a sign change, a second stores their values in key order.
+  void finest_candidates(Candidates& out) const {
     const OctreeLevel& F = finest_;
     const auto& x = chi_.values(F.depth);
+    auto for_each_cell = [&](auto&& f) {
+      for_each_line(
+          F.cell_lines, F.cells, [&](long i, long j, std::size_t first, std::size_t last) {
+            LineCursor column[4];
+            for (int c = 0; c < 4; ++c)
+              column[c] = LineCursor(F.nodes, F.node_lines.line(i + (c & 1), j + (c >> 1)));
+            for (std::size_t c = first; c < last; ++c) {
+              const long k = long(F.cells[c] & kKeyMask);
+              auto values = [&](double* value) {
+                for (int q = 0; q < 8; ++q)
+                  value[q] = iso_ - x[std::size_t(column[q & 3].find(
+                                        pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1))))];
+              };
+              f(c, values);
+            }
+          });
+    };
     std::vector<char> has_surface(F.cells.size(), 0);
-    for_each_line(F.cell_lines, F.cells, [&](long i, long j, std::size_t first, std::size_t last) {
-      LineCursor column[4];
-      for (int c = 0; c < 4; ++c)
-        column[c] = LineCursor(F.nodes, F.node_lines.line(i + (c & 1), j + (c >> 1)));
-      for (std::size_t c = first; c < last; ++c) {
-        const long k = long(F.cells[c] & kKeyMask);
-        double value[8];
-        for (int q = 0; q < 8; ++q)
-          value[q] = iso_ - x[std::size_t(column[q & 3].find(
-                                pack(i + (q & 1), j + (q >> 1 & 1), k + (q >> 2 & 1))))];
-        has_surface[c] = mixed(value);
-      }
+    for_each_cell([&](std::size_t c, auto&& values) {
+      double value[8];
+      values(value);
+      has_surface[c] = mixed(value);
     });
+    std::vector<long> slot(F.cells.size(), -1);
+    const std::size_t before = out.cells.size();
     for (std::size_t c = 0; c < F.cells.size(); ++c)
       if (has_surface[c]) {
         const auto [i, j, k] = unpack(F.cells[c]);
-        out.push_back(cell_key(i, j, k));
+        slot[c] = long(out.cells.size() - before);
+        out.cells.push_back(cell_key(i, j, k));
       }
+    out.values.resize(out.cells.size());
+    for_each_cell([&](std::size_t c, auto&& values) {
+      if (slot[c] >= 0) values(out.values[before + std::size_t(slot[c])].data());
+    });
   }
 
   const Indicator& chi_;
@@ -225,18 +273,24 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
     const Eigen::Vector3d unit = (p0 + v0 / (v0 - v1) * (p1 - p0)) / double(R);
     mesh.vertices.row(Eigen::Index(e)) = frame.from_unit(unit).transpose();
   });
-  std::vector<detail::PolygonOutput> out(1);
-  for (std::size_t c = 0; c < polygons.size(); ++c)
-    for (std::size_t q = 0; q < polygons[c].edges.size(); ++q) {
-      const int count = polygons[c].sizes[q];
-      int ids[12];
-      Eigen::Vector3d position[12];
-      for (int v = 0; v < count; ++v) {
-        ids[v] = edge_index.find(global_edge(cells[c], polygons[c].edges[q][std::size_t(v)]));
-        position[v] = mesh.vertices.row(ids[v]).transpose();
+  // Fans in fixed chunks of cells, in parallel; the chunks are joined in order, so the mesh does
+  // not depend on the threads.
+  constexpr std::size_t kChunk = 8192;
+  std::vector<detail::PolygonOutput> out((polygons.size() + kChunk - 1) / kChunk);
+  tbb::parallel_for(std::size_t(0), out.size(), [&](std::size_t chunk) {
+    const std::size_t last = std::min(polygons.size(), (chunk + 1) * kChunk);
+    for (std::size_t c = chunk * kChunk; c < last; ++c)
+      for (std::size_t q = 0; q < polygons[c].edges.size(); ++q) {
+        const int count = polygons[c].sizes[q];
+        int ids[12];
+        Eigen::Vector3d position[12];
+        for (int v = 0; v < count; ++v) {
+          ids[v] = edge_index.find(global_edge(cells[c], polygons[c].edges[q][std::size_t(v)]));
+          position[v] = mesh.vertices.row(ids[v]).transpose();
+        }
+        detail::triangulate_polygon(ids, polygons[c].edges[q].data(), position, count, out[chunk]);
       }
-      detail::triangulate_polygon(ids, polygons[c].edges[q].data(), position, count, out[0]);
-    }
+  });
   detail::polygons_to_mesh(out, mesh);
   return mesh;
 }
