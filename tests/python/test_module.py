@@ -69,6 +69,15 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     np.testing.assert_array_equal(V_on, V)
     with pytest.raises(ValueError, match="sign_constraints"):
         sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints="sometimes")
+    # Bricks of any size give the automatic bricks' mesh; a bad size is a ValueError.
+    V_b, F_b = sdfcontour.contour(np.load(tmp_path / "b.npy"), brick_size=6)
+    np.testing.assert_array_equal(V_b, V)
+    np.testing.assert_array_equal(F_b, F)
+    for bad in ("big", -2):
+        with pytest.raises(ValueError, match="brick_size"):
+            sdfcontour.contour(np.load(tmp_path / "b.npy"), brick_size=bad)
+    with pytest.raises(ValueError, match="tolerance"):
+        sdfcontour.contour(np.load(tmp_path / "b.npy"), finest_solver_tolerance=0.0)
     # Without the sign constraints: the CLI's --no-sign-constraints mesh, a different one.
     subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "free.ply"), "-q",
                     "--no-sign-constraints"], check=True, stdout=subprocess.DEVNULL)
