@@ -88,18 +88,8 @@ class SurfaceCells {
     }
     // One order whatever the rounds: by key (a single round's cells already are).
     if (std::is_sorted(cells.begin(), cells.end())) return;
-    std::vector<std::size_t> order(cells.size());
-    for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return cells[a] < cells[b]; });
-    std::vector<Key> sorted_cells(cells.size());
-    std::vector<std::array<double, 8>> sorted_values(cells.size());
-    for (std::size_t c = 0; c < order.size(); ++c) {
-      sorted_cells[c] = cells[order[c]];
-      sorted_values[c] = values[order[c]];
-    }
-    cells = std::move(sorted_cells);
-    values = std::move(sorted_values);
+    Candidates all{std::move(cells), std::move(values)};
+    sort_by_key(all, cells, values);
   }
 
   // The candidates' keys, ascending, and their values in the same order.
@@ -140,29 +130,38 @@ class SurfaceCells {
       }
   }
 
+  // The finest subcells with a sign change of leaf c of level L (finest = L's depth + shift), if
+  // its corners straddle iso.
+  void leaf_subcells(const OctreeLevel& L, int shift, std::size_t c, Candidates& out) const {
+    const auto [i, j, k] = unpack(L.cells[c]);
+    const long n = 1L << shift;
+    int inside = 0;
+    for (int q = 0; q < 8; ++q)
+      inside += iso_ - chi_.at_finest_node((i + (q & 1)) << shift, (j + (q >> 1 & 1)) << shift,
+                                           (k + (q >> 2 & 1)) << shift, iso_ - 1.0) <
+                0;
+    if (inside == 0 || inside == 8) return;
+    for (long a = 0; a < n; ++a)
+      for (long b = 0; b < n; ++b)
+        for (long e = 0; e < n; ++e) {
+          std::array<double, 8> value;
+          const long fi = (i << shift) + a, fj = (j << shift) + b, fk = (k << shift) + e;
+          cell_values(fi, fj, fk, value.data());
+          if (!mixed(value.data())) continue;
+          out.cells.push_back(cell_key(fi, fj, fk));
+          out.values.push_back(value);
+        }
+  }
+
   void leaf_candidates(const OctreeLevel& L, Candidates& out) const {
     const int shift = chi_.tree().finest - L.depth;
-    std::vector<Candidates> found(L.cells.size());
-    tbb::parallel_for(std::size_t(0), L.cells.size(), [&](std::size_t c) {
-      if (L.refined[c]) return;
-      const auto [i, j, k] = unpack(L.cells[c]);
-      const long n = 1L << shift;
-      int inside = 0;
-      for (int q = 0; q < 8; ++q)
-        inside += iso_ - chi_.at_finest_node((i + (q & 1)) << shift, (j + (q >> 1 & 1)) << shift,
-                                             (k + (q >> 2 & 1)) << shift, iso_ - 1.0) <
-                  0;
-      if (inside == 0 || inside == 8) return;
-      for (long a = 0; a < n; ++a)
-        for (long b = 0; b < n; ++b)
-          for (long e = 0; e < n; ++e) {
-            std::array<double, 8> value;
-            const long fi = (i << shift) + a, fj = (j << shift) + b, fk = (k << shift) + e;
-            cell_values(fi, fj, fk, value.data());
-            if (!mixed(value.data())) continue;
-            found[c].cells.push_back(cell_key(fi, fj, fk));
-            found[c].values.push_back(value);
-          }
+    // Found per fixed chunk of cells, joined in order: the same list whatever the threads.
+    constexpr std::size_t kChunk = 4096;
+    std::vector<Candidates> found((L.cells.size() + kChunk - 1) / kChunk);
+    tbb::parallel_for(std::size_t(0), found.size(), [&](std::size_t chunk) {
+      const std::size_t last = std::min(L.cells.size(), (chunk + 1) * kChunk);
+      for (std::size_t c = chunk * kChunk; c < last; ++c)
+        if (!L.refined[c]) leaf_subcells(L, shift, c, found[chunk]);
     });
     for (auto& f : found) {
       out.cells.insert(out.cells.end(), f.cells.begin(), f.cells.end());
@@ -192,18 +191,18 @@ class SurfaceCells {
             }
           });
     };
-    std::vector<char> has_surface(F.cells.size(), 0);
+    // slot[c]: 0 for a cell with a sign change, -1 otherwise; then its rank among them.
+    std::vector<int> slot(F.cells.size());
     for_each_cell([&](std::size_t c, auto&& values) {
       double value[8];
       values(value);
-      has_surface[c] = mixed(value);
+      slot[c] = mixed(value) ? 0 : -1;
     });
-    std::vector<long> slot(F.cells.size(), -1);
     const std::size_t before = out.cells.size();
     for (std::size_t c = 0; c < F.cells.size(); ++c)
-      if (has_surface[c]) {
+      if (slot[c] >= 0) {
         const auto [i, j, k] = unpack(F.cells[c]);
-        slot[c] = long(out.cells.size() - before);
+        slot[c] = int(out.cells.size() - before);
         out.cells.push_back(cell_key(i, j, k));
       }
     out.values.resize(out.cells.size());
