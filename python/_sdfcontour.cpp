@@ -180,6 +180,7 @@ ContourOptions contour_options(const py::dict& o) {
   c.bricks.size = get<int>(o, "brick_size", c.bricks.size);
   const std::string signs = get<std::string>(o, "sign_constraints", "auto");
   c.enforce_signs = signs == "on" ? Switch::On : signs == "off" ? Switch::Off : Switch::Auto;
+  if (!get<bool>(o, "carve", true)) c.carve = Switch::Off;
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
@@ -278,6 +279,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["sign_violations"] = r.sign_violations;
   stats["sign_violations_left"] = r.sign_violations_left;
   stats["sign_constraints_dropped"] = r.sign_constraints_dropped;
+  stats["carved_vertices"] = r.carving ? r.carving->vertices_moved : 0L;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

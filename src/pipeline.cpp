@@ -143,6 +143,21 @@ GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
   return m;
 }
 
+// The band's samples proper, without the margin that only closes their stars.
+Samples core_samples(const BandSamples& band) {
+  const Samples& s = band.samples;
+  const Eigen::Index n = Eigen::Index(std::count(band.core.begin(), band.core.end(), 1));
+  Samples out;
+  out.points.resize(n, 3);
+  out.values.resize(n);
+  for (Eigen::Index i = 0, q = 0; i < s.values.size(); ++i)
+    if (band.core[std::size_t(i)]) {
+      out.points.row(q) = s.points.row(i);
+      out.values[q++] = s.values[i];
+    }
+  return out;
+}
+
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
@@ -320,7 +335,11 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
         sides.values[Eigen::Index(q)] = s.values[near[q]];
       }
     }
-    // Nothing after the reconstruction needs the samples or triangulations: free them first.
+    // Carving needs the band's own samples after the reconstruction (not its margin).
+    const bool carve = method == Method::Gcp && options.carve != Switch::Off;
+    Samples carving_samples;
+    if (carve) carving_samples = core_samples(band);
+    // Nothing else after the reconstruction needs the samples or triangulations: free them first.
     band = BandSamples();
     regular.reset();
     delaunay.reset();
@@ -349,6 +368,11 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     // (~100 of extent < 0.5 h on the shared meshes at 32^3): no piece that small comes from
     // samples a spacing apart.
     result.pieces_removed = remove_small_pieces(*result.mesh, result.band_spacing);
+    if (carve)
+      result.carving = stages.run("carving", "carving the mesh out of the samples' spheres", [&] {
+        return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,
+                          result.band_spacing, options.carving);
+      });
     if (method == Method::Gcp && grid) check_on_zero_set(*grid, result);
   }
   if (method == Method::MtRt && options.want_mesh)
@@ -409,8 +433,11 @@ ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
             << " spacings): smoothed with a Gaussian of one sample";
     options.progress(message.str());
   }
+  // Smoothed values are no longer distances: their spheres are not empty.
+  ContourOptions smoothed = options;
+  if (smoothed.carve == Switch::Auto) smoothed.carve = Switch::Off;
   ContourResult result =
-      contour_with_fallback(grid_input(gaussian_smoothed(*grid, 1.0)), shape, options);
+      contour_with_fallback(grid_input(gaussian_smoothed(*grid, 1.0)), shape, smoothed);
   result.noise_level = measured.noise;
   result.smoothed = true;
   return result;

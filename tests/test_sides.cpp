@@ -49,7 +49,10 @@ TEST(Sides, SamplesStayOnTheirSide) {
       SCOPED_TRACE(std::string(name) + " " + std::to_string(n));
       const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
       const Grid grid = sample_grid(sdf, n, Bounds{});
+      // The constraints alone: carving moves the mesh afterwards, which flips a few samples
+      // within ~0.01 h of the surface either way (docs/carving.md).
       ContourOptions with, without;
+      with.carve = without.carve = Switch::Off;
       without.enforce_signs = Switch::Off;
       const ContourResult held = contour(grid_input(grid), nullptr, with);
       const ContourResult free = contour(grid_input(grid), nullptr, without);

@@ -29,7 +29,7 @@ struct ContourArgs {
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, serial_triangulation = false, no_sign_constraints = false,
-       sign_constraints = false;
+       sign_constraints = false, no_carve = false;
   double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
          sign_margin = SignConstraintOptions{}.margin,
          sign_trigger = SignConstraintOptions{}.trigger;
@@ -114,6 +114,7 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.sign_constraints.margin = a.sign_margin;
   require_range("--sign-trigger", a.sign_trigger, 0, 1);
   opt.sign_constraints.trigger = a.sign_trigger;
+  if (a.no_carve) opt.carve = Switch::Off;
   return opt;
 }
 
@@ -177,6 +178,11 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["sign_violations_left"] = r.sign_violations_left;
     j["sign_constraints_dropped"] = r.sign_constraints_dropped;
   }
+  if (r.carving)
+    j["carving"] = {{"vertices_moved", r.carving->vertices_moved},
+                    {"largest_move", r.carving->largest_move},
+                    {"held_back", r.carving->held_back},
+                    {"passes", r.carving->passes}};
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
@@ -322,6 +328,10 @@ Command add_contour_command(CLI::App& app) {
               "accurate; finer grids are more accurate without)");
   c->add_flag("--no-sign-constraints", a->no_sign_constraints,
               "GCP: do not correct the indicator (the paper's reconstruction)");
+  c->add_flag("--no-carve", a->no_carve,
+              "GCP: keep the reconstruction's vertices where they are; by default a vertex "
+              "inside a band sample's sphere (which holds no surface) moves onto it, except on "
+              "values smoothed for noise");
   const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
                                                           {"--sign-radius", &a->sign_radius},
                                                           {"--sign-margin", &a->sign_margin},

@@ -15,6 +15,7 @@
 #include "sdfcontour/npy.h"
 #include "sdfcontour/poisson.h"
 #include "sdfcontour/sdf_input.h"
+#include "sdfcontour/sphere_carving.h"
 
 namespace sdfcontour {
 
@@ -60,6 +61,10 @@ struct ContourOptions {
   double sign_band = 2.0;
   double sign_radius = 1.5;  ///< the correction's radius, in spacings (SignConstraintOptions)
   SignConstraintOptions sign_constraints;
+  /// GCP: move the mesh out of the band's sample spheres (sphere_carving.h). Auto: on, except on
+  /// values smoothed for noise (their spheres are no longer empty).
+  Switch carve = Switch::Auto;
+  CarvingOptions carving;
   bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
@@ -118,6 +123,7 @@ struct ContourResult {
   long sign_violations = 0, sign_violations_left = 0;
   bool sign_constraints_dropped = false;  ///< they changed the topology: the solved surface kept
   bool sign_constraints = false;          ///< gcp: the samples' sides constrained the indicator
+  std::optional<CarvingStats> carving;    ///< gcp: when the mesh was carved
   bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's

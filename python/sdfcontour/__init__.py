@@ -131,7 +131,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
-            batch_size=65536, progress=False, return_stats=False):
+            carve=True, batch_size=65536, progress=False, return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -172,6 +172,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         on the wrong side of the mesh. "auto": below 128 samples per axis, where it is more
         accurate (finer grids are more accurate without); False: the paper's reconstruction
         (CLI ``--sign-constraints`` / ``--no-sign-constraints``).
+    carve : bool
+        GCP: move the mesh's vertices out of the band samples' spheres, which hold no surface
+        (on by default, except on values smoothed for noise; CLI ``--no-carve``).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
@@ -225,6 +228,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         o["sign_constraints"] = "auto"
     else:
         o["sign_constraints"] = "on" if sign_constraints else "off"
+    if not isinstance(carve, (bool, np.bool_)):
+        raise ValueError(f"carve must be True or False, got {carve!r}")
+    o["carve"] = bool(carve)
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if return_stats:
         return out["V"], out["F"], out["stats"]
