@@ -84,10 +84,24 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     V_free, F_free = sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints=False)
     np.testing.assert_array_equal(V_free, sdfcontour.read_mesh(tmp_path / "free.ply")[0])
     assert V_free.shape != V.shape or not np.array_equal(V_free, V)
+    # Carving is on by default and moves vertices; carve=False is the CLI's --no-carve mesh, with
+    # the same triangles and a larger L1.
+    assert stats["carved_vertices"] > 0
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "uncarved.ply"),
+                    "-q", "--no-carve"], check=True, stdout=subprocess.DEVNULL)
+    V_plain, F_plain, plain_stats = sdfcontour.contour(np.load(tmp_path / "b.npy"), carve=False,
+                                                       return_stats=True)
+    np.testing.assert_array_equal(V_plain, sdfcontour.read_mesh(tmp_path / "uncarved.ply")[0])
+    np.testing.assert_array_equal(F_plain, F)
+    assert plain_stats["carved_vertices"] == 0
+    with pytest.raises(ValueError, match="carve"):
+        sdfcontour.contour(np.load(tmp_path / "b.npy"), carve="auto")
     # And the mesh is close to the ground truth the CLI wrote.
     V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)
     assert d["closed"] and d["L1"] < 0.25 * 2 / 31
+    d_plain = sdfcontour.distances(V_plain, F_plain, V_gt, F_gt, samples=20000)
+    assert d["L1"] < d_plain["L1"]
 
 
 def test_float32_and_float64_agree():
