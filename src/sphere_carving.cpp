@@ -25,8 +25,10 @@ class VertexColumns {
       top = top.cwiseMax(V.row(v).transpose());
     }
     const Eigen::Vector3d extent = top - origin_;
-    // Keep the column table modest whatever the spacing: coarser cubes only cost more tests.
-    while ((extent[0] / cell_ + 1) * (extent[1] / cell_ + 1) > 6.4e7) cell_ *= 2;
+    // Keep the column table modest and the heights within an int whatever the spacing: coarser
+    // cubes only cost more tests.
+    while ((extent[0] / cell_ + 1) * (extent[1] / cell_ + 1) > 6.4e7 || extent[2] / cell_ > 1e9)
+      cell_ *= 2;
     for (int a = 0; a < 3; ++a) size_[a] = long(extent[a] / cell_) + 1;
     std::vector<std::pair<long, int>> keyed(which.size(), {0, 0});  // (column, k) key, vertex
     tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t q) {
