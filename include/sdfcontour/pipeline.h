@@ -61,7 +61,9 @@ struct ContourOptions {
   double sign_band = 2.0;
   double sign_radius = 1.5;  ///< the correction's radius, in spacings (SignConstraintOptions)
   SignConstraintOptions sign_constraints;
-  /// GCP: move the mesh out of the band's sample spheres (sphere_carving.h). Auto: on, except on
+  /// GCP: move the mesh out of the samples' spheres (sphere_carving.h): the band's samples, or
+  /// on a grid below 128 samples per axis with the automatic band, every sample within 16
+  /// spacings. Auto: on, except on
   /// values smoothed for noise (their spheres are no longer empty).
   Switch carve = Switch::Auto;
   CarvingOptions carving;
