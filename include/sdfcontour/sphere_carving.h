@@ -5,7 +5,7 @@
 // least how deep it cuts: carving moves each such vertex radially onto the sphere of the ball it
 // enters deepest, which is never farther from the true surface than the vertex was along that
 // direction. Poisson's smooth surface bulges into the spheres a little all over (GCP's L1 at 32^3
-// falls by ~8% on the shared meshes, docs/carving.md) and deeply where a thin part is
+// falls by 10-12% on the shared meshes, docs/carving.md) and deeply where a thin part is
 // under-sampled (the samples then end on the wrong side of the mesh).
 #pragma once
 
