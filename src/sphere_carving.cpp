@@ -124,8 +124,9 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
       const Eigen::Vector3d p = points.row(s).transpose();
       columns.for_each_near_ball(p, r, [&](int v) {
         const double d2 = (V.row(v).transpose() - p).squaredNorm();
-        if (d2 < r * r && d2 > 0 && r - std::sqrt(d2) > inside)
-          out.push_back({v, int(s), r - std::sqrt(d2)});
+        if (!(d2 < r * r && d2 > 0)) return;
+        const double depth = r - std::sqrt(d2);
+        if (depth > inside) out.push_back({v, int(s), depth});
       });
     }
   });
@@ -163,6 +164,8 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
     if (factor[std::size_t(F(t, 0))] > 0 || factor[std::size_t(F(t, 1))] > 0 ||
         factor[std::size_t(F(t, 2))] > 0)
       moving.push_back(t);
+  std::vector<Eigen::Vector3d> before(moving.size());
+  for (std::size_t q = 0; q < moving.size(); ++q) before[q] = triangle_normal(V, F, moving[q]);
   const double min_cos = std::cos(options.max_turn_degrees * M_PI / 180);
   std::vector<char> turned(moving.size());
   std::vector<char> held(std::size_t(V.rows()), 0);
@@ -174,10 +177,9 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
         const int v = F(t, c);
         corners.col(c) = (V.row(v) + factor[std::size_t(v)] * moves.row(v)).transpose();
       }
-      const Eigen::Vector3d before = triangle_normal(V, F, t);
       const Eigen::Vector3d after =
           (corners.col(1) - corners.col(0)).cross(corners.col(2) - corners.col(0));
-      turned[q] = !(before.dot(after) >= min_cos * before.norm() * after.norm());
+      turned[q] = !(before[q].dot(after) >= min_cos * before[q].norm() * after.norm());
     });
     bool any = false;
     for (std::size_t q = 0; q < moving.size(); ++q) {

@@ -330,8 +330,9 @@ Command add_contour_command(CLI::App& app) {
               "GCP: do not correct the indicator (the paper's reconstruction)");
   c->add_flag("--no-carve", a->no_carve,
               "GCP: keep the reconstruction's vertices where they are; by default a vertex "
-              "inside a band sample's sphere (which holds no surface) moves onto it, except on "
-              "values smoothed for noise");
+              "inside a sample's sphere (which holds no surface) moves onto it: the band's "
+              "samples, or below 128 samples per axis with --band auto every sample within 16 "
+              "spacings; not on values smoothed for noise");
   const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
                                                           {"--sign-radius", &a->sign_radius},
                                                           {"--sign-margin", &a->sign_margin},

@@ -63,8 +63,7 @@ struct ContourOptions {
   SignConstraintOptions sign_constraints;
   /// GCP: move the mesh out of the samples' spheres (sphere_carving.h): the band's samples, or
   /// on a grid below 128 samples per axis with the automatic band, every sample within 16
-  /// spacings. Auto: on, except on
-  /// values smoothed for noise (their spheres are no longer empty).
+  /// spacings. Auto: on, except on values smoothed for noise (their spheres are not empty).
   Switch carve = Switch::Auto;
   CarvingOptions carving;
   bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)

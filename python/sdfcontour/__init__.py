@@ -173,8 +173,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         accurate (finer grids are more accurate without); False: the paper's reconstruction
         (CLI ``--sign-constraints`` / ``--no-sign-constraints``).
     carve : bool
-        GCP: move the mesh's vertices out of the band samples' spheres, which hold no surface
-        (on by default, except on values smoothed for noise; CLI ``--no-carve``).
+        GCP: move the mesh's vertices out of the samples' spheres, which hold no surface (the
+        band's samples; below 128 samples per axis with ``band="auto"``, every sample within 16
+        spacings). On by default, except on values smoothed for noise; CLI ``--no-carve``.
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
