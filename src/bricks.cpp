@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <mutex>
 #include <string>
@@ -309,14 +310,25 @@ ContactPoints brick_contact_points(const Samples& samples, double spacing,
   std::vector<int> active;
   for (int b = 0; b < grid.count(); ++b)
     if (grid.offsets[std::size_t(b) + 1] > grid.offsets[std::size_t(b)]) active.push_back(b);
+  // Largest bricks first, each worker taking the next one: the last to start is a small one, so
+  // no thread idles long at the end (bricks are few, about four per thread; a parallel_for would
+  // split the range in halves and could give one thread all the large ones). The merge below
+  // restores the sample order.
+  auto own = [&](int b) { return grid.offsets[std::size_t(b) + 1] - grid.offsets[std::size_t(b)]; };
+  std::stable_sort(active.begin(), active.end(), [&](int a, int b) { return own(a) > own(b); });
   std::vector<BrickOutput> outputs(active.size());
   std::mutex progress_mutex;
   int done = 0;
-  tbb::parallel_for(std::size_t(0), active.size(), std::size_t(1), [&](std::size_t a) {
-    outputs[a] = runner.run(active[a]);
-    if (progress) {
-      std::lock_guard<std::mutex> lock(progress_mutex);
-      progress(++done, int(active.size()));
+  std::atomic<std::size_t> next{0};
+  const int workers =
+      std::max(1, std::min(tbb::this_task_arena::max_concurrency(), int(active.size())));
+  tbb::parallel_for(0, workers, 1, [&](int) {
+    for (std::size_t a; (a = next++) < active.size();) {
+      outputs[a] = runner.run(active[a]);
+      if (progress) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        progress(++done, int(active.size()));
+      }
     }
   });
 
