@@ -353,6 +353,10 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     } else if (carve) {
       carving_samples = core_samples(band);
     }
+    CarvingOptions carving = options.carving;
+    if (options.carve_sides == Switch::Off ||
+        (options.carve_sides == Switch::Auto && grid && band.samples_per_axis >= 128))
+      carving.side_passes = 0;
     // Nothing else after the reconstruction needs the samples or triangulations: free them first.
     band = BandSamples();
     regular.reset();
@@ -385,7 +389,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     if (carve)
       result.carving = stages.run("carving", "carving the mesh out of the samples' spheres", [&] {
         return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,
-                          result.band_spacing, options.carving);
+                          result.band_spacing, carving);
       });
     if (method == Method::Gcp && grid) check_on_zero_set(*grid, result);
   }

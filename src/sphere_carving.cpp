@@ -8,6 +8,8 @@
 #include <numeric>
 #include <vector>
 
+#include "carving_internal.h"
+
 namespace sdfcontour {
 
 namespace {
@@ -148,53 +150,70 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
   return moves;
 }
 
-Eigen::Vector3d triangle_normal(const PointMatrix& V, const TriangleMatrix& F, Eigen::Index t) {
-  const Eigen::Vector3d a = V.row(F(t, 0)).transpose();
-  return (V.row(F(t, 1)).transpose() - a).cross(V.row(F(t, 2)).transpose() - a);
+// Rounds (up to options.passes) pushing the vertices `candidates` out of the balls; only a vertex
+// that moved can have entered a ball, so later rounds look at those alone.
+void carve_vertices(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
+                    double spacing, const CarvingOptions& options, std::vector<int> candidates,
+                    CarvingStats& stats) {
+  PointMatrix& V = mesh.vertices;
+  for (int round = 0; round < options.passes && !candidates.empty(); ++round) {
+    ++stats.passes;
+    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing);
+    std::vector<double> factor(std::size_t(V.rows()));
+    for (Eigen::Index v = 0; v < V.rows(); ++v)
+      factor[std::size_t(v)] = moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
+    if (std::none_of(factor.begin(), factor.end(), [](double f) { return f > 0; })) return;
+    stats.held_back += detail::hold_back_turning_triangles(mesh, moves, factor, options);
+    candidates.clear();
+    for (Eigen::Index v = 0; v < V.rows(); ++v)
+      if (factor[std::size_t(v)] > 0) {
+        V.row(v) += factor[std::size_t(v)] * moves.row(v);
+        candidates.push_back(int(v));
+      }
+  }
 }
 
-// Scales each vertex's move (factor 1, halved, then 0) until no triangle's normal turns by more
-// than the allowed angle; returns the vertices held back.
-long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
-                                 std::vector<double>& factor, const CarvingOptions& options) {
-  const PointMatrix& V = mesh.vertices;
+// Rings of triangles around a sample's last nearest triangle searched for its next one.
+constexpr int kSeedRings = 3;
+
+// The triangle phase (see CarvingOptions::side_passes). After the first round, only the samples
+// that failed the last one or whose nearest triangle has a vertex that moved are checked again.
+void carve_triangles(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
+                     double spacing, const CarvingOptions& options, CarvingStats& stats) {
+  std::vector<int> check;
+  for (Eigen::Index s = 0; s < values.size(); ++s)
+    if (std::abs(values[s]) <= options.side_reach * spacing) check.push_back(int(s));
+  PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
-  std::vector<Eigen::Index> moving;  // triangles with a moving vertex
-  for (Eigen::Index t = 0; t < F.rows(); ++t)
-    if (factor[std::size_t(F(t, 0))] > 0 || factor[std::size_t(F(t, 1))] > 0 ||
-        factor[std::size_t(F(t, 2))] > 0)
-      moving.push_back(t);
-  std::vector<Eigen::Vector3d> before(moving.size());
-  for (std::size_t q = 0; q < moving.size(); ++q) before[q] = triangle_normal(V, F, moving[q]);
-  const double min_cos = std::cos(options.max_turn_degrees * M_PI / 180);
-  std::vector<char> turned(moving.size());
-  std::vector<char> held(std::size_t(V.rows()), 0);
+  // Moves are short (a fraction of a spacing), so after the first round a sample's nearest
+  // triangle is sought near its last one.
+  std::vector<int> seeds;
   for (int round = 0;; ++round) {
-    tbb::parallel_for(std::size_t(0), moving.size(), [&](std::size_t q) {
-      const Eigen::Index t = moving[q];
-      Eigen::Matrix3d corners;
-      for (int c = 0; c < 3; ++c) {
-        const int v = F(t, c);
-        corners.col(c) = (V.row(v) + factor[std::size_t(v)] * moves.row(v)).transpose();
-      }
-      const Eigen::Vector3d after =
-          (corners.col(1) - corners.col(0)).cross(corners.col(2) - corners.col(0));
-      turned[q] = !(before[q].dot(after) >= min_cos * before[q].norm() * after.norm());
-    });
-    bool any = false;
-    for (std::size_t q = 0; q < moving.size(); ++q) {
-      if (!turned[q]) continue;
-      for (int c = 0; c < 3; ++c) {
-        const std::size_t v = std::size_t(F(moving[q], c));
-        if (factor[v] == 0) continue;
-        factor[v] = round < options.halvings ? factor[v] / 2 : 0;
-        held[v] = 1;
-        any = true;
-      }
+    const std::vector<int> among = detail::triangles_around(mesh, seeds, kSeedRings);
+    const detail::SideCheck found =
+        detail::check_sample_sides(mesh, points, values, check, round > 0 ? &among : nullptr);
+    if (round == 0) stats.side_violations = found.violations;
+    stats.side_violations_left = found.violations;
+    stats.wrong_side_left = found.wrong_side;
+    if (found.violations == 0 || round == options.side_passes) return;
+    std::vector<double> factor(std::size_t(V.rows()));
+    for (Eigen::Index v = 0; v < V.rows(); ++v)
+      factor[std::size_t(v)] = found.moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
+    stats.held_back += detail::hold_back_turning_triangles(mesh, found.moves, factor, options);
+    for (Eigen::Index v = 0; v < V.rows(); ++v)
+      V.row(v) += factor[std::size_t(v)] * found.moves.row(v);
+    ++stats.side_passes;
+    std::vector<int> next;
+    seeds.clear();
+    for (std::size_t w = 0; w < check.size(); ++w) {
+      const int t = found.nearest[w];
+      const bool moved =
+          t >= 0 && (factor[std::size_t(F(t, 0))] > 0 || factor[std::size_t(F(t, 1))] > 0 ||
+                     factor[std::size_t(F(t, 2))] > 0);
+      if (found.failed[w] || moved) next.push_back(check[w]), seeds.push_back(t);
     }
-    if (!any) break;
+    check = std::move(next);
   }
-  return long(std::count(held.begin(), held.end(), 1));
 }
 
 }  // namespace
@@ -208,30 +227,27 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
     throw Error("sphere carving: the spacing must be positive and finite");
   if (!values.allFinite() || !points.allFinite())
     throw Error("sphere carving: the samples must be finite");
-  if (options.passes < 0 || options.halvings < 0 || !(options.max_turn_degrees >= 0) ||
-      !(options.max_turn_degrees <= 180))
-    throw Error("sphere carving: passes and halvings must be >= 0, the turn in [0, 180] degrees");
+  if (options.passes < 0 || options.halvings < 0 || options.side_passes < 0 ||
+      !(options.max_turn_degrees >= 0) || !(options.max_turn_degrees <= 180) ||
+      !(options.side_reach >= 0) || !std::isfinite(options.side_reach))
+    throw Error(
+        "sphere carving: passes, side passes and halvings must be >= 0, the side reach finite "
+        "and >= 0, the turn in [0, 180] degrees");
   CarvingStats stats;
   PointMatrix& V = mesh.vertices;
   if (V.rows() == 0 || points.rows() == 0) return stats;
   const PointMatrix start = V;
-  // Only a vertex that moved can have entered a ball: later rounds look at those alone.
-  std::vector<int> candidates(std::size_t(V.rows()));
-  std::iota(candidates.begin(), candidates.end(), 0);
-  while (stats.passes < options.passes && !candidates.empty()) {
-    ++stats.passes;
-    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing);
-    std::vector<double> factor(std::size_t(V.rows()));
+  std::vector<int> all(std::size_t(V.rows()));
+  std::iota(all.begin(), all.end(), 0);
+  carve_vertices(mesh, points, values, spacing, options, std::move(all), stats);
+  if (options.side_passes > 0) {
+    const PointMatrix before = V;
+    carve_triangles(mesh, points, values, spacing, options, stats);
+    // Moving a triangle off a ball near the surface can push a vertex into a larger ball.
+    std::vector<int> moved;
     for (Eigen::Index v = 0; v < V.rows(); ++v)
-      factor[std::size_t(v)] = moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
-    if (std::none_of(factor.begin(), factor.end(), [](double f) { return f > 0; })) break;
-    stats.held_back += hold_back_turning_triangles(mesh, moves, factor, options);
-    candidates.clear();
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      if (factor[std::size_t(v)] > 0) {
-        V.row(v) += factor[std::size_t(v)] * moves.row(v);
-        candidates.push_back(int(v));
-      }
+      if (V.row(v) != before.row(v)) moved.push_back(int(v));
+    carve_vertices(mesh, points, values, spacing, options, std::move(moved), stats);
   }
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
     const double d = (V.row(v) - start.row(v)).norm();

@@ -127,6 +127,63 @@ TEST(Carving, TrianglesKeepTheirSide) {
   EXPECT_LT(normal_z(flipped), 0);
 }
 
+namespace {
+
+// The cube [-1, 1]^3 as 12 outward triangles.
+Mesh cube_mesh() {
+  Mesh m;
+  m.vertices.resize(8, 3);
+  for (int v = 0; v < 8; ++v)
+    m.vertices.row(v) << (v & 1 ? 1 : -1), (v & 2 ? 1 : -1), (v & 4 ? 1 : -1);
+  m.triangles.resize(12, 3);
+  m.triangles << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2,
+      4, 6, 1, 3, 5, 3, 7, 5;
+  return m;
+}
+
+}  // namespace
+
+// No vertex lies in either sample's ball, so the vertex rounds leave the cube alone; the triangle
+// rounds move its top face until the sample just above it is inside and the other's ball, which
+// the face cuts, is clear of the mesh: both at least |value| inside (an independent signed
+// distance). A sample too far from the surface (beyond side_reach) is not looked at.
+TEST(Carving, TrianglesLeaveTheBallsAndSamplesKeepTheirSide) {
+  PointMatrix p(3, 3);
+  p << 0.1, 0.2, 1.01,   // inside by its value, outside the cube by 0.01
+      -0.3, -0.4, 0.95,  // inside, but its ball reaches 0.03 above the top face
+      0.0, 0.0, 1.5;     // outside and clear
+  Eigen::VectorXd value(3);
+  value << -0.02, -0.08, 0.3;
+  const double spacing = 0.1;
+  ASSERT_GT(MeshSdf(cube_mesh()).distance(p.row(0).transpose()), 0);
+  ASSERT_GT(MeshSdf(cube_mesh()).distance(p.row(1).transpose()), -0.08);
+
+  Mesh vertices_only = cube_mesh();
+  CarvingOptions no_sides;
+  no_sides.side_passes = 0;
+  carve_mesh(vertices_only, p, value, spacing, no_sides);
+  EXPECT_EQ(vertices_only.vertices, cube_mesh().vertices);
+
+  Mesh carved = cube_mesh();
+  const CarvingStats stats = carve_mesh(carved, p, value, spacing);
+  const MeshSdf after(carved);
+  EXPECT_LE(after.distance(p.row(0).transpose()), -0.02 * (1 - 1e-6));
+  EXPECT_LE(after.distance(p.row(1).transpose()), -0.08 * (1 - 1e-6));
+  EXPECT_EQ(stats.side_violations, 2);
+  EXPECT_EQ(stats.side_violations_left, 0);
+  EXPECT_EQ(stats.wrong_side_left, 0);
+  EXPECT_GE(stats.side_passes, 1);
+  // Only the top face's corners moved, and upwards.
+  for (Eigen::Index v = 0; v < 8; ++v) {
+    const Eigen::Vector3d d = carved.vertices.row(v) - cube_mesh().vertices.row(v);
+    if (cube_mesh().vertices(v, 2) < 0) {
+      EXPECT_EQ(d.norm(), 0.0);
+    }
+    EXPECT_GE(d.z(), 0.0);
+    EXPECT_NEAR(d.head<2>().norm(), 0.0, 1e-12);
+  }
+}
+
 TEST(Carving, BadInputIsAnError) {
   Mesh m = inflated_sphere(1.0);
   const Samples s = sphere_band(16, 2);
@@ -137,6 +194,12 @@ TEST(Carving, BadInputIsAnError) {
   EXPECT_THROW(carve_mesh(m, s.points, nan, 0.1), Error);
   CarvingOptions bad;
   bad.passes = -1;
+  EXPECT_THROW(carve_mesh(m, s.points, s.values, 0.1, bad), Error);
+  bad = CarvingOptions{};
+  bad.side_passes = -1;
+  EXPECT_THROW(carve_mesh(m, s.points, s.values, 0.1, bad), Error);
+  bad = CarvingOptions{};
+  bad.side_reach = std::nan("");
   EXPECT_THROW(carve_mesh(m, s.points, s.values, 0.1, bad), Error);
 }
 

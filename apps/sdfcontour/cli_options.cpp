@@ -21,6 +21,16 @@ std::optional<double> parse_finite(const std::string& text) {
   return x;
 }
 
+std::optional<int> parse_count_or_auto(const std::string& option, const std::string& text, int max,
+                                       const std::string& meaning) {
+  if (text == "auto") return std::nullopt;
+  const std::optional<double> x = parse_finite(text);
+  if (!x || *x < 0 || *x != std::floor(*x) || *x > max)
+    throw Error(option + " must be " + meaning + " (0 to " + std::to_string(max) +
+                ") or 'auto', got '" + text + "'");
+  return int(*x);
+}
+
 Bounds parse_bounds(const std::string& text) {
   std::vector<double> v;
   std::stringstream ss(text);

@@ -29,6 +29,11 @@ Bounds parse_bounds(const std::string& text);
 /// Throws Error unless value is finite and within [lo, hi].
 void require_range(const std::string& option, double value, double lo, double hi);
 
+/// "auto" (nothing), or the whole of `text` as a whole number in [0, max]; else throws Error
+/// naming `option` and `meaning` (what the number counts).
+std::optional<int> parse_count_or_auto(const std::string& option, const std::string& text, int max,
+                                       const std::string& meaning);
+
 /// A positive number, or one of `words` (returned as the word's value).
 double parse_number_or(const std::string& option, const std::string& text,
                        const std::vector<std::pair<std::string, double>>& words);

@@ -16,25 +16,42 @@
 namespace sdfcontour {
 
 struct CarvingOptions {
-  /// Rounds of pushing vertices out (a vertex pushed out of one ball can enter another).
+  /// Rounds of pushing vertices out (a vertex pushed out of one ball can enter another), before
+  /// the triangle phase and again, on the vertices it moved, after it.
   int passes = 3;
   /// A triangle's normal may turn by at most this many degrees in a round; where it would turn
   /// more (two sides of a thin part pushed through each other), its vertices move half as far,
   /// up to `halvings` times, then not at all.
   double max_turn_degrees = 60;
   int halvings = 8;
+  /// Rounds of the triangle phase, after the vertex rounds (0: none). A ball can hold part of a
+  /// triangle with no vertex in it, and a sample close to the surface can end on the wrong side of
+  /// the mesh: each sample within `side_reach` spacings of the surface (|value|) that does either
+  /// moves the vertices of the mesh's nearest feature (triangle, edge or vertex) along its normal
+  /// until the sample would lie on its own side, |value| away.
+  int side_passes = 12;
+  double side_reach = 1;
 };
 
 struct CarvingStats {
   long vertices_moved = 0;  ///< distinct vertices that moved, over all rounds
   double largest_move = 0;  ///< the longest total displacement of a vertex
   long held_back = 0;       ///< vertices kept short of a sphere to keep their triangles' sides
-  int passes = 0;           ///< rounds run (the last one moved nothing, or `passes` ran out)
+  int passes = 0;           ///< vertex rounds run (before and after the triangle phase)
+  /// Triangle phase: samples on the wrong side of the mesh or with part of a triangle inside their
+  /// ball, before its first round and after its last; rounds that moved vertices.
+  long side_violations = 0, side_violations_left = 0;
+  /// Of side_violations_left, the samples on the wrong side (later rounds check only the samples
+  /// near the moves, so these two count among those).
+  long wrong_side_left = 0;
+  int side_passes = 0;
 };
 
 /// Moves the vertices of `mesh` (in place) out of the balls of the samples: ball i has centre
-/// points.row(i) (n x 3) and radius |values[i]| (n). `spacing` (> 0) is the samples' spacing,
-/// the cell of the index used to find the vertices near a ball. Triangles are unchanged. The
+/// points.row(i) (n x 3) and radius |values[i]| (n), then (options.side_passes) moves the
+/// triangles near the surface off the balls and behind the samples' own sides. `spacing` (> 0) is
+/// the samples' spacing, the cell of the index used to find the vertices near a ball and the unit
+/// of options.side_reach. The triangles' connectivity is unchanged. The
 /// result does not depend on the thread count. Throws Error for mismatched sizes, a non-finite
 /// value, or a spacing that is not positive.
 CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,

@@ -1,0 +1,43 @@
+// Internal: the parts of sphere carving shared by its vertex phase (sphere_carving.cpp) and its
+// triangle phase (carving_triangles.cpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "sdfcontour/sphere_carving.h"
+
+namespace sdfcontour::detail {
+
+/// Scales each vertex's move in `moves` (per vertex, factor[v] times its row: 1, halved, then 0)
+/// until no triangle's normal turns by more than options.max_turn_degrees; returns the vertices
+/// held back.
+long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
+                                 std::vector<double>& factor, const CarvingOptions& options);
+
+/// The samples whose side of the mesh is wrong or whose ball holds part of a triangle, and the
+/// moves that put each of them outside the mesh's nearest feature.
+struct SideCheck {
+  long violations = 0;       ///< samples on the wrong side or with a triangle inside their ball
+  long wrong_side = 0;       ///< of those, the samples on the wrong side
+  PointMatrix moves;         ///< per vertex (rows of mesh.vertices); zero where none is asked
+  std::vector<int> nearest;  ///< per checked sample, its nearest triangle
+  std::vector<char> failed;  ///< per checked sample, whether it violates
+};
+
+/// Checks the samples `which` (indices into points / values) against the mesh's nearest point:
+/// a sample with value v must lie on the side of sign(v) of it, at least |v| away. For each
+/// that does not, the vertices of the nearest feature (triangle, edge or vertex) are asked to
+/// move along the feature's (pseudo)normal so that it would; a vertex asked by several samples
+/// takes a wrong-side sample's move before a ball's, then the longest (ties: the lower sample).
+/// Thread-count independent.
+/// `among` (optional): the triangles to look for the nearest among (default: all).
+SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
+                             const Eigen::VectorXd& values, const std::vector<int>& which,
+                             const std::vector<int>* among = nullptr);
+
+/// The triangles within `rings` rings (triangles sharing a vertex) of `seeds` (ascending; entries
+/// < 0 are skipped).
+std::vector<int> triangles_around(const Mesh& mesh, const std::vector<int>& seeds, int rings);
+
+}  // namespace sdfcontour::detail
