@@ -181,6 +181,10 @@ ContourOptions contour_options(const py::dict& o) {
   const std::string signs = get<std::string>(o, "sign_constraints", "auto");
   c.enforce_signs = signs == "on" ? Switch::On : signs == "off" ? Switch::Off : Switch::Auto;
   if (!get<bool>(o, "carve", true)) c.carve = Switch::Off;
+  if (const int rounds = get<int>(o, "side_passes", -1); rounds >= 0) {
+    c.carving.side_passes = rounds;
+    c.carve_sides = rounds > 0 ? Switch::On : Switch::Off;
+  }
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;

@@ -131,7 +131,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
-            carve=True, batch_size=65536, progress=False, return_stats=False):
+            carve=True, side_passes="auto", batch_size=65536, progress=False,
+            return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -176,6 +177,11 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         GCP: move the mesh's vertices out of the samples' spheres, which hold no surface (the
         band's samples; below 128 samples per axis with ``band="auto"``, every sample within 16
         spacings). On by default, except on values smoothed for noise; CLI ``--no-carve``.
+    side_passes : int or "auto"
+        GCP carving: rounds in which each sample within a spacing of the surface that a triangle
+        cuts, or that lies on the wrong side of the mesh, moves the nearest triangle, edge or
+        vertex behind its sphere. 0: vertices only; "auto": 12 below 128 samples per axis, 0
+        above (CLI ``--side-passes``).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
@@ -232,6 +238,14 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     if not isinstance(carve, (bool, np.bool_)):
         raise ValueError(f"carve must be True or False, got {carve!r}")
     o["carve"] = bool(carve)
+    if isinstance(side_passes, str) and side_passes == "auto":
+        o["side_passes"] = -1
+    elif (isinstance(side_passes, (int, np.integer)) and not isinstance(side_passes, bool)
+          and 0 <= side_passes <= 100):
+        o["side_passes"] = int(side_passes)
+    else:
+        raise ValueError(f"side_passes must be a whole number from 0 to 100 or 'auto', "
+                         f"got {side_passes!r}")
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if return_stats:
         return out["V"], out["F"], out["stats"]

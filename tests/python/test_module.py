@@ -96,6 +96,16 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     assert plain_stats["carved_vertices"] == 0
     with pytest.raises(ValueError, match="carve"):
         sdfcontour.contour(np.load(tmp_path / "b.npy"), carve="auto")
+    # side_passes=0 (vertices only) is the CLI's --side-passes 0 mesh, and differs from the
+    # default's, whose triangles also leave the spheres.
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "vertices.ply"),
+                    "-q", "--side-passes", "0"], check=True, stdout=subprocess.DEVNULL)
+    V_vertices, _ = sdfcontour.contour(np.load(tmp_path / "b.npy"), side_passes=0)
+    np.testing.assert_array_equal(V_vertices, sdfcontour.read_mesh(tmp_path / "vertices.ply")[0])
+    assert not np.array_equal(V_vertices, V)
+    for bad in (-1, 1.5, "all", True):
+        with pytest.raises(ValueError, match="side_passes"):
+            sdfcontour.contour(np.load(tmp_path / "b.npy"), side_passes=bad)
     # And the mesh is close to the ground truth the CLI wrote.
     V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)
