@@ -31,10 +31,17 @@ struct SideCheck {
 /// move along the feature's (pseudo)normal so that it would; a vertex asked by several samples
 /// takes a wrong-side sample's move before a ball's, then the longest (ties: the lower sample).
 /// Thread-count independent.
-/// `among` (optional): the triangles to look for the nearest among (default: all).
+/// A ball counts as cut only where the mesh reaches more than `slack` into it. `among`
+/// (optional): the triangles to look for the nearest among (default: all).
 SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
                              const Eigen::VectorXd& values, const std::vector<int>& which,
-                             const std::vector<int>* among = nullptr);
+                             double slack, const std::vector<int>* among = nullptr);
+
+/// The samples with |value| <= reach (ascending) whose ball, grown by `grow`, meets a triangle
+/// around one of `vertices`.
+std::vector<int> samples_near_vertices(const Mesh& mesh, const std::vector<int>& vertices,
+                                       const PointMatrix& points, const Eigen::VectorXd& values,
+                                       double reach, double grow);
 
 /// The triangles within `rings` rings (triangles sharing a vertex) of `seeds` (ascending; entries
 /// < 0 are skipped).

@@ -95,6 +95,9 @@ Eigen::Vector3d barycentric(const Mesh& mesh, Eigen::Index t, const Eigen::Vecto
   return Eigen::Vector3d(1 - v - w, v, w);
 }
 
+// Above this many queries a tree builds its kd-tree of hints first.
+constexpr std::size_t kManyQueries = 2000;
+
 // A vertex's requested move, from sample `sample`, `length` long.
 struct Request {
   int sample = -1;
@@ -132,6 +135,36 @@ std::vector<int> triangles_around(const Mesh& mesh, const std::vector<int>& seed
   std::vector<int> out;
   for (Eigen::Index t = 0; t < F.rows(); ++t)
     if (in[std::size_t(t)]) out.push_back(int(t));
+  return out;
+}
+
+std::vector<int> samples_near_vertices(const Mesh& mesh, const std::vector<int>& vertices,
+                                       const PointMatrix& points, const Eigen::VectorXd& values,
+                                       double reach, double grow) {
+  std::vector<int> seeds;
+  const VertexTriangles around(mesh);
+  for (int v : vertices)
+    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
+      seeds.push_back(around.triangles[std::size_t(o)]);
+  std::sort(seeds.begin(), seeds.end());
+  seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+  if (seeds.empty()) return {};
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+  std::vector<Triangle> triangles;
+  for (int t : seeds) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+  const Tree tree(triangles.begin(), triangles.end());
+  std::vector<char> near(std::size_t(values.size()), 0);
+  tbb::parallel_for(Eigen::Index(0), values.size(), [&](Eigen::Index s) {
+    const double r = std::abs(values[s]);
+    if (!(r <= reach)) return;
+    const K::Point_3 p(points(s, 0), points(s, 1), points(s, 2));
+    near[std::size_t(s)] = tree.do_intersect(K::Sphere_3(p, (r + grow) * (r + grow)));
+  });
+  std::vector<int> out;
+  for (std::size_t s = 0; s < near.size(); ++s)
+    if (near[s]) out.push_back(int(s));
   return out;
 }
 
@@ -181,7 +214,7 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
 
 SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
                              const Eigen::VectorXd& values, const std::vector<int>& which,
-                             const std::vector<int>* among) {
+                             double slack, const std::vector<int>* among) {
   SideCheck out;
   out.moves = PointMatrix::Zero(mesh.vertices.rows(), 3);
   if (mesh.triangles.rows() == 0 || which.empty()) return out;
@@ -200,7 +233,8 @@ SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
   auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
   for (int t : index) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
   Tree tree(triangles.begin(), triangles.end());
-  tree.accelerate_distance_queries();
+  // The kd-tree of hints pays off over many queries, not over the few of later rounds.
+  if (which.size() > kManyQueries) tree.accelerate_distance_queries();
   const VertexTriangles around(mesh);
   // Per checked sample: the feature's vertices and the move asked of them (empty if none).
   std::vector<std::vector<int>> features(which.size());
@@ -222,7 +256,7 @@ SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
     const Eigen::Vector3d n = feature_normal(mesh, around, t, barycentric(mesh, t, q), feature);
     const double side = values[s] > 0 ? 1 : -1, height = (p - q).dot(n);
     wrong[w] = !(side * height > 0);
-    if (!wrong[w] && (p - q).norm() >= r) return;
+    if (!wrong[w] && (p - q).norm() >= r - slack) return;
     out.failed[w] = 1;
     // Move the feature along n so that p would lie r (and a little) beyond it on its own side.
     asked[w] = (height - side * r * (1 + kBeyond)) * n;

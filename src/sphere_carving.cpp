@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -47,6 +49,15 @@ class VertexColumns {
       vertices_[q] = keyed[q].second;
     }
     std::partial_sum(offsets_.begin(), offsets_.end(), offsets_.begin());
+    // Summed-area table of the column counts: a ball over empty columns is skipped at once.
+    area_.assign(std::size_t((size_[0] + 1) * (size_[1] + 1)), 0);
+    for (long j = 0; j < size_[1]; ++j)
+      for (long i = 0; i < size_[0]; ++i) {
+        const std::size_t col = std::size_t(j * size_[0] + i);
+        area_[corner(i + 1, j + 1)] = (offsets_[col + 1] - offsets_[col]) +
+                                      area_[corner(i, j + 1)] + area_[corner(i + 1, j)] -
+                                      area_[corner(i, j)];
+      }
   }
 
   // Calls f(vertex) for each vertex in a cube that meets the ball (centre p, radius r): per
@@ -59,6 +70,10 @@ class VertexColumns {
             .any())
       return;
     const auto a = cell_of(p - reach), b = cell_of(p + reach);
+    if (area_[corner(b[0] + 1, b[1] + 1)] - area_[corner(a[0], b[1] + 1)] -
+            area_[corner(b[0] + 1, a[1])] + area_[corner(a[0], a[1])] ==
+        0)
+      return;
     for (long j = a[1]; j <= b[1]; ++j)
       for (long i = a[0]; i <= b[0]; ++i) {
         const std::size_t col = std::size_t(j * size_[0] + i);
@@ -77,6 +92,7 @@ class VertexColumns {
   }
 
  private:
+  std::size_t corner(long i, long j) const { return std::size_t(j * (size_[0] + 1) + i); }
   long cell_of_axis(double x, int a) const {
     return std::clamp(long(std::floor((x - origin_[a]) / cell_)), 0L, size_[std::size_t(a)] - 1);
   }
@@ -92,6 +108,7 @@ class VertexColumns {
   Eigen::Vector3d origin_;
   std::array<long, 3> size_{};
   std::vector<std::size_t> offsets_;  // per column (i + size_x j), into heights_ / vertices_
+  std::vector<std::size_t> area_;     // vertices in columns [0, i) x [0, j), at corner(i, j)
   std::vector<int> heights_, vertices_;
 };
 
@@ -108,11 +125,11 @@ constexpr double kInside = 1e-9;
 // Vertices are indexed in cubes of this many spacings (1 and 3 were slower on bunny 256^3).
 constexpr double kIndexCell = 2;
 
-// For each vertex of `which` inside at least one ball, the ball it enters deepest (ties: the
-// lower sample), as the displacement onto that ball's sphere; zero elsewhere.
+// For each vertex of `which` inside at least one ball of radius > `above`, the ball it enters
+// deepest (ties: the lower sample), as the displacement onto that ball's sphere; zero elsewhere.
 PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                           const PointMatrix& points, const Eigen::VectorXd& values,
-                           double spacing) {
+                           const PointMatrix& points, const Eigen::VectorXd& values, double spacing,
+                           double above) {
   const VertexColumns columns(V, which, kIndexCell * spacing);
   const double inside = kInside * spacing;
   constexpr Eigen::Index kBlock = 4096;
@@ -122,7 +139,7 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
     auto& out = found[std::size_t(b)];
     for (Eigen::Index s = b * kBlock; s < std::min(n, (b + 1) * kBlock); ++s) {
       const double r = std::abs(values[s]);
-      if (!(r > 0)) continue;
+      if (!(r > above)) continue;
       const Eigen::Vector3d p = points.row(s).transpose();
       columns.for_each_near_ball(p, r, [&](int v) {
         const double d2 = (V.row(v).transpose() - p).squaredNorm();
@@ -150,15 +167,15 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
   return moves;
 }
 
-// Rounds (up to options.passes) pushing the vertices `candidates` out of the balls; only a vertex
-// that moved can have entered a ball, so later rounds look at those alone.
+// Rounds (up to options.passes) pushing the vertices `candidates` out of the balls of radius >
+// `above`; only a vertex that moved can have entered a ball, so later rounds look at those alone.
 void carve_vertices(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
                     double spacing, const CarvingOptions& options, std::vector<int> candidates,
-                    CarvingStats& stats) {
+                    double above, CarvingStats& stats) {
   PointMatrix& V = mesh.vertices;
   for (int round = 0; round < options.passes && !candidates.empty(); ++round) {
     ++stats.passes;
-    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing);
+    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing, above);
     std::vector<double> factor(std::size_t(V.rows()));
     for (Eigen::Index v = 0; v < V.rows(); ++v)
       factor[std::size_t(v)] = moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
@@ -174,46 +191,57 @@ void carve_vertices(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd
 }
 
 // Rings of triangles around a sample's last nearest triangle searched for its next one.
-constexpr int kSeedRings = 3;
+constexpr int kSeedRings = 1;
 
-// The triangle phase (see CarvingOptions::side_passes). After the first round, only the samples
-// that failed the last one or whose nearest triangle has a vertex that moved are checked again.
-void carve_triangles(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
-                     double spacing, const CarvingOptions& options, CarvingStats& stats) {
-  std::vector<int> check;
-  for (Eigen::Index s = 0; s < values.size(); ++s)
-    if (std::abs(values[s]) <= options.side_reach * spacing) check.push_back(int(s));
+// Rounds of the triangle phase (see CarvingOptions::side_passes) over the samples within reach:
+// those whose ball the mesh cuts deeper than `slack` (infinite: none) or that lie on the wrong
+// side move the mesh's nearest feature. After the first round, only the samples that failed the
+// last one or whose nearest triangle moved are checked again. `check`: the samples to check
+// first. Returns the vertices it moved and (in `check`) the samples that failed the last round.
+std::vector<int> carve_triangles(Mesh& mesh, const PointMatrix& points,
+                                 const Eigen::VectorXd& values, const CarvingOptions& options,
+                                 double slack, std::vector<int>& check, CarvingStats& stats) {
   PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
+  std::vector<char> moved(std::size_t(V.rows()), 0);
   // Moves are short (a fraction of a spacing), so after the first round a sample's nearest
   // triangle is sought near its last one.
   std::vector<int> seeds;
   for (int round = 0;; ++round) {
     const std::vector<int> among = detail::triangles_around(mesh, seeds, kSeedRings);
-    const detail::SideCheck found =
-        detail::check_sample_sides(mesh, points, values, check, round > 0 ? &among : nullptr);
-    if (round == 0) stats.side_violations = found.violations;
-    stats.side_violations_left = found.violations;
+    const detail::SideCheck found = detail::check_sample_sides(mesh, points, values, check, slack,
+                                                               round > 0 ? &among : nullptr);
+    if (std::isfinite(slack)) {
+      if (round == 0) stats.side_violations = found.violations;
+      stats.side_violations_left = found.violations;
+    }
     stats.wrong_side_left = found.wrong_side;
-    if (found.violations == 0 || round == options.side_passes) return;
+    if (found.violations == 0 || round == options.side_passes) break;
     std::vector<double> factor(std::size_t(V.rows()));
     for (Eigen::Index v = 0; v < V.rows(); ++v)
       factor[std::size_t(v)] = found.moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
     stats.held_back += detail::hold_back_turning_triangles(mesh, found.moves, factor, options);
     for (Eigen::Index v = 0; v < V.rows(); ++v)
-      V.row(v) += factor[std::size_t(v)] * found.moves.row(v);
+      if (factor[std::size_t(v)] > 0) {
+        V.row(v) += factor[std::size_t(v)] * found.moves.row(v);
+        moved[std::size_t(v)] = 1;
+      }
     ++stats.side_passes;
     std::vector<int> next;
     seeds.clear();
     for (std::size_t w = 0; w < check.size(); ++w) {
       const int t = found.nearest[w];
-      const bool moved =
+      const bool near_move =
           t >= 0 && (factor[std::size_t(F(t, 0))] > 0 || factor[std::size_t(F(t, 1))] > 0 ||
                      factor[std::size_t(F(t, 2))] > 0);
-      if (found.failed[w] || moved) next.push_back(check[w]), seeds.push_back(t);
+      if (found.failed[w] || near_move) next.push_back(check[w]), seeds.push_back(t);
     }
     check = std::move(next);
   }
+  std::vector<int> out;
+  for (std::size_t v = 0; v < moved.size(); ++v)
+    if (moved[v]) out.push_back(int(v));
+  return out;
 }
 
 }  // namespace
@@ -239,15 +267,34 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
   const PointMatrix start = V;
   std::vector<int> all(std::size_t(V.rows()));
   std::iota(all.begin(), all.end(), 0);
-  carve_vertices(mesh, points, values, spacing, options, std::move(all), stats);
+  carve_vertices(mesh, points, values, spacing, options, std::move(all), 0.0, stats);
   if (options.side_passes > 0) {
+    // Triangles off the small balls near the surface and samples onto their sides; then the
+    // vertices that moved out of any ball they entered; then, as that can put a sample next to
+    // the surface on the wrong side again, its side alone (the few moves left are tiny).
+    const double reach = options.side_reach * spacing;
+    std::vector<int> check;
+    for (Eigen::Index s = 0; s < values.size(); ++s)
+      if (std::abs(values[s]) <= reach) check.push_back(int(s));
+    const std::vector<int> moved =
+        carve_triangles(mesh, points, values, options, 0.0, check, stats);
     const PointMatrix before = V;
-    carve_triangles(mesh, points, values, spacing, options, stats);
-    // Moving a triangle off a ball near the surface can push a vertex into a larger ball.
-    std::vector<int> moved;
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      if (V.row(v) != before.row(v)) moved.push_back(int(v));
-    carve_vertices(mesh, points, values, spacing, options, std::move(moved), stats);
+    carve_vertices(mesh, points, values, spacing, options, moved, 0.0, stats);
+    std::vector<int> pushed;  // by the vertex rounds just run
+    double longest = 0;
+    for (int v : moved)
+      if (V.row(v) != before.row(v)) {
+        pushed.push_back(v);
+        longest = std::max(longest, (V.row(v) - before.row(v)).norm());
+      }
+    // The samples to check again: those still failing, and those whose balls, grown by the
+    // longest push, the pushed vertices' triangles meet (a sample on the surface has none).
+    const std::vector<int> near =
+        detail::samples_near_vertices(mesh, pushed, points, values, reach, longest);
+    std::vector<int> again;
+    std::set_union(check.begin(), check.end(), near.begin(), near.end(), std::back_inserter(again));
+    carve_triangles(mesh, points, values, options, std::numeric_limits<double>::infinity(), again,
+                    stats);
   }
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
     const double d = (V.row(v) - start.row(v)).norm();
