@@ -31,11 +31,12 @@ struct SideCheck {
 /// move along the feature's (pseudo)normal so that it would; a vertex asked by several samples
 /// takes a wrong-side sample's move before a ball's, then the longest (ties: the lower sample).
 /// Thread-count independent.
-/// A ball counts as cut only where the mesh reaches more than `slack` into it. `among`
+/// A ball counts as cut only where the mesh reaches more than `slack` into it; a sample whose
+/// move would be longer than `longest` counts but moves nothing. `among`
 /// (optional): the triangles to look for the nearest among (default: all).
 SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
                              const Eigen::VectorXd& values, const std::vector<int>& which,
-                             double slack, const std::vector<int>* among = nullptr);
+                             double slack, double longest, const std::vector<int>* among = nullptr);
 
 /// The samples with |value| <= reach (ascending) whose ball, grown by `grow`, meets a triangle
 /// around one of `vertices`.

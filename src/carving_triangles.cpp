@@ -214,7 +214,7 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
 
 SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
                              const Eigen::VectorXd& values, const std::vector<int>& which,
-                             double slack, const std::vector<int>* among) {
+                             double slack, double longest, const std::vector<int>* among) {
   SideCheck out;
   out.moves = PointMatrix::Zero(mesh.vertices.rows(), 3);
   if (mesh.triangles.rows() == 0 || which.empty()) return out;
@@ -260,13 +260,17 @@ SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
     out.failed[w] = 1;
     // Move the feature along n so that p would lie r (and a little) beyond it on its own side.
     asked[w] = (height - side * r * (1 + kBeyond)) * n;
+    // A longer move is no local correction (a missing thin part, or the other side's sheet):
+    // it counts, but moves nothing.
+    if (asked[w].norm() > longest) feature.clear();
     features[w] = std::move(feature);
   });
   std::vector<Request> best(std::size_t(V.rows()));
   for (std::size_t w = 0; w < which.size(); ++w) {
-    if (features[w].empty()) continue;
+    if (!out.failed[w]) continue;
     ++out.violations;
     out.wrong_side += wrong[w];
+    if (features[w].empty()) continue;
     const Request asks{which[w], bool(wrong[w]), asked[w].norm(), asked[w]};
     for (int v : features[w])
       if (asks.before(best[std::size_t(v)])) best[std::size_t(v)] = asks;

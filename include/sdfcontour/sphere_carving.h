@@ -28,7 +28,9 @@ struct CarvingOptions {
   /// triangle with no vertex in it, and a sample close to the surface can end on the wrong side of
   /// the mesh: each sample within `side_reach` spacings of the surface (|value|) that does either
   /// moves the vertices of the mesh's nearest feature (triangle, edge or vertex) along its normal
-  /// until the sample would lie on its own side, |value| away.
+  /// until the sample would lie on its own side, |value| away. The vertices it moved then leave
+  /// any ball they entered (vertex rounds), and up to as many rounds put the samples near those
+  /// moves back on their sides (their balls alone may stay cut, by a hair).
   int side_passes = 12;
   double side_reach = 1;
 };
@@ -41,8 +43,8 @@ struct CarvingStats {
   /// Triangle phase: samples on the wrong side of the mesh or with part of a triangle inside their
   /// ball, before its first round and after its last; rounds that moved vertices.
   long side_violations = 0, side_violations_left = 0;
-  /// Of side_violations_left, the samples on the wrong side (later rounds check only the samples
-  /// near the moves, so these two count among those).
+  /// Samples the last check found on the wrong side. Later rounds check only the samples that
+  /// failed or lie near the last moves, so this and side_violations_left count among those.
   long wrong_side_left = 0;
   int side_passes = 0;
 };
