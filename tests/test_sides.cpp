@@ -39,6 +39,17 @@ Sides wrong_sides(const Grid& grid, const Mesh& mesh, double within = 3) {
   return r;
 }
 
+// Calls f(name, n, grid) for the SDF grids of bunny and koala at 32^3 and 64^3.
+template <class F>
+void for_each_shared_grid(F&& f) {
+  for (const char* name : {"bunny", "koala_lowres"})
+    for (int n : {32, 64}) {
+      SCOPED_TRACE(std::string(name) + " " + std::to_string(n));
+      const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
+      f(name, n, sample_grid(sdf, n, Bounds{}));
+    }
+}
+
 }  // namespace
 
 // On bunny and koala at 32^3 and 64^3, no sample farther than 0.02 h from the surface ends on
@@ -46,53 +57,45 @@ Sides wrong_sides(const Grid& grid, const Mesh& mesh, double within = 3) {
 // than that stay, a few per mesh at 64^3: the margin, |value| times chi's slope, vanishes there.)
 TEST(Sides, SamplesStayOnTheirSide) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
-  for (const char* name : {"bunny", "koala_lowres"})
-    for (int n : {32, 64}) {
-      SCOPED_TRACE(std::string(name) + " " + std::to_string(n));
-      const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
-      const Grid grid = sample_grid(sdf, n, Bounds{});
-      // The constraints alone: carving moves the mesh afterwards, which flips a few samples
-      // within ~0.01 h of the surface either way (docs/carving.md).
-      ContourOptions with, without;
-      with.carve = without.carve = Switch::Off;
-      without.enforce_signs = Switch::Off;
-      const ContourResult held = contour(grid_input(grid), nullptr, with);
-      const ContourResult free = contour(grid_input(grid), nullptr, without);
-      ASSERT_TRUE(held.fallback.empty()) << held.fallback;
-      EXPECT_TRUE(held.sign_constraints);  // automatic below 128 samples per axis
-      EXPECT_FALSE(free.sign_constraints);
-      const Sides a = wrong_sides(grid, *held.mesh), b = wrong_sides(grid, *free.mesh);
-      std::cout << name << " " << n << "^3: wrong side " << b.wrong << " (deepest " << b.deepest
-                << " h) -> " << a.wrong << " (deepest " << a.deepest << " h); chi disagreed at "
-                << held.sign_violations << ", after the sweeps at " << held.sign_violations_left
-                << "\n";
-      EXPECT_LE(a.deepest, 0.02);
-      EXPECT_LE(3 * a.wrong, b.wrong);
-      EXPECT_LT(5 * held.sign_violations_left, held.sign_violations);
-    }
+  for_each_shared_grid([](const char* name, int n, const Grid& grid) {
+    // The constraints alone: carving moves the mesh afterwards, which flips a few samples
+    // within ~0.01 h of the surface either way (docs/carving.md).
+    ContourOptions with, without;
+    with.carve = without.carve = Switch::Off;
+    without.enforce_signs = Switch::Off;
+    const ContourResult held = contour(grid_input(grid), nullptr, with);
+    const ContourResult free = contour(grid_input(grid), nullptr, without);
+    ASSERT_TRUE(held.fallback.empty()) << held.fallback;
+    EXPECT_TRUE(held.sign_constraints);  // automatic below 128 samples per axis
+    EXPECT_FALSE(free.sign_constraints);
+    const Sides a = wrong_sides(grid, *held.mesh), b = wrong_sides(grid, *free.mesh);
+    std::cout << name << " " << n << "^3: wrong side " << b.wrong << " (deepest " << b.deepest
+              << " h) -> " << a.wrong << " (deepest " << a.deepest << " h); chi disagreed at "
+              << held.sign_violations << ", after the sweeps at " << held.sign_violations_left
+              << "\n";
+    EXPECT_LE(a.deepest, 0.02);
+    EXPECT_LE(3 * a.wrong, b.wrong);
+    EXPECT_LT(5 * held.sign_violations_left, held.sign_violations);
+  });
 }
 
 // With everything on (the sign constraints, then carving's vertex and triangle rounds), no sample
 // of bunny's or koala's grid at 32^3 or 64^3 within 3 spacings of the surface ends on the wrong
 // side of GCP's mesh (MC never puts one there; checking every sample took 71 s and found none
-// either); without the triangle rounds, 1-12 do.
+// either); without the triangle rounds, 0-12 do.
 TEST(Sides, NoSampleOnTheWrongSideOfTheCarvedMesh) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
-  for (const char* name : {"bunny", "koala_lowres"})
-    for (int n : {32, 64}) {
-      SCOPED_TRACE(std::string(name) + " " + std::to_string(n));
-      const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
-      const Grid grid = sample_grid(sdf, n, Bounds{});
-      const ContourResult r = contour(grid_input(grid), nullptr, ContourOptions{});
-      ASSERT_TRUE(r.fallback.empty()) << r.fallback;
-      ASSERT_TRUE(r.carving.has_value());
-      EXPECT_GT(r.carving->side_passes, 0);
-      const Sides wrong = wrong_sides(grid, *r.mesh);
-      std::cout << name << " " << n << "^3: " << r.carving->side_violations
-                << " samples failed the triangle rounds' first check; wrong side " << wrong.wrong
-                << "\n";
-      EXPECT_EQ(wrong.wrong, 0) << "deepest " << wrong.deepest << " h";
-    }
+  for_each_shared_grid([](const char* name, int n, const Grid& grid) {
+    const ContourResult r = contour(grid_input(grid), nullptr, ContourOptions{});
+    ASSERT_TRUE(r.fallback.empty()) << r.fallback;
+    ASSERT_TRUE(r.carving.has_value());
+    EXPECT_GT(r.carving->side_passes, 0);
+    const Sides wrong = wrong_sides(grid, *r.mesh);
+    std::cout << name << " " << n << "^3: " << r.carving->side_violations
+              << " samples failed the triangle rounds' first check; wrong side " << wrong.wrong
+              << "\n";
+    EXPECT_EQ(wrong.wrong, 0) << "deepest " << wrong.deepest << " h";
+  });
 }
 
 // From 128 samples per axis the solved surface is already within the samples' noise, and the
