@@ -9,6 +9,13 @@
 
 namespace sdfcontour::detail {
 
+/// The triangles around each vertex: those of vertex v are triangles[offsets[v] .. offsets[v+1]).
+/// Built once per mesh (carving moves vertices, never triangles).
+struct VertexTriangles {
+  std::vector<int> offsets, triangles;
+  explicit VertexTriangles(const Mesh& mesh);
+};
+
 /// Scales each vertex's move in `moves` (per vertex, factor[v] times its row: 1, halved, then 0)
 /// until no triangle's normal turns by more than options.max_turn_degrees; returns the vertices
 /// held back.
@@ -25,27 +32,28 @@ struct SideCheck {
   std::vector<char> failed;  ///< per checked sample, whether it violates
 };
 
-/// Checks the samples `which` (indices into points / values) against the mesh's nearest point:
-/// a sample with value v must lie on the side of sign(v) of it, at least |v| away. For each
-/// that does not, the vertices of the nearest feature (triangle, edge or vertex) are asked to
-/// move along the feature's (pseudo)normal so that it would; a vertex asked by several samples
-/// takes a wrong-side sample's move before a ball's, then the longest (ties: the lower sample).
-/// Thread-count independent.
-/// A ball counts as cut only where the mesh reaches more than `slack` into it; a sample whose
-/// move would be longer than `longest` counts but moves nothing. `among`
-/// (optional): the triangles to look for the nearest among (default: all).
-SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
-                             const Eigen::VectorXd& values, const std::vector<int>& which,
-                             double slack, double longest, const std::vector<int>* among = nullptr);
+/// Checks the samples `which` (indices into points / values; `around`: the mesh's) against the
+/// mesh's nearest point: a sample with value v must lie on the side of sign(v) of it, at least |v|
+/// away. For each that does not, the vertices of the nearest feature (triangle, edge or vertex) are
+/// asked to move along the feature's (pseudo)normal so that it would; a vertex asked by several
+/// samples takes a wrong-side sample's move before a ball's, then the longest (ties: the lower
+/// sample). Thread-count independent. A ball counts as cut only where the mesh reaches more than
+/// `slack` into it; a sample whose move would be longer than `longest` counts but moves nothing.
+/// `among` (optional): the triangles to look for the nearest among (default: all).
+SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
+                             const PointMatrix& points, const Eigen::VectorXd& values,
+                             const std::vector<int>& which, double slack, double longest,
+                             const std::vector<int>* among = nullptr);
 
 /// The samples with |value| <= reach (ascending) whose ball, grown by `grow`, meets a triangle
 /// around one of `vertices`.
-std::vector<int> samples_near_vertices(const Mesh& mesh, const std::vector<int>& vertices,
-                                       const PointMatrix& points, const Eigen::VectorXd& values,
-                                       double reach, double grow);
+std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& around,
+                                       const std::vector<int>& vertices, const PointMatrix& points,
+                                       const Eigen::VectorXd& values, double reach, double grow);
 
 /// The triangles within `rings` rings (triangles sharing a vertex) of `seeds` (ascending; entries
 /// < 0 are skipped).
-std::vector<int> triangles_around(const Mesh& mesh, const std::vector<int>& seeds, int rings);
+std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& around,
+                                  const std::vector<int>& seeds, int rings);
 
 }  // namespace sdfcontour::detail

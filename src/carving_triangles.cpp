@@ -33,22 +33,6 @@ constexpr double kOnFeature = 1e-9;
 // (relative) beyond it.
 constexpr double kBeyond = 1e-6;
 
-// The triangles around each vertex.
-struct VertexTriangles {
-  std::vector<int> offsets, triangles;
-  explicit VertexTriangles(const Mesh& mesh) {
-    const TriangleMatrix& F = mesh.triangles;
-    offsets.assign(std::size_t(mesh.vertices.rows()) + 1, 0);
-    for (Eigen::Index t = 0; t < F.rows(); ++t)
-      for (int c = 0; c < 3; ++c) ++offsets[std::size_t(F(t, c)) + 1];
-    for (std::size_t v = 1; v < offsets.size(); ++v) offsets[v] += offsets[v - 1];
-    triangles.resize(std::size_t(offsets.back()));
-    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-    for (Eigen::Index t = 0; t < F.rows(); ++t)
-      for (int c = 0; c < 3; ++c) triangles[std::size_t(fill[std::size_t(F(t, c))]++)] = int(t);
-  }
-};
-
 // The outward (pseudo)normal of the feature of triangle t holding the point with barycentric
 // coordinates `bary`: the triangle's normal inside it, the sum of the two triangles' unit normals
 // on an edge, their angle-weighted sum at a vertex (Baerentzen and Aanaes: the sign of (p - q) .
@@ -113,8 +97,20 @@ struct Request {
 
 }  // namespace
 
-std::vector<int> triangles_around(const Mesh& mesh, const std::vector<int>& seeds, int rings) {
-  const VertexTriangles around(mesh);
+VertexTriangles::VertexTriangles(const Mesh& mesh) {
+  const TriangleMatrix& F = mesh.triangles;
+  offsets.assign(std::size_t(mesh.vertices.rows()) + 1, 0);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) ++offsets[std::size_t(F(t, c)) + 1];
+  for (std::size_t v = 1; v < offsets.size(); ++v) offsets[v] += offsets[v - 1];
+  triangles.resize(std::size_t(offsets.back()));
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) triangles[std::size_t(fill[std::size_t(F(t, c))]++)] = int(t);
+}
+
+std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& around,
+                                  const std::vector<int>& seeds, int rings) {
   const TriangleMatrix& F = mesh.triangles;
   std::vector<char> in(std::size_t(F.rows()), 0);
   std::vector<int> frontier;
@@ -138,11 +134,10 @@ std::vector<int> triangles_around(const Mesh& mesh, const std::vector<int>& seed
   return out;
 }
 
-std::vector<int> samples_near_vertices(const Mesh& mesh, const std::vector<int>& vertices,
-                                       const PointMatrix& points, const Eigen::VectorXd& values,
-                                       double reach, double grow) {
+std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& around,
+                                       const std::vector<int>& vertices, const PointMatrix& points,
+                                       const Eigen::VectorXd& values, double reach, double grow) {
   std::vector<int> seeds;
-  const VertexTriangles around(mesh);
   for (int v : vertices)
     for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
       seeds.push_back(around.triangles[std::size_t(o)]);
@@ -212,9 +207,10 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
   return long(std::count(held.begin(), held.end(), 1));
 }
 
-SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
-                             const Eigen::VectorXd& values, const std::vector<int>& which,
-                             double slack, double longest, const std::vector<int>* among) {
+SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
+                             const PointMatrix& points, const Eigen::VectorXd& values,
+                             const std::vector<int>& which, double slack, double longest,
+                             const std::vector<int>* among) {
   SideCheck out;
   out.moves = PointMatrix::Zero(mesh.vertices.rows(), 3);
   if (mesh.triangles.rows() == 0 || which.empty()) return out;
@@ -235,7 +231,6 @@ SideCheck check_sample_sides(const Mesh& mesh, const PointMatrix& points,
   Tree tree(triangles.begin(), triangles.end());
   // The kd-tree of hints pays off over many queries, not over the few of later rounds.
   if (which.size() > kManyQueries) tree.accelerate_distance_queries();
-  const VertexTriangles around(mesh);
   // Per checked sample: the feature's vertices and the move asked of them (empty if none).
   std::vector<std::vector<int>> features(which.size());
   std::vector<Eigen::Vector3d> asked(which.size());

@@ -204,9 +204,9 @@ constexpr int kSeedRings = 1;
 // side move the mesh's nearest feature. After the first round, only the samples that failed the
 // last one or whose nearest triangle moved are checked again. `check`: the samples to check
 // first. Returns the vertices it moved and (in `check`) the samples that failed the last round.
-std::vector<int> carve_triangles(Mesh& mesh, const PointMatrix& points,
-                                 const Eigen::VectorXd& values, double spacing,
-                                 const CarvingOptions& options, double slack,
+std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& around,
+                                 const PointMatrix& points, const Eigen::VectorXd& values,
+                                 double spacing, const CarvingOptions& options, double slack,
                                  std::vector<int>& check, CarvingStats& stats) {
   PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
@@ -215,10 +215,10 @@ std::vector<int> carve_triangles(Mesh& mesh, const PointMatrix& points,
   // triangle is sought near its last one.
   std::vector<int> seeds;
   for (int round = 0;; ++round) {
-    const std::vector<int> among = detail::triangles_around(mesh, seeds, kSeedRings);
+    const std::vector<int> among = detail::triangles_around(mesh, around, seeds, kSeedRings);
     const detail::SideCheck found =
-        detail::check_sample_sides(mesh, points, values, check, slack, kLongestSideMove * spacing,
-                                   round > 0 ? &among : nullptr);
+        detail::check_sample_sides(mesh, around, points, values, check, slack,
+                                   kLongestSideMove * spacing, round > 0 ? &among : nullptr);
     if (std::isfinite(slack)) {
       if (round == 0) stats.side_violations = found.violations;
       stats.side_violations_left = found.violations;
@@ -280,12 +280,13 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
     // Triangles off the small balls near the surface and samples onto their sides; then the
     // vertices that moved out of any ball they entered; then, as that can put a sample next to
     // the surface on the wrong side again, its side alone (the few moves left are tiny).
+    const detail::VertexTriangles around(mesh);
     const double reach = options.side_reach * spacing;
     std::vector<int> check;
     for (Eigen::Index s = 0; s < values.size(); ++s)
       if (std::abs(values[s]) <= reach) check.push_back(int(s));
     const std::vector<int> moved =
-        carve_triangles(mesh, points, values, spacing, options, 0.0, check, stats);
+        carve_triangles(mesh, around, points, values, spacing, options, 0.0, check, stats);
     const PointMatrix before = V;
     carve_vertices(mesh, points, values, spacing, options, moved, 0.0, stats);
     std::vector<int> pushed;  // by the vertex rounds just run
@@ -298,11 +299,11 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
     // The samples to check again: those still failing, and those whose balls, grown by the
     // longest push, the pushed vertices' triangles meet (a sample on the surface has none).
     const std::vector<int> near =
-        detail::samples_near_vertices(mesh, pushed, points, values, reach, longest);
+        detail::samples_near_vertices(mesh, around, pushed, points, values, reach, longest);
     std::vector<int> again;
     std::set_union(check.begin(), check.end(), near.begin(), near.end(), std::back_inserter(again));
-    carve_triangles(mesh, points, values, spacing, options, std::numeric_limits<double>::infinity(),
-                    again, stats);
+    carve_triangles(mesh, around, points, values, spacing, options,
+                    std::numeric_limits<double>::infinity(), again, stats);
   }
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
     const double d = (V.row(v) - start.row(v)).norm();
