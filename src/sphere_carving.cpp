@@ -49,15 +49,6 @@ class VertexColumns {
       vertices_[q] = keyed[q].second;
     }
     std::partial_sum(offsets_.begin(), offsets_.end(), offsets_.begin());
-    // Summed-area table of the column counts: a ball over empty columns is skipped at once.
-    area_.assign(std::size_t((size_[0] + 1) * (size_[1] + 1)), 0);
-    for (long j = 0; j < size_[1]; ++j)
-      for (long i = 0; i < size_[0]; ++i) {
-        const std::size_t col = std::size_t(j * size_[0] + i);
-        area_[corner(i + 1, j + 1)] = (offsets_[col + 1] - offsets_[col]) +
-                                      area_[corner(i, j + 1)] + area_[corner(i + 1, j)] -
-                                      area_[corner(i, j)];
-      }
   }
 
   // Calls f(vertex) for each vertex in a cube that meets the ball (centre p, radius r): per
@@ -70,10 +61,6 @@ class VertexColumns {
             .any())
       return;
     const auto a = cell_of(p - reach), b = cell_of(p + reach);
-    if (area_[corner(b[0] + 1, b[1] + 1)] - area_[corner(a[0], b[1] + 1)] -
-            area_[corner(b[0] + 1, a[1])] + area_[corner(a[0], a[1])] ==
-        0)
-      return;
     for (long j = a[1]; j <= b[1]; ++j)
       for (long i = a[0]; i <= b[0]; ++i) {
         const std::size_t col = std::size_t(j * size_[0] + i);
@@ -92,7 +79,6 @@ class VertexColumns {
   }
 
  private:
-  std::size_t corner(long i, long j) const { return std::size_t(j * (size_[0] + 1) + i); }
   long cell_of_axis(double x, int a) const {
     return std::clamp(long(std::floor((x - origin_[a]) / cell_)), 0L, size_[std::size_t(a)] - 1);
   }
@@ -108,7 +94,6 @@ class VertexColumns {
   Eigen::Vector3d origin_;
   std::array<long, 3> size_{};
   std::vector<std::size_t> offsets_;  // per column (i + size_x j), into heights_ / vertices_
-  std::vector<std::size_t> area_;     // vertices in columns [0, i) x [0, j), at corner(i, j)
   std::vector<int> heights_, vertices_;
 };
 
@@ -125,11 +110,11 @@ constexpr double kInside = 1e-9;
 // Vertices are indexed in cubes of this many spacings (1 and 3 were slower on bunny 256^3).
 constexpr double kIndexCell = 2;
 
-// For each vertex of `which` inside at least one ball of radius > `above`, the ball it enters
-// deepest (ties: the lower sample), as the displacement onto that ball's sphere; zero elsewhere.
+// For each vertex of `which` inside at least one ball, the ball it enters deepest (ties: the
+// lower sample), as the displacement onto that ball's sphere; zero elsewhere.
 PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                           const PointMatrix& points, const Eigen::VectorXd& values, double spacing,
-                           double above) {
+                           const PointMatrix& points, const Eigen::VectorXd& values,
+                           double spacing) {
   const VertexColumns columns(V, which, kIndexCell * spacing);
   const double inside = kInside * spacing;
   constexpr Eigen::Index kBlock = 4096;
@@ -139,7 +124,7 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
     auto& out = found[std::size_t(b)];
     for (Eigen::Index s = b * kBlock; s < std::min(n, (b + 1) * kBlock); ++s) {
       const double r = std::abs(values[s]);
-      if (!(r > above)) continue;
+      if (!(r > 0)) continue;
       const Eigen::Vector3d p = points.row(s).transpose();
       columns.for_each_near_ball(p, r, [&](int v) {
         const double d2 = (V.row(v).transpose() - p).squaredNorm();
@@ -167,26 +152,42 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
   return moves;
 }
 
-// Rounds (up to options.passes) pushing the vertices `candidates` out of the balls of radius >
-// `above`; only a vertex that moved can have entered a ball, so later rounds look at those alone.
+// Applies `moves` (per vertex; zero: stay), each scaled back where it would turn a triangle too
+// far; returns which vertices moved.
+std::vector<char> apply_moves(Mesh& mesh, const PointMatrix& moves, const CarvingOptions& options,
+                              CarvingStats& stats) {
+  PointMatrix& V = mesh.vertices;
+  std::vector<double> factor(std::size_t(V.rows()));
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    factor[std::size_t(v)] = moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
+  std::vector<char> moved(factor.size(), 0);
+  if (std::none_of(factor.begin(), factor.end(), [](double f) { return f > 0; })) return moved;
+  stats.held_back += detail::hold_back_turning_triangles(mesh, moves, factor, options);
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (factor[std::size_t(v)] > 0) {
+      V.row(v) += factor[std::size_t(v)] * moves.row(v);
+      moved[std::size_t(v)] = 1;
+    }
+  return moved;
+}
+
+// The indices of the set entries of `flags`.
+std::vector<int> set_indices(const std::vector<char>& flags) {
+  std::vector<int> out;
+  for (std::size_t i = 0; i < flags.size(); ++i)
+    if (flags[i]) out.push_back(int(i));
+  return out;
+}
+
+// Rounds (up to options.passes) pushing the vertices `candidates` out of the balls; only a vertex
+// that moved can have entered a ball, so later rounds look at those alone.
 void carve_vertices(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
                     double spacing, const CarvingOptions& options, std::vector<int> candidates,
-                    double above, CarvingStats& stats) {
-  PointMatrix& V = mesh.vertices;
+                    CarvingStats& stats) {
   for (int round = 0; round < options.passes && !candidates.empty(); ++round) {
     ++stats.passes;
-    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing, above);
-    std::vector<double> factor(std::size_t(V.rows()));
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      factor[std::size_t(v)] = moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
-    if (std::none_of(factor.begin(), factor.end(), [](double f) { return f > 0; })) return;
-    stats.held_back += detail::hold_back_turning_triangles(mesh, moves, factor, options);
-    candidates.clear();
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      if (factor[std::size_t(v)] > 0) {
-        V.row(v) += factor[std::size_t(v)] * moves.row(v);
-        candidates.push_back(int(v));
-      }
+    const PointMatrix moves = deepest_pushes(mesh.vertices, candidates, points, values, spacing);
+    candidates = set_indices(apply_moves(mesh, moves, options, stats));
   }
 }
 
@@ -208,14 +209,14 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
                                  const PointMatrix& points, const Eigen::VectorXd& values,
                                  double spacing, const CarvingOptions& options, double slack,
                                  std::vector<int>& check, CarvingStats& stats) {
-  PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
-  std::vector<char> moved(std::size_t(V.rows()), 0);
+  std::vector<char> moved(std::size_t(mesh.vertices.rows()), 0);
   // Moves are short (a fraction of a spacing), so after the first round a sample's nearest
   // triangle is sought near its last one.
   std::vector<int> seeds;
   for (int round = 0;; ++round) {
-    const std::vector<int> among = detail::triangles_around(mesh, around, seeds, kSeedRings);
+    const std::vector<int> among =
+        round > 0 ? detail::triangles_around(mesh, around, seeds, kSeedRings) : std::vector<int>();
     const detail::SideCheck found =
         detail::check_sample_sides(mesh, around, points, values, check, slack,
                                    kLongestSideMove * spacing, round > 0 ? &among : nullptr);
@@ -225,31 +226,20 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
     }
     stats.wrong_side_left = found.wrong_side;
     if (found.violations == 0 || round == options.side_passes) break;
-    std::vector<double> factor(std::size_t(V.rows()));
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      factor[std::size_t(v)] = found.moves.row(v).squaredNorm() > 0 ? 1.0 : 0.0;
-    stats.held_back += detail::hold_back_turning_triangles(mesh, found.moves, factor, options);
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      if (factor[std::size_t(v)] > 0) {
-        V.row(v) += factor[std::size_t(v)] * found.moves.row(v);
-        moved[std::size_t(v)] = 1;
-      }
+    const std::vector<char> now = apply_moves(mesh, found.moves, options, stats);
+    for (std::size_t v = 0; v < now.size(); ++v) moved[v] |= now[v];
     ++stats.side_passes;
     std::vector<int> next;
     seeds.clear();
     for (std::size_t w = 0; w < check.size(); ++w) {
       const int t = found.nearest[w];
-      const bool near_move =
-          t >= 0 && (factor[std::size_t(F(t, 0))] > 0 || factor[std::size_t(F(t, 1))] > 0 ||
-                     factor[std::size_t(F(t, 2))] > 0);
+      const bool near_move = t >= 0 && (now[std::size_t(F(t, 0))] || now[std::size_t(F(t, 1))] ||
+                                        now[std::size_t(F(t, 2))]);
       if (found.failed[w] || near_move) next.push_back(check[w]), seeds.push_back(t);
     }
     check = std::move(next);
   }
-  std::vector<int> out;
-  for (std::size_t v = 0; v < moved.size(); ++v)
-    if (moved[v]) out.push_back(int(v));
-  return out;
+  return set_indices(moved);
 }
 
 }  // namespace
@@ -275,7 +265,7 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
   const PointMatrix start = V;
   std::vector<int> all(std::size_t(V.rows()));
   std::iota(all.begin(), all.end(), 0);
-  carve_vertices(mesh, points, values, spacing, options, std::move(all), 0.0, stats);
+  carve_vertices(mesh, points, values, spacing, options, std::move(all), stats);
   if (options.side_passes > 0) {
     // Triangles off the small balls near the surface and samples onto their sides; then the
     // vertices that moved out of any ball they entered; then, as that can put a sample next to
@@ -288,7 +278,7 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
     const std::vector<int> moved =
         carve_triangles(mesh, around, points, values, spacing, options, 0.0, check, stats);
     const PointMatrix before = V;
-    carve_vertices(mesh, points, values, spacing, options, moved, 0.0, stats);
+    carve_vertices(mesh, points, values, spacing, options, moved, stats);
     std::vector<int> pushed;  // by the vertex rounds just run
     double longest = 0;
     for (int v : moved)
