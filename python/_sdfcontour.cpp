@@ -185,6 +185,8 @@ ContourOptions contour_options(const py::dict& o) {
     c.carving.side_passes = rounds;
     c.carve_sides = rounds > 0 ? Switch::On : Switch::Off;
   }
+  const std::string projection = get<std::string>(o, "projection", "auto");
+  c.project = projection == "on" ? Switch::On : projection == "off" ? Switch::Off : Switch::Auto;
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
@@ -284,6 +286,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["sign_violations_left"] = r.sign_violations_left;
   stats["sign_constraints_dropped"] = r.sign_constraints_dropped;
   stats["carved_vertices"] = r.carving ? r.carving->vertices_moved : 0L;
+  stats["projected_vertices"] = r.projection ? r.projection->vertices_moved : 0L;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

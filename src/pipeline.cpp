@@ -300,6 +300,14 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                                      core);
     });
   }
+  // The contact points' depths (|value| of their samples), for the projection.
+  Eigen::VectorXd contact_depths;
+  if (result.contact_points) {
+    const std::vector<int>& from = result.contact_points->samples;
+    contact_depths.resize(Eigen::Index(from.size()));
+    for (std::size_t q = 0; q < from.size(); ++q)
+      contact_depths[Eigen::Index(q)] = std::abs(s.values[from[q]]);
+  }
   // Contact points name their samples by input index.
   if (result.contact_points)
     for (int& i : result.contact_points->samples) i = int(band.source[std::size_t(i)]);
@@ -353,6 +361,11 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     } else if (carve) {
       carving_samples = core_samples(band);
     }
+    // Projection needs the contact points after the reconstruction. Auto: as carving's sides.
+    const bool project =
+        method == Method::Gcp &&
+        (options.project == Switch::On ||
+         (options.project == Switch::Auto && !(grid && band.samples_per_axis >= 128)));
     CarvingOptions carving = options.carving;
     if (options.carve_sides == Switch::Off ||
         (options.carve_sides == Switch::Auto && grid && band.samples_per_axis >= 128))
@@ -371,7 +384,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
         [&] {
           SignConstraintOptions sopt = options.sign_constraints;
           sopt.radius = options.sign_radius * result.band_spacing;
-          if (!options.want_points)
+          if (!options.want_points && !project)
             return poisson_reconstruct(std::move(oriented), popt, sides, sopt);
           return poisson_reconstruct(oriented, popt, sides, sopt);
         });
@@ -386,6 +399,13 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     // (~100 of extent < 0.5 h on the shared meshes at 32^3): no piece that small comes from
     // samples a spacing apart.
     result.pieces_removed = remove_small_pieces(*result.mesh, result.band_spacing);
+    if (project)
+      result.projection =
+          stages.run("projection", "projecting the mesh onto the contact points", [&] {
+            return project_to_contact_points(*result.mesh, lent.points, lent.normals,
+                                             contact_depths, result.band_spacing,
+                                             options.projection);
+          });
     if (carve)
       result.carving = stages.run("carving", "carving the mesh out of the samples' spheres", [&] {
         return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,

@@ -23,7 +23,7 @@ namespace {
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
                                      weights = "james", band = "auto", truncation = "auto", grid,
-                                     brick_size = "auto", side_passes = "auto";
+                                     brick_size = "auto", side_passes = "auto", projection = "auto";
   int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
@@ -33,6 +33,12 @@ struct ContourArgs {
   double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
          sign_margin = SignConstraintOptions{}.margin,
          sign_trigger = SignConstraintOptions{}.trigger;
+  double projection_radius = ContactProjectionOptions{}.radius,
+         projection_max_move = ContactProjectionOptions{}.max_move,
+         projection_agreement = ContactProjectionOptions{}.normal_agreement,
+         projection_depth_scale = ContactProjectionOptions{}.depth_scale,
+         projection_variance = ContactProjectionOptions{}.max_variance_factor,
+         projection_residual = ContactProjectionOptions{}.max_residual;
   std::uint64_t seed = 0;
   RunOptions run;
   PoissonArgs poisson = [] {
@@ -114,6 +120,22 @@ ContourOptions contour_options(const ContourArgs& a) {
     opt.carving.side_passes = *rounds;
     opt.carve_sides = *rounds > 0 ? Switch::On : Switch::Off;
   }
+  if (a.projection == "on" || a.projection == "off")
+    opt.project = a.projection == "on" ? Switch::On : Switch::Off;
+  else if (a.projection != "auto")
+    throw Error("--projection: '" + a.projection + "' is not on, off or auto");
+  require_range("--projection-radius", a.projection_radius, 0.5, 8);
+  require_range("--projection-max-move", a.projection_max_move, 0, 4);
+  opt.projection.radius = a.projection_radius;
+  opt.projection.max_move = a.projection_max_move;
+  require_range("--projection-agreement", a.projection_agreement, -1, 1);
+  opt.projection.normal_agreement = a.projection_agreement;
+  require_range("--projection-depth-scale", a.projection_depth_scale, 0, 1e6);
+  opt.projection.depth_scale = a.projection_depth_scale;
+  require_range("--projection-variance", a.projection_variance, 1, 1e6);
+  opt.projection.max_variance_factor = a.projection_variance;
+  require_range("--projection-residual", a.projection_residual, 0, 1e6);
+  opt.projection.max_residual = a.projection_residual;
   return opt;
 }
 
@@ -177,6 +199,9 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["sign_violations_left"] = r.sign_violations_left;
     j["sign_constraints_dropped"] = r.sign_constraints_dropped;
   }
+  if (r.projection)
+    j["projection"] = {{"vertices_moved", r.projection->vertices_moved},
+                       {"largest_move", r.projection->largest_move}};
   if (r.carving)
     j["carving"] = {{"vertices_moved", r.carving->vertices_moved},
                     {"largest_move", r.carving->largest_move},
@@ -341,6 +366,33 @@ Command add_contour_command(CLI::App& app) {
                 "triangle cuts, or that lies on the wrong side of the mesh, moves the nearest "
                 "triangle, edge or vertex behind its sphere; 0: vertices only; auto: 12 below 128 "
                 "samples per axis, 0 above (bunny 256^3: it would cost 11 s)")
+      ->capture_default_str();
+  c->add_option("--projection", a->projection,
+                "GCP: move each vertex along its normal onto a quadric fitted to the contact "
+                "points within --projection-radius spacings whose normals agree with it (on, off; "
+                "auto: on below 128 samples per axis of a grid and on scattered samples)")
+      ->capture_default_str();
+  c->add_option("--projection-radius", a->projection_radius,
+                "GCP projection: the fitted neighbourhood's radius, in spacings")
+      ->capture_default_str();
+  c->add_option("--projection-max-move", a->projection_max_move,
+                "GCP projection: a vertex whose fit is farther than this many spacings stays")
+      ->capture_default_str();
+  c->add_option("--projection-agreement", a->projection_agreement,
+                "GCP projection: only contact points whose normal's cosine with the vertex's "
+                "exceeds this are fitted")
+      ->capture_default_str();
+  c->add_option("--projection-depth-scale", a->projection_depth_scale,
+                "GCP projection: a point from a sample |value| away weighs 1 / (1 + (|value| / "
+                "(this many spacings))^2); 0: all the same")
+      ->capture_default_str();
+  c->add_option("--projection-variance", a->projection_variance,
+                "GCP projection: the largest variance factor of a fitted height (1: a plain mean); "
+                "a vertex whose fit is less certain stays")
+      ->capture_default_str();
+  c->add_option("--projection-residual", a->projection_residual,
+                "GCP projection: a vertex stays where the points' RMS distance from the fitted "
+                "quadric exceeds this many spacings (0: no limit)")
       ->capture_default_str();
   const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
                                                           {"--sign-radius", &a->sign_radius},

@@ -10,6 +10,7 @@
 #include "sdfcontour/bricks.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_points.h"
+#include "sdfcontour/contact_projection.h"
 #include "sdfcontour/gradients.h"
 #include "sdfcontour/noise.h"
 #include "sdfcontour/npy.h"
@@ -70,6 +71,10 @@ struct ContourOptions {
   /// axis of a grid (and on scattered samples), off above, where it costs more than it gains
   /// (bunny 256^3: 11 s, against 17 s for the rest).
   Switch carve_sides = Switch::Auto;
+  /// GCP: move the reconstructed mesh onto a local quadric fit of its contact points
+  /// (contact_projection.h), before carving. Auto: on.
+  Switch project = Switch::Auto;
+  ContactProjectionOptions projection;
   bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
@@ -128,7 +133,8 @@ struct ContourResult {
   long sign_violations = 0, sign_violations_left = 0;
   bool sign_constraints_dropped = false;  ///< they changed the topology: the solved surface kept
   bool sign_constraints = false;          ///< gcp: the samples' sides constrained the indicator
-  std::optional<CarvingStats> carving;    ///< gcp: when the mesh was carved
+  std::optional<ContactProjectionStats> projection;  ///< gcp: when the mesh was projected
+  std::optional<CarvingStats> carving;               ///< gcp: when the mesh was carved
   bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's

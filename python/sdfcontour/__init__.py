@@ -131,7 +131,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
-            carve=True, side_passes="auto", batch_size=65536, progress=False,
+            carve=True, side_passes="auto", projection="auto", batch_size=65536, progress=False,
             return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
@@ -182,6 +182,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         cuts, or that lies on the wrong side of the mesh, moves the nearest triangle, edge or
         vertex behind its sphere. 0: vertices only; "auto": 12 below 128 samples per axis, 0
         above (CLI ``--side-passes``).
+    projection : bool or "auto"
+        GCP: move each vertex of the reconstruction along its normal onto a quadric fitted to
+        the contact points around it, where they fit one to 0.005 spacings ("auto": below 128
+        samples per axis of a grid, and on scattered samples; CLI ``--projection``).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
@@ -246,6 +250,14 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     else:
         raise ValueError(f"side_passes must be a whole number from 0 to 100 or 'auto', "
                          f"got {side_passes!r}")
+    if isinstance(projection, str):
+        if projection != "auto":
+            raise ValueError(f"projection must be True, False or 'auto', got {projection!r}")
+        o["projection"] = "auto"
+    elif isinstance(projection, (bool, np.bool_)):
+        o["projection"] = "on" if projection else "off"
+    else:
+        raise ValueError(f"projection must be True, False or 'auto', got {projection!r}")
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if return_stats:
         return out["V"], out["F"], out["stats"]

@@ -106,6 +106,20 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     for bad in (-1, 1.5, "all", True):
         with pytest.raises(ValueError, match="side_passes"):
             sdfcontour.contour(np.load(tmp_path / "b.npy"), side_passes=bad)
+    # The projection onto the contact points is on by default below 128 samples per axis;
+    # projection=False is the CLI's --projection off mesh (same triangles, vertices unprojected).
+    assert stats["projected_vertices"] > 0
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "unprojected.ply"),
+                    "-q", "--projection", "off"], check=True, stdout=subprocess.DEVNULL)
+    V_unprojected, F_unprojected, unprojected_stats = sdfcontour.contour(
+        np.load(tmp_path / "b.npy"), projection=False, return_stats=True)
+    np.testing.assert_array_equal(V_unprojected,
+                                  sdfcontour.read_mesh(tmp_path / "unprojected.ply")[0])
+    np.testing.assert_array_equal(F_unprojected, F)
+    assert unprojected_stats["projected_vertices"] == 0 and not np.array_equal(V_unprojected, V)
+    for bad in ("on", 1, None):
+        with pytest.raises(ValueError, match="projection"):
+            sdfcontour.contour(np.load(tmp_path / "b.npy"), projection=bad)
     # And the mesh is close to the ground truth the CLI wrote.
     V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)

@@ -1,0 +1,58 @@
+// Projection onto the contact points: a reconstructed mesh moved onto a local fit of the points.
+//
+// The screened Poisson surface is smooth: it passes near the contact points but, where the
+// normals it is given turn (a curved surface sampled every spacing), it cuts the corners, and it
+// rounds edges and flattens poles by up to ~0.01 spacing on exact distances. The contact points
+// themselves are more accurate than that: an error of angle t in a sample's gradient moves its
+// point along the sample's sphere, which touches the surface, so off the surface by only
+// ~|value| t^2 / 2. Each vertex here moves along its normal onto a weighted least-squares
+// quadric (a height field over the vertex's tangent plane) through the contact points near it
+// whose normals agree with its own (the builtin sphere at 64^3: largest error 0.008 h ->
+// 0.0004 h; docs/projection.md).
+#pragma once
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+struct ContactProjectionOptions {
+  /// Radius of the neighbourhood fitted around each vertex, in spacings (Gaussian weights of
+  /// standard deviation radius / sqrt(8) over the tangent plane).
+  double radius = 1.5;
+  /// A vertex moves at most this many spacings; a larger correction is not applied (the fit then
+  /// meets a feature it cannot represent: an edge, a thin part, the other side).
+  double max_move = 0.25;
+  /// Points whose normal is more than acos(normal_agreement) from the vertex's are not fitted.
+  double normal_agreement = 0.8;
+  /// Fewer agreeing points than this within the radius leave the vertex where it is.
+  int min_points = 12;
+  /// A point from a sample |value| away weighs 1 / (1 + (|value| / (depth_scale spacings))^2):
+  /// far samples' points are less accurate. 0: every point weighs the same.
+  double depth_scale = 0;
+  /// A fit whose height is this much less certain than a mean of its points' (the intercept's
+  /// variance factor, (M^-1)_00 times the weights' sum: ~1 for points spread evenly around the
+  /// vertex) extrapolates from one side: the vertex stays.
+  double max_variance_factor = 8;
+  /// Where the points' weighted RMS distance from the fitted quadric exceeds this many spacings,
+  /// they are no smooth surface (an edge, facets finer than the radius, a thin part's two sides):
+  /// the vertex stays. 0: no limit.
+  double max_residual = 0.005;
+};
+
+struct ContactProjectionStats {
+  long vertices_moved = 0;  ///< vertices the fit moved
+  double largest_move = 0;  ///< the longest move, in the mesh's units
+};
+
+/// Moves the vertices of `mesh` (in place) along their area-weighted normals onto the quadric
+/// fitted to the contact points `points` (k x 3) with unit outward `normals` (k x 3) near each;
+/// `depths` (k, or empty) are the |value|s of the points' samples, for options.depth_scale.
+/// Every vertex is fitted from the input positions, so the result does not depend on the order
+/// or the thread count. `spacing` (> 0) is the samples' spacing, the unit of the options' lengths.
+/// Throws Error for mismatched sizes, non-finite input or options out of range.
+ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& points,
+                                                 const PointMatrix& normals,
+                                                 const Eigen::VectorXd& depths, double spacing,
+                                                 const ContactProjectionOptions& options = {});
+
+}  // namespace sdfcontour

@@ -1,0 +1,190 @@
+// Projection onto the contact points (contact_projection.h): vertices moved along their normals
+// onto a quadric fitted to the points near them.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <random>
+
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/contact_projection.h"
+#include "sdfcontour/marching.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+constexpr double kSpacing = 0.05;
+
+// A flat square of (n x n) vertices `step` apart at height z, facing +z.
+Mesh flat_patch(int n, double step, double z) {
+  Mesh m;
+  m.vertices.resize(n * n, 3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      m.vertices.row(j * n + i) << (i - (n - 1) / 2.0) * step, (j - (n - 1) / 2.0) * step, z;
+  m.triangles.resize(2 * (n - 1) * (n - 1), 3);
+  int t = 0;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i;
+      m.triangles.row(t++) << a, a + 1, a + n + 1;
+      m.triangles.row(t++) << a, a + n + 1, a + n;
+    }
+  return m;
+}
+
+// `count` random points on the plane z = height over [-extent, extent]^2 with normal (0, 0, nz).
+void add_plane_points(PointMatrix& P, PointMatrix& N, int count, double extent, double height,
+                      double nz, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-extent, extent);
+  const Eigen::Index first = P.rows();
+  P.conservativeResize(first + count, 3);
+  N.conservativeResize(first + count, 3);
+  for (int q = 0; q < count; ++q) {
+    P.row(first + q) << u(rng), u(rng), height;
+    N.row(first + q) << 0, 0, nz;
+  }
+}
+
+// Exact contact points of the builtin sphere (radius 0.6): `count` random directions.
+void sphere_points(PointMatrix& P, PointMatrix& N, int count) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g;
+  P.resize(count, 3);
+  N.resize(count, 3);
+  for (int q = 0; q < count; ++q) {
+    const Eigen::RowVector3d d = Eigen::RowVector3d(g(rng), g(rng), g(rng)).normalized();
+    N.row(q) = d;
+    P.row(q) = 0.6 * d;
+  }
+}
+
+double largest_radius_error(const Mesh& m) {
+  return (m.vertices.rowwise().norm().array() - 0.6).abs().maxCoeff();
+}
+
+}  // namespace
+
+TEST(ContactProjection, PutsVerticesExactlyOnAPlane) {
+  Mesh m = flat_patch(21, kSpacing / 2, 0.1 * kSpacing);
+  PointMatrix P, N;
+  add_plane_points(P, N, 4000, 8 * kSpacing, 0.0, 1.0, 1);
+  const ContactProjectionStats st = project_to_contact_points(m, P, N, {}, kSpacing);
+  EXPECT_EQ(st.vertices_moved, m.vertices.rows());
+  EXPECT_NEAR(st.largest_move, 0.1 * kSpacing, 1e-12);
+  EXPECT_LT(m.vertices.col(2).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(ContactProjection, BringsASphereMuchCloserThanMarchingCubes) {
+  // Marching cubes' sphere at 32^3 is ~1e-2 spacings off; exact contact points at ~40 per
+  // square spacing bring every vertex within 1e-3 spacings (the quadric's own error is ~1e-5).
+  const double h = 2.0 / 31;
+  Mesh m = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 32, Bounds{}));
+  const double before = largest_radius_error(m);
+  PointMatrix P, N;
+  sphere_points(P, N, int(40 * 4 * M_PI * 0.36 / (h * h)));
+  project_to_contact_points(m, P, N, {}, h);
+  EXPECT_GT(before, 5e-3 * h);
+  EXPECT_LT(largest_radius_error(m), 1e-3 * h);
+}
+
+TEST(ContactProjection, LeavesFarFitsAndFewPointsAlone) {
+  PointMatrix P, N;
+  add_plane_points(P, N, 4000, 8 * kSpacing, 0.0, 1.0, 2);
+  // Half a spacing above the points: beyond max_move (0.25).
+  Mesh far = flat_patch(5, kSpacing / 2, 0.5 * kSpacing);
+  const Mesh far_before = far;
+  EXPECT_EQ(project_to_contact_points(far, P, N, {}, kSpacing).vertices_moved, 0);
+  EXPECT_EQ(far.vertices, far_before.vertices);
+  // Points only on one side of the vertices (x > 2 spacings): the fit would extrapolate.
+  PointMatrix side(0, 3), side_normals(0, 3);
+  for (Eigen::Index q = 0; q < P.rows(); ++q)
+    if (P(q, 0) > 0.5 * kSpacing) {
+      side.conservativeResize(side.rows() + 1, 3);
+      side_normals.conservativeResize(side.rows(), 3);
+      side.row(side.rows() - 1) = P.row(q);
+      side_normals.row(side.rows() - 1) = N.row(q);
+    }
+  Mesh one_sided = flat_patch(1, kSpacing, 0.1 * kSpacing);
+  one_sided.vertices.row(0) << -0.5 * kSpacing, 0, 0.1 * kSpacing;
+  one_sided.triangles.resize(0, 3);
+  EXPECT_EQ(project_to_contact_points(one_sided, side, side_normals, {}, kSpacing).vertices_moved,
+            0);
+}
+
+TEST(ContactProjection, IgnoresPointsFacingTheOtherWay) {
+  // A thin part: the other side's points, 0.3 spacings above and facing down, must not pull.
+  PointMatrix P, N;
+  add_plane_points(P, N, 4000, 8 * kSpacing, 0.0, 1.0, 3);
+  add_plane_points(P, N, 4000, 8 * kSpacing, 0.3 * kSpacing, -1.0, 4);
+  Mesh m = flat_patch(11, kSpacing / 2, 0.05 * kSpacing);
+  project_to_contact_points(m, P, N, {}, kSpacing);
+  EXPECT_LT(m.vertices.col(2).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(ContactProjection, DepthWeightsFavourNearSamples) {
+  // Points of far samples (depth 6 spacings) off by 0.1 spacings, of near ones exact: with depth
+  // weights the fit lands much nearer the exact plane than their plain mean (0.05).
+  PointMatrix P, N;
+  add_plane_points(P, N, 3000, 8 * kSpacing, 0.0, 1.0, 5);
+  add_plane_points(P, N, 3000, 8 * kSpacing, 0.1 * kSpacing, 1.0, 6);
+  Eigen::VectorXd depth(P.rows());
+  depth.head(3000).setConstant(0.5 * kSpacing);
+  depth.tail(3000).setConstant(6 * kSpacing);
+  // With the default residual limit the two layers (0.05 spacings RMS from any quadric) are no
+  // smooth surface: nothing moves.
+  Mesh guarded = flat_patch(5, kSpacing / 2, 0.02 * kSpacing);
+  EXPECT_EQ(project_to_contact_points(guarded, P, N, depth, kSpacing).vertices_moved, 0);
+  ContactProjectionOptions o;
+  o.max_residual = 0;
+  Mesh plain = flat_patch(5, kSpacing / 2, 0.0), weighted = plain;
+  project_to_contact_points(plain, P, N, depth, kSpacing, o);
+  o.depth_scale = 1;
+  project_to_contact_points(weighted, P, N, depth, kSpacing, o);
+  EXPECT_NEAR(plain.vertices.col(2).mean(), 0.05 * kSpacing, 0.01 * kSpacing);
+  EXPECT_LT(weighted.vertices.col(2).cwiseAbs().maxCoeff(), 0.01 * kSpacing);
+}
+
+TEST(ContactProjection, SameResultWhateverTheThreadCount) {
+  const double h = 2.0 / 31;
+  const Mesh mc = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 32, Bounds{}));
+  PointMatrix P, N;
+  sphere_points(P, N, 20000);
+  Mesh one = mc, two = mc;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    project_to_contact_points(one, P, N, {}, h);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    project_to_contact_points(two, P, N, {}, h);
+  }
+  EXPECT_EQ(one.vertices, two.vertices);
+  EXPECT_NE(one.vertices, mc.vertices);
+}
+
+TEST(ContactProjection, RejectsBadInput) {
+  Mesh m = flat_patch(3, kSpacing, 0);
+  PointMatrix P, N;
+  add_plane_points(P, N, 100, kSpacing, 0, 1, 8);
+  const PointMatrix fewer_normals = N.topRows(50);
+  EXPECT_THROW(project_to_contact_points(m, P, fewer_normals, {}, kSpacing), Error);
+  EXPECT_THROW(project_to_contact_points(m, P, N, Eigen::VectorXd::Ones(3), kSpacing), Error);
+  EXPECT_THROW(project_to_contact_points(m, P, N, {}, 0.0), Error);
+  PointMatrix bad = P;
+  bad(0, 0) = std::nan("");
+  EXPECT_THROW(project_to_contact_points(m, bad, N, {}, kSpacing), Error);
+  for (const auto& change : std::vector<void (*)(ContactProjectionOptions&)>{
+           [](ContactProjectionOptions& o) { o.radius = 0; },
+           [](ContactProjectionOptions& o) { o.max_move = -1; },
+           [](ContactProjectionOptions& o) { o.normal_agreement = 2; },
+           [](ContactProjectionOptions& o) { o.min_points = 5; },
+           [](ContactProjectionOptions& o) { o.depth_scale = std::nan(""); },
+           [](ContactProjectionOptions& o) { o.max_variance_factor = 0.5; },
+           [](ContactProjectionOptions& o) { o.max_residual = -1; }}) {
+    ContactProjectionOptions o;
+    change(o);
+    EXPECT_THROW(project_to_contact_points(m, P, N, {}, kSpacing, o), Error);
+  }
+}
