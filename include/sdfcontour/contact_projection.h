@@ -18,7 +18,7 @@ namespace sdfcontour {
 struct ContactProjectionOptions {
   /// Radius of the neighbourhood fitted around each vertex, in spacings (Gaussian weights of
   /// standard deviation radius / sqrt(8) over the tangent plane).
-  double radius = 1.5;
+  double radius = 2;
   /// A vertex moves at most this many spacings; a larger correction is not applied (the fit then
   /// meets a feature it cannot represent: an edge, a thin part, the other side).
   double max_move = 0.25;
