@@ -120,7 +120,9 @@ with tempfile.TemporaryDirectory() as d:
     # Options out of range end in an error, never a garbage mesh with exit 0.
     for opt, value in [("--solver-tolerance", "nan"), ("--alpha", "1e300"), ("--alpha", "-1"), ("--scale", "1e300"),
                        ("--full-depth", "30"), ("--depth", "0"), ("--threads", "-1"), ("--samples-per-node", "0"),
-                       ("--tie-tolerance", "inf"), ("--knn", "1"), ("--bounds=-1e308,1e308", None)]:
+                       ("--tie-tolerance", "inf"), ("--knn", "1"), ("--bounds=-1e308,1e308", None),
+                       ("--projection", "maybe"), ("--projection-radius", "0"), ("--projection-residual", "nan"),
+                       ("--projection-variance", "0.5")]:
         depth = [] if opt in ("--depth", "--full-depth") else ["--depth", "5"]
         args = ["contour", "builtin:sphere@12", "-o", out, *depth] + ([opt, value] if value else [opt])
         expect_error(f"{opt} {value}", args, opt.split("=")[0], [out])

@@ -33,12 +33,7 @@ struct ContourArgs {
   double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
          sign_margin = SignConstraintOptions{}.margin,
          sign_trigger = SignConstraintOptions{}.trigger;
-  double projection_radius = ContactProjectionOptions{}.radius,
-         projection_max_move = ContactProjectionOptions{}.max_move,
-         projection_agreement = ContactProjectionOptions{}.normal_agreement,
-         projection_depth_scale = ContactProjectionOptions{}.depth_scale,
-         projection_variance = ContactProjectionOptions{}.max_variance_factor,
-         projection_residual = ContactProjectionOptions{}.max_residual;
+  ContactProjectionOptions projection_options;
   std::uint64_t seed = 0;
   RunOptions run;
   PoissonArgs poisson = [] {
@@ -76,6 +71,31 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
   loaded.input = sdf_input_from_npy(map_npy(spec), bounds);
   return loaded;
 }
+
+// The projection's numeric options: name, field, allowed range, help.
+struct ProjectionOption {
+  const char* name;
+  double ContactProjectionOptions::*field;
+  double lo, hi;
+  const char* help;
+};
+const ProjectionOption kProjectionOptions[] = {
+    {"--projection-radius", &ContactProjectionOptions::radius, 0.5, 8,
+     "GCP projection: the fitted neighbourhood's radius, in spacings"},
+    {"--projection-max-move", &ContactProjectionOptions::max_move, 0, 4,
+     "GCP projection: a vertex whose fit is farther than this many spacings stays"},
+    {"--projection-agreement", &ContactProjectionOptions::normal_agreement, -1, 1,
+     "GCP projection: only contact points whose normal's cosine with the vertex's exceeds this "
+     "are fitted"},
+    {"--projection-depth-scale", &ContactProjectionOptions::depth_scale, 0, 1e6,
+     "GCP projection: a point from a sample |value| away weighs 1 / (1 + (|value| / (this many "
+     "spacings))^2); 0: all the same"},
+    {"--projection-variance", &ContactProjectionOptions::max_variance_factor, 1, 1e6,
+     "GCP projection: the largest variance factor of a fitted height (1: a plain mean); a vertex "
+     "whose fit is less certain stays"},
+    {"--projection-residual", &ContactProjectionOptions::max_residual, 0, 1e6,
+     "GCP projection: a vertex stays where the points' RMS distance from the fitted quadric "
+     "exceeds this many spacings (0: no limit)"}};
 
 ContourOptions contour_options(const ContourArgs& a) {
   ContourOptions opt;
@@ -124,18 +144,9 @@ ContourOptions contour_options(const ContourArgs& a) {
     opt.project = a.projection == "on" ? Switch::On : Switch::Off;
   else if (a.projection != "auto")
     throw Error("--projection: '" + a.projection + "' is not on, off or auto");
-  require_range("--projection-radius", a.projection_radius, 0.5, 8);
-  require_range("--projection-max-move", a.projection_max_move, 0, 4);
-  opt.projection.radius = a.projection_radius;
-  opt.projection.max_move = a.projection_max_move;
-  require_range("--projection-agreement", a.projection_agreement, -1, 1);
-  opt.projection.normal_agreement = a.projection_agreement;
-  require_range("--projection-depth-scale", a.projection_depth_scale, 0, 1e6);
-  opt.projection.depth_scale = a.projection_depth_scale;
-  require_range("--projection-variance", a.projection_variance, 1, 1e6);
-  opt.projection.max_variance_factor = a.projection_variance;
-  require_range("--projection-residual", a.projection_residual, 0, 1e6);
-  opt.projection.max_residual = a.projection_residual;
+  for (const ProjectionOption& p : kProjectionOptions)
+    require_range(p.name, a.projection_options.*p.field, p.lo, p.hi);
+  opt.projection = a.projection_options;
   return opt;
 }
 
@@ -372,28 +383,8 @@ Command add_contour_command(CLI::App& app) {
                 "points within --projection-radius spacings whose normals agree with it (on, off; "
                 "auto: on below 128 samples per axis of a grid and on scattered samples)")
       ->capture_default_str();
-  c->add_option("--projection-radius", a->projection_radius,
-                "GCP projection: the fitted neighbourhood's radius, in spacings")
-      ->capture_default_str();
-  c->add_option("--projection-max-move", a->projection_max_move,
-                "GCP projection: a vertex whose fit is farther than this many spacings stays")
-      ->capture_default_str();
-  c->add_option("--projection-agreement", a->projection_agreement,
-                "GCP projection: only contact points whose normal's cosine with the vertex's "
-                "exceeds this are fitted")
-      ->capture_default_str();
-  c->add_option("--projection-depth-scale", a->projection_depth_scale,
-                "GCP projection: a point from a sample |value| away weighs 1 / (1 + (|value| / "
-                "(this many spacings))^2); 0: all the same")
-      ->capture_default_str();
-  c->add_option("--projection-variance", a->projection_variance,
-                "GCP projection: the largest variance factor of a fitted height (1: a plain mean); "
-                "a vertex whose fit is less certain stays")
-      ->capture_default_str();
-  c->add_option("--projection-residual", a->projection_residual,
-                "GCP projection: a vertex stays where the points' RMS distance from the fitted "
-                "quadric exceeds this many spacings (0: no limit)")
-      ->capture_default_str();
+  for (const ProjectionOption& p : kProjectionOptions)
+    c->add_option(p.name, a->projection_options.*p.field, p.help)->capture_default_str();
   const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
                                                           {"--sign-radius", &a->sign_radius},
                                                           {"--sign-margin", &a->sign_margin},
