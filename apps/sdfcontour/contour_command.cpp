@@ -381,7 +381,7 @@ Command add_contour_command(CLI::App& app) {
   c->add_option("--projection", a->projection,
                 "GCP: move each vertex along its normal onto a quadric fitted to the contact "
                 "points within --projection-radius spacings whose normals agree with it (on, off; "
-                "auto: on below 128 samples per axis of a grid and on scattered samples)")
+                "auto: on below 128 samples per axis)")
       ->capture_default_str();
   for (const ProjectionOption& p : kProjectionOptions)
     c->add_option(p.name, a->projection_options.*p.field, p.help)->capture_default_str();

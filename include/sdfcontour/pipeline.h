@@ -72,7 +72,8 @@ struct ContourOptions {
   /// (bunny 256^3: 11 s, against 17 s for the rest).
   Switch carve_sides = Switch::Auto;
   /// GCP: move the reconstructed mesh onto a local quadric fit of its contact points
-  /// (contact_projection.h), before carving. Auto: on.
+  /// (contact_projection.h), before carving. Auto: below 128 samples per axis (a grid's, or
+  /// scattered samples' extent in spacings).
   Switch project = Switch::Auto;
   ContactProjectionOptions projection;
   bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)

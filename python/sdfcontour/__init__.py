@@ -185,7 +185,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     projection : bool or "auto"
         GCP: move each vertex of the reconstruction along its normal onto a quadric fitted to
         the contact points around it, where they fit one to 0.005 spacings ("auto": below 128
-        samples per axis of a grid, and on scattered samples; CLI ``--projection``).
+        samples per axis; CLI ``--projection``).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
