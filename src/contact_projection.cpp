@@ -93,9 +93,9 @@ void validate(const Mesh& mesh, const PointMatrix& points, const PointMatrix& no
       o.min_points < 6 || !(o.depth_scale >= 0) || !std::isfinite(o.depth_scale) ||
       !(o.max_variance_factor >= 1) || !(o.max_residual >= 0) || !std::isfinite(o.max_residual))
     throw Error(
-        "projection: radius must be positive, max_move non-negative, normal_agreement in [-1, 1] "
-        "min_points at least 6 (a quadric has six coefficients), depth_scale non-negative and "
-        "max_variance_factor at least 1, max_residual non-negative");
+        "projection: radius must be positive, max_move non-negative, normal_agreement in [-1, 1], "
+        "min_points at least 6 (a quadric has six coefficients), depth_scale non-negative, "
+        "max_variance_factor at least 1 and max_residual non-negative");
 }
 
 }  // namespace
