@@ -5,8 +5,10 @@
 // differ from the global one only where a tetrahedron's orthosphere (its empty power sphere)
 // reaches out of the halo's box: a sample outside could then lie in it. So a brick certifies
 // each of its samples: every incident tetrahedron's orthosphere, grown by the largest weight of
-// any sample, must stay inside the box, and the sample must not be on the box's convex hull.
-// A brick with an uncertified sample is redone with twice the halo. Certified samples have
+// any sample, must stay inside the box (solved exactly for tetrahedra too flat for doubles), and
+// a sample on the box's convex hull must have global hull facets (no sample beyond them; in a
+// flat face of the hull, such as a grid's side, a power circle inside the box).
+// A brick with an uncertified sample is redone with a wider halo. Certified samples have
 // exactly the global star, hence the same neighbours, gradients (sums in the same order, since
 // samples keep their global order) and kept contact points: the result equals the global one.
 #pragma once
