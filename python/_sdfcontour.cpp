@@ -281,6 +281,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["noise_level"] = r.noise_level;
   stats["smoothed"] = r.smoothed;
   stats["pieces_removed"] = r.pieces_removed;
+  stats["clipped_to_grid"] = r.clipped_to_grid;
   stats["sign_constraints"] = r.sign_constraints;
   stats["sign_violations"] = r.sign_violations;
   stats["sign_violations_left"] = r.sign_violations_left;

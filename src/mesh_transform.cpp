@@ -1,5 +1,9 @@
 #include "sdfcontour/mesh_transform.h"
 
+#include <map>
+#include <utility>
+#include <vector>
+
 namespace sdfcontour {
 
 Mesh normalize_mesh(const Mesh& mesh, double half_extent) {
@@ -12,6 +16,101 @@ Mesh normalize_mesh(const Mesh& mesh, double half_extent) {
   const Eigen::RowVector3d centre = 0.5 * (lo + hi);
   out.vertices = ((mesh.vertices.rowwise() - centre) * (2 * half_extent / longest)).eval();
   return out;
+}
+
+namespace {
+
+// The mesh kept on the side where coordinate `axis` times `sign` is at most `sign` * `bound`.
+struct HalfSpaceClip {
+  int axis;
+  double sign, bound;
+
+  double outside(const Eigen::RowVector3d& p) const { return sign * (p[axis] - bound); }
+
+  // Appends to `out` the part of `in` inside; true if anything was dropped or cut.
+  bool apply(const Mesh& in, std::vector<Eigen::RowVector3d>& vertices,
+             std::vector<Eigen::Vector3i>& triangles) const {
+    const Eigen::Index n = in.vertices.rows();
+    vertices.clear();
+    triangles.clear();
+    for (Eigen::Index v = 0; v < n; ++v) vertices.push_back(in.vertices.row(v));
+    std::map<std::pair<int, int>, int> cut;  // edge (low, high) -> its vertex on the plane
+    auto crossing = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      const auto found = cut.find(key);
+      if (found != cut.end()) return found->second;
+      // From the lower index, so both triangles of an edge get the same point.
+      const Eigen::RowVector3d p = vertices[std::size_t(key.first)],
+                               q = vertices[std::size_t(key.second)];
+      const double dp = outside(p), dq = outside(q);
+      if (dp == 0) return key.first;  // the edge leaves from a vertex on the plane
+      if (dq == 0) return key.second;
+      Eigen::RowVector3d x = p + (q - p) * (dp / (dp - dq));
+      x[axis] = bound;
+      vertices.push_back(x);
+      const int id = int(vertices.size()) - 1;
+      cut.emplace(key, id);
+      return id;
+    };
+    bool changed = false;
+    for (Eigen::Index t = 0; t < in.triangles.rows(); ++t) {
+      const Eigen::Vector3i tri = in.triangles.row(t).transpose();
+      bool out[3];
+      int outside_count = 0;
+      for (int c = 0; c < 3; ++c)
+        outside_count += out[c] = outside(vertices[std::size_t(tri[c])]) > 0;
+      if (outside_count == 0) {
+        triangles.push_back(tri);
+        continue;
+      }
+      changed = true;
+      if (outside_count == 3) continue;
+      // The kept polygon, corners in the triangle's order.
+      std::vector<int> polygon;
+      for (int c = 0; c < 3; ++c) {
+        const int a = tri[c], b = tri[(c + 1) % 3];
+        if (!out[c]) polygon.push_back(a);
+        if (out[c] != out[(c + 1) % 3]) polygon.push_back(crossing(a, b));
+      }
+      for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
+        const int a = polygon[0], b = polygon[k], c = polygon[k + 1];
+        if (a != b && b != c && c != a) triangles.emplace_back(a, b, c);
+      }
+    }
+    return changed;
+  }
+};
+
+}  // namespace
+
+Mesh clip_mesh_to_box(const Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+                      bool* changed) {
+  Mesh current = mesh;
+  bool any = false;
+  std::vector<Eigen::RowVector3d> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const HalfSpaceClip& clip :
+         {HalfSpaceClip{axis, 1.0, max[axis]}, HalfSpaceClip{axis, -1.0, min[axis]}}) {
+      if (!clip.apply(current, vertices, triangles)) continue;
+      any = true;
+      // Keep only the vertices the kept triangles use, in their first order.
+      std::vector<int> renumber(vertices.size(), -1);
+      int used = 0;
+      for (const auto& t : triangles)
+        for (int c = 0; c < 3; ++c)
+          if (renumber[std::size_t(t[c])] < 0) renumber[std::size_t(t[c])] = used++;
+      PointMatrix kept(used, 3);
+      for (std::size_t v = 0; v < vertices.size(); ++v)
+        if (renumber[v] >= 0) kept.row(renumber[v]) = vertices[v];
+      TriangleMatrix tris(Eigen::Index(triangles.size()), 3);
+      for (std::size_t t = 0; t < triangles.size(); ++t)
+        for (int c = 0; c < 3; ++c)
+          tris(Eigen::Index(t), c) = renumber[std::size_t(triangles[t][c])];
+      current = Mesh{std::move(kept), std::move(tris)};
+    }
+  if (changed) *changed = any;
+  return current;
 }
 
 }  // namespace sdfcontour

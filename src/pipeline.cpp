@@ -11,6 +11,7 @@
 #include "sdfcontour/field_agreement.h"
 #include "sdfcontour/marching.h"
 #include "sdfcontour/mesh_properties.h"
+#include "sdfcontour/mesh_transform.h"
 
 namespace sdfcontour {
 
@@ -411,7 +412,15 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
         return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,
                           result.band_spacing, carving);
       });
-    if (method == Method::Gcp && grid) check_on_zero_set(*grid, result);
+    if (method == Method::Gcp && grid) {
+      // A surface that runs out of the grid (a cropped scan's TSDF) ends at its sides, as
+      // marching cubes' does; the reconstruction closed it outside, where no sample was.
+      *result.mesh = clip_mesh_to_box(*result.mesh, grid->bounds.min, grid->bounds.max,
+                                      &result.clipped_to_grid);
+      if (result.mesh->triangles.rows() == 0)
+        throw NotDistances("no part of the reconstructed surface lies in the grid");
+      check_on_zero_set(*grid, result);
+    }
   }
   if (method == Method::MtRt && options.want_mesh)
     result.mesh = stages.run(

@@ -200,7 +200,10 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["gradient_norm_percentiles"] = {r.gradient_norms.low, r.gradient_norms.median,
                                       r.gradient_norms.high};
   }
-  if (r.fallback.empty() && a.method == "gcp") j["off_zero_set"] = r.off_zero_set;
+  if (r.fallback.empty() && a.method == "gcp") {
+    j["off_zero_set"] = r.off_zero_set;
+    j["clipped_to_grid"] = r.clipped_to_grid;
+  }
   if (r.noise_level > 0) j["noise_level"] = r.noise_level;
   if (r.fallback.empty() && (a.method == "gcp" || a.method == "gtcp"))
     j["pieces_removed"] = r.pieces_removed;

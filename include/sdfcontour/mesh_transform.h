@@ -1,4 +1,4 @@
-// Placing meshes in the unit-ish box the experiments use.
+// Placing meshes in the unit-ish box the experiments use, and cutting them to a box.
 #pragma once
 
 #include "sdfcontour/types.h"
@@ -9,5 +9,13 @@ namespace sdfcontour {
 /// longest side spans [-half_extent, half_extent]. Throws Error for an empty or flat-as-a-point
 /// mesh.
 Mesh normalize_mesh(const Mesh& mesh, double half_extent);
+
+/// `mesh` cut to the box [min, max]: triangles outside are dropped, triangles across a side are
+/// cut along it (new vertices exactly on the side, shared by the triangles on both sides of an
+/// edge, so the cut mesh stays connected), unused vertices removed. Vertices on a side count as
+/// inside. A mesh inside the box comes back unchanged. `changed` (optional): set to whether any
+/// triangle was dropped or cut.
+Mesh clip_mesh_to_box(const Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+                      bool* changed = nullptr);
 
 }  // namespace sdfcontour

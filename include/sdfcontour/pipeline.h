@@ -129,6 +129,9 @@ struct ContourResult {
   double noise_level = 0;    ///< GCP on a grid: the values' noise_level(), in spacings
   double band_spacings = 0;  ///< the band used (auto resolved), in spacings
   int pieces_removed = 0;    ///< gcp, gtcp: pieces of the mesh smaller than a spacing, removed
+  /// gcp on a grid whose surface runs out of it: the mesh was cut to the grid's box (the
+  /// reconstruction closes it outside, where no sample says where it is)
+  bool clipped_to_grid = false;
   /// gcp with enforce_signs: samples on the wrong side of the indicator before its correction,
   /// and after it (0 unless the sweeps ran out).
   long sign_violations = 0, sign_violations_left = 0;

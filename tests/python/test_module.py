@@ -137,6 +137,21 @@ def test_float32_and_float64_agree():
     np.testing.assert_array_equal(F32, F64)
 
 
+def test_a_grid_that_cuts_the_surface_gives_gcp_cut_at_its_side():
+    # A cropped volume (the sphere runs out of the grid at x = 0.3): GCP's mesh ends at the
+    # grid's side like marching cubes' and stays closer to the sphere.
+    x = np.linspace(-1.0, 0.3, 40)
+    yz = np.linspace(-1.0, 1.0, 61)
+    p = np.stack(np.meshgrid(x, yz, yz, indexing="ij"), -1).reshape(-1, 3)
+    grid = sphere(p).reshape(40, 61, 61)
+    bounds = ((-1.0, -1.0, -1.0), (0.3, 1.0, 1.0))
+    V, F, stats = sdfcontour.contour(grid, bounds=bounds, return_stats=True)
+    assert "fallback" not in stats and stats["clipped_to_grid"]
+    assert V[:, 0].max() <= 0.3
+    V_mc, _ = sdfcontour.contour(grid, bounds=bounds, method="mc")
+    assert mean_abs(sphere, V) < 0.25 * mean_abs(sphere, V_mc)
+
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_grid_is_read_in_place(dtype):
     grid = full_grid(sphere, 24).astype(dtype)

@@ -1,0 +1,91 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/marching.h"
+#include "sdfcontour/mesh_properties.h"
+#include "sdfcontour/mesh_transform.h"
+#include "sdfcontour/pipeline.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+// Edges used by one triangle only.
+std::vector<std::pair<int, int>> boundary_edges(const Mesh& mesh) {
+  std::map<std::pair<int, int>, int> uses;
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const int a = mesh.triangles(t, c), b = mesh.triangles(t, (c + 1) % 3);
+      ++uses[std::minmax(a, b)];
+    }
+  std::vector<std::pair<int, int>> out;
+  for (const auto& [edge, n] : uses)
+    if (n == 1) out.push_back(edge);
+  return out;
+}
+
+}  // namespace
+
+// A sphere of radius 0.6 cut at x = 0.3: every vertex on the kept side, the cut's boundary
+// exactly on the plane and nowhere else, one piece, and the area of the sphere less the cap.
+TEST(Clipping, CutsAMeshAlongTheBoxSide) {
+  const Grid grid = sample_grid(*make_builtin_shape("sphere"), 48, Bounds{});
+  const Mesh sphere = marching_cubes(grid);
+  const double r = 0.6;  // the builtin sphere's radius, checked against the mesh
+  EXPECT_NEAR(sphere.vertices.rowwise().norm().maxCoeff(), r, 0.01);
+  const Eigen::Vector3d lo = Eigen::Vector3d::Constant(-1), hi(0.3, 1, 1);
+  bool changed = false;
+  const Mesh cut = clip_mesh_to_box(sphere, lo, hi, &changed);
+  EXPECT_TRUE(changed);
+  EXPECT_LE(cut.vertices.col(0).maxCoeff(), 0.3);
+  const auto boundary = boundary_edges(cut);
+  ASSERT_FALSE(boundary.empty());
+  for (const auto& [a, b] : boundary) {
+    EXPECT_EQ(cut.vertices(a, 0), 0.3);
+    EXPECT_EQ(cut.vertices(b, 0), 0.3);
+  }
+  EXPECT_EQ(connected_components(cut), 1);
+  const double kept = 4 * M_PI * r * r - 2 * M_PI * r * (r - 0.3);
+  EXPECT_NEAR(surface_area(cut) / kept, surface_area(sphere) / (4 * M_PI * r * r), 1e-3);
+  EXPECT_TRUE(mesh_topology(cut).consistently_oriented);
+  // A box holding the mesh leaves it as it was.
+  const Mesh same = clip_mesh_to_box(sphere, lo, Eigen::Vector3d::Constant(1), &changed);
+  EXPECT_FALSE(changed);
+  EXPECT_EQ(same.vertices, sphere.vertices);
+  EXPECT_EQ(same.triangles, sphere.triangles);
+  // A box missing it leaves nothing.
+  EXPECT_EQ(
+      clip_mesh_to_box(sphere, Eigen::Vector3d::Constant(0.9), hi.cwiseMax(1.0)).triangles.rows(),
+      0);
+}
+
+// GCP on a grid that cuts the surface (as a cropped scan's TSDF does) keeps GCP's accuracy inside
+// the grid instead of falling back to marching cubes: the reconstruction closes the surface
+// outside, and that part is cut away.
+TEST(Clipping, GcpOnAGridThatCutsTheSurface) {
+  Bounds bounds;
+  bounds.max.x() = 0.3;
+  const auto shape = make_builtin_shape("sphere");
+  const Grid grid = sample_grid(*shape, 48, bounds);
+  const double h = grid.spacing().maxCoeff();
+  ContourOptions options;
+  options.method = Method::Gcp;
+  const ContourResult r = contour(grid_input(grid), nullptr, options);
+  ASSERT_TRUE(r.fallback.empty()) << r.fallback;
+  EXPECT_TRUE(r.clipped_to_grid);
+  ASSERT_TRUE(r.mesh);
+  EXPECT_LE(r.mesh->vertices.col(0).maxCoeff(), 0.3);
+  EXPECT_EQ(connected_components(*r.mesh), 1);
+  double gcp_worst = 0, mc_worst = 0;
+  for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v)
+    gcp_worst = std::max(gcp_worst, std::abs(r.mesh->vertices.row(v).norm() - 0.6));
+  const Mesh mc = marching_cubes(grid);
+  for (Eigen::Index v = 0; v < mc.vertices.rows(); ++v)
+    mc_worst = std::max(mc_worst, std::abs(mc.vertices.row(v).norm() - 0.6));
+  std::cout << "largest distance to the sphere: gcp " << gcp_worst / h << " h, mc " << mc_worst / h
+            << " h\n";
+  EXPECT_LT(gcp_worst, mc_worst);
+}
