@@ -122,6 +122,21 @@ void check_on_zero_set(const GridView& grid, ContourResult& result) {
                        " connected pieces where marching cubes finds " + std::to_string(mc_pieces));
 }
 
+// Whether some sample on the grid's sides is inside (negative): the surface runs out of the grid
+// (or the grid lies inside it), so the far field is not all outside.
+bool grid_sides_inside(const GridView& grid) {
+  const auto& n = grid.dims;
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j) {
+      const bool side_ij = i == 0 || j == 0 || i == n[0] - 1 || j == n[1] - 1;
+      for (int k = 0; k < n[2]; k += side_ij ? 1 : n[2] - 1) {
+        if (grid.value(grid.index(i, j, k)) < 0) return true;
+        if (n[2] == 1) break;
+      }
+    }
+  return false;
+}
+
 // What contour() measures of a grid before choosing to smooth it, handed on so that the
 // pipeline does not measure it again.
 struct GridMeasures {
@@ -331,6 +346,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     popt.cancel = options.cancel;
     if (popt.depth == 0) popt.depth = auto_poisson_depth(s.points, band.spacing);
     result.poisson_depth = popt.depth;
+    // A grid whose sides are inside in part cuts the surface: its far field is inside there.
+    if (grid && grid_sides_inside(*grid)) popt.dirichlet_fallback = false;
     // GCP's mesh keeps the samples next to the surface on their sides.
     SignedSamples sides;
     result.sign_constraints =
@@ -400,6 +417,19 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     // (~100 of extent < 0.5 h on the shared meshes at 32^3): no piece that small comes from
     // samples a spacing apart.
     result.pieces_removed = remove_small_pieces(*result.mesh, result.band_spacing);
+    // A surface that runs out of the grid (a cropped scan's TSDF) ends at its sides, as
+    // marching cubes' does; the reconstruction closed it outside, where no sample was. Cut
+    // before projection and carving, which would work on that part for nothing, and again
+    // after them, as they move the cut's vertices a little.
+    auto clip_to_grid = [&] {
+      if (method != Method::Gcp || !grid) return;
+      bool clipped = false;
+      *result.mesh = clip_mesh_to_box(*result.mesh, grid->bounds.min, grid->bounds.max, &clipped);
+      result.clipped_to_grid |= clipped;
+      if (result.mesh->triangles.rows() == 0)
+        throw NotDistances("no part of the reconstructed surface lies in the grid");
+    };
+    clip_to_grid();
     if (project)
       result.projection =
           stages.run("projection", "projecting the mesh onto the contact points", [&] {
@@ -412,15 +442,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
         return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,
                           result.band_spacing, carving);
       });
-    if (method == Method::Gcp && grid) {
-      // A surface that runs out of the grid (a cropped scan's TSDF) ends at its sides, as
-      // marching cubes' does; the reconstruction closed it outside, where no sample was.
-      *result.mesh = clip_mesh_to_box(*result.mesh, grid->bounds.min, grid->bounds.max,
-                                      &result.clipped_to_grid);
-      if (result.mesh->triangles.rows() == 0)
-        throw NotDistances("no part of the reconstructed surface lies in the grid");
-      check_on_zero_set(*grid, result);
-    }
+    if (result.clipped_to_grid) clip_to_grid();
+    if (method == Method::Gcp && grid) check_on_zero_set(*grid, result);
   }
   if (method == Method::MtRt && options.want_mesh)
     result.mesh = stages.run(

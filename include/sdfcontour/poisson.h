@@ -33,6 +33,10 @@ struct PoissonOptions {
   double samples_per_node = 1.5;  ///< splat each normal at the depth where a node holds this many
   double point_weight = 10.0;     ///< alpha, the screening weight (0: plain Poisson); see README
   PoissonBoundary boundary = PoissonBoundary::Neumann;
+  /// Solve with Dirichlet boundaries instead when Neumann (or free) ones leave part of the
+  /// domain's faces inside (see PoissonResult::boundary_fallback). Off for points of a surface
+  /// known to leave the domain (a grid that cuts it), whose far field is inside in part.
+  bool dirichlet_fallback = true;
   double solver_tolerance = 1e-4;  ///< conjugate gradients stop at this relative residual per depth
   /// ... except at the finest depth, which takes most of the solve's time: there this looser
   /// tolerance measured as accurate (L1 within ±1% on 28 grids, 32³-256³; docs/scale.md).

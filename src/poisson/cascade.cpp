@@ -118,7 +118,8 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     std::vector<char> solved;
     PoissonLevelStats stats = solve(solved);
     if (d == tree.min_depth) {
-      if (boundary != PoissonBoundary::Dirichlet && far_field_inside(L, x, points)) {
+      if (boundary != PoissonBoundary::Dirichlet && o.dirichlet_fallback &&
+          far_field_inside(L, x, points)) {
         boundary = PoissonBoundary::Dirichlet;
         result.boundary_fallback = true;
         if (o.progress)
