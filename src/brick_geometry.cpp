@@ -5,6 +5,9 @@
 #include <CGAL/convex_hull_3.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <iterator>
 
 namespace sdfcontour {
@@ -77,6 +80,104 @@ bool exact_orthocentre(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const
   const Exact::Point_3 o = Exact().construct_weighted_circumcenter_3_object()(pa, pb, pc, pd);
   centre = {CGAL::to_double(o.x()), CGAL::to_double(o.y()), CGAL::to_double(o.z())};
   return centre.allFinite();
+}
+
+namespace {
+using Eigen::Vector3d;
+using Box = BrickBox;
+}  // namespace
+
+bool sphere_inside(const Vector3d& c, double reach2, const Box& box, double margin, Box& need) {
+  if (!std::isfinite(reach2) || !c.allFinite()) return false;
+  if (reach2 <= -margin * margin) return true;  // an imaginary sphere: no sample can violate it
+  const double reach = std::sqrt(std::max(reach2, 0.0)) + margin;
+  if (box.depth(c) > reach) return true;
+  need.min = need.min.cwiseMin(c - Vector3d::Constant(2 * reach));
+  need.max = need.max.cwiseMax(c + Vector3d::Constant(2 * reach));
+  return false;
+}
+
+bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
+                        const Box& box, double max_weight, double margin, Box& need) {
+  auto w = [&](int i) { return values[i] * values[i]; };
+  const Vector3d p0 = p.row(v[0]).transpose();
+  // The orthocentre c = p0 + x solves 2 d_r . x = |d_r|^2 - w_r + w_0 (r = 1..3), by Cramer's
+  // rule with cross products.
+  Vector3d d[3];
+  double b[3];
+  for (int r = 0; r < 3; ++r) {
+    d[r] = p.row(v[r + 1]).transpose() - p0;
+    b[r] = (d[r].squaredNorm() - w(v[r + 1]) + w(v[0])) / 2;
+  }
+  const Vector3d c12 = d[1].cross(d[2]), c20 = d[2].cross(d[0]), c01 = d[0].cross(d[1]);
+  const double det = d[0].dot(c12);
+  Vector3d x;
+  if (std::abs(det) > 1e-12 * d[0].norm() * d[1].norm() * d[2].norm()) {
+    x = (b[0] * c12 + b[1] * c20 + b[2] * c01) / det;
+  } else {  // too flat for doubles: solve it exactly
+    Vector3d c;
+    const Eigen::Vector4d weights(w(v[0]), w(v[1]), w(v[2]), w(v[3]));
+    if (!exact_orthocentre(p0, p.row(v[1]).transpose(), p.row(v[2]).transpose(),
+                           p.row(v[3]).transpose(), weights, c))
+      return false;
+    x = c - p0;
+  }
+  // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
+  return sphere_inside(p0 + x, x.squaredNorm() - w(v[0]) + max_weight, box, margin, need);
+}
+
+bool power_circle_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
+                         const Box& box, double max_weight, double margin, Box& need) {
+  auto w = [&](int i) { return values[i] * values[i]; };
+  const Vector3d p0 = p.row(v[0]).transpose();
+  const Vector3d d1 = p.row(v[1]).transpose() - p0, d2 = p.row(v[2]).transpose() - p0;
+  // x = s d1 + t d2 with 2 d_r . x = |d_r|^2 - w_r + w_0 (r = 1, 2).
+  const double a11 = d1.dot(d1), a12 = d1.dot(d2), a22 = d2.dot(d2);
+  const double b1 = (a11 - w(v[1]) + w(v[0])) / 2, b2 = (a22 - w(v[2]) + w(v[0])) / 2;
+  const double det = a11 * a22 - a12 * a12;
+  if (!(det > 1e-12 * a11 * a22)) return false;  // a sliver triangle: not certified here
+  const Vector3d x = ((b1 * a22 - b2 * a12) * d1 + (b2 * a11 - b1 * a12) * d2) / det;
+  return sphere_inside(p0 + x, x.squaredNorm() - w(v[0]) + max_weight, box, margin, need);
+}
+
+bool hull_facets_global(const Samples& ls, const Triangulation& tri, int r,
+                        const std::vector<Vector3d>& hull, double max_weight, double margin,
+                        const Box& box, Box& need) {
+  struct Facet {
+    std::array<int, 3> v;
+    int opposite;
+  };
+  std::vector<Facet> facets;
+  for (int o = tri.incident_offsets[std::size_t(r)]; o < tri.incident_offsets[std::size_t(r) + 1];
+       ++o) {
+    const auto tet = tri.tets.row(tri.incident_tets[std::size_t(o)]);
+    for (int j = 0; j < 4; ++j) {
+      if (tet[j] == r) continue;
+      Facet f{{}, tet[j]};
+      for (int i = 0, n = 0; i < 4; ++i)
+        if (i != j) f.v[std::size_t(n++)] = tet[i];
+      std::sort(f.v.begin(), f.v.end());
+      facets.push_back(f);
+    }
+  }
+  std::sort(facets.begin(), facets.end(), [](const Facet& a, const Facet& b) { return a.v < b.v; });
+  auto at = [&](int i) -> Vector3d { return ls.points.row(i).transpose(); };
+  bool ok = true;
+  for (std::size_t i = 0, j; i < facets.size(); i = j) {
+    for (j = i + 1; j < facets.size() && facets[j].v == facets[i].v;) ++j;
+    if (j > i + 1) continue;  // shared by two finite tets: not on the hull
+    const Facet& f = facets[i];
+    switch (classify_hull_facet(at(f.v[0]), at(f.v[1]), at(f.v[2]), at(f.opposite), hull)) {
+      case HullFacet::Global:
+        break;
+      case HullFacet::InGlobalFace:
+        ok &= power_circle_inside(ls.points, ls.values, f.v.data(), box, max_weight, margin, need);
+        break;
+      case HullFacet::NotGlobal:
+        return false;
+    }
+  }
+  return ok;
 }
 
 }  // namespace sdfcontour

@@ -18,19 +18,7 @@ namespace sdfcontour {
 namespace {
 
 using Eigen::Vector3d;
-
-struct Box {
-  Vector3d min, max;
-  bool contains(const Vector3d& p) const {
-    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
-  }
-  bool contains(const Box& b) const { return contains(b.min) && contains(b.max); }
-  // Distance from p (inside) to the box's outside; 0 outside.
-  double depth(const Vector3d& p) const {
-    if (!contains(p)) return 0;
-    return std::min((p - min).minCoeff(), (max - p).minCoeff());
-  }
-};
+using Box = BrickBox;
 
 // Samples bucketed by brick, each bucket in ascending sample order.
 struct BrickGrid {
@@ -93,66 +81,6 @@ std::vector<int> gather(const BrickGrid& g, const PointMatrix& points, const Box
       }
   std::sort(out.begin(), out.end());
   return out;
-}
-
-// True if the ball about c of squared radius reach2 stays `margin` inside `box`; else `need`
-// grows to hold it (unless it is not finite: the caller widens the box then).
-bool sphere_inside(const Vector3d& c, double reach2, const Box& box, double margin, Box& need) {
-  if (!std::isfinite(reach2) || !c.allFinite()) return false;
-  if (reach2 <= -margin * margin) return true;  // an imaginary sphere: no sample can violate it
-  const double reach = std::sqrt(std::max(reach2, 0.0)) + margin;
-  if (box.depth(c) > reach) return true;
-  need.min = need.min.cwiseMin(c - Vector3d::Constant(2 * reach));
-  need.max = need.max.cwiseMax(c + Vector3d::Constant(2 * reach));
-  return false;
-}
-
-// True if the tet's orthosphere, grown by `max_weight`, stays `margin` inside `box`: then no
-// sample outside the box can have a negative power product with it. Otherwise `need` grows to
-// hold the grown sphere (or, for an exactly flat tet, by nothing: the caller widens the box).
-bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
-                        const Box& box, double max_weight, double margin, Box& need) {
-  auto w = [&](int i) { return values[i] * values[i]; };
-  const Vector3d p0 = p.row(v[0]).transpose();
-  // The orthocentre c = p0 + x solves 2 d_r . x = |d_r|^2 - w_r + w_0 (r = 1..3), by Cramer's
-  // rule with cross products.
-  Vector3d d[3];
-  double b[3];
-  for (int r = 0; r < 3; ++r) {
-    d[r] = p.row(v[r + 1]).transpose() - p0;
-    b[r] = (d[r].squaredNorm() - w(v[r + 1]) + w(v[0])) / 2;
-  }
-  const Vector3d c12 = d[1].cross(d[2]), c20 = d[2].cross(d[0]), c01 = d[0].cross(d[1]);
-  const double det = d[0].dot(c12);
-  Vector3d x;
-  if (std::abs(det) > 1e-12 * d[0].norm() * d[1].norm() * d[2].norm()) {
-    x = (b[0] * c12 + b[1] * c20 + b[2] * c01) / det;
-  } else {  // too flat for doubles: solve it exactly
-    Vector3d c;
-    const Eigen::Vector4d weights(w(v[0]), w(v[1]), w(v[2]), w(v[3]));
-    if (!exact_orthocentre(p0, p.row(v[1]).transpose(), p.row(v[2]).transpose(),
-                           p.row(v[3]).transpose(), weights, c))
-      return false;
-    x = c - p0;
-  }
-  // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
-  return sphere_inside(p0 + x, x.squaredNorm() - w(v[0]) + max_weight, box, margin, need);
-}
-
-// The same for a triangle's power circle in its plane (a facet in a flat face of the hull:
-// only samples on that plane can conflict with its infinite cell).
-bool power_circle_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
-                         const Box& box, double max_weight, double margin, Box& need) {
-  auto w = [&](int i) { return values[i] * values[i]; };
-  const Vector3d p0 = p.row(v[0]).transpose();
-  const Vector3d d1 = p.row(v[1]).transpose() - p0, d2 = p.row(v[2]).transpose() - p0;
-  // x = s d1 + t d2 with 2 d_r . x = |d_r|^2 - w_r + w_0 (r = 1, 2).
-  const double a11 = d1.dot(d1), a12 = d1.dot(d2), a22 = d2.dot(d2);
-  const double b1 = (a11 - w(v[1]) + w(v[0])) / 2, b2 = (a22 - w(v[2]) + w(v[0])) / 2;
-  const double det = a11 * a22 - a12 * a12;
-  if (!(det > 1e-12 * a11 * a22)) return false;  // a sliver triangle: not certified here
-  const Vector3d x = ((b1 * a22 - b2 * a12) * d1 + (b2 * a11 - b1 * a12) * d2) / det;
-  return sphere_inside(p0 + x, x.squaredNorm() - w(v[0]) + max_weight, box, margin, need);
 }
 
 // Adds `from`'s outcome counts to `to`'s.
@@ -271,7 +199,9 @@ class BrickRunner {
   // each tet's verdict (-1: not yet), as a tet is in up to four stars.
   bool certified(const Samples& ls, const Triangulation& tri, std::size_t r, const Box& box,
                  Box& need, std::vector<signed char>& tet_inside) const {
-    if (tri.on_hull[r] && !hull_facets_global(ls, tri, int(r), box, need)) return false;
+    if (tri.on_hull[r] &&
+        !hull_facets_global(ls, tri, int(r), hull_, max_weight_, margin_, box, need))
+      return false;
     bool ok = true;
     for (int o = tri.incident_offsets[r]; o < tri.incident_offsets[r + 1]; ++o) {
       const int t = tri.incident_tets[std::size_t(o)];
@@ -280,51 +210,6 @@ class BrickRunner {
         inside = orthosphere_inside(ls.points, ls.values, tri.tets.row(t).data(), box, max_weight_,
                                     margin_, need);
       ok &= inside == 1;
-    }
-    return ok;
-  }
-
-  // The facets of r's star on the local hull (in one of its finite tets only) are facets of the
-  // global hull: then its infinite cells are global ones too. A facet in a flat face of the
-  // global hull also needs its power circle, grown by the largest weight, inside `box` (else
-  // `need` grows to hold it).
-  bool hull_facets_global(const Samples& ls, const Triangulation& tri, int r, const Box& box,
-                          Box& need) const {
-    struct Facet {
-      std::array<int, 3> v;
-      int opposite;
-    };
-    std::vector<Facet> facets;
-    for (int o = tri.incident_offsets[std::size_t(r)]; o < tri.incident_offsets[std::size_t(r) + 1];
-         ++o) {
-      const auto tet = tri.tets.row(tri.incident_tets[std::size_t(o)]);
-      for (int j = 0; j < 4; ++j) {
-        if (tet[j] == r) continue;
-        Facet f{{}, tet[j]};
-        for (int i = 0, n = 0; i < 4; ++i)
-          if (i != j) f.v[std::size_t(n++)] = tet[i];
-        std::sort(f.v.begin(), f.v.end());
-        facets.push_back(f);
-      }
-    }
-    std::sort(facets.begin(), facets.end(),
-              [](const Facet& a, const Facet& b) { return a.v < b.v; });
-    auto at = [&](int i) -> Vector3d { return ls.points.row(i).transpose(); };
-    bool ok = true;
-    for (std::size_t i = 0, j; i < facets.size(); i = j) {
-      for (j = i + 1; j < facets.size() && facets[j].v == facets[i].v;) ++j;
-      if (j > i + 1) continue;  // shared by two finite tets: not on the hull
-      const Facet& f = facets[i];
-      switch (classify_hull_facet(at(f.v[0]), at(f.v[1]), at(f.v[2]), at(f.opposite), hull_)) {
-        case HullFacet::Global:
-          break;
-        case HullFacet::InGlobalFace:
-          ok &= power_circle_inside(ls.points, ls.values, f.v.data(), box, max_weight_, margin_,
-                                    need);
-          break;
-        case HullFacet::NotGlobal:
-          return false;
-      }
     }
     return ok;
   }
