@@ -178,15 +178,14 @@ ContourOptions contour_options(const py::dict& o) {
     c.band.truncation = std::stod(truncation);
   }
   c.bricks.size = get<int>(o, "brick_size", c.bricks.size);
-  const std::string signs = get<std::string>(o, "sign_constraints", "auto");
-  c.enforce_signs = signs == "on" ? Switch::On : signs == "off" ? Switch::Off : Switch::Auto;
+  c.enforce_signs =
+      parse_switch("sign_constraints", get<std::string>(o, "sign_constraints", "auto"));
   if (!get<bool>(o, "carve", true)) c.carve = Switch::Off;
   if (const int rounds = get<int>(o, "side_passes", -1); rounds >= 0) {
     c.carving.side_passes = rounds;
     c.carve_sides = rounds > 0 ? Switch::On : Switch::Off;
   }
-  const std::string projection = get<std::string>(o, "projection", "auto");
-  c.project = projection == "on" ? Switch::On : projection == "off" ? Switch::Off : Switch::Auto;
+  c.project = parse_switch("projection", get<std::string>(o, "projection", "auto"));
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;

@@ -26,6 +26,13 @@ const detail::NameTable<GradientSource> kGradientSources = {{"regular", Gradient
                                                             {"knn", GradientSource::Knn}};
 }  // namespace
 
+const detail::NameTable<Switch> kSwitches = {
+    {"auto", Switch::Auto}, {"on", Switch::On}, {"off", Switch::Off}};
+
+Switch parse_switch(const std::string& what, const std::string& name) {
+  return detail::parse_name(kSwitches, what, name);
+}
+
 Method parse_method(const std::string& name) {
   return detail::parse_name(kMethods, "method", name);
 }
@@ -316,9 +323,14 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                                      core);
     });
   }
-  // The contact points' depths (|value| of their samples), for the projection.
+  // Projection needs the contact points after the reconstruction, and their depths (|value| of
+  // their samples). Auto: below 128 samples per axis (bunny 256^3: L1 0.91x for ~4 s more;
+  // docs/projection.md).
+  const bool project = method == Method::Gcp && contact_mesh &&
+                       (options.project == Switch::On ||
+                        (options.project == Switch::Auto && band.samples_per_axis < 128));
   Eigen::VectorXd contact_depths;
-  if (result.contact_points) {
+  if (project) {
     const std::vector<int>& from = result.contact_points->samples;
     contact_depths.resize(Eigen::Index(from.size()));
     for (std::size_t q = 0; q < from.size(); ++q)
@@ -379,11 +391,6 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     } else if (carve) {
       carving_samples = core_samples(band);
     }
-    // Projection needs the contact points after the reconstruction. Auto: below 128 samples per
-    // axis (bunny 256^3: L1 0.91x for ~4 s more; docs/projection.md).
-    const bool project =
-        method == Method::Gcp && (options.project == Switch::On ||
-                                  (options.project == Switch::Auto && band.samples_per_axis < 128));
     CarvingOptions carving = options.carving;
     if (options.carve_sides == Switch::Off ||
         (options.carve_sides == Switch::Auto && grid && band.samples_per_axis >= 128))

@@ -140,10 +140,7 @@ ContourOptions contour_options(const ContourArgs& a) {
     opt.carving.side_passes = *rounds;
     opt.carve_sides = *rounds > 0 ? Switch::On : Switch::Off;
   }
-  if (a.projection == "on" || a.projection == "off")
-    opt.project = a.projection == "on" ? Switch::On : Switch::Off;
-  else if (a.projection != "auto")
-    throw Error("--projection: '" + a.projection + "' is not on, off or auto");
+  opt.project = parse_switch("--projection", a.projection);
   for (const ProjectionOption& p : kProjectionOptions)
     require_range(p.name, a.projection_options.*p.field, p.lo, p.hi);
   opt.projection = a.projection_options;

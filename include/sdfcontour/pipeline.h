@@ -35,6 +35,8 @@ std::string gradient_source_name(GradientSource source);
 
 /// An option that is on, off, or chosen from the input.
 enum class Switch { Auto, On, Off };
+/// "auto", "on", "off" <-> Switch; throws Error "unknown WHAT 'NAME' (known: ...)" for others.
+Switch parse_switch(const std::string& what, const std::string& name);
 
 /// Whether GCP constrains the samples' sides by default, for samples `samples_per_axis` across:
 /// below 128. Measured (docs/sides.md): on the shared meshes they lower GCP's L1 to 0.958x at
