@@ -20,20 +20,17 @@ Mesh normalize_mesh(const Mesh& mesh, double half_extent) {
 
 namespace {
 
-// The mesh kept on the side where coordinate `axis` times `sign` is at most `sign` * `bound`.
+// The part of a mesh on the side where coordinate `axis` times `sign` is at most `sign` * `bound`.
 struct HalfSpaceClip {
   int axis;
   double sign, bound;
 
   double outside(const Eigen::RowVector3d& p) const { return sign * (p[axis] - bound); }
 
-  // Appends to `out` the part of `in` inside; true if anything was dropped or cut.
-  bool apply(const Mesh& in, std::vector<Eigen::RowVector3d>& vertices,
+  // Replaces `triangles` by their parts inside, appending the new vertices on the plane to
+  // `vertices`; true if anything was dropped or cut.
+  bool apply(std::vector<Eigen::RowVector3d>& vertices,
              std::vector<Eigen::Vector3i>& triangles) const {
-    const Eigen::Index n = in.vertices.rows();
-    vertices.clear();
-    triangles.clear();
-    for (Eigen::Index v = 0; v < n; ++v) vertices.push_back(in.vertices.row(v));
     std::map<std::pair<int, int>, int> cut;  // edge (low, high) -> its vertex on the plane
     auto crossing = [&](int a, int b) {
       const auto key = std::minmax(a, b);
@@ -53,14 +50,15 @@ struct HalfSpaceClip {
       return id;
     };
     bool changed = false;
-    for (Eigen::Index t = 0; t < in.triangles.rows(); ++t) {
-      const Eigen::Vector3i tri = in.triangles.row(t).transpose();
+    std::vector<Eigen::Vector3i> kept;
+    kept.reserve(triangles.size());
+    for (const Eigen::Vector3i& tri : triangles) {
       bool out[3];
       int outside_count = 0;
       for (int c = 0; c < 3; ++c)
         outside_count += out[c] = outside(vertices[std::size_t(tri[c])]) > 0;
       if (outside_count == 0) {
-        triangles.push_back(tri);
+        kept.push_back(tri);
         continue;
       }
       changed = true;
@@ -74,43 +72,48 @@ struct HalfSpaceClip {
       }
       for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
         const int a = polygon[0], b = polygon[k], c = polygon[k + 1];
-        if (a != b && b != c && c != a) triangles.emplace_back(a, b, c);
+        if (a != b && b != c && c != a) kept.emplace_back(a, b, c);
       }
     }
+    triangles = std::move(kept);
     return changed;
   }
 };
 
 }  // namespace
 
-Mesh clip_mesh_to_box(const Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vector3d& max,
-                      bool* changed) {
-  Mesh current = mesh;
-  bool any = false;
-  std::vector<Eigen::RowVector3d> vertices;
-  std::vector<Eigen::Vector3i> triangles;
+bool clip_mesh_to_box(Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
+  // A box holding every vertex holds every triangle (the common case: nothing to copy).
+  if (mesh.vertices.rows() == 0 ||
+      ((mesh.vertices.colwise().minCoeff().transpose().array() >= min.array()).all() &&
+       (mesh.vertices.colwise().maxCoeff().transpose().array() <= max.array()).all()))
+    return false;
+  std::vector<Eigen::RowVector3d> vertices(std::size_t(mesh.vertices.rows()));
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    vertices[v] = mesh.vertices.row(Eigen::Index(v));
+  std::vector<Eigen::Vector3i> triangles(std::size_t(mesh.triangles.rows()));
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    triangles[t] = mesh.triangles.row(Eigen::Index(t)).transpose();
+  bool changed = false;
   for (int axis = 0; axis < 3; ++axis)
     for (const HalfSpaceClip& clip :
-         {HalfSpaceClip{axis, 1.0, max[axis]}, HalfSpaceClip{axis, -1.0, min[axis]}}) {
-      if (!clip.apply(current, vertices, triangles)) continue;
-      any = true;
-      // Keep only the vertices the kept triangles use, in their first order.
-      std::vector<int> renumber(vertices.size(), -1);
-      int used = 0;
-      for (const auto& t : triangles)
-        for (int c = 0; c < 3; ++c)
-          if (renumber[std::size_t(t[c])] < 0) renumber[std::size_t(t[c])] = used++;
-      PointMatrix kept(used, 3);
-      for (std::size_t v = 0; v < vertices.size(); ++v)
-        if (renumber[v] >= 0) kept.row(renumber[v]) = vertices[v];
-      TriangleMatrix tris(Eigen::Index(triangles.size()), 3);
-      for (std::size_t t = 0; t < triangles.size(); ++t)
-        for (int c = 0; c < 3; ++c)
-          tris(Eigen::Index(t), c) = renumber[std::size_t(triangles[t][c])];
-      current = Mesh{std::move(kept), std::move(tris)};
-    }
-  if (changed) *changed = any;
-  return current;
+         {HalfSpaceClip{axis, 1.0, max[axis]}, HalfSpaceClip{axis, -1.0, min[axis]}})
+      changed |= clip.apply(vertices, triangles);
+  if (!changed) return false;
+  // Keep only the vertices the kept triangles use, in their first order.
+  std::vector<int> renumber(vertices.size(), -1);
+  int used = 0;
+  for (const auto& t : triangles)
+    for (int c = 0; c < 3; ++c)
+      if (renumber[std::size_t(t[c])] < 0) renumber[std::size_t(t[c])] = used++;
+  mesh.vertices.resize(used, 3);
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    if (renumber[v] >= 0) mesh.vertices.row(renumber[v]) = vertices[v];
+  mesh.triangles.resize(Eigen::Index(triangles.size()), 3);
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c)
+      mesh.triangles(Eigen::Index(t), c) = renumber[std::size_t(triangles[t][c])];
+  return true;
 }
 
 }  // namespace sdfcontour

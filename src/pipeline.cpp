@@ -430,9 +430,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     // after them, as they move the cut's vertices a little.
     auto clip_to_grid = [&] {
       if (method != Method::Gcp || !grid) return;
-      bool clipped = false;
-      *result.mesh = clip_mesh_to_box(*result.mesh, grid->bounds.min, grid->bounds.max, &clipped);
-      result.clipped_to_grid |= clipped;
+      result.clipped_to_grid |= clip_mesh_to_box(*result.mesh, grid->bounds.min, grid->bounds.max);
       if (result.mesh->triangles.rows() == 0)
         throw NotDistances("no part of the reconstructed surface lies in the grid");
     };

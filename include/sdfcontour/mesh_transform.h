@@ -10,12 +10,11 @@ namespace sdfcontour {
 /// mesh.
 Mesh normalize_mesh(const Mesh& mesh, double half_extent);
 
-/// `mesh` cut to the box [min, max]: triangles outside are dropped, triangles across a side are
+/// Cuts `mesh` to the box [min, max]: triangles outside are dropped, triangles across a side are
 /// cut along it (new vertices exactly on the side, shared by the triangles on both sides of an
 /// edge, so the cut mesh stays connected), unused vertices removed. Vertices on a side count as
-/// inside. A mesh inside the box comes back unchanged. `changed` (optional): set to whether any
-/// triangle was dropped or cut.
-Mesh clip_mesh_to_box(const Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vector3d& max,
-                      bool* changed = nullptr);
+/// inside. Returns whether any triangle was dropped or cut; a mesh inside the box is left as it
+/// was.
+bool clip_mesh_to_box(Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vector3d& max);
 
 }  // namespace sdfcontour
