@@ -7,6 +7,7 @@
 #include "poisson/density.h"
 #include "poisson/extraction.h"
 #include "poisson/indicator.h"
+#include "poisson/normal_field.h"
 #include "poisson/octree.h"
 #include "poisson/points.h"
 #include "poisson/system.h"
@@ -86,6 +87,74 @@ TEST(PoissonStages, ConjugateGradientsSolveALaplaceProblemExactly) {
   EXPECT_FALSE(early.converged);
   EXPECT_EQ(early.iterations, 2);
   EXPECT_GT(early.relative_residual, 1e-12);
+}
+
+// The system's product holds the screening without storing rows: with the fixed nodes at zero,
+// x . A x grows by  screening * sum_p w_p chi(p)^2  (chi the trilinear interpolation of x, found
+// here from the points' cells and corners directly), and the product is A's: symmetric.
+TEST(PoissonStages, ScreeningTermIsTheSumOverThePoints) {
+  auto points = sphere_points(3000, 5);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    points[i].weight = 0.25 + 0.75 * double(i % 4) / 3;
+  const MortonRuns runs(points, 5);
+  const Octree tree = build_octree(points, runs, 3, 5);
+  const OctreeLevel& L = tree.level(5);
+  const std::vector<char> solved = solved_nodes(L, PoissonBoundary::Neumann);
+  const CellRuns cells = cell_runs(L, runs);
+  const double screening = 3.5;
+  auto system = [&](double s) {
+    return assemble_system(L, solved, std::vector<double>(L.nodes.size(), 0.0), cells, s, points,
+                           runs);
+  };
+  const LevelSystem plain = system(0.0), screened = system(screening);
+  std::srand(7);
+  auto random_on_solved = [&] {
+    std::vector<double> x(L.nodes.size(), 0.0);
+    for (std::size_t v = 0; v < x.size(); ++v)
+      if (solved[v]) x[v] = double(std::rand()) / RAND_MAX - 0.5;
+    return x;
+  };
+  const std::vector<double> x = random_on_solved(), y = random_on_solved();
+  std::vector<double> Ax(x.size()), Ay(x.size());
+  const double xAx = multiply(L, solved, screened, x, Ax);
+  std::vector<double> unused(x.size());
+  const double stiffness = multiply(L, solved, plain, x, unused);
+  double expected = 0;
+  long points_in_solved_cells = 0;
+  for (const UnitPoint& p : points) {
+    const std::array<long, 3> c = {long(p.p.x() * double(L.res)), long(p.p.y() * double(L.res)),
+                                   long(p.p.z() * double(L.res))};
+    double chi = 0;
+    bool all_solved = true;
+    for (int a = 0; a < 8; ++a) {
+      const long i = c[0] + (a & 1), j = c[1] + (a >> 1 & 1), k = c[2] + (a >> 2 & 1);
+      const int v = L.node(i, j, k);
+      ASSERT_GE(v, 0);
+      all_solved = all_solved && solved[std::size_t(v)];
+      double w = 1;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double t = p.p[axis] * double(L.res) - double(c[std::size_t(axis)]);
+        w *= (a >> axis & 1) ? t : 1 - t;
+      }
+      chi += w * x[std::size_t(v)];
+    }
+    points_in_solved_cells += all_solved;
+    expected += p.weight * chi * chi;
+  }
+  ASSERT_GT(points_in_solved_cells, 2000);
+  EXPECT_NEAR(xAx - stiffness, screening * expected, 1e-10 * std::abs(xAx));
+  EXPECT_GT(screening * expected, 0.01 * stiffness);  // the screening is not negligible here
+  multiply(L, solved, screened, y, Ay);
+  double yAx = 0, xAy = 0;
+  for (std::size_t v = 0; v < x.size(); ++v) yAx += y[v] * Ax[v], xAy += x[v] * Ay[v];
+  EXPECT_NEAR(yAx, xAy, 1e-12 * (std::abs(yAx) + std::abs(xAx)));
+  // The diagonal is A's: e_v . A e_v.
+  for (std::size_t v = 0; v < x.size(); v += 97) {
+    if (!solved[v]) continue;
+    std::vector<double> e(x.size(), 0.0), Ae(x.size());
+    e[v] = 1;
+    EXPECT_NEAR(multiply(L, solved, screened, e, Ae), screened.diagonal(v), 1e-12);
+  }
 }
 
 // On an adaptive octree, a linear function stored at every depth's nodes is read back exactly

@@ -34,19 +34,37 @@ struct UninitialisedAllocator : std::allocator<T> {
   }
 };
 
-/// Rows (27 slots, slot(dx, dy, dz)) and right-hand side of one depth's system. Inside the domain
-/// and away from points a row is the constant stiffness stencil h K (`interior_row`); only nodes
-/// on the domain's faces (truncated stencil) and corners of cells holding points (screening) store
-/// their own row.
+/// One depth's system: the stiffness  int grad phi_u . grad phi_v  plus the screening
+/// screening * sum_p w_p phi_u(p) phi_v(p), and the right-hand side. Nothing is stored per row:
+/// inside the domain the stiffness is the constant stencil h K (`interior_row`), on the domain's
+/// faces its truncation (recomputed where used: few nodes), and the screening is a symmetric 8 x 8
+/// block per cell holding points, over the cell's corners.
 struct LevelSystem {
   std::array<double, 27> interior_row{};
-  std::vector<int> row_of;  ///< per node: its own row, or -1 (the interior row, or not solved)
-  std::vector<std::array<double, 27>, UninitialisedAllocator<std::array<double, 27>>> rows;
+  double screening = 0;
+  /// Per cell holding points: its corner nodes (corner bits x=1, y=2, z=4) and the sums of
+  /// w_a w_b over its points (a <= b, pair_index), w the corners' trilinear weights and points'
+  /// weights included.
+  /// The cells come grouped by the parity of (i, j, k): cells of one parity share no corner.
+  /// Group g is [parity_begin[g], parity_begin[g + 1]).
+  std::array<std::size_t, 9> parity_begin{};
+  std::vector<std::array<int, 8>, UninitialisedAllocator<std::array<int, 8>>> screened_corners;
+  std::vector<std::array<double, 36>, UninitialisedAllocator<std::array<double, 36>>>
+      screened_blocks;
+  /// Per node: its index in own_diagonal (a solved node on a face or a screened cell's corner),
+  /// else -1 (its diagonal is interior_row's centre).
+  std::vector<int> own_of;
+  std::vector<double> own_diagonal;
   std::vector<double> b;  ///< per node; 0 on nodes not solved for
-  const double* row(std::size_t v) const {
-    return row_of[v] >= 0 ? rows[std::size_t(row_of[v])].data() : interior_row.data();
+  double diagonal(std::size_t v) const {
+    return own_of[v] >= 0 ? own_diagonal[std::size_t(own_of[v])] : interior_row[13];
   }
 };
+
+/// Index of the pair of cell corners (a, b) in a screening block (symmetric: either order).
+constexpr int pair_index(int a, int b) {
+  return a <= b ? a * 8 - a * (a - 1) / 2 + (b - a) : b * 8 - b * (b - 1) / 2 + (a - b);
+}
 
 /// The normal field's part of one depth's right-hand side, -int grad phi_v . V, for the nodes
 /// with solved[v] (0 elsewhere): V from coarser splats given on `grid`, plus `finer` (the finer
@@ -65,11 +83,17 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   const std::vector<Eigen::Vector3d>& coarser,
                                                   const std::vector<double>& finer);
 
-/// Completes the system for the nodes with solved[v]: rows  int grad phi_u . grad phi_v +
-/// screening * sum_p phi_u(p) phi_v(p)  and  b += screening * sum_p phi_v(p) / 2, over the points
-/// in `runs` (the cells holding points); screening = alpha * (mean area) * 2^d.
+/// Completes the system for the nodes with solved[v]: the screening blocks of the points in
+/// `runs` (the cells holding points) and  b += screening * sum_p w_p phi_v(p) / 2;
+/// screening = alpha * (mean area) * 2^d.
 LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solved,
                             std::vector<double> b, const CellRuns& runs, double screening,
                             const std::vector<UnitPoint>& points, const MortonRuns& morton);
+
+/// out = A in on the solved nodes (0 elsewhere); returns in . out over them. `in` may be nonzero
+/// on fixed nodes (their values enter through the solved nodes' rows). Every sum runs in a fixed
+/// order, so out does not depend on the thread count.
+double multiply(const OctreeLevel& L, const std::vector<char>& solved, const LevelSystem& S,
+                const std::vector<double>& in, std::vector<double>& out);
 
 }  // namespace sdfcontour::poisson
