@@ -224,11 +224,6 @@ Key global_edge(Key cell, int e) {
   return pack(u[0] + (low & 1), u[1] + (low >> 1 & 1), u[2] + (low >> 2 & 1)) * 3 + Key(e / 4);
 }
 
-struct CellPolygons {
-  std::vector<std::array<int, 12>> edges;  // local edge ids
-  std::vector<int> sizes;
-};
-
 }  // namespace
 
 Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame,
@@ -237,21 +232,29 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
   std::vector<Key> cells;
   std::vector<std::array<double, 8>> values;
   surface.close(surface.candidates(), cells, values, cancel);
-  // Polygons per cell with their edges' global keys; vertices are deduplicated by edge.
-  std::vector<CellPolygons> polygons(cells.size());
-  tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
-    detail::cube_polygons(values[c].data(), [&](const int* edges, int size) {
-      std::array<int, 12> e{};
-      std::copy(edges, edges + size, e.begin());
-      polygons[c].edges.push_back(e);
-      polygons[c].sizes.push_back(size);
+  // Polygons per cell, found twice (the cube's case is cheap to redo; storing them took ~150
+  // bytes per surface cell, the extraction's largest array): first for the global keys of their
+  // edges, where vertices are deduplicated, then for the triangles. Fixed chunks of cells, joined
+  // in order: the mesh does not depend on the threads.
+  constexpr std::size_t kChunk = 8192;
+  const std::size_t chunks = (cells.size() + kChunk - 1) / kChunk;
+  auto for_each_polygon = [&](std::size_t chunk, auto&& f) {
+    const std::size_t last = std::min(cells.size(), (chunk + 1) * kChunk);
+    for (std::size_t c = chunk * kChunk; c < last; ++c)
+      detail::cube_polygons(values[c].data(),
+                            [&](const int* edges, int size) { f(c, edges, size); });
+  };
+  std::vector<std::vector<Key>> chunk_edges(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    for_each_polygon(chunk, [&](std::size_t c, const int* edges, int size) {
+      for (int v = 0; v < size; ++v) chunk_edges[chunk].push_back(global_edge(cells[c], edges[v]));
     });
   });
   std::vector<Key> edge_keys;
-  for (std::size_t c = 0; c < polygons.size(); ++c)
-    for (std::size_t q = 0; q < polygons[c].edges.size(); ++q)
-      for (int v = 0; v < polygons[c].sizes[q]; ++v)
-        edge_keys.push_back(global_edge(cells[c], polygons[c].edges[q][std::size_t(v)]));
+  for (auto& e : chunk_edges) {
+    edge_keys.insert(edge_keys.end(), e.begin(), e.end());
+    std::vector<Key>().swap(e);
+  }
   sort_unique(edge_keys);
   const KeyIndex edge_index(edge_keys);
   const long R = chi.tree().level(chi.tree().finest).res;
@@ -272,23 +275,17 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
     const Eigen::Vector3d unit = (p0 + v0 / (v0 - v1) * (p1 - p0)) / double(R);
     mesh.vertices.row(Eigen::Index(e)) = frame.from_unit(unit).transpose();
   });
-  // Fans in fixed chunks of cells, in parallel; the chunks are joined in order, so the mesh does
-  // not depend on the threads.
-  constexpr std::size_t kChunk = 8192;
-  std::vector<detail::PolygonOutput> out((polygons.size() + kChunk - 1) / kChunk);
-  tbb::parallel_for(std::size_t(0), out.size(), [&](std::size_t chunk) {
-    const std::size_t last = std::min(polygons.size(), (chunk + 1) * kChunk);
-    for (std::size_t c = chunk * kChunk; c < last; ++c)
-      for (std::size_t q = 0; q < polygons[c].edges.size(); ++q) {
-        const int count = polygons[c].sizes[q];
-        int ids[12];
-        Eigen::Vector3d position[12];
-        for (int v = 0; v < count; ++v) {
-          ids[v] = edge_index.find(global_edge(cells[c], polygons[c].edges[q][std::size_t(v)]));
-          position[v] = mesh.vertices.row(ids[v]).transpose();
-        }
-        detail::triangulate_polygon(ids, polygons[c].edges[q].data(), position, count, out[chunk]);
+  std::vector<detail::PolygonOutput> out(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    for_each_polygon(chunk, [&](std::size_t c, const int* edges, int count) {
+      int ids[12];
+      Eigen::Vector3d position[12];
+      for (int v = 0; v < count; ++v) {
+        ids[v] = edge_index.find(global_edge(cells[c], edges[v]));
+        position[v] = mesh.vertices.row(ids[v]).transpose();
       }
+      detail::triangulate_polygon(ids, edges, position, count, out[chunk]);
+    });
   });
   detail::polygons_to_mesh(out, mesh);
   return mesh;
