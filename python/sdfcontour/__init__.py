@@ -126,6 +126,15 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
     return out
 
 
+
+def _switch(name, value):
+    """True, False or "auto" as the library's on/off/auto; anything else is a ValueError."""
+    if isinstance(value, str) and value == "auto":
+        return "auto"
+    if isinstance(value, (bool, np.bool_)):
+        return "on" if value else "off"
+    raise ValueError(f"{name} must be True, False or 'auto', got {value!r}")
+
 def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", margin=1.0,
             truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
             tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
@@ -233,12 +242,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
                  solver_tolerance, progress, finest_solver_tolerance)
-    if isinstance(sign_constraints, str):
-        if sign_constraints != "auto":
-            raise ValueError(f"sign_constraints must be True, False or 'auto', got {sign_constraints!r}")
-        o["sign_constraints"] = "auto"
-    else:
-        o["sign_constraints"] = "on" if sign_constraints else "off"
+    o["sign_constraints"] = _switch("sign_constraints", sign_constraints)
     if not isinstance(carve, (bool, np.bool_)):
         raise ValueError(f"carve must be True or False, got {carve!r}")
     o["carve"] = bool(carve)
@@ -250,14 +254,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     else:
         raise ValueError(f"side_passes must be a whole number from 0 to 100 or 'auto', "
                          f"got {side_passes!r}")
-    if isinstance(projection, str):
-        if projection != "auto":
-            raise ValueError(f"projection must be True, False or 'auto', got {projection!r}")
-        o["projection"] = "auto"
-    elif isinstance(projection, (bool, np.bool_)):
-        o["projection"] = "on" if projection else "off"
-    else:
-        raise ValueError(f"projection must be True, False or 'auto', got {projection!r}")
+    o["projection"] = _switch("projection", projection)
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if return_stats:
         return out["V"], out["F"], out["stats"]

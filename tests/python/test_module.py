@@ -67,8 +67,9 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     assert not stats["sign_constraints_dropped"]
     V_on, _ = sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints=True)
     np.testing.assert_array_equal(V_on, V)
-    with pytest.raises(ValueError, match="sign_constraints"):
-        sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints="sometimes")
+    for bad in ("sometimes", 1, None):  # only True, False or "auto", as for projection
+        with pytest.raises(ValueError, match="sign_constraints"):
+            sdfcontour.contour(np.load(tmp_path / "b.npy"), sign_constraints=bad)
     # Bricks of any size give the automatic bricks' mesh; a bad size is a ValueError.
     V_b, F_b = sdfcontour.contour(np.load(tmp_path / "b.npy"), brick_size=6)
     np.testing.assert_array_equal(V_b, V)
