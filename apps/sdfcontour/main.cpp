@@ -6,11 +6,13 @@
 
 #include "atomic_file.h"
 #include "commands.h"
+#include "huge_pages.h"
 #include "sdfcontour/types.h"
 
 using namespace sdfcontour;
 
 int main(int argc, char** argv) {
+  cli::rerun_with_huge_pages(argv);
   CLI::App app{"sdfcontour: contour samples of a signed distance function into a triangle mesh"};
   app.require_subcommand(1);
   cli::Command eval_points;
