@@ -24,10 +24,9 @@ const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
 const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
                                                             {"delaunay", GradientSource::Delaunay},
                                                             {"knn", GradientSource::Knn}};
-}  // namespace
-
 const detail::NameTable<Switch> kSwitches = {
     {"auto", Switch::Auto}, {"on", Switch::On}, {"off", Switch::Off}};
+}  // namespace
 
 Switch parse_switch(const std::string& what, const std::string& name) {
   return detail::parse_name(kSwitches, what, name);

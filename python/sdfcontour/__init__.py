@@ -126,7 +126,6 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
     return out
 
 
-
 def _switch(name, value):
     """True, False or "auto" as the library's on/off/auto; anything else is a ValueError."""
     if isinstance(value, str) and value == "auto":
@@ -134,6 +133,7 @@ def _switch(name, value):
     if isinstance(value, (bool, np.bool_)):
         return "on" if value else "off"
     raise ValueError(f"{name} must be True, False or 'auto', got {value!r}")
+
 
 def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", margin=1.0,
             truncation="auto", gradient="regular", weights="james", knn=18, fn=False,

@@ -2,7 +2,6 @@
 
 #include <cmath>
 
-#include "bspline.h"
 #include "deterministic_sum.h"
 
 namespace sdfcontour::poisson {

@@ -251,6 +251,9 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
     });
   });
   std::vector<Key> edge_keys;
+  std::size_t emitted = 0;
+  for (const auto& e : chunk_edges) emitted += e.size();
+  edge_keys.reserve(emitted);  // no doubling of the largest list on the way
   for (auto& e : chunk_edges) {
     edge_keys.insert(edge_keys.end(), e.begin(), e.end());
     std::vector<Key>().swap(e);

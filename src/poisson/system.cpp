@@ -180,9 +180,13 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
   tbb::parallel_for(std::size_t(0), nn, [&](std::size_t v) {
     if (S.own_of[v] < 0) return;
     const auto [i, j, k] = unpack(L.nodes[v]);
-    std::array<double, 27> row;
-    if (L.on_face(i, j, k)) stiffness_row(L, i, j, k, row);
-    S.own_diagonal[std::size_t(S.own_of[v])] = L.on_face(i, j, k) ? row[13] : S.interior_row[13];
+    double centre = S.interior_row[13];
+    if (L.on_face(i, j, k)) {
+      std::array<double, 27> row;
+      stiffness_row(L, i, j, k, row);
+      centre = row[13];
+    }
+    S.own_diagonal[std::size_t(S.own_of[v])] = centre;
   });
   // Screening: (chi(p) - 1/2)^2 for the points in this depth's active cells.
   for (int a = 7; a >= 0; --a)
