@@ -5,6 +5,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "sdfcontour/types.h"
@@ -29,15 +31,43 @@ struct CubeTables {
 
 const CubeTables& cube_tables();
 
-/// Traces the polygons of one cube around its faces. A face with two diagonal pairs of equal sign
-/// is resolved by the asymptotic decider on the face's bilinear interpolant, evaluated in the
-/// face's own corner order so that both cubes sharing it decide alike. For each polygon, calls
+/// What a cube's polygons depend on: which corners are inside (bit c for corner c, value < 0) and,
+/// for each face with two diagonal pairs of equal sign, whether its inside corners connect (bit
+/// f for face f = 2 axis + side). Two bytes where the corner values take 64.
+struct CubeCase {
+  std::uint8_t inside = 0;
+  std::uint8_t insides_connected = 0;
+  bool mixed() const { return inside != 0 && inside != 0xff; }
+};
+
+/// The case of a cube with these corner values. An ambiguous face is resolved by the asymptotic
+/// decider on its bilinear interpolant, evaluated in the face's own corner order so that both
+/// cubes sharing it decide alike.
+inline CubeCase cube_case(const double value[8]) {
+  const CubeTables& T = cube_tables();
+  CubeCase out;
+  for (int c = 0; c < 8; ++c) out.inside |= std::uint8_t((value[c] < 0) << c);
+  for (int face = 0; face < 6; ++face) {
+    const int* c = T.face_corner[face];
+    const bool i0 = value[c[0]] < 0, i1 = value[c[1]] < 0, i2 = value[c[2]] < 0,
+               i3 = value[c[3]] < 0;
+    if (!(i0 == i2 && i1 == i3 && i0 != i1)) continue;  // not two diagonal pairs
+    const int a = face / 2, u = (a + 1) % 3, v = (a + 2) % 3, side = (face & 1) << a;
+    const double f00 = value[side], f10 = value[side | 1 << u], f11 = value[side | 1 << u | 1 << v],
+                 f01 = value[side | 1 << v];
+    const double saddle = (f00 * f11 - f10 * f01) / (f00 + f11 - f10 - f01);
+    out.insides_connected |= std::uint8_t((saddle < 0) << face);
+  }
+  return out;
+}
+
+/// Traces the polygons of a cube of this case around its faces. For each polygon, calls
 /// emit(edges, size) with its vertices as local edge ids, ordered counter-clockwise seen from
 /// outside (value >= 0).
 template <class Emit>
-void cube_polygons(const double value[8], Emit&& emit) {
+void cube_polygons(CubeCase cube, Emit&& emit) {
   const CubeTables& T = cube_tables();
-  auto inside = [](double v) { return v < 0; };
+  auto inside = [&](int corner) { return (cube.inside >> corner & 1) != 0; };
   int next_edge[12];  // the edge where the segment starting at edge e's crossing ends
   std::fill(std::begin(next_edge), std::end(next_edge), -1);
   for (int face = 0; face < 6; ++face) {
@@ -45,9 +75,9 @@ void cube_polygons(const double value[8], Emit&& emit) {
     int starts[2], ends[2], ns = 0, ne = 0, order[4], crossings = 0;
     for (int q = 0; q < 4; ++q) {
       const int c0 = c[q], c1 = c[(q + 1) % 4];
-      if (inside(value[c0]) == inside(value[c1])) continue;
+      if (inside(c0) == inside(c1)) continue;
       order[crossings++] = T.edge_between(c0, c1);
-      if (inside(value[c1]))
+      if (inside(c1))
         starts[ns++] = crossings - 1;  // outside -> inside
       else
         ends[ne++] = crossings - 1;
@@ -55,11 +85,7 @@ void cube_polygons(const double value[8], Emit&& emit) {
     if (crossings == 2) {
       next_edge[order[starts[0]]] = order[ends[0]];
     } else if (crossings == 4) {
-      const int a = face / 2, u = (a + 1) % 3, v = (a + 2) % 3, side = (face & 1) << a;
-      const double f00 = value[side], f10 = value[side | 1 << u],
-                   f11 = value[side | 1 << u | 1 << v], f01 = value[side | 1 << v];
-      const double saddle = (f00 * f11 - f10 * f01) / (f00 + f11 - f10 - f01);
-      const bool insides_connected = inside(saddle);
+      const bool insides_connected = (cube.insides_connected >> face & 1) != 0;
       for (int s = 0; s < 2; ++s) {
         const int at = starts[s];
         next_edge[order[at]] = order[insides_connected ? (at + 3) % 4 : (at + 1) % 4];
@@ -76,6 +102,12 @@ void cube_polygons(const double value[8], Emit&& emit) {
     }
     emit(static_cast<const int*>(edges), size);
   }
+}
+
+/// The same from the cube's corner values.
+template <class Emit>
+void cube_polygons(const double value[8], Emit&& emit) {
+  cube_polygons(cube_case(value), std::forward<Emit>(emit));
 }
 
 /// Triangles whose vertex id -k-1 names the k-th centroid vertex.

@@ -1,6 +1,7 @@
 #include "extraction.h"
 
 #include <algorithm>
+#include <cstdint>
 
 #include "../cube_polygons.h"
 
@@ -11,12 +12,6 @@ namespace {
 // Finest-depth cells, keyed with a +1 offset so that the ring just outside the domain has keys.
 Key cell_key(long i, long j, long k) {
   return pack(i + 1, j + 1, k + 1);
-}
-
-bool mixed(const double* value) {
-  int inside = 0;
-  for (int c = 0; c < 8; ++c) inside += value[c] < 0;
-  return inside > 0 && inside < 8;
 }
 
 // Cells and the polygons in them are found from iso - chi at finest-depth nodes (inside < 0).
@@ -32,10 +27,11 @@ class SurfaceCells {
   }
 
   // Candidates: finest active cells with a sign change, and subcells of coarser leaves whose
-  // corners straddle iso; all distinct, with their corner values.
+  // corners straddle iso; all distinct, with their cube cases (what their polygons need of their
+  // corner values).
   struct Candidates {
     std::vector<Key> cells;
-    std::vector<std::array<double, 8>> values;
+    std::vector<detail::CubeCase> cases;
   };
   Candidates candidates() const {
     Candidates found;
@@ -46,65 +42,102 @@ class SurfaceCells {
   }
 
   // Closes the candidates: a face with a sign change needs the cell across it. Returns the cells
-  // with a sign change, sorted by key, and their values. Round after round, in parallel: the
-  // cells across the sign-changing faces of the last round's new cells, not yet seen. The first
-  // round's values are the candidates' own.
-  void close(Candidates first, std::vector<Key>& cells, std::vector<std::array<double, 8>>& values,
+  // with a sign change, sorted by key, and their cases. Round after round, in parallel: the cells
+  // across the sign-changing faces of the last round's new cells, not yet seen. The first round's
+  // cases are the candidates' own.
+  void close(Candidates first, std::vector<Key>& cells, std::vector<detail::CubeCase>& cases,
              const std::atomic<bool>* cancel) const {
-    std::vector<Key> seen, frontier;
-    std::vector<std::array<double, 8>> value;
-    sort_by_key(first, frontier, value);
-    while (!frontier.empty()) {
+    std::vector<Key> seen;
+    Candidates frontier;
+    sort_by_key(first, frontier.cells, frontier.cases);
+    while (!frontier.cells.empty()) {
       check_cancel(cancel);
+      const std::size_t n = frontier.cells.size();
       // Cells seen so far (kept or not) are not visited again.
-      std::vector<Key> merged(seen.size() + frontier.size());
-      std::merge(seen.begin(), seen.end(), frontier.begin(), frontier.end(), merged.begin());
+      std::vector<Key> merged(seen.size() + n);
+      std::merge(seen.begin(), seen.end(), frontier.cells.begin(), frontier.cells.end(),
+                 merged.begin());
       seen = std::move(merged);
-      const bool evaluate = value.empty();
-      if (evaluate) value.resize(frontier.size());
-      std::vector<char> keep(frontier.size());
-      std::vector<std::array<Key, 6>> across(frontier.size());
-      tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t c) {
-        const auto u = unpack(frontier[c]);
-        if (evaluate) cell_values(u[0] - 1, u[1] - 1, u[2] - 1, value[c].data());
-        keep[c] = mixed(value[c].data());
-        across[c].fill(kNone);
-        if (!keep[c]) return;
-        neighbours_across_sign_changes(frontier[c], value[c], across[c]);
-        for (Key& n : across[c])
-          if (n != kNone && std::binary_search(seen.begin(), seen.end(), n)) n = kNone;
+      if (frontier.cases.empty()) {
+        frontier.cases.resize(n);
+        tbb::parallel_for(std::size_t(0), n, [&](std::size_t c) {
+          const auto u = unpack(frontier.cells[c]);
+          double value[8];
+          cell_values(u[0] - 1, u[1] - 1, u[2] - 1, value);
+          frontier.cases[c] = detail::cube_case(value);
+        });
+      }
+      // The next round: per fixed chunk, joined in order (the same whatever the threads).
+      constexpr std::size_t kChunk = 4096;
+      std::vector<std::vector<Key>> across((n + kChunk - 1) / kChunk);
+      tbb::parallel_for(std::size_t(0), across.size(), [&](std::size_t chunk) {
+        for (std::size_t c = chunk * kChunk; c < std::min(n, (chunk + 1) * kChunk); ++c) {
+          if (!frontier.cases[c].mixed()) continue;
+          std::array<Key, 6> neighbours;
+          neighbours_across_sign_changes(frontier.cells[c], frontier.cases[c], neighbours);
+          for (const Key m : neighbours)
+            if (m != kNone && !std::binary_search(seen.begin(), seen.end(), m))
+              across[chunk].push_back(m);
+        }
       });
       std::vector<Key> next;
-      for (std::size_t c = 0; c < frontier.size(); ++c) {
-        if (!keep[c]) continue;
-        cells.push_back(frontier[c]);
-        values.push_back(value[c]);
-        for (const Key n : across[c])
-          if (n != kNone) next.push_back(n);
-      }
+      for (const auto& a : across) next.insert(next.end(), a.begin(), a.end());
       sort_unique(next);
-      frontier = std::move(next);
-      value.clear();
+      // The cells with a sign change stay: compacted in place, then moved (the first round, the
+      // largest) or appended.
+      std::size_t kept = 0;
+      for (std::size_t c = 0; c < n; ++c)
+        if (frontier.cases[c].mixed()) {
+          frontier.cells[kept] = frontier.cells[c];
+          frontier.cases[kept++] = frontier.cases[c];
+        }
+      frontier.cells.resize(kept);
+      frontier.cases.resize(kept);
+      if (cells.empty()) {
+        cells = std::move(frontier.cells);
+        cases = std::move(frontier.cases);
+      } else {
+        cells.insert(cells.end(), frontier.cells.begin(), frontier.cells.end());
+        cases.insert(cases.end(), frontier.cases.begin(), frontier.cases.end());
+      }
+      frontier = Candidates{std::move(next), {}};
     }
     // One order whatever the rounds: by key (a single round's cells already are).
     if (std::is_sorted(cells.begin(), cells.end())) return;
-    Candidates all{std::move(cells), std::move(values)};
-    sort_by_key(all, cells, values);
+    Candidates all{std::move(cells), std::move(cases)};
+    sort_by_key(all, cells, cases);
   }
 
-  // The candidates' keys, ascending, and their values in the same order.
+  // The candidates' keys, ascending, and their cases in the same order, moved into keys and
+  // cases. Sorted in place (a permutation applied cycle by cycle): a sorted copy would double the
+  // extraction's largest arrays.
   static void sort_by_key(Candidates& found, std::vector<Key>& keys,
-                          std::vector<std::array<double, 8>>& values) {
-    std::vector<std::size_t> order(found.cells.size());
-    for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return found.cells[a] < found.cells[b]; });
-    keys.resize(order.size());
-    values.resize(order.size());
+                          std::vector<detail::CubeCase>& cases) {
+    std::vector<std::uint32_t> order(found.cells.size());
+    for (std::size_t c = 0; c < order.size(); ++c) order[c] = std::uint32_t(c);
+    tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return found.cells[a] < found.cells[b];
+    });
+    // Position c takes the element at order[c]; each cycle is walked once, and order[c] = c marks
+    // a position done.
     for (std::size_t c = 0; c < order.size(); ++c) {
-      keys[c] = found.cells[order[c]];
-      values[c] = found.values[order[c]];
+      if (order[c] == c) continue;
+      const Key key = found.cells[c];
+      const detail::CubeCase cube = found.cases[c];
+      std::size_t at = c;
+      while (order[at] != c) {
+        const std::size_t from = order[at];
+        found.cells[at] = found.cells[from];
+        found.cases[at] = found.cases[from];
+        order[at] = std::uint32_t(at);
+        at = from;
+      }
+      found.cells[at] = key;
+      found.cases[at] = cube;
+      order[at] = std::uint32_t(at);
     }
+    keys = std::move(found.cells);
+    cases = std::move(found.cases);
     found = Candidates();
   }
 
@@ -112,8 +145,9 @@ class SurfaceCells {
   static constexpr Key kNone = ~Key(0);
 
   // The cells across the faces of `cell` with a sign change (kNone elsewhere).
-  void neighbours_across_sign_changes(Key cell, const std::array<double, 8>& value,
+  void neighbours_across_sign_changes(Key cell, detail::CubeCase cube,
                                       std::array<Key, 6>& out) const {
+    out.fill(kNone);
     const long R = finest_.res;
     const auto u = unpack(cell);
     const long i = u[0] - 1, j = u[1] - 1, k = u[2] - 1;
@@ -121,7 +155,7 @@ class SurfaceCells {
       for (int side = 0; side < 2; ++side) {
         int inside = 0;
         for (int c = 0; c < 8; ++c)
-          if ((c >> axis & 1) == side) inside += value[std::size_t(c)] < 0;
+          if ((c >> axis & 1) == side) inside += cube.inside >> c & 1;
         if (inside == 0 || inside == 4) continue;
         long ni = i, nj = j, nk = k;
         (axis == 0 ? ni : axis == 1 ? nj : nk) += side ? 1 : -1;
@@ -144,12 +178,13 @@ class SurfaceCells {
     for (long a = 0; a < n; ++a)
       for (long b = 0; b < n; ++b)
         for (long e = 0; e < n; ++e) {
-          std::array<double, 8> value;
+          double value[8];
           const long fi = (i << shift) + a, fj = (j << shift) + b, fk = (k << shift) + e;
-          cell_values(fi, fj, fk, value.data());
-          if (!mixed(value.data())) continue;
+          cell_values(fi, fj, fk, value);
+          const detail::CubeCase cube = detail::cube_case(value);
+          if (!cube.mixed()) continue;
           out.cells.push_back(cell_key(fi, fj, fk));
-          out.values.push_back(value);
+          out.cases.push_back(cube);
         }
   }
 
@@ -165,7 +200,7 @@ class SurfaceCells {
     });
     for (auto& f : found) {
       out.cells.insert(out.cells.end(), f.cells.begin(), f.cells.end());
-      out.values.insert(out.values.end(), f.values.begin(), f.values.end());
+      out.cases.insert(out.cases.end(), f.cases.begin(), f.cases.end());
     }
   }
 
@@ -196,7 +231,7 @@ class SurfaceCells {
     for_each_cell([&](std::size_t c, auto&& values) {
       double value[8];
       values(value);
-      slot[c] = mixed(value) ? 0 : -1;
+      slot[c] = detail::cube_case(value).mixed() ? 0 : -1;
     });
     const std::size_t before = out.cells.size();
     for (std::size_t c = 0; c < F.cells.size(); ++c)
@@ -205,9 +240,12 @@ class SurfaceCells {
         slot[c] = int(out.cells.size() - before);
         out.cells.push_back(cell_key(i, j, k));
       }
-    out.values.resize(out.cells.size());
+    out.cases.resize(out.cells.size());
     for_each_cell([&](std::size_t c, auto&& values) {
-      if (slot[c] >= 0) values(out.values[before + std::size_t(slot[c])].data());
+      if (slot[c] < 0) return;
+      double value[8];
+      values(value);
+      out.cases[before + std::size_t(slot[c])] = detail::cube_case(value);
     });
   }
 
@@ -230,8 +268,8 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
                          const std::atomic<bool>* cancel) {
   const SurfaceCells surface(chi, iso);
   std::vector<Key> cells;
-  std::vector<std::array<double, 8>> values;
-  surface.close(surface.candidates(), cells, values, cancel);
+  std::vector<detail::CubeCase> cases;
+  surface.close(surface.candidates(), cells, cases, cancel);
   // Polygons per cell, found twice (the cube's case is cheap to redo; storing them took ~150
   // bytes per surface cell, the extraction's largest array): first for the global keys of their
   // edges, where vertices are deduplicated, then for the triangles. Fixed chunks of cells, joined
@@ -241,8 +279,7 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
   auto for_each_polygon = [&](std::size_t chunk, auto&& f) {
     const std::size_t last = std::min(cells.size(), (chunk + 1) * kChunk);
     for (std::size_t c = chunk * kChunk; c < last; ++c)
-      detail::cube_polygons(values[c].data(),
-                            [&](const int* edges, int size) { f(c, edges, size); });
+      detail::cube_polygons(cases[c], [&](const int* edges, int size) { f(c, edges, size); });
   };
   std::vector<std::vector<Key>> chunk_edges(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
@@ -259,7 +296,12 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
     std::vector<Key>().swap(e);
   }
   sort_unique(edge_keys);
-  const KeyIndex edge_index(edge_keys);
+  edge_keys.shrink_to_fit();  // it held every cell's copy of each edge: ~4x the unique ones
+  // A vertex's id is its edge key's rank, found by binary search (a hash index over the keys took
+  // 16 bytes a slot at half load: more than the vertices themselves).
+  auto vertex_id = [&](Key edge) {
+    return int(std::lower_bound(edge_keys.begin(), edge_keys.end(), edge) - edge_keys.begin());
+  };
   const long R = chi.tree().level(chi.tree().finest).res;
   Mesh mesh;
   mesh.vertices.resize(Eigen::Index(edge_keys.size()), 3);
@@ -284,12 +326,16 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
       int ids[12];
       Eigen::Vector3d position[12];
       for (int v = 0; v < count; ++v) {
-        ids[v] = edge_index.find(global_edge(cells[c], edges[v]));
+        ids[v] = vertex_id(global_edge(cells[c], edges[v]));
         position[v] = mesh.vertices.row(ids[v]).transpose();
       }
       detail::triangulate_polygon(ids, edges, position, count, out[chunk]);
     });
   });
+  // The surface cells and edges are done with: freed before the triangles are joined.
+  std::vector<Key>().swap(cells);
+  std::vector<detail::CubeCase>().swap(cases);
+  std::vector<Key>().swap(edge_keys);
   detail::polygons_to_mesh(out, mesh);
   return mesh;
 }
