@@ -52,6 +52,11 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   // nest), and the coarser depth's grid it was prolonged from.
   std::vector<Eigen::Vector3d> coarser;
   CellGrid grid, coarser_grid;
+  // The finest depth's solved nodes and right-hand side, made as soon as the coarser splats are
+  // all on the grid before it: the splats on that grid (the largest arrays but the finest
+  // depth's) are then freed before the depth before the finest is solved.
+  std::vector<char> finest_solved;
+  std::vector<double> finest_b;
   for (int d = tree.min_depth; d <= tree.finest; ++d) {
     const auto level_start = Clock::now();
     OctreeLevel& L = tree.level(d);
@@ -74,6 +79,15 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       if (d < tree.finest) {
         add_on_grid(field.splat_cells[std::size_t(d)], field.splat[std::size_t(d)], grid, coarser);
         coarser_grid = std::move(grid);
+        if (d + 1 == tree.finest) {
+          const OctreeLevel& F = tree.level(tree.finest);
+          finest_solved = solved_nodes(F, boundary);
+          finest_b =
+              splat_divergence_from_coarser(F, finest_solved, coarser_grid, coarser,
+                                            std::move(field.finer[std::size_t(tree.finest)]));
+          std::vector<Eigen::Vector3d>().swap(coarser);
+          coarser_grid = CellGrid();
+        }
       } else {
         std::vector<Eigen::Vector3d>().swap(coarser);
         coarser_grid = CellGrid();
@@ -89,11 +103,17 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     auto solve = [&](std::vector<char>& solved) {
       const auto start = Clock::now();
       if (d == tree.min_depth) x.assign(L.nodes.size(), 0.0);
-      solved = solved_nodes(L, boundary);
-      const auto& finer = field.finer[std::size_t(d)];
-      std::vector<double> b =
-          from_coarser ? splat_divergence_from_coarser(L, solved, coarser_grid, coarser, finer)
-                       : splat_divergence(L, solved, grid, coarser, finer);
+      std::vector<double> b;
+      if (from_coarser) {  // made at the depth before
+        solved = std::move(finest_solved);
+        b = std::move(finest_b);
+      } else {
+        solved = solved_nodes(L, boundary);
+        // The finer splats' part becomes the right-hand side; the coarsest depth may solve twice.
+        auto& finer_part = field.finer[std::size_t(d)];
+        std::vector<double> finer = d == tree.min_depth ? finer_part : std::move(finer_part);
+        b = splat_divergence(L, solved, grid, coarser, std::move(finer));
+      }
       if (d > tree.min_depth) release_field();
       return_free_memory();
       LevelSystem system = assemble_system(L, solved, std::move(b), field.runs[std::size_t(d)],

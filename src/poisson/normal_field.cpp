@@ -250,7 +250,7 @@ void divergence(const OctreeLevel& L, const CellGrid& G, const std::vector<Eigen
         const std::size_t at = std::size_t(k - 2 + oz - base);
         sum += P[at] * vz[std::size_t(oz)] + Q[at] * sz[std::size_t(oz)];
       }
-      out[v] = sum;
+      out[v] += sum;
     }
   });
 }

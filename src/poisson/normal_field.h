@@ -68,7 +68,7 @@ NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& poin
 std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
                                              const std::vector<Eigen::Vector3d>& values);
 
-/// out[v] = int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set and first
+/// out[v] += int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set and first
 /// index in [rows[0], rows[1]), W given by depth-d quadratic coefficients on `grid` (which needs
 /// the cells with first index in [rows[0] - 2, rows[1]]).
 void divergence(const OctreeLevel& L, const CellGrid& grid, const std::vector<Eigen::Vector3d>& W,

@@ -23,12 +23,11 @@ void stiffness_row(const OctreeLevel& L, long i, long j, long k, std::array<doub
   }
 }
 
-// b = -(b + finer) on the solved nodes, 0 elsewhere: the right-hand side from the coarser splats'
-// divergence b.
-void add_finer_and_negate(const std::vector<char>& solved, const std::vector<double>& finer,
-                          std::vector<double>& b) {
+// b = -b on the solved nodes, 0 elsewhere: b held the finer splats' part plus the coarser ones'
+// divergence.
+void negate_on_solved(const std::vector<char>& solved, std::vector<double>& b) {
   tbb::parallel_for(std::size_t(0), b.size(),
-                    [&](std::size_t v) { b[v] = solved[v] ? -(b[v] + finer[v]) : 0.0; });
+                    [&](std::size_t v) { b[v] = solved[v] ? -b[v] : 0.0; });
 }
 
 int parity(const std::array<long, 3>& c) {
@@ -98,10 +97,10 @@ void stiffness_product(const OctreeLevel& L, const std::vector<char>& solved, co
 std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<char>& solved,
                                      const CellGrid& grid,
                                      const std::vector<Eigen::Vector3d>& coarser,
-                                     const std::vector<double>& finer) {
-  std::vector<double> b(L.nodes.size(), 0.0);
+                                     std::vector<double> finer) {
+  std::vector<double> b = std::move(finer);  // the divergence adds onto it
   divergence(L, grid, coarser, b, &solved);
-  add_finer_and_negate(solved, finer, b);
+  negate_on_solved(solved, b);
   return b;
 }
 
@@ -109,8 +108,8 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   const std::vector<char>& solved,
                                                   const CellGrid& coarser_grid,
                                                   const std::vector<Eigen::Vector3d>& coarser,
-                                                  const std::vector<double>& finer) {
-  std::vector<double> b(L.nodes.size(), 0.0);
+                                                  std::vector<double> finer) {
+  std::vector<double> b = std::move(finer);  // the divergence adds onto it
   // Sixteen slabs: each prolongs about a sixteenth of the grid (plus its 3-row margin).
   const long thickness = std::max(8L, (L.res + 1) / 16);
   for (long first = 0; first <= L.res; first += thickness) {
@@ -118,7 +117,7 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
     const CellGrid slab = spline_grid(L, first - 2, last);
     divergence(L, slab, prolong_splines(coarser_grid, slab, coarser), b, &solved, {first, last});
   }
-  add_finer_and_negate(solved, finer, b);
+  negate_on_solved(solved, b);
   return b;
 }
 
@@ -130,12 +129,10 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
   S.b = std::move(b);
   stiffness_row(L, 1, 1, 1, S.interior_row);  // res >= 2, so (1, 1, 1) is off every face
   S.screening = screening;
-  // Per cell holding points: its corners, the block of w_a w_b sums, and (for the right-hand side)
-  // the sums of w_a.
+  // Per cell holding points: its corners and its points' corner weights.
   const std::size_t cells = screening > 0 ? runs.cells.size() : 0;
   S.screened_corners.resize(cells);
-  S.screened_blocks.resize(cells);
-  std::vector<std::array<double, 8>, UninitialisedAllocator<std::array<double, 8>>> sums(cells);
+  S.point_begin.resize(cells + 1);
   // Grouped by parity (a counting sort, each group in key order).
   std::vector<std::size_t> at(cells);
   for (std::size_t r = 0; r < cells; ++r)
@@ -145,22 +142,19 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
     auto next = S.parity_begin;
     for (std::size_t r = 0; r < cells; ++r) at[r] = next[std::size_t(parity(runs.cell(L, r)))]++;
   }
+  if (cells > 0) S.point_begin[0] = 0;
+  for (std::size_t run = 0; run < cells; ++run)
+    S.point_begin[at[run] + 1] = runs.cells[run][2] - runs.cells[run][1];
+  for (std::size_t r = 0; r < cells; ++r) S.point_begin[r + 1] += S.point_begin[r];
+  S.screened_points.resize(cells > 0 ? S.point_begin[cells] : 0);
   tbb::parallel_for(std::size_t(0), cells, [&](std::size_t run) {
     const std::size_t r = at[run];
-    auto& block = S.screened_blocks[r];
-    auto& sum = sums[r];
-    block.fill(0.0);
-    sum.fill(0.0);
     const auto cell = runs.cell(L, run);
     S.screened_corners[r] = L.corner_nodes(cell);
-    for (std::uint32_t q = runs.cells[run][1]; q < runs.cells[run][2]; ++q) {
+    auto* out = &S.screened_points[S.point_begin[r]];
+    for (std::uint32_t q = runs.cells[run][1]; q < runs.cells[run][2]; ++q, ++out) {
       const UnitPoint& s = points[morton.point(q)];
-      const auto w = corner_weights(s.p, cell, L.res);
-      for (int a = 0; a < 8; ++a) {
-        const double sw = s.weight * w[std::size_t(a)];
-        sum[std::size_t(a)] += sw;
-        for (int c = a; c < 8; ++c) block[std::size_t(pair_index(a, c))] += sw * w[std::size_t(c)];
-      }
+      *out = {corner_weights(s.p, cell, L.res), s.weight};
     }
   });
   // Nodes with their own diagonal: solved, on a face or a screened cell's corner. For a fixed
@@ -193,9 +187,15 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
     tbb::parallel_for(std::size_t(0), cells, [&](std::size_t r) {
       const std::size_t v = std::size_t(S.screened_corners[r][std::size_t(a)]);
       if (S.own_of[v] < 0) return;
-      S.b[v] += screening * 0.5 * sums[r][std::size_t(a)];
-      S.own_diagonal[std::size_t(S.own_of[v])] +=
-          screening * S.screened_blocks[r][std::size_t(pair_index(a, a))];
+      double sum = 0, square_sum = 0;
+      for (std::uint32_t q = S.point_begin[r]; q < S.point_begin[r + 1]; ++q) {
+        const auto& point = S.screened_points[q];
+        const double w = point.corner_weight[std::size_t(a)];
+        sum += point.weight * w;
+        square_sum += point.weight * w * w;
+      }
+      S.b[v] += screening * 0.5 * sum;
+      S.own_diagonal[std::size_t(S.own_of[v])] += screening * square_sum;
     });
   return S;
 }
@@ -203,28 +203,24 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
 double multiply(const OctreeLevel& L, const std::vector<char>& solved, const LevelSystem& S,
                 const std::vector<double>& in, std::vector<double>& out) {
   stiffness_product(L, solved, S, in, out);
-  // Screening, cell by cell: each corner gets its row of the cell's block times the corners'
-  // values. One parity group at a time, so that no two cells write one node at once, and every
-  // node sums its (at most one per group) cells in the same order whatever the threads.
-  static constexpr auto kPair = [] {
-    std::array<std::array<int, 8>, 8> t{};
-    for (int a = 0; a < 8; ++a)
-      for (int c = 0; c < 8; ++c) t[std::size_t(a)][std::size_t(c)] = pair_index(a, c);
-    return t;
-  }();
+  // Screening, cell by cell: each point adds  w_p phi_a(p) chi(p)  to its cell's corners a. One
+  // parity group at a time, so that no two cells write one node at once, and every node sums its
+  // (at most one per group) cells in the same order whatever the threads.
   for (std::size_t g = 0; g < 8; ++g)
     tbb::parallel_for(S.parity_begin[g], S.parity_begin[g + 1], [&](std::size_t r) {
       const auto& corner = S.screened_corners[r];
-      const auto& block = S.screened_blocks[r];
-      double x[8];
+      double x[8], sum[8] = {};
       for (int c = 0; c < 8; ++c) x[c] = in[std::size_t(corner[std::size_t(c)])];
+      for (std::uint32_t q = S.point_begin[r]; q < S.point_begin[r + 1]; ++q) {
+        const auto& w = S.screened_points[q].corner_weight;
+        double chi = 0;
+        for (int c = 0; c < 8; ++c) chi += w[std::size_t(c)] * x[c];
+        chi *= S.screened_points[q].weight;
+        for (int a = 0; a < 8; ++a) sum[a] += w[std::size_t(a)] * chi;
+      }
       for (int a = 0; a < 8; ++a) {
         const std::size_t v = std::size_t(corner[std::size_t(a)]);
-        if (!solved[v]) continue;
-        double sum = 0;
-        for (int c = 0; c < 8; ++c)
-          sum += block[std::size_t(kPair[std::size_t(a)][std::size_t(c)])] * x[c];
-        out[v] += S.screening * sum;
+        if (solved[v]) out[v] += S.screening * sum[a];
       }
     });
   return deterministic_sum(L.nodes.size(),

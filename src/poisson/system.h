@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -37,20 +38,25 @@ struct UninitialisedAllocator : std::allocator<T> {
 /// One depth's system: the stiffness  int grad phi_u . grad phi_v  plus the screening
 /// screening * sum_p w_p phi_u(p) phi_v(p), and the right-hand side. Nothing is stored per row:
 /// inside the domain the stiffness is the constant stencil h K (`interior_row`), on the domain's
-/// faces its truncation (recomputed where used: few nodes), and the screening is a symmetric 8 x 8
-/// block per cell holding points, over the cell's corners.
+/// faces its truncation (recomputed where used: few nodes), and the screening is kept per point,
+/// as the trilinear weights of its cell's corners: a cell's 8 x 8 block is the sum of its points'
+/// rank-one terms, and most cells hold one or two points (a block would take 36 doubles).
 struct LevelSystem {
   std::array<double, 27> interior_row{};
   double screening = 0;
-  /// Per cell holding points: its corner nodes (corner bits x=1, y=2, z=4) and the sums of
-  /// w_a w_b over its points (a <= b, pair_index), w the corners' trilinear weights and points'
-  /// weights included.
+  /// Per cell holding points: its corner nodes (corner bits x=1, y=2, z=4) and its points,
+  /// screened_points[point_begin[r], point_begin[r + 1]).
   /// The cells come grouped by the parity of (i, j, k): cells of one parity share no corner.
   /// Group g is [parity_begin[g], parity_begin[g + 1]).
   std::array<std::size_t, 9> parity_begin{};
   std::vector<std::array<int, 8>, UninitialisedAllocator<std::array<int, 8>>> screened_corners;
-  std::vector<std::array<double, 36>, UninitialisedAllocator<std::array<double, 36>>>
-      screened_blocks;
+  std::vector<std::uint32_t, UninitialisedAllocator<std::uint32_t>> point_begin;
+  /// Per point: its corners' trilinear weights and its weight (confidence).
+  struct ScreenedPoint {
+    std::array<double, 8> corner_weight;
+    double weight;
+  };
+  std::vector<ScreenedPoint, UninitialisedAllocator<ScreenedPoint>> screened_points;
   /// Per node: its index in own_diagonal (a solved node on a face or a screened cell's corner),
   /// else -1 (its diagonal is interior_row's centre).
   std::vector<int> own_of;
@@ -61,18 +67,13 @@ struct LevelSystem {
   }
 };
 
-/// Index of the pair of cell corners (a, b) in a screening block (symmetric: either order).
-constexpr int pair_index(int a, int b) {
-  return a <= b ? a * 8 - a * (a - 1) / 2 + (b - a) : b * 8 - b * (b - 1) / 2 + (a - b);
-}
-
 /// The normal field's part of one depth's right-hand side, -int grad phi_v . V, for the nodes
 /// with solved[v] (0 elsewhere): V from coarser splats given on `grid`, plus `finer` (the finer
-/// splats' part, NormalField::finer at this depth).
+/// splats' part, NormalField::finer at this depth; its storage becomes the result's).
 std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<char>& solved,
                                      const CellGrid& grid,
                                      const std::vector<Eigen::Vector3d>& coarser,
-                                     const std::vector<double>& finer);
+                                     std::vector<double> finer);
 
 /// The same with the coarser splats given on the coarser depth's spline grid, prolonged a slab of
 /// rows at a time: the finest depth's whole spline grid (holding every cell within two of an
@@ -81,7 +82,7 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   const std::vector<char>& solved,
                                                   const CellGrid& coarser_grid,
                                                   const std::vector<Eigen::Vector3d>& coarser,
-                                                  const std::vector<double>& finer);
+                                                  std::vector<double> finer);
 
 /// Completes the system for the nodes with solved[v]: the screening blocks of the points in
 /// `runs` (the cells holding points) and  b += screening * sum_p w_p phi_v(p) / 2;
