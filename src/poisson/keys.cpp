@@ -19,13 +19,28 @@ KeyIndex::KeyIndex(const std::vector<Key>& keys) {
 
 LineIndex::LineIndex(const std::vector<Key>& keys) {
   std::vector<Key> line_keys;
+  long j_min = long(kKeyMask), j_max = 0;
   for (std::size_t v = 0; v < keys.size(); ++v)
     if (v == 0 || keys[v] >> kKeyBits != keys[v - 1] >> kKeyBits) {
       line_keys.push_back(keys[v] >> kKeyBits);
       start_.push_back(std::uint32_t(v));
+      const long j = long(line_keys.back() & kKeyMask);
+      j_min = std::min(j_min, j), j_max = std::max(j_max, j);
     }
   start_.push_back(std::uint32_t(keys.size()));
-  lines_ = KeyIndex(line_keys);
+  if (line_keys.empty()) return;
+  const long i_min = long(line_keys.front() >> kKeyBits),
+             i_max = long(line_keys.back() >> kKeyBits);
+  const std::size_t area = std::size_t(i_max - i_min + 1) * std::size_t(j_max - j_min + 1);
+  if (area <= 4 * line_keys.size() + 4096) {
+    i0_ = i_min, j0_ = j_min, width_ = i_max - i_min + 1, height_ = j_max - j_min + 1;
+    dense_.assign(area, -1);
+    for (std::size_t l = 0; l < line_keys.size(); ++l)
+      dense_[std::size_t((long(line_keys[l] >> kKeyBits) - i0_) * height_ +
+                         (long(line_keys[l] & kKeyMask) - j0_))] = int(l);
+  } else {
+    lines_ = KeyIndex(line_keys);
+  }
 }
 
 void sort_unique(std::vector<Key>& keys) {

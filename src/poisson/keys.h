@@ -55,16 +55,18 @@ class KeyIndex {
   std::size_t mask_ = 0;
 };
 
-/// Positions in a sorted key array, found through its lines: a small hash of the line keys, then
-/// a binary search inside the line. The line table is a few percent of the keys, so it stays in
-/// cache where a hash over every key would not.
+/// Positions in a sorted key array, found through its lines: the line's number from a table, then
+/// a binary search inside the line. The table is dense over the lines' bounding rectangle of
+/// (i, j) when that is at most a few times the line count (an octree level's lines fill most of
+/// their rectangle: 4 bytes per (i, j)), else a hash of the line keys (16 bytes a slot at half
+/// load).
 class LineIndex {
  public:
   LineIndex() = default;
   explicit LineIndex(const std::vector<Key>& keys);
   /// Position of key in keys (the array this was built from), or -1.
   int find(const std::vector<Key>& keys, Key key) const {
-    const int line = lines_.find(key >> kKeyBits);
+    const int line = line_number(long(key >> (2 * kKeyBits)), long((key >> kKeyBits) & kKeyMask));
     if (line < 0) return -1;
     const auto first = keys.begin() + start_[std::size_t(line)],
                last = keys.begin() + start_[std::size_t(line) + 1];
@@ -73,8 +75,7 @@ class LineIndex {
   }
   /// Range [first, last) of line (i, j), empty if it has no keys (or i, j lie outside [0, 2^21)).
   std::array<std::uint32_t, 2> line(long i, long j) const {
-    if (i < 0 || j < 0 || i > long(kKeyMask) || j > long(kKeyMask)) return {0, 0};
-    const int l = lines_.find(pack(0, i, j));
+    const int l = line_number(i, j);
     if (l < 0) return {0, 0};
     return {start_[std::size_t(l)], start_[std::size_t(l) + 1]};
   }
@@ -83,7 +84,17 @@ class LineIndex {
   std::uint32_t start(std::size_t l) const { return start_[l]; }
 
  private:
-  KeyIndex lines_;
+  int line_number(long i, long j) const {
+    if (!dense_.empty()) {
+      if (i < i0_ || j < j0_ || i >= i0_ + width_ || j >= j0_ + height_) return -1;
+      return dense_[std::size_t((i - i0_) * height_ + (j - j0_))];
+    }
+    if (i < 0 || j < 0 || i > long(kKeyMask) || j > long(kKeyMask)) return -1;
+    return lines_.find(pack(0, i, j));
+  }
+  long i0_ = 0, j0_ = 0, width_ = 0, height_ = 0;
+  std::vector<int> dense_;  ///< line number per (i, j) of the rectangle, -1 for none
+  KeyIndex lines_;          ///< used when dense_ is empty
   std::vector<std::uint32_t> start_;
 };
 
