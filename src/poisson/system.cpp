@@ -142,11 +142,11 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
     auto next = S.parity_begin;
     for (std::size_t r = 0; r < cells; ++r) at[r] = next[std::size_t(parity(runs.cell(L, r)))]++;
   }
-  if (cells > 0) S.point_begin[0] = 0;
+  S.point_begin[0] = 0;
   for (std::size_t run = 0; run < cells; ++run)
     S.point_begin[at[run] + 1] = runs.cells[run][2] - runs.cells[run][1];
   for (std::size_t r = 0; r < cells; ++r) S.point_begin[r + 1] += S.point_begin[r];
-  S.screened_points.resize(cells > 0 ? S.point_begin[cells] : 0);
+  S.screened_points.resize(S.point_begin[cells]);
   tbb::parallel_for(std::size_t(0), cells, [&](std::size_t run) {
     const std::size_t r = at[run];
     const auto cell = runs.cell(L, run);
