@@ -49,20 +49,21 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   const CgOptions cg{o.solver_tolerance, o.max_iterations, o.cancel},
       cg_finest{o.finest_solver_tolerance, o.max_iterations, o.cancel};
   // V from coarser splats, expressed on the current depth's spline grid (quadratic B-splines
-  // nest), and the coarser depth's grid it was prolonged from.
+  // nest), and the coarser depth's grid it was prolonged from. The two finest depths keep it on
+  // the grid of the depth before them and prolong it a slab at a time (their grids are the
+  // largest arrays of a reconstruction).
   std::vector<Eigen::Vector3d> coarser;
   CellGrid grid, coarser_grid;
-  // The finest depth's solved nodes and right-hand side, made as soon as the coarser splats are
-  // all on the grid before it: the splats on that grid (the largest arrays but the finest
-  // depth's) are then freed before the depth before the finest is solved.
+  // The finest depth's solved nodes and right-hand side, made before the depth before the finest
+  // is solved, so that the coarser splats are freed by then.
   std::vector<char> finest_solved;
   std::vector<double> finest_b;
   for (int d = tree.min_depth; d <= tree.finest; ++d) {
     const auto level_start = Clock::now();
     OctreeLevel& L = tree.level(d);
     auto& x = result.values[std::size_t(d)];
-    // The finest depth reads the coarser splats from the coarser grid, a slab at a time.
-    const bool from_coarser = d == tree.finest && d > tree.min_depth;
+    // The two finest depths read the coarser splats from a coarser grid, a slab at a time.
+    const bool from_coarser = d >= tree.finest - 1 && d > tree.min_depth;
     if (!from_coarser) grid = spline_grid(L);
     if (d == tree.min_depth) {
       coarser.assign(grid.keys.size(), Eigen::Vector3d::Zero());
@@ -77,14 +78,19 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     // built and the system solved, the largest at the end).
     auto release_field = [&]() {
       if (d < tree.finest) {
-        add_on_grid(field.splat_cells[std::size_t(d)], field.splat[std::size_t(d)], grid, coarser);
-        coarser_grid = std::move(grid);
+        // This depth's splats join V: on this depth's grid, or, when V stayed on the coarser
+        // grid, added slab by slab as the finest depth's right-hand side prolongs it.
+        const MiddleDepth middle{L, field.splat_cells[std::size_t(d)], field.splat[std::size_t(d)]};
+        if (!from_coarser) {
+          add_on_grid(middle.splat_cells, middle.splat, grid, coarser);
+          coarser_grid = std::move(grid);
+        }
         if (d + 1 == tree.finest) {
           const OctreeLevel& F = tree.level(tree.finest);
           finest_solved = solved_nodes(F, boundary);
-          finest_b =
-              splat_divergence_from_coarser(F, finest_solved, coarser_grid, coarser,
-                                            std::move(field.finer[std::size_t(tree.finest)]));
+          finest_b = splat_divergence_from_coarser(
+              F, finest_solved, coarser_grid, coarser,
+              std::move(field.finer[std::size_t(tree.finest)]), from_coarser ? &middle : nullptr);
           std::vector<Eigen::Vector3d>().swap(coarser);
           coarser_grid = CellGrid();
         }
@@ -104,7 +110,7 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       const auto start = Clock::now();
       if (d == tree.min_depth) x.assign(L.nodes.size(), 0.0);
       std::vector<double> b;
-      if (from_coarser) {  // made at the depth before
+      if (from_coarser && d == tree.finest) {  // made at the depth before
         solved = std::move(finest_solved);
         b = std::move(finest_b);
       } else {
@@ -112,7 +118,9 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
         // The finer splats' part becomes the right-hand side; the coarsest depth may solve twice.
         auto& finer_part = field.finer[std::size_t(d)];
         std::vector<double> finer = d == tree.min_depth ? finer_part : std::move(finer_part);
-        b = splat_divergence(L, solved, grid, coarser, std::move(finer));
+        b = from_coarser ? splat_divergence_from_coarser(L, solved, coarser_grid, coarser,
+                                                         std::move(finer))
+                         : splat_divergence(L, solved, grid, coarser, std::move(finer));
       }
       if (d > tree.min_depth) release_field();
       return_free_memory();

@@ -138,8 +138,12 @@ CellGrid spline_grid(const OctreeLevel& L, long first, long last) {
 
 void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& values,
                  const CellGrid& grid, std::vector<Eigen::Vector3d>& onto) {
-  // Both key lists are sorted: one merge walk.
-  for (std::size_t a = 0, g = 0; a < cells.keys.size(); ++a) {
+  if (grid.keys.empty()) return;
+  // Both key lists are sorted: one merge walk over the cells within the grid's key range.
+  const auto from = std::lower_bound(cells.keys.begin(), cells.keys.end(), grid.keys.front());
+  const auto to = std::upper_bound(from, cells.keys.end(), grid.keys.back());
+  for (std::size_t a = std::size_t(from - cells.keys.begin()), g = 0;
+       a < std::size_t(to - cells.keys.begin()); ++a) {
     while (grid.keys[g] < cells.keys[a]) ++g;
     onto[g] += values[a];
   }

@@ -54,7 +54,8 @@ CellGrid spline_grid(const OctreeLevel& L);
 /// The cells of spline_grid(L) whose first index lies in [first, last].
 CellGrid spline_grid(const OctreeLevel& L, long first, long last);
 
-/// onto += the coefficients (cells, values) of a sub-grid of `grid` (onto is on `grid`).
+/// onto += the coefficients (cells, values) that lie in `grid`'s key range (onto is on `grid`),
+/// where `grid` holds every one of those cells (a slab of rows of a grid holding them all).
 void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& values,
                  const CellGrid& grid, std::vector<Eigen::Vector3d>& onto);
 

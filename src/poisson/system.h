@@ -75,14 +75,25 @@ std::vector<double> splat_divergence(const OctreeLevel& L, const std::vector<cha
                                      const std::vector<Eigen::Vector3d>& coarser,
                                      std::vector<double> finer);
 
-/// The same with the coarser splats given on the coarser depth's spline grid, prolonged a slab of
-/// rows at a time: the finest depth's whole spline grid (holding every cell within two of an
-/// active cell) is the largest array of a reconstruction, and never exists.
+/// A depth between the coarser splats' grid and L, with its own splats (NormalField::splat_cells
+/// and splat at that depth).
+struct MiddleDepth {
+  const OctreeLevel& level;
+  const CellGrid& splat_cells;
+  const std::vector<Eigen::Vector3d>& splat;
+};
+
+/// The same with the coarser splats given on a coarser depth's spline grid, prolonged a slab of
+/// rows at a time: the two finest depths' whole spline grids (holding every cell within two of an
+/// active cell) and V on them are the largest arrays of a reconstruction, and never exist. With
+/// `middle`, the coarser grid is two depths up: each slab is prolonged onto the middle depth's
+/// cells above it, the middle depth's splats added there, and prolonged again onto L.
 std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   const std::vector<char>& solved,
                                                   const CellGrid& coarser_grid,
                                                   const std::vector<Eigen::Vector3d>& coarser,
-                                                  std::vector<double> finer);
+                                                  std::vector<double> finer,
+                                                  const MiddleDepth* middle = nullptr);
 
 /// Completes the system for the nodes with solved[v]: the screening blocks of the points in
 /// `runs` (the cells holding points) and  b += screening * sum_p w_p phi_v(p) / 2;
