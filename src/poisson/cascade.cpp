@@ -88,9 +88,9 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
         if (d + 1 == tree.finest) {
           const OctreeLevel& F = tree.level(tree.finest);
           finest_solved = solved_nodes(F, boundary);
-          finest_b = splat_divergence_from_coarser(
-              F, finest_solved, coarser_grid, coarser,
-              std::move(field.finer[std::size_t(tree.finest)]), from_coarser ? &middle : nullptr);
+          finest_b = splat_divergence_from_coarser(F, finest_solved, coarser_grid, coarser,
+                                                   std::move(field.finer[std::size_t(tree.finest)]),
+                                                   from_coarser ? &middle : nullptr);
           std::vector<Eigen::Vector3d>().swap(coarser);
           coarser_grid = CellGrid();
         }
@@ -118,9 +118,9 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
         // The finer splats' part becomes the right-hand side; the coarsest depth may solve twice.
         auto& finer_part = field.finer[std::size_t(d)];
         std::vector<double> finer = d == tree.min_depth ? finer_part : std::move(finer_part);
-        b = from_coarser ? splat_divergence_from_coarser(L, solved, coarser_grid, coarser,
-                                                         std::move(finer))
-                         : splat_divergence(L, solved, grid, coarser, std::move(finer));
+        b = from_coarser
+                ? splat_divergence_from_coarser(L, solved, coarser_grid, coarser, std::move(finer))
+                : splat_divergence(L, solved, grid, coarser, std::move(finer));
       }
       if (d > tree.min_depth) release_field();
       return_free_memory();
