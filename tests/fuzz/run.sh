@@ -14,8 +14,11 @@ flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recov
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp \
   -ltbb -o "$out/fuzz_npy"
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/mesh_files.cpp -o "$out/fuzz_mesh_files"
-clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_vdb.cpp src/vdb.cpp src/isolated_call.cpp src/samples.cpp \
-  src/atomic_file.cpp -lopenvdb -lImath-3_1 -ltbb -o "$out/fuzz_vdb"
+# The OpenVDB module is linked in (openvdb_loader.cpp then uses it instead of loading it).
+clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
+  tests/fuzz/fuzz_vdb.cpp src/vdb.cpp src/openvdb_loader.cpp src/openvdb_module.cpp \
+  src/isolated_call.cpp src/samples.cpp src/atomic_file.cpp -lopenvdb -lImath-3_1 -ltbb \
+  -o "$out/fuzz_vdb"
 # OpenVDB reads in a child process (src/isolated_call.h; its sanitizer reports on hostile files are
 # printed but end only the child, which the parent reports as an error), which inherits libFuzzer's malloc limit:
 # a huge allocation there is the child's failure, which the parent turns into an error, so only

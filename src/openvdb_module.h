@@ -1,0 +1,46 @@
+// Internal: OpenVDB behind a module loaded on first use. Linking libopenvdb into a program costs
+// ~85 ms of symbol relocation at every start (twice for the CLI, which runs itself again for huge
+// pages), more than marching cubes takes on a 256^3 grid; only .vdb input and output need it.
+#pragma once
+
+#include <cstdint>
+#include <ostream>
+#include <string>
+
+#include "sdfcontour/vdb.h"
+
+namespace sdfcontour::detail {
+
+/// How a module call ended; no exception crosses the module's boundary.
+struct OpenVdbStatus {
+  enum Kind { Ok, BadInput, Io, OutOfMemory, Internal } kind = Ok;
+  std::string message;  ///< one line, for every kind but Ok
+};
+
+/// A grid to write: dims[0] x dims[1] x dims[2] values in C order, sample (i, j, k) at
+/// origin + h (i, j, k).
+struct OpenVdbGridToWrite {
+  int dims[3];
+  double h;
+  double origin[3];
+  const double* values;
+  float background;  ///< > 0: voxels with |value| < background are active
+  std::string name;
+};
+
+/// The module's entry points (the same compiler and standard library on both sides).
+struct OpenVdbFunctions {
+  /// Reads the float level set named grid_name (empty: the first float grid) into `out`.
+  OpenVdbStatus (*read)(const std::string& path, const std::string& grid_name, VdbLevelSet& out);
+  /// Writes the grid as a level set to `out`.
+  OpenVdbStatus (*write)(const OpenVdbGridToWrite& grid, std::ostream& out);
+};
+
+/// The module's functions, loaded on first use (thread-safe). Throws IoError when the module
+/// cannot be found or loaded, naming where it looked.
+const OpenVdbFunctions& openvdb_functions();
+
+}  // namespace sdfcontour::detail
+
+/// The module's one exported symbol.
+extern "C" const sdfcontour::detail::OpenVdbFunctions* sdfcontour_openvdb_functions();
