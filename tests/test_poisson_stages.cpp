@@ -157,6 +157,61 @@ TEST(PoissonStages, ScreeningTermIsTheSumOverThePoints) {
   }
 }
 
+// V given by coarser quadratic B-splines: its divergence against a depth's hats taken directly
+// (one depth up, or two with the middle depth's splats added on the way) equals the divergence of
+// its prolongation onto that depth's own B-splines (quadratic B-splines nest).
+TEST(PoissonStages, DivergenceFromCoarserSplinesEqualsThatOfTheirProlongation) {
+  const auto points = sphere_points(4000, 6);
+  const MortonRuns runs(points, 6);
+  const Octree tree = build_octree(points, runs, 3, 6);
+  const OctreeLevel &C = tree.level(4), &M = tree.level(5), &F = tree.level(6);
+  ASSERT_LT(F.cells.size(), std::size_t(F.res * F.res * F.res) / 2);  // adaptive
+  std::srand(11);
+  auto random_field = [](std::size_t n) {
+    std::vector<Vector3d> W(n);
+    for (auto& w : W) w = Vector3d::Random();
+    return W;
+  };
+  const CellGrid coarse_grid = spline_grid(C), middle_grid = spline_grid(M),
+                 fine_grid = spline_grid(F);
+  const std::vector<Vector3d> W = random_field(coarse_grid.keys.size());
+  // The middle depth's splats: every third cell of its grid.
+  CellGrid splat_cells;
+  for (std::size_t c = 0; c < middle_grid.keys.size(); c += 3)
+    splat_cells.keys.push_back(middle_grid.keys[c]);
+  splat_cells.lines = LineIndex(splat_cells.keys);
+  const std::vector<Vector3d> splats = random_field(splat_cells.keys.size());
+  const std::vector<char> all(F.nodes.size(), 1), all_middle(M.nodes.size(), 1);
+  const std::vector<double> zeros(F.nodes.size(), 0.0), zeros_middle(M.nodes.size(), 0.0);
+
+  // One depth up: M's hats against C's splines.
+  const std::vector<Vector3d> on_middle = prolong_splines(coarse_grid, middle_grid, W);
+  std::vector<double> expected(M.nodes.size(), 0.0);
+  divergence(M, middle_grid, on_middle, expected, nullptr);
+  const std::vector<double> direct =
+      splat_divergence_from_coarser(M, all_middle, coarse_grid, W, zeros_middle);
+  double largest = 0;
+  for (double e : expected) largest = std::max(largest, std::abs(e));
+  ASSERT_GT(largest, 0);
+  for (std::size_t v = 0; v < M.nodes.size(); ++v)
+    ASSERT_NEAR(direct[v], -expected[v], 1e-12 * largest) << "middle node " << v;
+
+  // Two depths up, with the middle depth's splats.
+  std::vector<Vector3d> with_splats = on_middle;
+  add_on_grid(splat_cells, splats, middle_grid, with_splats);
+  std::vector<double> expected_fine(F.nodes.size(), 0.0);
+  divergence(F, fine_grid, prolong_splines(middle_grid, fine_grid, with_splats), expected_fine,
+             nullptr);
+  const MiddleDepth middle{M, splat_cells, splats};
+  const std::vector<double> direct_fine =
+      splat_divergence_from_coarser(F, all, coarse_grid, W, zeros, &middle);
+  largest = 0;
+  for (double e : expected_fine) largest = std::max(largest, std::abs(e));
+  ASSERT_GT(largest, 0);
+  for (std::size_t v = 0; v < F.nodes.size(); ++v)
+    ASSERT_NEAR(direct_fine[v], -expected_fine[v], 1e-12 * largest) << "fine node " << v;
+}
+
 // On an adaptive octree, a linear function stored at every depth's nodes is read back exactly
 // anywhere (hanging nodes included), and its iso-surface is the plane, watertight against the
 // domain's ring of "outside".

@@ -26,20 +26,21 @@ double quadratic_bspline(double t) {
   return 0;
 }
 
-HatQuadraticIntegrals::HatQuadraticIntegrals(long res)
+HatQuadraticIntegrals::HatQuadraticIntegrals(long res, int up)
     : value(std::size_t(res + 1)), slope(std::size_t(res + 1)) {
-  const double h = 1.0 / double(res);
+  const double h = 1.0 / double(res), width = double(1L << up);  // Q's cell side, in hat cells
   for (long i = 0; i <= res; ++i)
     for (int o = -2; o <= 1; ++o) {
-      const double centre = double(i + o) + 0.5;
+      const double centre = (double((i >> up) + o) + 0.5) * width;
       double v = 0, s = 0;
-      // On each unit interval the hat is linear and Q quadratic: Simpson's rule is exact.
+      // On each unit interval the hat is linear and Q quadratic (its knots fall on the hat's):
+      // Simpson's rule is exact.
       for (long m = std::max(0L, i - 1); m <= std::min(res - 1, i); ++m) {
         const double sign = m < i ? 1.0 : -1.0;  // d hat / du on (m, m + 1)
         double fv = 0, fs = 0;
         for (int q = 0; q < 3; ++q) {
           const double u = double(m) + 0.5 * q, wq = q == 1 ? 4.0 / 6 : 1.0 / 6;
-          const double bq = quadratic_bspline(u - centre);
+          const double bq = quadratic_bspline((u - centre) / width);
           fv += wq * (1 - std::abs(u - double(i))) * bq;
           fs += wq * sign * bq;
         }

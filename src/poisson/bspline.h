@@ -54,13 +54,14 @@ inline std::array<double, 3> quadratic_weights(double t) {
   return {0.5 * (1 - t) * (1 - t), 0.75 - (t - 0.5) * (t - 0.5), 0.5 * t * t};
 }
 
-/// 1D integrals over the domain [0, 1] between the hat of node i and the quadratic B-spline Q of
-/// cell i + o, o in -2..1: value[i][o + 2] = int hat_i Q_{i+o}, slope[i][o + 2] = int hat_i'
-/// Q_{i+o}. Near the domain's faces the integrals are cut there, so they are tabulated for every
-/// node i in 0..res.
+/// 1D integrals over the domain [0, 1] between the hat of node i (res cells per axis) and the
+/// quadratic B-spline Q of cell c = (i >> up) + o, o in -2..1, of the depth `up` (0 or 1) coarser:
+/// value[i][o + 2] = int hat_i Q_c, slope[i][o + 2] = int hat_i' Q_c. Every Q reaching into
+/// hat_i's support is among them. Near the domain's faces the integrals are cut there, so they
+/// are tabulated for every node i in 0..res.
 struct HatQuadraticIntegrals {
   std::vector<std::array<double, 4>> value, slope;
-  explicit HatQuadraticIntegrals(long res);
+  explicit HatQuadraticIntegrals(long res, int up = 0);
 };
 
 }  // namespace sdfcontour::poisson

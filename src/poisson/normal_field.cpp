@@ -212,22 +212,23 @@ std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellG
 }
 
 void divergence(const OctreeLevel& L, const CellGrid& G, const std::vector<Eigen::Vector3d>& W,
-                std::vector<double>& out, const std::vector<char>* want, std::array<long, 2> rows) {
+                std::vector<double>& out, const std::vector<char>* want, std::array<long, 2> rows,
+                int up) {
   // Over the 4 x 4 x 4 cells whose B-splines overlap node v's hat. The integrals are products of
   // 1D ones, so a line of nodes (fixed i, j) first folds its 16 cell columns into two values per
   // cell height k', P(k') (the x and y terms) and Q(k') (the z term), and each node then sums
   // four heights.
-  const HatQuadraticIntegrals I(L.res);
+  const HatQuadraticIntegrals I(L.res, up);
   for_each_line(L.node_lines, L.nodes, [&](long i, long j, std::size_t first, std::size_t last) {
     if (i < rows[0] || i >= rows[1]) return;
-    const long k_last = long(L.nodes[last - 1] & kKeyMask);
-    // Heights k' = k_first - 2 .. k_last + 1, stored from index 0.
-    const long k_first = long(L.nodes[first] & kKeyMask), base = k_first - 2;
+    // Heights k' = (k_first >> up) - 2 .. (k_last >> up) + 1, stored from index 0.
+    const long k_last = long(L.nodes[last - 1] & kKeyMask) >> up;
+    const long k_first = long(L.nodes[first] & kKeyMask) >> up, base = k_first - 2;
     std::vector<double> P(std::size_t(k_last - k_first + 4), 0.0), Q(P.size(), 0.0);
     const auto &vx = I.value[std::size_t(i)], &vy = I.value[std::size_t(j)];
     const auto &sx = I.slope[std::size_t(i)], &sy = I.slope[std::size_t(j)];
     for (int c = 0; c < 16; ++c) {
-      const long ci = i + (c & 3) - 2, cj = j + (c >> 2) - 2;
+      const long ci = (i >> up) + (c & 3) - 2, cj = (j >> up) + (c >> 2) - 2;
       if (ci < -1 || cj < -1) continue;
       const int ox = c & 3, oy = c >> 2;
       const double px = sx[std::size_t(ox)] * vy[std::size_t(oy)],
@@ -251,7 +252,7 @@ void divergence(const OctreeLevel& L, const CellGrid& G, const std::vector<Eigen
       const auto &vz = I.value[std::size_t(k)], &sz = I.slope[std::size_t(k)];
       double sum = 0;
       for (int oz = 0; oz < 4; ++oz) {
-        const std::size_t at = std::size_t(k - 2 + oz - base);
+        const std::size_t at = std::size_t((k >> up) - 2 + oz - base);
         sum += P[at] * vz[std::size_t(oz)] + Q[at] * sz[std::size_t(oz)];
       }
       out[v] += sum;

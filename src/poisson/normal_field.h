@@ -70,10 +70,11 @@ std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellG
                                              const std::vector<Eigen::Vector3d>& values);
 
 /// out[v] += int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set and first
-/// index in [rows[0], rows[1]), W given by depth-d quadratic coefficients on `grid` (which needs
-/// the cells with first index in [rows[0] - 2, rows[1]]).
+/// index in [rows[0], rows[1]), W given by the quadratic coefficients on `grid` of the depth `up`
+/// (0 or 1) coarser than L's. The grid needs the cells with first index in
+/// [(rows[0] >> up) - 2, ((rows[1] - 1) >> up) + 1].
 void divergence(const OctreeLevel& L, const CellGrid& grid, const std::vector<Eigen::Vector3d>& W,
                 std::vector<double>& out, const std::vector<char>* want,
-                std::array<long, 2> rows = {0, kAllRows});
+                std::array<long, 2> rows = {0, kAllRows}, int up = 0);
 
 }  // namespace sdfcontour::poisson

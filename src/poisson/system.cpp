@@ -111,21 +111,18 @@ std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   std::vector<double> finer,
                                                   const MiddleDepth* middle) {
   std::vector<double> b = std::move(finer);  // the divergence adds onto it
-  // Sixteen slabs: each prolongs about a sixteenth of the grid (plus its 3-row margin).
-  const long thickness = std::max(8L, (L.res + 1) / 16);
-  for (long first = 0; first <= L.res; first += thickness) {
-    const long last = std::min(first + thickness, L.res + 1);
-    // Node rows [first, last) read the splines of cells first - 2 .. last.
-    const CellGrid slab = spline_grid(L, first - 2, last);
-    if (!middle) {
-      divergence(L, slab, prolong_splines(coarser_grid, slab, coarser), b, &solved, {first, last});
-      continue;
+  if (!middle) {
+    divergence(L, coarser_grid, coarser, b, &solved, {0, kAllRows}, /*up=*/1);
+  } else {
+    // Sixteen slabs of node rows: each prolongs about a sixteenth of the middle depth's grid.
+    const long thickness = std::max(8L, (L.res + 1) / 16);
+    for (long first = 0; first <= L.res; first += thickness) {
+      const long last = std::min(first + thickness, L.res + 1);
+      const CellGrid between = spline_grid(middle->level, (first >> 1) - 2, ((last - 1) >> 1) + 1);
+      std::vector<Eigen::Vector3d> values = prolong_splines(coarser_grid, between, coarser);
+      add_on_grid(middle->splat_cells, middle->splat, between, values);
+      divergence(L, between, values, b, &solved, {first, last}, /*up=*/1);
     }
-    // Cell c prolongs from the coarser cells floor(c / 2) - 1 .. floor(c / 2) + 1.
-    const CellGrid between = spline_grid(middle->level, ((first - 2) >> 1) - 1, (last >> 1) + 1);
-    std::vector<Eigen::Vector3d> values = prolong_splines(coarser_grid, between, coarser);
-    add_on_grid(middle->splat_cells, middle->splat, between, values);
-    divergence(L, slab, prolong_splines(between, slab, values), b, &solved, {first, last});
   }
   negate_on_solved(solved, b);
   return b;

@@ -83,11 +83,11 @@ struct MiddleDepth {
   const std::vector<Eigen::Vector3d>& splat;
 };
 
-/// The same with the coarser splats given on a coarser depth's spline grid, prolonged a slab of
-/// rows at a time: the two finest depths' whole spline grids (holding every cell within two of an
-/// active cell) and V on them are the largest arrays of a reconstruction, and never exist. With
-/// `middle`, the coarser grid is two depths up: each slab is prolonged onto the middle depth's
-/// cells above it, the middle depth's splats added there, and prolonged again onto L.
+/// The same with the coarser splats given on the grid of the depth before L's, their divergence
+/// taken against L's hats directly: the two finest depths' whole spline grids (holding every cell
+/// within two of an active cell) and V on them are the largest arrays of a reconstruction, and
+/// never exist. With `middle`, the coarser grid is two depths up: a slab of rows at a time, V is
+/// prolonged onto the middle depth's cells, and the middle depth's splats added there.
 std::vector<double> splat_divergence_from_coarser(const OctreeLevel& L,
                                                   const std::vector<char>& solved,
                                                   const CellGrid& coarser_grid,
