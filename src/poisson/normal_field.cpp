@@ -17,35 +17,35 @@ CellRuns cell_runs(const OctreeLevel& L, const MortonRuns& runs) {
 
 namespace {
 
-// The depth-d splat coefficients on the cells they touch (G), gathered from per-run sums over
-// the 27 cells around each run.
+// The depth-d splat coefficients on the cells they touch (G), each gathered from the points of the
+// 27 cells around it (no per-cell table of 27 sums: 648 bytes per cell holding points, 1.2 GB for
+// bunny 512^3's depth 10, and filling it took longer than the gather).
 void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<UnitPoint>& points,
                  const MortonRuns& morton, CellGrid& G, std::vector<Eigen::Vector3d>& V) {
   const int d = L.depth;
-  std::vector<std::array<Eigen::Vector3d, 27>> cell_sums(runs.cells.size());
   std::vector<char> has_splat(runs.cells.size(), 0);
   const double inverse_volume = 1.0 / (L.h * L.h * L.h);
   tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
-    auto& sums = cell_sums[r];
-    sums.fill(Eigen::Vector3d::Zero());
+    for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2] && !has_splat[r]; ++q)
+      has_splat[r] = points[morton.point(q)].depth == d;
+  });
+  // Source cell r's splats on the cell (dx, dy, dz) away, summed over its points in order.
+  auto splat_of = [&](std::uint32_t r, int dx, int dy, int dz) {
     const auto cell = runs.cell(L, r);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
       const UnitPoint& s = points[morton.point(q)];
       if (s.depth != d) continue;
-      has_splat[r] = 1;
-      std::array<double, 3> w[3];
+      double w[3];
+      const int offset[3] = {dx, dy, dz};
       for (int a = 0; a < 3; ++a)
-        w[a] = quadratic_weights(
-            std::clamp(s.p[a] * double(L.res) - double(cell[std::size_t(a)]), 0.0, 1.0));
+        w[a] = quadratic_weights(std::clamp(s.p[a] * double(L.res) - double(cell[std::size_t(a)]),
+                                            0.0, 1.0))[std::size_t(offset[a] + 1)];
       const Eigen::Vector3d weighted = s.area * s.weight * inverse_volume * s.n;
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx)
-            sums[std::size_t(slot(dx, dy, dz))] += w[0][std::size_t(dx + 1)] *
-                                                   w[1][std::size_t(dy + 1)] *
-                                                   w[2][std::size_t(dz + 1)] * weighted;
+      sum += w[0] * w[1] * w[2] * weighted;
     }
-  });
+    return sum;
+  };
   // The cells holding depth-d splats, sorted, with their runs.
   std::vector<std::pair<Key, std::uint32_t>> splatting;
   for (std::size_t r = 0; r < runs.cells.size(); ++r)
@@ -73,8 +73,7 @@ void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<U
             const int t = (dx + 1) + 3 * (dy + 1);
             if (gk - 1 - dz < 0) continue;
             const int at = from[t].find(pack(gi - 1 - dx, gj - 1 - dy, gk - 1 - dz));
-            if (at >= 0)
-              sum += cell_sums[splatting[std::size_t(at)].second][std::size_t(slot(dx, dy, dz))];
+            if (at >= 0) sum += splat_of(splatting[std::size_t(at)].second, dx, dy, dz);
           }
       V[g] = sum;
     }
