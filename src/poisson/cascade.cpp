@@ -49,9 +49,9 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   const CgOptions cg{o.solver_tolerance, o.max_iterations, o.cancel},
       cg_finest{o.finest_solver_tolerance, o.max_iterations, o.cancel};
   // V from coarser splats, expressed on the current depth's spline grid (quadratic B-splines
-  // nest), and the coarser depth's grid it was prolonged from. The two finest depths keep it on
-  // the grid of the depth before them and prolong it a slab at a time (their grids are the
-  // largest arrays of a reconstruction).
+  // nest), and the coarser depth's grid it was prolonged from. The two finest depths never build
+  // their grids (the largest arrays of a reconstruction): V stays on a coarser depth's grid and
+  // their hats are integrated against its B-splines (splat_divergence_from_coarser).
   std::vector<Eigen::Vector3d> coarser;
   CellGrid grid, coarser_grid;
   // The finest depth's solved nodes and right-hand side, made before the depth before the finest
@@ -62,7 +62,7 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     const auto level_start = Clock::now();
     OctreeLevel& L = tree.level(d);
     auto& x = result.values[std::size_t(d)];
-    // The two finest depths read the coarser splats from a coarser grid, a slab at a time.
+    // The two finest depths take V's divergence from a coarser depth's grid.
     const bool from_coarser = d >= tree.finest - 1 && d > tree.min_depth;
     if (!from_coarser) grid = spline_grid(L);
     if (d == tree.min_depth) {
