@@ -16,8 +16,8 @@ CLI = sys.argv[1]
 passed = failed = 0
 
 
-def run(*args):
-    return subprocess.run([CLI, *args], capture_output=True, text=True, timeout=300)
+def run(*args, env=None):
+    return subprocess.run([CLI, *args], capture_output=True, text=True, timeout=300, env=env)
 
 
 def check(name, condition, detail=""):
@@ -29,8 +29,8 @@ def check(name, condition, detail=""):
         print(f"FAIL {name}: {detail}")
 
 
-def expect_error(name, args, needle, out_files=()):
-    r = run(*args)
+def expect_error(name, args, needle, out_files=(), env=None):
+    r = run(*args, env=env)
     lines = r.stderr.strip().splitlines()
     errors = [line for line in lines if line.startswith("sdfcontour: error:")]
     check(name + " exit code", r.returncode != 0, f"exit {r.returncode}")
@@ -292,6 +292,13 @@ with tempfile.TemporaryDirectory() as d:
         expect_error("vdb junk", ["contour", p("junk.vdb"), "-o", out], "not a .vdb", [out])
         expect_error("vdb random", ["sample", os.path.join(meshes, "cube.obj"), "--random", "100", "-o", p("c.vdb")],
                      "grid", [p("c.vdb")])
+        # OpenVDB is a module loaded on first use: one that does not load is an error, not a crash.
+        broken = dict(os.environ, SDFCONTOUR_OPENVDB_MODULE=p("junk.vdb"))
+        expect_error("vdb module broken, read", ["contour", p("spot.vdb"), "-o", out], "cannot load the OpenVDB module",
+                     [out], env=broken)
+        expect_error("vdb module broken, write", ["sample", os.path.join(meshes, "cube.obj"), "--res", "8", "-o",
+                                                  p("c2.vdb")], "cannot load the OpenVDB module",
+                     [p("c2.vdb"), p("c2_mesh.ply"), p("c2_gtcp.ply")], env=broken)
         expect_error("eval unreadable", ["eval", p("none.ply"), prefix + "_mesh.ply"], "cannot read")
         open(p("empty.off"), "w").write("OFF\n0 0 0\n")
         expect_error("eval empty mesh", ["eval", p("empty.off"), prefix + "_mesh.ply"], "")
