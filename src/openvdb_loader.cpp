@@ -21,7 +21,8 @@ namespace {
 constexpr const char* kModuleFile = "sdfcontour_openvdb.so";
 
 // Where to look, first found wins: $SDFCONTOUR_OPENVDB_MODULE (a file), beside the running
-// program, the build tree, the install tree.
+// program (the build tree's CLI), where an installed program's module is (bin/../lib/sdfcontour),
+// the build tree, the install tree.
 std::vector<std::string> module_candidates() {
   std::vector<std::string> paths;
   if (const char* set = std::getenv("SDFCONTOUR_OPENVDB_MODULE"); set && *set) paths.push_back(set);
@@ -31,6 +32,7 @@ std::vector<std::string> module_candidates() {
     std::string dir(self, std::size_t(length));
     dir.erase(dir.find_last_of('/') + 1);
     paths.push_back(dir + kModuleFile);
+    paths.push_back(dir + "../" + SDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR + "/" + kModuleFile);
   }
   paths.push_back(std::string(SDFCONTOUR_BUILD_MODULE_DIR) + "/" + kModuleFile);
   paths.push_back(std::string(SDFCONTOUR_INSTALL_MODULE_DIR) + "/" + kModuleFile);
