@@ -41,7 +41,7 @@ std::vector<std::string> module_candidates() {
 
 const OpenVdbFunctions* load() {
   if (sdfcontour_openvdb_functions) return sdfcontour_openvdb_functions();
-  std::string tried, last_error;
+  std::string tried;
   for (const std::string& path : module_candidates()) {
     if (::access(path.c_str(), R_OK) != 0) {
       tried += (tried.empty() ? "" : ", ") + path;

@@ -3,7 +3,6 @@
 // pages), more than marching cubes takes on a 256^3 grid; only .vdb input and output need it.
 #pragma once
 
-#include <cstdint>
 #include <ostream>
 #include <string>
 

@@ -188,13 +188,17 @@ TEST(PoissonStages, DivergenceFromCoarserSplinesEqualsThatOfTheirProlongation) {
   const std::vector<Vector3d> on_middle = prolong_splines(coarse_grid, middle_grid, W);
   std::vector<double> expected(M.nodes.size(), 0.0);
   divergence(M, middle_grid, on_middle, expected, nullptr);
-  const std::vector<double> direct =
-      splat_divergence_from_coarser(M, all_middle, coarse_grid, W, zeros_middle);
-  double largest = 0;
-  for (double e : expected) largest = std::max(largest, std::abs(e));
-  ASSERT_GT(largest, 0);
-  for (std::size_t v = 0; v < M.nodes.size(); ++v)
-    ASSERT_NEAR(direct[v], -expected[v], 1e-12 * largest) << "middle node " << v;
+  // The right-hand side is minus the divergence on the solved nodes (here all of them).
+  auto expect_negated = [](const std::vector<double>& direct, const std::vector<double>& expected,
+                           const char* what) {
+    double largest = 0;
+    for (double e : expected) largest = std::max(largest, std::abs(e));
+    ASSERT_GT(largest, 0) << what;
+    for (std::size_t v = 0; v < expected.size(); ++v)
+      ASSERT_NEAR(direct[v], -expected[v], 1e-12 * largest) << what << " node " << v;
+  };
+  expect_negated(splat_divergence_from_coarser(M, all_middle, coarse_grid, W, zeros_middle),
+                 expected, "middle");
 
   // Two depths up, with the middle depth's splats.
   std::vector<Vector3d> with_splats = on_middle;
@@ -203,13 +207,8 @@ TEST(PoissonStages, DivergenceFromCoarserSplinesEqualsThatOfTheirProlongation) {
   divergence(F, fine_grid, prolong_splines(middle_grid, fine_grid, with_splats), expected_fine,
              nullptr);
   const MiddleDepth middle{M, splat_cells, splats};
-  const std::vector<double> direct_fine =
-      splat_divergence_from_coarser(F, all, coarse_grid, W, zeros, &middle);
-  largest = 0;
-  for (double e : expected_fine) largest = std::max(largest, std::abs(e));
-  ASSERT_GT(largest, 0);
-  for (std::size_t v = 0; v < F.nodes.size(); ++v)
-    ASSERT_NEAR(direct_fine[v], -expected_fine[v], 1e-12 * largest) << "fine node " << v;
+  expect_negated(splat_divergence_from_coarser(F, all, coarse_grid, W, zeros, &middle),
+                 expected_fine, "fine");
 }
 
 // On an adaptive octree, a linear function stored at every depth's nodes is read back exactly
