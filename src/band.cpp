@@ -175,7 +175,7 @@ Truncation resolve_truncation(const GridView& grid, const BandOptions& options) 
 }
 
 double auto_band(double samples_per_axis) {
-  return samples_per_axis < 128 ? 8.0 : 4.0;
+  return samples_per_axis < 128 ? 8.0 : samples_per_axis < 256 ? 4.0 : 3.0;
 }
 
 void validate_band_options(const BandOptions& options) {

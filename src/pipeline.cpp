@@ -323,11 +323,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     });
   }
   // Projection needs the contact points after the reconstruction, and their depths (|value| of
-  // their samples). Auto: below 128 samples per axis (bunny 256^3: L1 0.91x for ~4 s more;
-  // docs/projection.md).
-  const bool project = method == Method::Gcp && contact_mesh &&
-                       (options.project == Switch::On ||
-                        (options.project == Switch::Auto && band.samples_per_axis < 128));
+  // their samples). Auto is on at every resolution (ContourOptions::project).
+  const bool project = method == Method::Gcp && contact_mesh && options.project != Switch::Off;
   Eigen::VectorXd contact_depths;
   if (project) {
     const std::vector<int>& from = result.contact_points->samples;

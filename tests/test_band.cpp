@@ -144,12 +144,15 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
   for (int s : band.contact_points->samples) EXPECT_LE(std::abs(grid.values[s]), 4 * h);
 }
 
-// The automatic band: 8 spacings below 128 samples per axis, 4 from 128 (as the result says).
+// The automatic band: 8 spacings below 128 samples per axis, 4 from 128, 3 from 256 (as the
+// result says).
 TEST(Band, AutoBandFollowsTheResolution) {
   EXPECT_EQ(auto_band(32), 8);
   EXPECT_EQ(auto_band(127), 8);
   EXPECT_EQ(auto_band(128), 4);
-  EXPECT_EQ(auto_band(512), 4);
+  EXPECT_EQ(auto_band(255), 4);
+  EXPECT_EQ(auto_band(256), 3);
+  EXPECT_EQ(auto_band(1024), 3);
   const Grid grid = torus_grid(40);
   const BandSamples b = select_band(grid, BandOptions{});
   EXPECT_EQ(b.band, 8);

@@ -359,7 +359,7 @@ Command add_contour_command(CLI::App& app) {
                 "Triangulation methods (all but mc) use only samples with |value| <= BAND "
                 "grid spacings (scattered samples: the side of a cube holding one sample); "
                 "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
-                "axis, 4 from 128")
+                "axis, 4 from 128, 3 from 256")
       ->capture_default_str();
   c->add_flag("--sign-constraints", a->sign_constraints,
               "GCP: correct the indicator where samples next to the surface would end on the "
@@ -381,7 +381,7 @@ Command add_contour_command(CLI::App& app) {
   c->add_option("--projection", a->projection,
                 "GCP: move each vertex along its normal onto a quadric fitted to the contact "
                 "points within --projection-radius spacings whose normals agree with it (on, off; "
-                "auto: on below 128 samples per axis)")
+                "auto: on)")
       ->capture_default_str();
   for (const ProjectionOption& p : kProjectionOptions)
     c->add_option(p.name, a->projection_options.*p.field, p.help)->capture_default_str();

@@ -160,7 +160,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Samples per axis for a callable ``sdf``.
     band : float, "auto" or "all"
         Triangulation methods use the samples with ``|value| <= band`` grid spacings; "auto"
-        is 8 below 128 samples per axis and 4 from 128 (docs/band.md); "all" keeps every sample
+        is 8 below 128 samples per axis, 4 from 128 and 3 from 256 (docs/band.md); "all" keeps every sample
         (the paper's GCP, far slower).
     margin : float
         Samples up to this many spacings beyond the band close the band's stars.
@@ -193,8 +193,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         above (CLI ``--side-passes``).
     projection : bool or "auto"
         GCP: move each vertex of the reconstruction along its normal onto a quadric fitted to
-        the contact points around it, where they fit one to 0.005 spacings ("auto": below 128
-        samples per axis; CLI ``--projection``).
+        the contact points around it, where they fit one to 0.005 spacings ("auto", the
+        default: on at every resolution; CLI ``--projection``).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).

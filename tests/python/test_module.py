@@ -107,7 +107,7 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     for bad in (-1, 1.5, "all", True):
         with pytest.raises(ValueError, match="side_passes"):
             sdfcontour.contour(np.load(tmp_path / "b.npy"), side_passes=bad)
-    # The projection onto the contact points is on by default below 128 samples per axis;
+    # The projection onto the contact points is on by default;
     # projection=False is the CLI's --projection off mesh (same triangles, vertices unprojected).
     assert stats["projected_vertices"] > 0
     subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "unprojected.ply"),
