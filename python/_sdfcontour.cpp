@@ -151,6 +151,7 @@ PoissonOptions poisson_options(const py::dict& o) {
   PoissonOptions p;
   p.depth = get<int>(o, "depth", p.depth);
   p.full_depth = get<int>(o, "full_depth", p.full_depth);
+  p.refine_dilation = get<int>(o, "refine_dilation", p.refine_dilation);
   p.point_weight = get<double>(o, "alpha", p.point_weight);
   p.samples_per_node = get<double>(o, "samples_per_node", p.samples_per_node);
   p.scale = get<double>(o, "scale", p.scale);
@@ -189,6 +190,7 @@ ContourOptions contour_options(const py::dict& o) {
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
+  if (get<std::string>(o, "refine_dilation_text", "") == "auto") c.poisson.refine_dilation = 0;
   if (get<bool>(o, "progress", false)) {
     c.progress = [](const std::string& m) { std::cerr << "[sdfcontour] " << m << std::endl; };
     c.progress_fraction = detail::ProgressBar();

@@ -354,6 +354,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     popt.cancel = options.cancel;
     if (popt.depth == 0) popt.depth = auto_poisson_depth(s.points, band.spacing);
     result.poisson_depth = popt.depth;
+    if (popt.refine_dilation == 0) popt.refine_dilation = band.samples_per_axis < 256 ? 2 : 1;
     // A grid whose sides are inside in part cuts the surface: its far field is inside there.
     if (grid && grid_sides_inside(*grid)) popt.dirichlet_fallback = false;
     // GCP's mesh keeps the samples next to the surface on their sides.

@@ -122,7 +122,8 @@ with tempfile.TemporaryDirectory() as d:
                        ("--full-depth", "30"), ("--depth", "0"), ("--threads", "-1"), ("--samples-per-node", "0"),
                        ("--tie-tolerance", "inf"), ("--knn", "1"), ("--bounds=-1e308,1e308", None),
                        ("--projection", "maybe"), ("--projection-radius", "0"), ("--projection-residual", "nan"),
-                       ("--projection-variance", "0.5")]:
+                       ("--projection-variance", "0.5"), ("--refine-dilation", "0"),
+                       ("--refine-dilation", "5"), ("--refine-dilation", "1.5")]:
         depth = [] if opt in ("--depth", "--full-depth") else ["--depth", "5"]
         args = ["contour", "builtin:sphere@12", "-o", out, *depth] + ([opt, value] if value else [opt])
         expect_error(f"{opt} {value}", args, opt.split("=")[0], [out])

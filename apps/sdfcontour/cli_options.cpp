@@ -145,6 +145,12 @@ void PoissonArgs::add_to(CLI::App* app) {
       ->capture_default_str();
   app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
       ->capture_default_str();
+  app->add_option("--refine-dilation", dilation,
+                  std::string("Each depth refines the cells within this many cells of the points' "
+                              "(1-4; 1 is cheaper, less accurate where points are sparse)") +
+                      (dilation == "auto" ? "; 'auto': 2 below 256 samples per axis, 1 from 256"
+                                          : ""))
+      ->capture_default_str();
   app->add_option("--samples-per-node", options.samples_per_node,
                   "Splat each normal where an octree node holds about this many samples")
       ->capture_default_str();
@@ -174,6 +180,14 @@ PoissonOptions PoissonArgs::resolved() const {
     require_range("--depth", o.depth, 1, 16);
     if (std::to_string(o.depth) != depth) throw Error("--depth must be a whole number or 'auto'");
     require_range("--full-depth", o.full_depth, 0, o.depth);
+  }
+  if (dilation == "auto") {
+    o.refine_dilation = 0;  // the pipeline chooses
+  } else {
+    o.refine_dilation = int(parse_number_or("--refine-dilation", dilation, {}));
+    require_range("--refine-dilation", o.refine_dilation, 1, 4);
+    if (std::to_string(o.refine_dilation) != dilation)
+      throw Error("--refine-dilation must be a whole number or 'auto'");
   }
   require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
   require_range("--scale", o.scale, 1, 16);

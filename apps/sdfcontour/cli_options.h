@@ -68,6 +68,7 @@ struct PoissonArgs {
   PoissonOptions options;
   std::string boundary = "neumann";
   std::string depth = "8";  ///< "auto" (contour only): from the grid's resolution
+  std::string dilation = "2";  ///< likewise
 
   void add_to(CLI::App* app);
   /// The options, range-checked; depth 0 for "auto".

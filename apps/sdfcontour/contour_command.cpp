@@ -39,6 +39,7 @@ struct ContourArgs {
   PoissonArgs poisson = [] {
     PoissonArgs p;
     p.depth = "auto";
+    p.dilation = "auto";
     return p;
   }();
 };

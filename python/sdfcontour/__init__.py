@@ -140,8 +140,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
-            carve=True, side_passes="auto", projection="auto", batch_size=65536, progress=False,
-            return_stats=False):
+            carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
+            batch_size=65536, progress=False, return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -204,6 +204,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Poisson octree depth; "auto" follows the grid's resolution.
     full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance, finest_solver_tolerance
         Screened Poisson options, as in :func:`poisson`.
+    refine_dilation : int or "auto"
+        As in :func:`poisson`; "auto": 2 below 256 samples per axis, 1 from 256 (CLI
+        ``--refine-dilation``).
     batch_size : int
         Points per call of a callable ``sdf``.
     progress : bool
@@ -255,6 +258,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         raise ValueError(f"side_passes must be a whole number from 0 to 100 or 'auto', "
                          f"got {side_passes!r}")
     o["projection"] = _switch("projection", projection)
+    if isinstance(refine_dilation, str) and refine_dilation == "auto":
+        o["refine_dilation_text"] = "auto"
+    else:
+        o["refine_dilation"] = _refine_dilation(refine_dilation)
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if return_stats:
         return out["V"], out["F"], out["stats"]
@@ -285,8 +292,17 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
     return out["P"], out["N"]
 
 
+def _refine_dilation(value):
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
+            and 1 <= value <= 4:
+        return int(value)
+    raise ValueError(f"refine_dilation must be a whole number from 1 to 4 (or 'auto' for contour), "
+                     f"got {value!r}")
+
+
 def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5,
-            scale=1.1, boundary="neumann", solver_tolerance=1e-4, finest_solver_tolerance=1e-3):
+            scale=1.1, boundary="neumann", solver_tolerance=1e-4, finest_solver_tolerance=1e-3,
+            refine_dilation=2):
     """Screened Poisson reconstruction of oriented points: a watertight mesh.
 
     Parameters
@@ -314,6 +330,9 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
         Conjugate gradients stop at this relative residual at each depth but the finest.
     finest_solver_tolerance : float
         ... and at this one at the finest depth (most of the solve's time).
+    refine_dilation : int
+        Each depth refines the cells within this many cells (1-4) of the points' cells: 1 is
+        cheaper and less accurate where points are sparse (CLI ``--refine-dilation``).
 
     Returns
     -------
@@ -327,7 +346,8 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     o = dict(depth=int(depth), alpha=float(alpha), full_depth=int(full_depth),
              samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
              solver_tolerance=float(solver_tolerance),
-             finest_solver_tolerance=float(finest_solver_tolerance))
+             finest_solver_tolerance=float(finest_solver_tolerance),
+             refine_dilation=_refine_dilation(refine_dilation))
     W = None if weights is None else np.asarray(weights, dtype=np.float64)
     return _sdfcontour.poisson(np.asarray(P), np.asarray(N), W, o)
 

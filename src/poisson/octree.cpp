@@ -16,7 +16,7 @@ void build_nodes(OctreeLevel& L) {
 // Morton order), dilated. Each point is resolved one depth finer than its splat, where its
 // screening term sharpens the surface; refining sparse points further makes bubbles around them.
 std::vector<Key> cells_to_refine(const std::vector<UnitPoint>& points, const MortonRuns& runs,
-                                 int d, long parent_res) {
+                                 int d, long parent_res, int dilation) {
   std::vector<Key> refine;
   runs.for_each_run(d - 1, [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
     for (std::size_t r = first; r < last; ++r)
@@ -26,12 +26,11 @@ std::vector<Key> cells_to_refine(const std::vector<UnitPoint>& points, const Mor
       }
   });
   sort_unique(refine);
-  // Dilate by two cells: the finer band then reaches four or five of its cells past every point's
-  // cell. Its edge nodes hold the coarser solution, which is less accurate near the surface; with
-  // one cell of dilation that pull cost up to a fifth of the accuracy on 100k-point inputs (wingnut
-  // L1 2.15e-4 -> 1.71e-4, torus 1.28e-4 -> 1.17e-4).
-  constexpr long kDilation = 2;
-  return dilate(refine, kDilation, parent_res - 1);
+  // Dilate (by two cells by default): the finer band then reaches four or five of its cells past
+  // every point's cell. Its edge nodes hold the coarser solution, which is less accurate near the
+  // surface; with one cell of dilation that pull cost up to a fifth of the accuracy on 100k-point
+  // inputs (wingnut L1 2.15e-4 -> 1.71e-4, torus 1.28e-4 -> 1.17e-4).
+  return dilate(refine, dilation, parent_res - 1);
 }
 
 // Children of the sorted parents, in sorted order without sorting: per parent slab i, child rows
@@ -66,7 +65,7 @@ std::vector<Key> children_of(const std::vector<Key>& parents) {
 }  // namespace
 
 Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
-                    int max_depth, const std::atomic<bool>* cancel) {
+                    int max_depth, int dilation, const std::atomic<bool>* cancel) {
   Octree tree;
   tree.min_depth = tree.finest = min_depth;
   tree.levels.resize(std::size_t(max_depth + 1));
@@ -83,7 +82,7 @@ Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs
           for (long k = 0; k < L.res; ++k) L.cells.push_back(pack(i, j, k));
     } else {
       OctreeLevel& P = tree.level(d - 1);
-      const std::vector<Key> refine = cells_to_refine(points, runs, d, P.res);
+      const std::vector<Key> refine = cells_to_refine(points, runs, d, P.res, dilation);
       // Only active cells refine: intersect the two sorted lists.
       std::vector<Key> parents;
       parents.reserve(refine.size());

@@ -50,10 +50,11 @@ struct Octree {
 };
 
 /// The octree down to max_depth: complete to min_depth; a depth-(d-1) cell is refined when it
-/// holds a point splatted at depth d-1 or finer, dilated by two cells.
-/// `cancel` (optional) is checked at each depth (throws Cancelled).
+/// holds a point splatted at depth d-1 or finer, dilated by `dilation` cells
+/// (PoissonOptions::refine_dilation). `cancel` (optional) is checked at each depth (throws
+/// Cancelled).
 Octree build_octree(const std::vector<UnitPoint>& points, const MortonRuns& runs, int min_depth,
-                    int max_depth, const std::atomic<bool>* cancel = nullptr);
+                    int max_depth, int dilation = 2, const std::atomic<bool>* cancel = nullptr);
 
 /// Per node of L: whether it is solved for (every incident cell inside the domain is active, so
 /// its row of the system is complete; Dirichlet boundaries also fix the domain's faces).

@@ -13,6 +13,8 @@ void validate(const OrientedPoints& input, const PoissonOptions& o) {
   if (input.normals.rows() != n) throw Error("poisson: points and normals differ in count");
   if (o.depth < 1 || o.depth > 16) throw Error("poisson: depth must be between 1 and 16");
   if (o.full_depth < 1) throw Error("poisson: full depth must be at least 1");
+  if (o.refine_dilation < 1 || o.refine_dilation > 4)
+    throw Error("poisson: the refinement's dilation must be between 1 and 4 cells");
   if (!(o.scale >= 1.0) || !std::isfinite(o.scale))
     throw Error("poisson: scale must be at least 1");
   if (!(o.samples_per_node > 0) || !std::isfinite(o.samples_per_node))

@@ -111,7 +111,7 @@ PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_point
       assign_areas_and_depths(unit.points, density, o.samples_per_node, d_min, D);
 
   stage.start("octree");
-  Octree tree = build_octree(unit.points, runs, d_min, D, o.cancel);
+  Octree tree = build_octree(unit.points, runs, d_min, D, o.refine_dilation, o.cancel);
 
   stage.start("splatting");
   NormalField field = splat_normals(tree, unit.points, runs, o.cancel);

@@ -121,6 +121,18 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     for bad in ("on", 1, None):
         with pytest.raises(ValueError, match="projection"):
             sdfcontour.contour(np.load(tmp_path / "b.npy"), projection=bad)
+    # The refinement's dilation: "auto" is 2 cells below 256 samples per axis; 1 is the CLI's
+    # --refine-dilation 1 mesh, another one.
+    np.testing.assert_array_equal(sdfcontour.contour(np.load(tmp_path / "b.npy"),
+                                                     refine_dilation=2)[0], V)
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "dilated1.ply"),
+                    "-q", "--refine-dilation", "1"], check=True, stdout=subprocess.DEVNULL)
+    V_one = sdfcontour.contour(np.load(tmp_path / "b.npy"), refine_dilation=1)[0]
+    np.testing.assert_array_equal(V_one, sdfcontour.read_mesh(tmp_path / "dilated1.ply")[0])
+    assert V_one.shape != V.shape or not np.array_equal(V_one, V)
+    for bad in (0, 5, 1.5, True, "one"):
+        with pytest.raises(ValueError, match="refine_dilation"):
+            sdfcontour.contour(np.load(tmp_path / "b.npy"), refine_dilation=bad)
     # And the mesh is close to the ground truth the CLI wrote.
     V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)
