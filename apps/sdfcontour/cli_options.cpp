@@ -145,11 +145,11 @@ void PoissonArgs::add_to(CLI::App* app) {
       ->capture_default_str();
   app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
       ->capture_default_str();
-  app->add_option("--refine-dilation", dilation,
-                  std::string("Each depth refines the cells within this many cells of the points' "
-                              "(1-4; 1 is cheaper, less accurate where points are sparse)") +
-                      (dilation == "auto" ? "; 'auto': 2 below 256 samples per axis, 1 from 256"
-                                          : ""))
+  app->add_option(
+         "--refine-dilation", dilation,
+         std::string("Each depth refines the cells within this many cells of the points' "
+                     "(1-4; 1 is cheaper, less accurate where points are sparse)") +
+             (dilation == "auto" ? "; 'auto': 2 below 256 samples per axis, 1 from 256" : ""))
       ->capture_default_str();
   app->add_option("--samples-per-node", options.samples_per_node,
                   "Splat each normal where an octree node holds about this many samples")

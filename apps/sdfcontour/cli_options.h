@@ -67,7 +67,7 @@ struct RunOptions {
 struct PoissonArgs {
   PoissonOptions options;
   std::string boundary = "neumann";
-  std::string depth = "8";  ///< "auto" (contour only): from the grid's resolution
+  std::string depth = "8";     ///< "auto" (contour only): from the grid's resolution
   std::string dilation = "2";  ///< likewise
 
   void add_to(CLI::App* app);

@@ -76,9 +76,9 @@ struct BandSamples {
 };
 
 /// The automatic band, in spacings, for samples `samples_per_axis` across: 8 below 128, 4 from
-/// 128, 3 from 256. Measured against every sample (`bench/band.py`, docs/band.md, 6 shared meshes, geometric
-/// mean of L1 / L1 with all samples): band 4 gives 1.068 at 32^3, 1.084 at 64^3, 1.120 at 96^3
-/// and 0.875 at 128^3; band 8 gives 1.017, 1.045 and 1.021 at 32^3, 64^3 and 96^3 for 31-60%
+/// 128, 3 from 256. Measured against every sample (`bench/band.py`, docs/band.md, 6 shared meshes,
+/// geometric mean of L1 / L1 with all samples): band 4 gives 1.068 at 32^3, 1.084 at 64^3, 1.120 at
+/// 96^3 and 0.875 at 128^3; band 8 gives 1.017, 1.045 and 1.021 at 32^3, 64^3 and 96^3 for 31-60%
 /// more time there. From 128 on, band 4 is as accurate as all samples and twice as fast as 8.
 /// From 256, with the projection (on by default), band 3 against 4 took 0.74x (bunny 256^3) and
 /// 0.79x (bunny 512^3) the time for 1.02x the L1 (docs/scale.md).
