@@ -140,7 +140,7 @@ void PoissonArgs::add_to(CLI::App* app) {
   app->add_option("--depth", depth,
                   depth == "auto"
                       ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 up to "
-                        "256, 10 above (a 512^3 grid: 4-6 GB)"
+                        "256, 10 above (a 512^3 grid: 1.4-2.2 GB in all)"
                       : "Finest octree depth")
       ->capture_default_str();
   app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
