@@ -169,26 +169,27 @@ void PoissonArgs::add_to(CLI::App* app) {
       ->capture_default_str();
 }
 
+namespace {
+
+// A whole number in [lo, hi], or 0 for "auto" (the pipeline chooses). The range is checked
+// before the conversion to int, which a huge value would make undefined.
+int whole_number_or_auto(const std::string& option, const std::string& text, int lo, int hi) {
+  if (text == "auto") return 0;
+  const double value = parse_number_or(option, text, {});
+  require_range(option, value, lo, hi);
+  const int whole = int(value);
+  if (std::to_string(whole) != text) throw Error(option + " must be a whole number or 'auto'");
+  return whole;
+}
+
+}  // namespace
+
 PoissonOptions PoissonArgs::resolved() const {
   PoissonOptions o = options;
   require_range("--alpha", o.point_weight, 0, 1e4);
-  if (depth == "auto") {
-    o.depth = 0;  // the pipeline chooses
-    require_range("--full-depth", o.full_depth, 0, 8);
-  } else {
-    o.depth = int(parse_number_or("--depth", depth, {}));
-    require_range("--depth", o.depth, 1, 16);
-    if (std::to_string(o.depth) != depth) throw Error("--depth must be a whole number or 'auto'");
-    require_range("--full-depth", o.full_depth, 0, o.depth);
-  }
-  if (dilation == "auto") {
-    o.refine_dilation = 0;  // the pipeline chooses
-  } else {
-    o.refine_dilation = int(parse_number_or("--refine-dilation", dilation, {}));
-    require_range("--refine-dilation", o.refine_dilation, 1, 4);
-    if (std::to_string(o.refine_dilation) != dilation)
-      throw Error("--refine-dilation must be a whole number or 'auto'");
-  }
+  o.depth = whole_number_or_auto("--depth", depth, 1, 16);
+  require_range("--full-depth", o.full_depth, 0, o.depth == 0 ? 8 : o.depth);
+  o.refine_dilation = whole_number_or_auto("--refine-dilation", dilation, 1, 4);
   require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
   require_range("--scale", o.scale, 1, 16);
   require_range("--solver-tolerance", o.solver_tolerance, 1e-16, 0.5);
