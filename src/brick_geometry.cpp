@@ -10,6 +10,8 @@
 #include <cmath>
 #include <iterator>
 
+#include "brick_shell.h"
+
 namespace sdfcontour {
 
 namespace {
@@ -92,13 +94,14 @@ bool sphere_inside(const Vector3d& c, double reach2, const Box& box, double marg
   if (reach2 <= -margin * margin) return true;  // an imaginary sphere: no sample can violate it
   const double reach = std::sqrt(std::max(reach2, 0.0)) + margin;
   if (box.depth(c) > reach) return true;
-  need.min = need.min.cwiseMin(c - Vector3d::Constant(2 * reach));
-  need.max = need.max.cwiseMax(c + Vector3d::Constant(2 * reach));
+  need.min = need.min.cwiseMin(c - Vector3d::Constant(reach));
+  need.max = need.max.cwiseMax(c + Vector3d::Constant(reach));
   return false;
 }
 
-bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
-                        const Box& box, double max_weight, double margin, Box& need) {
+bool orthosphere_certified(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
+                           const Box& box, const BrickShell* shell, double max_weight,
+                           double margin, Box& need) {
   auto w = [&](int i) { return values[i] * values[i]; };
   const Vector3d p0 = p.row(v[0]).transpose();
   // The orthocentre c = p0 + x solves 2 d_r . x = |d_r|^2 - w_r + w_0 (r = 1..3), by Cramer's
@@ -123,7 +126,17 @@ bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, con
     x = c - p0;
   }
   // q outside violates the tet iff |c - q|^2 - w_q < r^2 = |c - p0|^2 - w0, and w_q <= max_weight.
-  return sphere_inside(p0 + x, x.squaredNorm() - w(v[0]) + max_weight, box, margin, need);
+  const Vector3d c = p0 + x;
+  const double r2 = x.squaredNorm() - w(v[0]);
+  Box grown = need;
+  if (sphere_inside(c, r2 + max_weight, box, margin, grown)) return true;
+  // The sphere leaves the box: the samples outside it that it can reach are all in the shell.
+  if (shell && std::isfinite(r2) && c.allFinite()) {
+    const double reach = std::sqrt(std::max(r2 + max_weight, 0.0)) + margin;
+    if (shell->outer().depth(c) > reach && shell->conflict_free(c, r2, reach, margin)) return true;
+  }
+  need = grown;
+  return false;
 }
 
 bool power_circle_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,

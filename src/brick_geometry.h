@@ -11,6 +11,8 @@
 
 namespace sdfcontour {
 
+class BrickShell;
+
 /// An axis-aligned box: a brick with its halo.
 struct BrickBox {
   Eigen::Vector3d min, max;
@@ -30,12 +32,15 @@ struct BrickBox {
 bool sphere_inside(const Eigen::Vector3d& c, double reach2, const BrickBox& box, double margin,
                    BrickBox& need);
 
-/// True if the orthosphere of the tet with sample rows v[0..3] (positions p, weights values²),
-/// grown by `max_weight`, stays `margin` inside `box`: then no sample outside the box can have a
-/// negative power product with it. Otherwise `need` grows to hold the grown sphere (or, for an
-/// exactly flat tet, by nothing). Tets too flat for doubles are solved exactly.
-bool orthosphere_inside(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
-                        const BrickBox& box, double max_weight, double margin, BrickBox& need);
+/// True if no sample outside `box` conflicts with (has a negative power product with) the
+/// orthosphere of the tet with sample rows v[0..3] (positions p, weights values²): either the
+/// orthosphere grown by `max_weight` (the largest outside weight) stays `margin` inside `box`,
+/// or it stays inside the `shell`'s outer box (if any) and none of the shell's samples conflicts
+/// with it. Otherwise `need` grows to hold the grown sphere (or, for an exactly flat tet, by
+/// nothing). Tets too flat for doubles are solved exactly.
+bool orthosphere_certified(const PointMatrix& p, const Eigen::VectorXd& values, const int* v,
+                           const BrickBox& box, const BrickShell* shell, double max_weight,
+                           double margin, BrickBox& need);
 
 /// The same for the power circle of the triangle v[0..2] in its plane (a facet in a flat face
 /// of the hull: only samples on that plane can conflict with its infinite cell).

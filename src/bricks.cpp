@@ -11,6 +11,7 @@
 #include <string>
 
 #include "brick_geometry.h"
+#include "brick_shell.h"
 #include "sdfcontour/triangulation.h"
 
 namespace sdfcontour {
@@ -91,6 +92,11 @@ void add_counts(ContactPoints& to, const ContactPoints& from) {
   to.rescued += from.rescued;
 }
 
+// Retries group the failed samples by cubes of this many spacings.
+constexpr double kRetryGroup = 16;
+// Retries this deep and deeper put all failed samples in one box that holds the last.
+constexpr int kGroupedRetries = 2;
+
 struct BrickOutput {
   ContactPoints kept;  // samples named by global index, in the order solved
   long triangulated = 0, largest = 0;
@@ -109,6 +115,9 @@ class BrickRunner {
         only_(only),
         grid_(bucket(s.points, o.size * h)) {
     max_weight_ = s.values.array().square().maxCoeff();
+    // Twice the largest |value|: a sphere about a point of the box's edge region, grown by the
+    // largest weight, stays inside.
+    shell_width_ = 2 * std::sqrt(max_weight_);
     all_ = {s.points.colwise().minCoeff().transpose(), s.points.colwise().maxCoeff().transpose()};
     margin_ = 1e-9 * (all_.max - all_.min).maxCoeff();
     std::vector<std::vector<int>> buckets(std::size_t(grid_.count()));
@@ -136,16 +145,24 @@ class BrickRunner {
 
  private:
   // Contact points of `targets` (ascending sample indices inside `box`) from the triangulation
-  // of the samples in `box`. Targets whose stars it cannot certify are solved again in a box
-  // grown to hold the orthospheres that failed (or, if that is no growth, twice as wide).
-  void solve(const Box& box, const std::vector<int>& targets, BrickOutput& out) const {
+  // of the samples in `box`. Targets whose stars it cannot certify are solved again, in small
+  // groups (retry), each in a box that holds its orthospheres that failed.
+  void solve(const Box& box, const std::vector<int>& targets, BrickOutput& out,
+             int depth = 0) const {
     if (targets.empty()) return;
     const bool everything = box.contains(all_);
-    const std::vector<int> local = gather(grid_, s_.points, box);
+    // The samples in the box are triangulated; those in a shell around it are only tested
+    // against the orthospheres that reach out of the box.
+    const Vector3d shell_width = Vector3d::Constant(everything ? 0.0 : shell_width_);
+    std::vector<int> local, outside;
+    for (int s : gather(grid_, s_.points, {box.min - shell_width, box.max + shell_width}))
+      (box.contains(point(s)) ? local : outside).push_back(s);
+    const BrickShell shell(s_.points, s_.values, outside,
+                           {box.min - shell_width, box.max + shell_width}, 2 * h_);
     Samples ls;
     Triangulation tri;
-    Box need = box;
     std::vector<int> failed;
+    std::vector<Box> needs;  // per failed target: the failing spheres (and the target)
     std::vector<char> keep(local.size(), 0);
     if (triangulate_local(local, everything, ls, tri)) {
       check_cancel(options_.cancel);
@@ -155,23 +172,77 @@ class BrickRunner {
       for (std::size_t r = 0, t = 0; r < local.size() && t < targets.size(); ++r) {
         if (local[r] != targets[t]) continue;
         ++t;
-        if (everything || tri.hidden[r] || certified(ls, tri, r, box, need, tet_inside))
+        Box need{point(local[r]), point(local[r])};
+        if (everything || tri.hidden[r] || certified(ls, tri, r, box, shell, need, tet_inside)) {
           keep[r] = 1;
-        else
+        } else {
           failed.push_back(local[r]);
+          needs.push_back(need);
+        }
       }
       const PointMatrix g = vertex_gradients(ls.points, ls.values, tri, gradient_, &keep);
       collect(gradient_contact_points(ls.points, ls.values, g, tri, contact_, &keep), local, out);
     } else {
       failed = targets;
+      for (int s : targets) needs.push_back({point(s), point(s)});
     }
     if (failed.empty()) return;
-    ++out.retries;
-    const Vector3d grow = (box.max - box.min) / 2;
-    if ((need.min.array() >= box.min.array()).all() && (need.max.array() <= box.max.array()).all())
-      need = {box.min - grow, box.max + grow};
-    solve(need, failed, out);
+    retry(box, failed, needs, depth, out);
   }
+
+  // Solves the `failed` targets of `box` (a retry at `depth`) again. Each failed target needs a
+  // box holding its failing spheres (`needs`) and a halo around itself. The targets are grouped
+  // by cubes of kRetryGroup spacings, each group solved in the box its members need, unless
+  // those boxes hold more volume than one box for them all: small groups keep a retry's
+  // triangulation small, as a thin halo's failures lie along the brick's faces. From
+  // kGroupedRetries deep on, the one box also holds `box`, so boxes only grow and the
+  // recursion ends. A box that would not grow beyond `box` (a failure that more room does not
+  // explain) becomes `box` grown by half its size on every side.
+  void retry(const Box& box, const std::vector<int>& failed, const std::vector<Box>& needs,
+             int depth, BrickOutput& out) const {
+    ++out.retries;
+    const Vector3d halo = Vector3d::Constant(options_.halo * h_);
+    auto add = [&](Box& to, std::size_t f) {
+      to.min = to.min.cwiseMin(needs[f].min - halo);
+      to.max = to.max.cwiseMax(needs[f].max + halo);
+    };
+    auto volume = [](const Box& b) { return (b.max - b.min).prod(); };
+    const Box none{Vector3d::Constant(INFINITY), Vector3d::Constant(-INFINITY)};
+    std::vector<std::pair<std::array<long, 3>, std::size_t>> keyed(failed.size());
+    for (std::size_t f = 0; f < failed.size(); ++f) {
+      const Vector3d cell = ((point(failed[f]) - box.min) / (kRetryGroup * h_)).array().floor();
+      keyed[f] = {{long(cell.x()), long(cell.y()), long(cell.z())}, f};
+    }
+    std::sort(keyed.begin(), keyed.end());  // groups in a fixed order, members ascending
+    std::vector<Box> boxes;
+    std::vector<std::vector<int>> groups;
+    Box all = depth < kGroupedRetries ? none : box;
+    double grouped = 0;
+    for (std::size_t i = 0, j; i < keyed.size(); i = j) {
+      boxes.push_back(none);
+      groups.emplace_back();
+      for (j = i; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) {
+        groups.back().push_back(failed[keyed[j].second]);
+        add(boxes.back(), keyed[j].second);
+        add(all, keyed[j].second);
+      }
+      grouped += volume(boxes.back());
+    }
+    if (depth >= kGroupedRetries || grouped >= volume(all)) {
+      boxes = {all};
+      groups = {failed};
+    }
+    for (std::size_t g = 0; g < boxes.size(); ++g) {
+      Box b = boxes[g];
+      if (box.contains(b)) {
+        const Vector3d grow = (box.max - box.min) / 2;
+        b = {box.min - grow, box.max + grow};
+      }
+      solve(b, groups[g], out, depth + 1);
+    }
+  }
+
+  Vector3d point(int s) const { return s_.points.row(s).transpose(); }
 
   // The local samples' triangulation; false if there is none yet (too few or flat samples).
   bool triangulate_local(const std::vector<int>& local, bool everything, Samples& ls,
@@ -198,7 +269,7 @@ class BrickRunner {
   // hull, every hull facet a global one. Failing orthospheres grow `need`. `tet_inside` caches
   // each tet's verdict (-1: not yet), as a tet is in up to four stars.
   bool certified(const Samples& ls, const Triangulation& tri, std::size_t r, const Box& box,
-                 Box& need, std::vector<signed char>& tet_inside) const {
+                 const BrickShell& shell, Box& need, std::vector<signed char>& tet_inside) const {
     if (tri.on_hull[r] &&
         !hull_facets_global(ls, tri, int(r), hull_, max_weight_, margin_, box, need))
       return false;
@@ -206,9 +277,10 @@ class BrickRunner {
     for (int o = tri.incident_offsets[r]; o < tri.incident_offsets[r + 1]; ++o) {
       const int t = tri.incident_tets[std::size_t(o)];
       signed char& inside = tet_inside[std::size_t(t)];
-      if (inside < 0)
-        inside = orthosphere_inside(ls.points, ls.values, tri.tets.row(t).data(), box, max_weight_,
-                                    margin_, need);
+      // A failure is tested again, so that every target's `need` holds its failing spheres.
+      if (inside != 1)
+        inside = orthosphere_certified(ls.points, ls.values, tri.tets.row(t).data(), box, &shell,
+                                       max_weight_, margin_, need);
       ok &= inside == 1;
     }
     return ok;
@@ -233,12 +305,18 @@ class BrickRunner {
   const BrickOptions& options_;
   const std::vector<char>* only_;
   BrickGrid grid_;
-  double max_weight_ = 0, margin_ = 0;
+  double max_weight_ = 0, margin_ = 0, shell_width_ = 0;
   Box all_;
   std::vector<Vector3d> hull_;  // the vertices of every sample's convex hull
 };
 
 }  // namespace
+
+double auto_brick_halo(double largest, double spacing) {
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
+  // Whole layers: a grid's largest |value| is just under a whole number of spacings.
+  return std::ceil(std::abs(largest) / spacing - 1e-6) + 2;
+}
 
 int auto_brick_size(const PointMatrix& points, double spacing, int threads) {
   if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");

@@ -264,14 +264,14 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                         (method == Method::Gcp && options.want_mesh);
   // GCP from the regular triangulation runs brick by brick (the same points, less memory).
   // Bricks need a band (or a truncation): without one, the weights are unbounded and no halo
-  // is local. The default halo is twice the largest |value| kept, in spacings.
+  // is local.
   const double largest = s.values.size() ? s.values.cwiseAbs().maxCoeff() : 0.0;
   const bool bounded = std::isfinite(options.band.band) || (std::isfinite(band.truncation.inside) &&
                                                             std::isfinite(band.truncation.outside));
   const bool gcp_in_bricks = need_gcp && options.gradient_source == GradientSource::Regular &&
                              options.bricks.size != 0 && bounded;
   BrickOptions bricks = options.bricks;
-  if (bricks.halo == 0) bricks.halo = std::max(2 * largest / band.spacing, 1.0);
+  if (bricks.halo == 0) bricks.halo = auto_brick_halo(largest, band.spacing);
   bricks.cancel = options.cancel;
   const bool need_regular =
       (need_gcp && !gcp_in_bricks) || (method == Method::MtRt && options.want_mesh);

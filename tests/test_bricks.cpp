@@ -1,6 +1,9 @@
 #include <cmath>
+#include <limits>
+#include <random>
 
 #include "brick_geometry.h"
+#include "brick_shell.h"
 #include "sdfcontour/band.h"
 #include "sdfcontour/bricks.h"
 #include "sdfcontour/builtin_shapes.h"
@@ -84,7 +87,7 @@ TEST(Bricks, AutomaticSizeKeepsFourBricksPerThread) {
   const Grid grid = sample_grid(*make_builtin_shape("torus"), 32, Bounds{});
   const BandSamples band = select_band(grid, BandOptions{});
   BrickOptions o;  // size automatic
-  o.halo = 2 * band.samples.values.cwiseAbs().maxCoeff() / band.spacing;
+  o.halo = auto_brick_halo(band.samples.values.cwiseAbs().maxCoeff(), band.spacing);
   BrickStats stats;
   expect_same(brick_contact_points(band.samples, band.spacing, {}, {}, o, &stats, {}, &band.core),
               global_contact_points(band, {}));
@@ -119,7 +122,10 @@ TEST(Bricks, CertifyHullSamplesAndFlatTetrahedraInPlace) {
     const BandSamples band = select_band(grid, band_options);
     BrickOptions o;
     o.size = 24;
-    o.halo = 2 * band.samples.values.cwiseAbs().maxCoeff() / band.spacing;
+    // A halo of twice the largest |value| holds every star here, so any retry would be a hull
+    // sample or a flat tet that was not certified.
+    const double largest = band.samples.values.cwiseAbs().maxCoeff();
+    o.halo = 2 * largest / band.spacing;
     BrickStats stats;
     const ContactPoints bricks =
         brick_contact_points(band.samples, band.spacing, {}, {}, o, &stats, {}, &band.core);
@@ -127,7 +133,18 @@ TEST(Bricks, CertifyHullSamplesAndFlatTetrahedraInPlace) {
               << stats.largest_brick << " of " << band.samples.values.size() << " samples\n";
     EXPECT_EQ(stats.retries, 0);
     EXPECT_LT(stats.largest_brick, band.samples.values.size() / 2);
-    expect_same(bricks, global_contact_points(band, {}));
+    const ContactPoints global = global_contact_points(band, {});
+    expect_same(bricks, global);
+    // The automatic halo is thinner: a few stars reach beyond it, and their samples are solved
+    // again in small boxes, so that the halo's savings are kept.
+    o.halo = auto_brick_halo(largest, band.spacing);
+    BrickStats thin;
+    expect_same(brick_contact_points(band.samples, band.spacing, {}, {}, o, &thin, {}, &band.core),
+                global);
+    std::cout << "  automatic halo " << o.halo << ": " << thin.retries << " retries, "
+              << thin.triangulated << " samples triangulated, against " << stats.triangulated
+              << "\n";
+    EXPECT_LT(thin.triangulated, stats.triangulated);
   }
 }
 
@@ -180,4 +197,45 @@ TEST(BrickGeometry, GlobalHullFacets) {
             HullFacet::Global);
   EXPECT_EQ(classify_hull_facet({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}, tet),
             HullFacet::NotGlobal);
+}
+
+// The shell's test against brute force: a sample q conflicts with the sphere (c, r2) when
+// |c - q|^2 - w_q < r2. Random samples in a box's shell, random spheres (some imaginary); a
+// conflict is never missed, and a sphere is passed whenever its nearest conflict is clearly
+// apart (more than the margin's worth).
+TEST(BrickGeometry, ShellFindsEveryConflictingSample) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const BrickBox box{Eigen::Vector3d::Constant(-0.5), Eigen::Vector3d::Constant(0.5)};
+  const BrickBox outer{Eigen::Vector3d::Constant(-1.0), Eigen::Vector3d::Constant(1.0)};
+  PointMatrix points(3000, 3);
+  Eigen::VectorXd values(3000);
+  std::vector<int> outside;
+  for (int i = 0; i < 3000; ++i) {
+    points.row(i) << u(rng), u(rng), u(rng);
+    values[i] = 0.1 * u(rng);
+    if (!box.contains(Eigen::Vector3d(points.row(i).transpose()))) outside.push_back(i);
+  }
+  const BrickShell shell(points, values, outside, outer, 0.05);
+  EXPECT_FALSE(shell.empty());
+  const double margin = 1e-9, max_weight = 0.01;
+  int conflicts = 0, free = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Eigen::Vector3d c(0.6 * u(rng), 0.6 * u(rng), 0.6 * u(rng));
+    const double r2 = 0.02 * u(rng);                           // negative: an imaginary sphere
+    double closest = std::numeric_limits<double>::infinity();  // min |c - q|^2 - w_q - r2
+    for (int q : outside)
+      closest = std::min(closest, (Eigen::Vector3d(points.row(q).transpose()) - c).squaredNorm() -
+                                      values[q] * values[q] - r2);
+    const double reach = std::sqrt(std::max(r2 + max_weight, 0.0)) + margin;
+    const bool clear = shell.conflict_free(c, r2, reach, margin);
+    if (closest < 0) {
+      EXPECT_FALSE(clear) << trial;
+    } else if (closest > 1e-6) {
+      EXPECT_TRUE(clear) << trial;
+    }
+    (clear ? free : conflicts) += 1;
+  }
+  EXPECT_GT(conflicts, 100);
+  EXPECT_GT(free, 100);
 }

@@ -420,8 +420,8 @@ Command add_contour_command(CLI::App& app) {
        "samples each, else 64")
       ->capture_default_str();
   c->add_option("--brick-halo", a->brick_halo,
-                "First halo around a brick, in spacings (doubled where it does not suffice); "
-                "0: twice the largest |value| in the band and its margin")
+                "First halo around a brick, in spacings (grown where it does not suffice); "
+                "0: the largest |value| in the band and its margin, plus 2")
       ->capture_default_str();
   c->add_flag("--fn", a->fn,
               "+FN: if the averaged gradient's point is discarded, try each incident tet's "

@@ -25,9 +25,9 @@ struct BrickOptions {
   static constexpr int kAutoSize = -1;
   /// Brick side in spacings; 0: one triangulation of every sample; kAutoSize: auto_brick_size.
   int size = kAutoSize;
-  /// First halo width in spacings (doubled where a star is not certified); 0: twice the largest
-  /// |value| kept (the band and its margin), from measurement: orthocentres of band-edge tets
-  /// lie up to about that far out, and their spheres reach as far again.
+  /// First halo width in spacings (grown where a star is not certified); 0: auto_brick_halo.
+  /// Samples in a shell beyond the halo, twice the largest |value| wide, are not triangulated
+  /// but tested against the orthospheres that reach out of the halo's box.
   double halo = 0;
   /// When set and it becomes true, the bricks stop soon (throws Cancelled).
   const std::atomic<bool>* cancel = nullptr;
@@ -41,6 +41,14 @@ struct BrickStats {
   long largest_brick = 0;  ///< samples in the largest triangulation
   int size = 0;            ///< the brick side used, in spacings
 };
+
+/// The first halo (in spacings) for samples whose largest |value| is `largest`: largest / spacing
+/// rounded up, + 2. From measurement: the stars of the band's outermost samples reach about that
+/// far (bunny 256³, largest 4 spacings: 5 needs no retry, 4 retries 5 of 8 bricks; 128³,
+/// largest 5: 7 none, 6 one; a sphere at 72³, largest 4: 6 none, 5.97 twelve). The exact test
+/// against the shell's samples lets it be this thin; bounding every outside weight by the
+/// largest needed twice the largest |value|.
+double auto_brick_halo(double largest, double spacing);
 
 /// The brick side (in spacings) for `points` (n x 3) at `spacing` when `threads` run them: the
 /// largest of 256, 192, 160, 128, 96 that still makes at least 4 bricks per thread with at most
