@@ -432,18 +432,37 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
         throw NotDistances("no part of the reconstructed surface lies in the grid");
     };
     clip_to_grid();
-    if (project)
+    // Projection and carving move vertices by a fraction of a spacing, which can push a thin
+    // part's sheet through the other; such moves are undone, the reconstruction's own mesh
+    // being free of crossings.
+    auto untangle = [&](const PointMatrix& before) {
+      const UntangleStats u = stages.run("untangling", "undoing moves that cross the mesh", [&] {
+        return revert_self_intersections(*result.mesh, before);
+      });
+      UntangleStats& sum = result.untangling.emplace(result.untangling.value_or(UntangleStats{}));
+      sum.rounds += u.rounds;
+      sum.vertices_reverted += u.vertices_reverted;
+      sum.intersections_found += u.intersections_found;
+      sum.intersections_left += u.intersections_left;
+    };
+    if (project) {
+      const PointMatrix before = result.mesh->vertices;
       result.projection =
           stages.run("projection", "projecting the mesh onto the contact points", [&] {
             return project_to_contact_points(*result.mesh, lent.points, lent.normals,
                                              contact_depths, result.band_spacing,
                                              options.projection);
           });
-    if (carve)
+      untangle(before);
+    }
+    if (carve) {
+      const PointMatrix before = result.mesh->vertices;
       result.carving = stages.run("carving", "carving the mesh out of the samples' spheres", [&] {
         return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,
                           result.band_spacing, carving);
       });
+      untangle(before);
+    }
     if (result.clipped_to_grid) clip_to_grid();
     if (method == Method::Gcp && grid) check_on_zero_set(*grid, result);
   }

@@ -223,6 +223,11 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                     {"side_violations_left", r.carving->side_violations_left},
                     {"wrong_side_left", r.carving->wrong_side_left},
                     {"side_passes", r.carving->side_passes}};
+  if (r.untangling)
+    j["untangling"] = {{"rounds", r.untangling->rounds},
+                       {"vertices_reverted", r.untangling->vertices_reverted},
+                       {"intersections_found", r.untangling->intersections_found},
+                       {"intersections_left", r.untangling->intersections_left}};
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};

@@ -16,6 +16,7 @@
 #include "sdfcontour/npy.h"
 #include "sdfcontour/poisson.h"
 #include "sdfcontour/sdf_input.h"
+#include "sdfcontour/self_intersections.h"
 #include "sdfcontour/sphere_carving.h"
 
 namespace sdfcontour {
@@ -142,6 +143,9 @@ struct ContourResult {
   bool sign_constraints = false;          ///< gcp: the samples' sides constrained the indicator
   std::optional<ContactProjectionStats> projection;  ///< gcp: when the mesh was projected
   std::optional<CarvingStats> carving;               ///< gcp: when the mesh was carved
+  /// gcp: projection's and carving's moves undone where they made the mesh cross itself
+  /// (self_intersections.h), summed over both stages
+  std::optional<UntangleStats> untangling;
   bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's

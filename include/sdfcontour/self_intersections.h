@@ -1,0 +1,38 @@
+// Triangles of a mesh that cross each other, and undoing the vertex moves that made them.
+// Projection and carving move vertices a fraction of a spacing; where a part is thinner than
+// that, a move can push one sheet through another and leave a self-intersecting mesh (which
+// breaks booleans, tetrahedral meshing and inside tests).
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+/// Pairs (s, t), s < t, ascending, of triangles of `mesh` that intersect other than in the
+/// vertices and edge they share: triangles with no common vertex that meet, and triangles with one
+/// common vertex whose opposite edges cut the other triangle. Triangles sharing an edge, and
+/// degenerate (zero-area) triangles, are not tested. With `watch` (one flag per triangle), only
+/// pairs with at least one flagged triangle are reported. Exact predicates (CGAL); parallel
+/// (TBB), the same result for any thread count.
+std::vector<std::pair<int, int>> self_intersecting_triangles(
+    const Mesh& mesh, const std::vector<char>* watch = nullptr);
+
+/// What revert_self_intersections did.
+struct UntangleStats {
+  int rounds = 0;                ///< rounds of tests
+  int vertices_reverted = 0;     ///< vertices moved back to where they were
+  long intersections_found = 0;  ///< intersecting pairs in the first round
+  long intersections_left = 0;   ///< pairs that moving back could not remove (`before` had them)
+};
+
+/// Moves back to `before` (the mesh's vertices before some stage moved them: same rows, same
+/// triangles) every moved vertex of a triangle that intersects another, round after round over
+/// the triangles around the vertices moved back, until no such triangle is left. `before` is
+/// taken as free of self-intersections; pairs it had already are counted as left. Throws Error
+/// if `before` does not match the mesh.
+UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before);
+
+}  // namespace sdfcontour
