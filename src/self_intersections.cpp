@@ -18,43 +18,64 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 
-// Triangles bucketed by the cube of side `cell` holding their bounding box's centre, sorted by
-// cube (x fastest). `cell` is at least every triangle's extent, so a triangle whose box meets a
-// given box has its centre within `cell` of it.
+// Triangles bucketed by the cubes of side `cell` that their bounding boxes meet, sorted by cube
+// (x fastest). The cubes are about twice a typical triangle's extent, so most triangles sit in one
+// to eight of them.
 class TriangleCubes {
  public:
   explicit TriangleCubes(const std::vector<Eigen::AlignedBox3d>& boxes) {
     Eigen::AlignedBox3d all;
-    cell_ = 0;
-    for (const auto& b : boxes) {
-      all.extend(b);
-      cell_ = std::max(cell_, (b.max() - b.min()).maxCoeff());
+    std::vector<double> extents(boxes.size());
+    for (std::size_t t = 0; t < boxes.size(); ++t) {
+      all.extend(boxes[t]);
+      extents[t] = (boxes[t].max() - boxes[t].min()).maxCoeff();
     }
+    auto middle = extents.begin() + long(extents.size() / 2);
+    std::nth_element(extents.begin(), middle, extents.end());
     origin_ = all.min();
     const Eigen::Vector3d extent = all.max() - all.min();
-    cell_ = std::max(cell_, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
-    // Keys must fit in 63 bits whatever the spread: coarser cubes only cost more tests.
-    while (((extent / cell_).array() + 1).prod() > 1e17) cell_ *= 2;
+    cell_ = std::max(2 * *middle, 1e-9 * std::max(extent.maxCoeff(), 1e-300));
+    // Keys must fit in 63 bits whatever the spread, and no triangle may sit in too many cubes:
+    // coarser cubes only cost more tests.
+    while (((extent / cell_).array() + 1).prod() > 1e17 ||
+           ((extent / cell_).array() + 1).prod() > 64.0 * double(boxes.size()))
+      cell_ *= 2;
     for (int a = 0; a < 3; ++a) size_[a] = long(extent[a] / cell_) + 1;
-    keyed_.resize(boxes.size());
+    std::vector<long> offsets(boxes.size() + 1, 0);
     tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
-      const auto c = cube_of(boxes[t].center());
-      keyed_[t] = {key(c[0], c[1], c[2]), int(t)};
+      const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
+      offsets[t + 1] = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    });
+    for (std::size_t t = 0; t < boxes.size(); ++t) offsets[t + 1] += offsets[t];
+    keyed_.resize(std::size_t(offsets.back()));
+    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
+      const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
+      long at = offsets[t];
+      for (long k = lo[2]; k <= hi[2]; ++k)
+        for (long j = lo[1]; j <= hi[1]; ++j)
+          for (long i = lo[0]; i <= hi[0]; ++i) keyed_[std::size_t(at++)] = {key(i, j, k), int(t)};
     });
     tbb::parallel_sort(keyed_.begin(), keyed_.end());
   }
 
-  // Calls f(triangle) for every triangle whose box may meet `box`.
+  // Calls f(u) once for every triangle u whose box meets `box`'s cubes: in the cube holding the
+  // lower corner of the two boxes' overlap (`boxes` as given to the constructor).
   template <class F>
-  void for_each_near(const Eigen::AlignedBox3d& box, F&& f) const {
-    const auto lo = cube_of(box.min().array() - cell_), hi = cube_of(box.max().array() + cell_);
+  void for_each_near(const Eigen::AlignedBox3d& box, const std::vector<Eigen::AlignedBox3d>& boxes,
+                     F&& f) const {
+    const auto lo = cube_of(box.min()), hi = cube_of(box.max());
     for (long k = lo[2]; k <= hi[2]; ++k)
-      for (long j = lo[1]; j <= hi[1]; ++j) {
-        auto it = std::lower_bound(keyed_.begin(), keyed_.end(),
-                                   std::pair<long, int>{key(lo[0], j, k), -1});
-        const long end = key(hi[0], j, k);
-        for (; it != keyed_.end() && it->first <= end; ++it) f(it->second);
-      }
+      for (long j = lo[1]; j <= hi[1]; ++j)
+        for (long i = lo[0]; i <= hi[0]; ++i) {
+          const long here = key(i, j, k);
+          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<long, int>{here, -1});
+          for (; it != keyed_.end() && it->first == here; ++it) {
+            const Eigen::AlignedBox3d& other = boxes[std::size_t(it->second)];
+            if (!box.intersects(other)) continue;
+            const auto corner = cube_of(box.min().cwiseMax(other.min()));
+            if (key(corner[0], corner[1], corner[2]) == here) f(it->second);
+          }
+        }
   }
 
  private:
@@ -70,7 +91,7 @@ class TriangleCubes {
   double cell_ = 1;
   Eigen::Vector3d origin_;
   long size_[3] = {1, 1, 1};
-  std::vector<std::pair<long, int>> keyed_;
+  std::vector<std::pair<long, int>> keyed_;  // (cube key, triangle), sorted
 };
 
 // Whether triangles s and t (not sharing an edge) meet other than in a shared vertex.
@@ -122,10 +143,9 @@ std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
   tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index ti) {
     const int t = int(ti);
     if (!watched(t) || flat[std::size_t(t)]) return;
-    cubes.for_each_near(boxes[std::size_t(t)], [&](int u) {
+    cubes.for_each_near(boxes[std::size_t(t)], boxes, [&](int u) {
       // Each pair once: from its lower triangle when both are watched.
       if (u == t || (watched(u) && u < t) || flat[std::size_t(u)]) return;
-      if (!boxes[std::size_t(t)].intersects(boxes[std::size_t(u)])) return;
       if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
     });
   });
