@@ -58,11 +58,13 @@ class TriangleCubes {
     tbb::parallel_sort(keyed_.begin(), keyed_.end());
   }
 
-  // Calls f(u) once for every triangle u whose box meets `box`'s cubes: in the cube holding the
-  // lower corner of the two boxes' overlap (`boxes` as given to the constructor).
+  // Calls f(u) once for every triangle u whose current box (`current`) meets `box`, found in the
+  // cube holding the lower corner of `box`'s overlap with u's bucketed box (`bucketed`, as given
+  // to the constructor, which holds u's current box).
   template <class F>
-  void for_each_near(const Eigen::AlignedBox3d& box, const std::vector<Eigen::AlignedBox3d>& boxes,
-                     F&& f) const {
+  void for_each_near(const Eigen::AlignedBox3d& box,
+                     const std::vector<Eigen::AlignedBox3d>& bucketed,
+                     const std::vector<Eigen::AlignedBox3d>& current, F&& f) const {
     const auto lo = cube_of(box.min()), hi = cube_of(box.max());
     for (long k = lo[2]; k <= hi[2]; ++k)
       for (long j = lo[1]; j <= hi[1]; ++j)
@@ -70,9 +72,9 @@ class TriangleCubes {
           const long here = key(i, j, k);
           auto it = std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<long, int>{here, -1});
           for (; it != keyed_.end() && it->first == here; ++it) {
-            const Eigen::AlignedBox3d& other = boxes[std::size_t(it->second)];
-            if (!box.intersects(other)) continue;
-            const auto corner = cube_of(box.min().cwiseMax(other.min()));
+            const std::size_t u = std::size_t(it->second);
+            if (!box.intersects(current[u])) continue;
+            const auto corner = cube_of(box.min().cwiseMax(bucketed[u].min()));
             if (key(corner[0], corner[1], corner[2]) == here) f(it->second);
           }
         }
@@ -123,6 +125,70 @@ bool degenerate(const Mesh& mesh, int t) {
 
 }  // namespace
 
+namespace {
+
+// The triangles' boxes and cube buckets, built once for rounds of tests while vertices move back
+// to `before`: each triangle is bucketed by the box of its current and earlier positions, which
+// holds every box it can have in between.
+class CrossingSearch {
+ public:
+  CrossingSearch(const Mesh& mesh, const PointMatrix* before)
+      : current_(std::size_t(mesh.triangles.rows())),
+        flat_(std::size_t(mesh.triangles.rows()), 0),
+        cubes_(bucketed_boxes(mesh, before)) {
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(),
+                      [&](Eigen::Index t) { refresh(mesh, int(t)); });
+  }
+
+  // Triangle t's box and flatness from the mesh's current positions.
+  void refresh(const Mesh& mesh, int t) {
+    Eigen::AlignedBox3d box;
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.row(mesh.triangles(t, c)).transpose());
+    current_[std::size_t(t)] = box;
+    flat_[std::size_t(t)] = degenerate(mesh, t);
+  }
+
+  // The crossing pairs with a watched triangle (all if `watch` is null), ascending.
+  std::vector<std::pair<int, int>> find(const Mesh& mesh, const std::vector<char>* watch) const {
+    auto watched = [&](int t) { return !watch || (*watch)[std::size_t(t)]; };
+    tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>> found;
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index ti) {
+      const int t = int(ti);
+      if (!watched(t) || flat_[std::size_t(t)]) return;
+      cubes_.for_each_near(current_[std::size_t(t)], bucketed_, current_, [&](int u) {
+        // Each pair once: from its lower triangle when both are watched.
+        if (u == t || (watched(u) && u < t) || flat_[std::size_t(u)]) return;
+        if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
+      });
+    });
+    std::vector<std::pair<int, int>> pairs;
+    for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+  }
+
+ private:
+  const std::vector<Eigen::AlignedBox3d>& bucketed_boxes(const Mesh& mesh,
+                                                         const PointMatrix* before) {
+    bucketed_.resize(std::size_t(mesh.triangles.rows()));
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
+      Eigen::AlignedBox3d& box = bucketed_[std::size_t(t)];
+      for (int c = 0; c < 3; ++c) {
+        const int v = mesh.triangles(t, c);
+        box.extend(mesh.vertices.row(v).transpose());
+        if (before) box.extend(before->row(v).transpose());
+      }
+    });
+    return bucketed_;
+  }
+
+  std::vector<Eigen::AlignedBox3d> bucketed_, current_;
+  std::vector<char> flat_;
+  TriangleCubes cubes_;
+};
+
+}  // namespace
+
 std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
                                                              const std::vector<char>* watch) {
   const Eigen::Index m = mesh.triangles.rows();
@@ -130,29 +196,7 @@ std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
     throw Error("self-intersections: " + std::to_string(watch->size()) + " flags for " +
                 std::to_string(m) + " triangles");
   if (m < 2) return {};
-  std::vector<Eigen::AlignedBox3d> boxes(static_cast<std::size_t>(m));
-  std::vector<char> flat(static_cast<std::size_t>(m), 0);
-  tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index t) {
-    auto& box = boxes[std::size_t(t)];
-    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.row(mesh.triangles(t, c)).transpose());
-    flat[std::size_t(t)] = degenerate(mesh, int(t));
-  });
-  const TriangleCubes cubes(boxes);
-  auto watched = [&](int t) { return !watch || (*watch)[std::size_t(t)]; };
-  tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>> found;
-  tbb::parallel_for(Eigen::Index(0), m, [&](Eigen::Index ti) {
-    const int t = int(ti);
-    if (!watched(t) || flat[std::size_t(t)]) return;
-    cubes.for_each_near(boxes[std::size_t(t)], boxes, [&](int u) {
-      // Each pair once: from its lower triangle when both are watched.
-      if (u == t || (watched(u) && u < t) || flat[std::size_t(u)]) return;
-      if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
-    });
-  });
-  std::vector<std::pair<int, int>> pairs;
-  for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
-  std::sort(pairs.begin(), pairs.end());
-  return pairs;
+  return CrossingSearch(mesh, nullptr).find(mesh, watch);
 }
 
 UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
@@ -166,8 +210,10 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
   std::vector<char> watch(std::size_t(m), 0);
   for (Eigen::Index t = 0; t < m; ++t)
     for (int c = 0; c < 3; ++c) watch[std::size_t(t)] |= moved(mesh.triangles(t, c));
+  if (m < 2) return stats;
+  CrossingSearch search(mesh, &before);
   for (;;) {
-    const auto pairs = self_intersecting_triangles(mesh, &watch);
+    const auto pairs = search.find(mesh, &watch);
     if (stats.rounds++ == 0) stats.intersections_found = long(pairs.size());
     std::vector<char> back(std::size_t(n), 0);
     bool any = false;
@@ -187,6 +233,7 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
       bool around = false;
       for (int c = 0; c < 3; ++c) around |= back[std::size_t(mesh.triangles(t, c))] != 0;
       watch[std::size_t(t)] = around;
+      if (around) search.refresh(mesh, int(t));
     }
   }
 }
