@@ -96,11 +96,13 @@ class TriangleCubes {
   std::vector<std::pair<long, int>> keyed_;  // (cube key, triangle), sorted
 };
 
+Point vertex_point(const Mesh& mesh, int v) {
+  return Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
+}
+
 // Whether triangles s and t (not sharing an edge) meet other than in a shared vertex.
 bool cross(const Mesh& mesh, int s, int t) {
-  auto at = [&](int v) {
-    return Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
-  };
+  auto at = [&](int v) { return vertex_point(mesh, v); };
   const auto S = mesh.triangles.row(s), T = mesh.triangles.row(t);
   int shared_s = -1, shared_t = -1, shared = 0;
   for (int i = 0; i < 3; ++i)
@@ -117,15 +119,17 @@ bool cross(const Mesh& mesh, int s, int t) {
 
 bool degenerate(const Mesh& mesh, int t) {
   const auto T = mesh.triangles.row(t);
-  auto at = [&](int v) {
-    return Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
-  };
-  return CGAL::collinear(at(T[0]), at(T[1]), at(T[2]));
+  return CGAL::collinear(vertex_point(mesh, T[0]), vertex_point(mesh, T[1]),
+                         vertex_point(mesh, T[2]));
 }
 
-}  // namespace
-
-namespace {
+// One flag per triangle: whether any of its vertices is flagged in `vertices`.
+std::vector<char> triangles_with(const Mesh& mesh, const std::vector<char>& vertices) {
+  std::vector<char> out(std::size_t(mesh.triangles.rows()), 0);
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) out[std::size_t(t)] |= vertices[std::size_t(mesh.triangles(t, c))];
+  return out;
+}
 
 // The triangles' boxes and cube buckets, built once for rounds of tests while vertices move back
 // to `before`: each triangle is bucketed by the box of its current and earlier positions, which
@@ -206,11 +210,11 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
   UntangleStats stats;
   const Eigen::Index n = mesh.vertices.rows(), m = mesh.triangles.rows();
   auto moved = [&](int v) { return mesh.vertices.row(v) != before.row(v); };
-  // First the triangles around any moved vertex, then those around the vertices moved back.
-  std::vector<char> watch(std::size_t(m), 0);
-  for (Eigen::Index t = 0; t < m; ++t)
-    for (int c = 0; c < 3; ++c) watch[std::size_t(t)] |= moved(mesh.triangles(t, c));
   if (m < 2) return stats;
+  // First the triangles around any moved vertex, then those around the vertices moved back.
+  std::vector<char> moved_vertices(std::size_t(n), 0);
+  for (Eigen::Index v = 0; v < n; ++v) moved_vertices[std::size_t(v)] = moved(int(v));
+  std::vector<char> watch = triangles_with(mesh, moved_vertices);
   CrossingSearch search(mesh, &before);
   for (;;) {
     const auto pairs = search.find(mesh, &watch);
@@ -229,12 +233,9 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
     }
     for (Eigen::Index v = 0; v < n; ++v)
       if (back[std::size_t(v)]) mesh.vertices.row(v) = before.row(v), ++stats.vertices_reverted;
-    for (Eigen::Index t = 0; t < m; ++t) {
-      bool around = false;
-      for (int c = 0; c < 3; ++c) around |= back[std::size_t(mesh.triangles(t, c))] != 0;
-      watch[std::size_t(t)] = around;
-      if (around) search.refresh(mesh, int(t));
-    }
+    watch = triangles_with(mesh, back);
+    for (Eigen::Index t = 0; t < m; ++t)
+      if (watch[std::size_t(t)]) search.refresh(mesh, int(t));
   }
 }
 
