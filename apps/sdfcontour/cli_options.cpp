@@ -143,6 +143,10 @@ void PoissonArgs::add_to(CLI::App* app) {
                         "256, 10 above (a 512^3 grid: 1.4-2.2 GB in all)"
                       : "Finest octree depth")
       ->capture_default_str();
+  app->add_option("--degree", options.degree,
+                  "Poisson elements: 1, trilinear; 2, quadratic B-splines (PoissonRecon's default; "
+                  "smoother, slower)")
+      ->capture_default_str();
   app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
       ->capture_default_str();
   app->add_option(
@@ -157,9 +161,11 @@ void PoissonArgs::add_to(CLI::App* app) {
   app->add_option("--scale", options.scale,
                   "Domain = bounding cube of the points enlarged by this factor")
       ->capture_default_str();
-  app->add_option("--boundary", boundary,
-                  "Boundary condition on the domain cube: neumann, dirichlet (chi = 0 on the "
-                  "faces) or free (for these degree-1 elements the same as neumann)")
+  app->add_option(
+         "--boundary", boundary,
+         "Boundary condition on the domain cube: neumann, dirichlet (chi = 0 on the "
+         "faces) or free (B-splines reaching in from outside kept as they are; for degree 1 "
+         "the same as neumann)")
       ->capture_default_str();
   app->add_option("--solver-tolerance", options.solver_tolerance,
                   "Conjugate gradients stop at this relative residual at each depth but the finest")
@@ -188,6 +194,7 @@ PoissonOptions PoissonArgs::resolved() const {
   PoissonOptions o = options;
   require_range("--alpha", o.point_weight, 0, 1e4);
   o.depth = whole_number_or_auto("--depth", depth, 1, 16);
+  require_range("--degree", o.degree, 1, 2);
   require_range("--full-depth", o.full_depth, 0, o.depth == 0 ? 8 : o.depth);
   o.refine_dilation = whole_number_or_auto("--refine-dilation", dilation, 1, 4);
   require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);

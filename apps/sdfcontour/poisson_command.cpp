@@ -29,6 +29,7 @@ nlohmann::json summary_json(const PoissonCommandArgs& a, const PoissonOptions& o
   j["boundary_fallback"] = r.boundary_fallback;
   j["options"] = {{"alpha", o.point_weight},
                   {"depth", o.depth},
+                  {"degree", o.degree},
                   {"full_depth", o.full_depth},
                   {"samples_per_node", o.samples_per_node},
                   {"scale", o.scale},

@@ -1,5 +1,6 @@
 // Screened Poisson surface reconstruction (Kazhdan, Bolitho & Hoppe 2006; Kazhdan & Hoppe 2013)
-// of oriented points on an adaptive octree, with trilinear (degree-1 B-spline) elements.
+// of oriented points on an adaptive octree, with trilinear (degree-1) or quadratic (degree-2)
+// B-spline elements.
 #pragma once
 
 #include <functional>
@@ -15,7 +16,9 @@ namespace sdfcontour {
 /// (even), Dirichlet reflects them oddly (chi = 0 there), free keeps every B-spline whose support
 /// meets the domain, unmodified. For degree-1 elements an even reflection of a face node's hat only
 /// rescales its part inside the domain, and no hat centred outside reaches inside, so Neumann and
-/// free span the same space and give the same chi: the natural condition, dchi/dn = V.n.
+/// free span the same space and give the same chi: the natural condition, dchi/dn = V.n. For
+/// degree 2 they differ: Neumann's space holds only functions with dchi/dn = 0 on the faces, free's
+/// also the B-splines centred just outside the domain, independent of those inside.
 enum class PoissonBoundary {
   Neumann,    ///< reflected (even) B-splines; for degree 1, the natural condition
   Dirichlet,  ///< the indicator is 0 (outside) on the domain's faces
@@ -27,7 +30,10 @@ PoissonBoundary parse_poisson_boundary(const std::string& name);
 std::string poisson_boundary_name(PoissonBoundary boundary);
 
 struct PoissonOptions {
-  int depth = 8;                  ///< finest octree depth (the domain cube split 2^depth times)
+  int depth = 8;  ///< finest octree depth (the domain cube split 2^depth times)
+  /// The elements: 1, trilinear (hats on the nodes); 2, quadratic B-splines on the cells' centres
+  /// (PoissonRecon's default), smoother, with a 5 x 5 x 5 stencil and more unknowns per cell.
+  int degree = 1;
   int full_depth = 5;             ///< the octree is complete down to this depth
   double scale = 1.1;             ///< domain cube = the points' bounding cube enlarged by this
   double samples_per_node = 1.5;  ///< splat each normal at the depth where a node holds this many

@@ -20,8 +20,8 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Whether more than 1% of the coarsest depth's face nodes are inside (chi >= the points' mean
-// chi at that depth).
+}  // namespace
+
 bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
                       const std::vector<UnitPoint>& points) {
   const double iso =
@@ -37,8 +37,6 @@ bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
   }
   return inside * 100 > count;
 }
-
-}  // namespace
 
 CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
                                    const std::vector<UnitPoint>& points, const MortonRuns& runs,

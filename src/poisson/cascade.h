@@ -3,6 +3,7 @@
 // finite-element space with hanging nodes), starting from the prolonged coarser solution.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "normal_field.h"
@@ -16,7 +17,15 @@ struct CascadeResult {
   std::vector<std::vector<double>> values;  ///< chi at each depth's nodes
   std::vector<PoissonLevelStats> levels;
   bool boundary_fallback = false;  ///< the far field came out inside; solved with Dirichlet
+  /// The points' weighted mean of chi, when the solve evaluates chi more exactly than the node
+  /// values' trilinear interpolation does (degree 2); NaN otherwise.
+  double iso_value = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// Whether more than 1% of the coarsest depth's face nodes are inside (chi >= the points' mean
+/// chi at that depth, interpolated from the node values x).
+bool far_field_inside(const OctreeLevel& coarsest, const std::vector<double>& x,
+                      const std::vector<UnitPoint>& points);
 
 /// Solves every depth. Consumes the normal field and the node columns level by level, so that
 /// the finest solve runs with only what it needs in memory.
@@ -31,5 +40,18 @@ struct CascadeResult {
 CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
                                    const std::vector<UnitPoint>& points, const MortonRuns& runs,
                                    double area_per_point, const PoissonOptions& options);
+
+}  // namespace sdfcontour::poisson
+
+namespace sdfcontour::poisson {
+
+/// The same with degree-2 elements (quadratic_basis.h): coefficients on each depth's cells within
+/// one of an active cell, prolonged exactly, and the finer splats' integrals restricted fine to
+/// coarse. Returns chi at each depth's nodes (for the extraction) and the iso-value from chi
+/// itself.
+CascadeResult solve_coarse_to_fine_quadratic(Octree& tree, NormalField& field,
+                                             const std::vector<UnitPoint>& points,
+                                             const MortonRuns& runs, double area_per_point,
+                                             const PoissonOptions& options);
 
 }  // namespace sdfcontour::poisson

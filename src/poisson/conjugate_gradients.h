@@ -40,8 +40,8 @@ CgState conjugate_gradients(std::size_t n, const std::vector<char>& solved, std:
     const double d = diagonal(v);
     return solved[v] && d > 0 ? d : 1.0;
   };
-  const double b_norm = std::sqrt(
-      deterministic_sum(n, [&](std::size_t v) { return solved[v] ? b[v] * b[v] : 0.0; }));
+  const double b_norm =
+      std::sqrt(deterministic_sum(n, [&](std::size_t v) { return solved[v] ? b[v] * b[v] : 0.0; }));
   std::vector<double> r = std::move(b), p(n), Ap(n);
   multiply(x, Ap);
   for (std::size_t v = 0; v < n; ++v) {

@@ -1,5 +1,7 @@
 #include "normal_field.h"
 
+#include <type_traits>
+
 #include "bspline.h"
 
 namespace sdfcontour::poisson {
@@ -149,7 +151,8 @@ void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& valu
 }
 
 NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
-                          const MortonRuns& runs, const std::atomic<bool>* cancel) {
+                          const MortonRuns& runs, const std::atomic<bool>* cancel,
+                          bool hat_divergence) {
   const std::size_t depths = tree.levels.size();
   NormalField field;
   field.splat_cells.resize(depths);
@@ -164,6 +167,7 @@ NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& poin
     const CellGrid& G = field.splat_cells[std::size_t(d)];
     splat_depth(L, field.runs[std::size_t(d)], points, runs, field.splat_cells[std::size_t(d)],
                 field.splat[std::size_t(d)]);
+    if (!hat_divergence) continue;
     auto& e = field.finer[std::size_t(d)];
     e.assign(L.nodes.size(), 0.0);
     if (!G.keys.empty()) divergence(L, G, field.splat[std::size_t(d)], e, nullptr);
@@ -173,10 +177,16 @@ NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& poin
   return field;
 }
 
-std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
-                                             const std::vector<Eigen::Vector3d>& values) {
+template <class T>
+std::vector<T> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
+                               const std::vector<T>& values) {
   // Q_c = (Q_{2c-1} + 3 Q_{2c} + 3 Q_{2c+1} + Q_{2c+2}) / 4 per axis.
-  std::vector<Eigen::Vector3d> out(fine.keys.size(), Eigen::Vector3d::Zero());
+  T zero;
+  if constexpr (std::is_same_v<T, double>)
+    zero = 0.0;
+  else
+    zero = T::Zero();
+  std::vector<T> out(fine.keys.size(), zero);
   auto parents = [](long offset_index, long* parent, double* weight) {
     const long index = offset_index - 1, m = index >> 1;  // floor(index / 2)
     parent[0] = m, weight[0] = 0.75;
@@ -194,7 +204,7 @@ std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellG
           LineCursor(coarse.keys, coarse.lines.line(parent[0][c & 1] + 1, parent[1][c >> 1] + 1));
     for (std::size_t f = first; f < last; ++f) {
       parents(long(fine.keys[f] & kKeyMask), parent[2], weight[2]);
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      T sum = zero;
       for (int c = 0; c < 8; ++c) {
         const long pz = parent[2][c >> 2 & 1];
         if (pz < -1) continue;
@@ -209,6 +219,11 @@ std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellG
   });
   return out;
 }
+
+template std::vector<Eigen::Vector3d> prolong_splines(const CellGrid&, const CellGrid&,
+                                                      const std::vector<Eigen::Vector3d>&);
+template std::vector<double> prolong_splines(const CellGrid&, const CellGrid&,
+                                             const std::vector<double>&);
 
 void divergence(const OctreeLevel& L, const CellGrid& G, const std::vector<Eigen::Vector3d>& W,
                 std::vector<double>& out, const std::vector<char>* want, std::array<long, 2> rows,

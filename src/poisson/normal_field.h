@@ -61,13 +61,17 @@ void add_on_grid(const CellGrid& cells, const std::vector<Eigen::Vector3d>& valu
 
 /// Splats the normals and computes the finer-splat divergence at every depth.
 /// `cancel` (optional) is checked at each depth (throws Cancelled).
+/// Without `hat_divergence` (degree 2) the finer-splat divergence against the hats is left empty.
 NormalField splat_normals(const Octree& tree, const std::vector<UnitPoint>& points,
-                          const MortonRuns& runs, const std::atomic<bool>* cancel = nullptr);
+                          const MortonRuns& runs, const std::atomic<bool>* cancel = nullptr,
+                          bool hat_divergence = true);
 
 /// Quadratic B-spline coefficients on a finer grid from a coarser one's (exact where the finer
 /// grid holds every cell the coarser coefficients reach).
-std::vector<Eigen::Vector3d> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
-                                             const std::vector<Eigen::Vector3d>& values);
+/// T is Eigen::Vector3d (the normal field) or double (degree-2 coefficients).
+template <class T>
+std::vector<T> prolong_splines(const CellGrid& coarse, const CellGrid& fine,
+                               const std::vector<T>& values);
 
 /// out[v] += int grad(phi_v) . W for the nodes v of L with `want` unset or want[v] set and first
 /// index in [rows[0], rows[1]), W given by the quadratic coefficients on `grid` of the depth `up`

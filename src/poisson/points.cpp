@@ -12,6 +12,7 @@ void validate(const OrientedPoints& input, const PoissonOptions& o) {
   if (n == 0) throw Error("poisson: no points to reconstruct from");
   if (input.normals.rows() != n) throw Error("poisson: points and normals differ in count");
   if (o.depth < 1 || o.depth > 16) throw Error("poisson: depth must be between 1 and 16");
+  if (o.degree != 1 && o.degree != 2) throw Error("poisson: degree must be 1 or 2");
   if (o.full_depth < 1) throw Error("poisson: full depth must be at least 1");
   if (o.refine_dilation < 1 || o.refine_dilation > 4)
     throw Error("poisson: the refinement's dilation must be between 1 and 4 cells");

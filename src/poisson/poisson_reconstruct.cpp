@@ -8,9 +8,11 @@
 //  system.h       one depth's screened system (stiffness + screening at the points)
 //  conjugate_gradients.h   the solve at one depth, returning its state
 //  cascade.h      coarse to fine, each depth starting from the coarser one; boundary fallback
+//  quadratic_basis.h, quadratic_system.h   the same with degree-2 elements
 //  indicator.h    chi anywhere; extraction.h  its iso-surface, watertight
 //  sign_constraints.h  optionally, chi corrected to keep samples of known side on their side
 #include <chrono>
+#include <cmath>
 #include <functional>
 
 #include "../enum_names.h"
@@ -114,10 +116,13 @@ PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_point
   Octree tree = build_octree(unit.points, runs, d_min, D, o.refine_dilation, o.cancel);
 
   stage.start("splatting");
-  NormalField field = splat_normals(tree, unit.points, runs, o.cancel);
+  NormalField field = splat_normals(tree, unit.points, runs, o.cancel, o.degree == 1);
 
   stage.start("solve");
-  CascadeResult solution = solve_coarse_to_fine(tree, field, unit.points, runs, area_per_point, o);
+  CascadeResult solution =
+      o.degree == 2
+          ? solve_coarse_to_fine_quadratic(tree, field, unit.points, runs, area_per_point, o)
+          : solve_coarse_to_fine(tree, field, unit.points, runs, area_per_point, o);
   result.levels = std::move(solution.levels);
   result.boundary_fallback = solution.boundary_fallback;
   Indicator chi(tree, std::move(solution.values));
@@ -126,9 +131,11 @@ PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_point
   // The weighted mean of chi at the points (with unit weights, the plain mean).
   const auto& pts = unit.points;
   result.iso_value =
-      deterministic_sum(pts.size(),
-                        [&](std::size_t s) { return pts[s].weight * chi.at(pts[s].p); }) /
-      deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight; });
+      !std::isnan(solution.iso_value)
+          ? solution.iso_value
+          : deterministic_sum(pts.size(), [&](std::size_t s) {
+              return pts[s].weight * chi.at(pts[s].p);
+            }) / deterministic_sum(pts.size(), [&](std::size_t s) { return pts[s].weight; });
 
   if (sides.points.rows() > 0) {
     if (sides.values.size() != sides.points.rows())
