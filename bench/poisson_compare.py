@@ -9,7 +9,7 @@ Each tool runs as its own process on the same PLY file; we report its wall time 
 (/usr/bin/time), and the L1 and Hausdorff distances of its mesh to the ground truth
 (`sdfcontour eval`). Ratios are ours / peer; the geometric means are over all rows.
 
-Usage: /usr/bin/python3 bench/poisson_compare.py [--depth 8] [--alpha 2] [--points 100000]
+Usage: /usr/bin/python3 bench/poisson_compare.py [--depth 8] [--alpha 2] [--degree 1] [--points 100000]
        [--grid 64] [--meshes bunny,spot] [--inputs surface,gtcp] [--peers meshlab,open3d]
        [--out docs/poisson_comparison.md]
 """
@@ -65,6 +65,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cli", default=os.path.join(ROOT, "build", "sdfcontour"))
     ap.add_argument("--depth", type=int, default=8)
+    ap.add_argument("--degree", type=int, default=1, help="our elements: 1 trilinear, 2 quadratic")
     ap.add_argument("--alpha", type=float, default=2.0, help="screening weight for ours and MeshLab (Open3D: 2)")
     ap.add_argument("--points", type=int, default=100000)
     ap.add_argument("--grid", type=int, default=64)
@@ -94,7 +95,8 @@ def main():
                 for tool in tools:
                     out = f"{prefix}_{kind}_{tool}.ply"
                     if tool == "ours":
-                        cmd = [args.cli, "poisson", pts, "-o", out, "--depth", str(args.depth), "--alpha", str(args.alpha), "-q"]
+                        cmd = [args.cli, "poisson", pts, "-o", out, "--depth", str(args.depth), "--alpha", str(args.alpha),
+                               "--degree", str(args.degree), "-q"]
                     elif tool == "meshlab":
                         cmd = ["xvfb-run", "-a", "meshlabserver", "-i", pts, "-o", out, "-s", mlx]
                     else:
@@ -128,7 +130,7 @@ def main():
     print(summary)
     if args.out:
         with open(args.out, "w") as f:
-            f.write(f"# Screened Poisson: ours against {' and '.join(names_of[t] for t in peers)}\n\nDepth {args.depth}, alpha {args.alpha}"
+            f.write(f"# Screened Poisson: ours against {' and '.join(names_of[t] for t in peers)}\n\nDepth {args.depth}, alpha {args.alpha}, our degree {args.degree}"
                     f"{' (Open3D: 2)' if 'open3d' in peers else ''}, {args.points} surface points or the GTCP points of a {args.grid}^3 grid; "
                     f"2 cores. Made by `/usr/bin/python3 bench/poisson_compare.py "
                     f"{' '.join(sys.argv[1:])}`.\n\n{header}\n" + "\n".join(rows) + f"\n\n{summary}\n")

@@ -90,6 +90,7 @@ QuadraticCells quadratic_cells(const OctreeLevel& L, PoissonBoundary boundary) {
                     C.solved[c] = complete;
                   }
                 });
+  for (std::size_t c = 0; c < n && !C.has_ties; ++c) C.has_ties = C.mirror[c] != int(c);
   return C;
 }
 
@@ -140,37 +141,36 @@ void quadratic_divergence(const OctreeLevel& L, const QuadraticCells& C,
                           const QuadraticIntegrals& I, const CellGrid& grid,
                           const std::vector<Eigen::Vector3d>& W, std::vector<double>& out) {
   const double h2 = L.h * L.h;  // d/dx = res d/du, and dx dy dz = h^3 du dv dw
-  for_each_line(C.grid.lines, C.grid.keys,
-                [&](long oi, long oj, std::size_t first, std::size_t last) {
-                  LineCursor column[25];  // grid lines of cells (i + ox, j + oy), offset keys
-                  for (int t = 0; t < 25; ++t) {
-                    const long gi = oi + t % 5 - 2, gj = oj + t / 5 - 2;
-                    if (gi >= 0 && gj >= 0)
-                      column[t] = LineCursor(grid.keys, grid.lines.line(gi, gj));
-                  }
-                  const auto &mx = I.mass[std::size_t(oi)], &my = I.mass[std::size_t(oj)];
-                  const auto &sx = I.slope[std::size_t(oi)], &sy = I.slope[std::size_t(oj)];
-                  for (std::size_t c = first; c < last; ++c) {
-                    const long ok = long(C.grid.keys[c] & kKeyMask);
-                    const auto &mz = I.mass[std::size_t(ok)], &sz = I.slope[std::size_t(ok)];
-                    double sum = 0;
-                    for (int t = 0; t < 25; ++t) {
-                      const long gi = oi + t % 5 - 2, gj = oj + t / 5 - 2;
-                      if (gi < 0 || gj < 0) continue;
-                      const std::size_t ox = std::size_t(t % 5), oy = std::size_t(t / 5);
-                      for (std::size_t oz = 0; oz < 5; ++oz) {
-                        const long gk = ok + long(oz) - 2;
-                        if (gk < 0) continue;
-                        const int s = column[t].find(pack(gi, gj, gk));
-                        if (s < 0) continue;
-                        const Eigen::Vector3d& v = W[std::size_t(s)];
-                        sum += v.x() * sx[ox] * my[oy] * mz[oz] + v.y() * mx[ox] * sy[oy] * mz[oz] +
-                               v.z() * mx[ox] * my[oy] * sz[oz];
-                      }
-                    }
-                    out[c] += h2 * sum;
-                  }
-                });
+  for_each_line(
+      C.grid.lines, C.grid.keys, [&](long oi, long oj, std::size_t first, std::size_t last) {
+        StencilLines lines(grid, oi, oj);
+        // Per line: the x and y factors of the x, y and z terms.
+        double fx[25], fy[25], fz[25];
+        const auto &mx = I.mass[std::size_t(oi)], &my = I.mass[std::size_t(oj)];
+        const auto &sx = I.slope[std::size_t(oi)], &sy = I.slope[std::size_t(oj)];
+        for (int l = 0; l < lines.count(); ++l) {
+          const std::size_t ox = std::size_t(lines.offset(l) % 5),
+                            oy = std::size_t(lines.offset(l) / 5);
+          fx[l] = sx[ox] * my[oy];
+          fy[l] = mx[ox] * sy[oy];
+          fz[l] = mx[ox] * my[oy];
+        }
+        for (std::size_t c = first; c < last; ++c) {
+          const long ok = long(C.grid.keys[c] & kKeyMask);
+          const auto &mz = I.mass[std::size_t(ok)], &sz = I.slope[std::size_t(ok)];
+          double sum = 0;
+          for (int l = 0; l < lines.count(); ++l) {
+            double along = 0, across = 0;  // W.z against slopes, W.x and W.y against masses along z
+            lines.window(l, ok, [&](std::size_t oz, std::size_t s) {
+              const Eigen::Vector3d& v = W[s];
+              across += mz[oz] * (fx[l] * v.x() + fy[l] * v.y());
+              along += sz[oz] * v.z();
+            });
+            sum += across + fz[l] * along;
+          }
+          out[c] += h2 * sum;
+        }
+      });
 }
 
 std::vector<double> node_values(const OctreeLevel& L, const QuadraticCells& C,

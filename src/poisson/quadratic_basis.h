@@ -40,6 +40,7 @@ struct QuadraticCells {
   /// Per cell: solved for at this depth (its B-spline's support inside the domain lies in active
   /// cells, so its row of the system is complete). Others hold the coarser depth's solution.
   std::vector<char> solved;
+  bool has_ties = false;  ///< some cell is tied
   std::size_t size() const { return grid.keys.size(); }
   /// Index of cell (i, j, k) (each in -1..res), or -1.
   int find(long i, long j, long k) const { return grid.find(i, j, k); }
@@ -47,6 +48,50 @@ struct QuadraticCells {
   double value(const std::vector<double>& x, std::size_t c) const {
     return sign[c] * x[std::size_t(mirror[c])];
   }
+};
+
+/// The (up to) 25 lines of a cell grid around line (oi, oj) (offset indices): lines (oi + ox - 2,
+/// oj + oy - 2), ox and oy in 0..4, each with a cursor for rows visited in increasing k. Where a
+/// line holds k - 2 .. k + 2 they are five consecutive entries (found with two comparisons);
+/// elsewhere (the band's edge, the domain's faces) the ones it holds are walked.
+class StencilLines {
+ public:
+  StencilLines(const CellGrid& grid, long oi, long oj) : keys_(grid.keys.data()) {
+    for (int t = 0; t < 25; ++t) {
+      const long gi = oi + t % 5 - 2, gj = oj + t / 5 - 2;
+      if (gi < 0 || gj < 0) continue;
+      const auto range = grid.lines.line(gi, gj);
+      if (range[0] == range[1]) continue;
+      at_[count_] = range[0];
+      end_[count_] = range[1];
+      prefix_[count_] = pack(gi, gj, 0);
+      offset_[count_++] = t;
+    }
+  }
+  int count() const { return count_; }
+  /// ox + 5 oy of line l.
+  int offset(int l) const { return offset_[l]; }
+  /// f(oz, index) for each cell of line l at offset index ok + oz - 2, oz in 0..4.
+  template <class F>
+  void window(int l, long ok, F&& f) {
+    const Key low = prefix_[l] + Key(std::max(ok - 2, 0L)), high = prefix_[l] + Key(ok + 2);
+    std::uint32_t a = at_[l];
+    while (a < end_[l] && keys_[a] < low) ++a;
+    at_[l] = a;
+    if (ok >= 2 && a + 4 < end_[l] && keys_[a] == low && keys_[a + 4] == high) {
+      for (std::size_t oz = 0; oz < 5; ++oz) f(oz, std::size_t(a + oz));
+      return;
+    }
+    for (; a < end_[l] && keys_[a] <= high; ++a)
+      f(std::size_t(long(keys_[a] - prefix_[l]) - ok + 2), std::size_t(a));
+  }
+
+ private:
+  const Key* keys_;
+  int count_ = 0;
+  int offset_[25];
+  std::uint32_t at_[25], end_[25];
+  Key prefix_[25];
 };
 
 /// The coefficient cells of L with the boundary's ties and the solved cells.

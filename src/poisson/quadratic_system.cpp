@@ -7,49 +7,73 @@ namespace sdfcontour::poisson {
 
 namespace {
 
-// out[c] = (untied stiffness row c) . (in through the ties), for the cells with rows. Each row
-// reads the 125 cells within two, found by cursors on the 25 coefficient lines around its own.
-void stiffness_product(const QuadraticSystem& S, const std::vector<double>& in,
-                       std::vector<double>& out) {
+// out[c] = (untied stiffness row c) . x for the cells with rows; x holds the coefficients with the
+// ties applied. The stiffness is h (Kx My Mz + Mx Ky Mz + Mx My Kz) with 1D factors, so it is
+// applied one axis at a time (sum factorisation, 35 products a row instead of 250): along z
+// a = Mz x and b = Kz x, along y p = My a and q = Ky a + My b, along x out = h (Kx p + Mx q). Each
+// pass is exact wherever a row reads it: a row's 125 neighbours exist, and so do those of the
+// partial sums it reads (they lie on its own height k, in its 5 x 5 lines).
+void stiffness_product(const QuadraticSystem& S, const double* x, std::vector<double>& out) {
   const QuadraticCells& C = *S.cells;
   const QuadraticIntegrals& I = *S.integrals;
+  const std::size_t n = C.size();
+  const Key* keys = C.grid.keys.data();
+  auto& [a, b, p, q] = S.scratch;
+  for (auto* v : {&a, &b, &p, &q}) v->resize(n);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t c) {
+    const auto &mz = I.mass[std::size_t(keys[c] & kKeyMask)],
+               &kz = I.stiffness[std::size_t(keys[c] & kKeyMask)];
+    double m = 0, k = 0;
+    for (std::size_t oz = 0; oz < 5; ++oz) {
+      const long at = long(c) + long(oz) - 2;  // the same line's neighbours are adjacent entries
+      if (at < 0 || at >= long(n) || keys[at] != keys[c] + oz - 2) continue;
+      m += mz[oz] * x[at];
+      k += kz[oz] * x[at];
+    }
+    a[c] = m;
+    b[c] = k;
+  });
+  for_each_line(C.grid.lines, C.grid.keys,
+                [&](long oi, long oj, std::size_t first, std::size_t last) {
+                  LineCursor column[5];
+                  for (int oy = 0; oy < 5; ++oy)
+                    if (oj + oy - 2 >= 0)
+                      column[oy] = LineCursor(C.grid.keys, C.grid.lines.line(oi, oj + oy - 2));
+                  const auto &my = I.mass[std::size_t(oj)], &ky = I.stiffness[std::size_t(oj)];
+                  for (std::size_t c = first; c < last; ++c) {
+                    const long k = long(keys[c] & kKeyMask);
+                    double pm = 0, qm = 0;
+                    for (std::size_t oy = 0; oy < 5; ++oy) {
+                      if (oj + long(oy) - 2 < 0) continue;
+                      const int at = column[oy].find(pack(oi, oj + long(oy) - 2, k));
+                      if (at < 0) continue;
+                      pm += my[oy] * a[std::size_t(at)];
+                      qm += ky[oy] * a[std::size_t(at)] + my[oy] * b[std::size_t(at)];
+                    }
+                    p[c] = pm;
+                    q[c] = qm;
+                  }
+                });
   const double h = S.level->h;  // grad . grad over h^3 du: res^2 h^3 = h
-  for_each_line(
-      C.grid.lines, C.grid.keys, [&](long oi, long oj, std::size_t first, std::size_t last) {
-        LineCursor column[25];
-        double across[25], along[25];  // per (ox, oy): the x and y factors of the two kinds of term
-        for (int t = 0; t < 25; ++t) {
-          const long gi = oi + t % 5 - 2, gj = oj + t / 5 - 2;
-          if (gi >= 0 && gj >= 0) column[t] = LineCursor(C.grid.keys, C.grid.lines.line(gi, gj));
-          const std::size_t ox = std::size_t(t % 5), oy = std::size_t(t / 5);
-          const auto &mx = I.mass[std::size_t(oi)], &my = I.mass[std::size_t(oj)];
-          const auto &kx = I.stiffness[std::size_t(oi)], &ky = I.stiffness[std::size_t(oj)];
-          across[t] = kx[ox] * my[oy] + mx[ox] * ky[oy];  // times mass along z
-          along[t] = mx[ox] * my[oy];                     // times stiffness along z
-        }
-        for (std::size_t c = first; c < last; ++c) {
-          if (!S.row[c]) continue;
-          const long ok = long(C.grid.keys[c] & kKeyMask);
-          const auto &mz = I.mass[std::size_t(ok)], &kz = I.stiffness[std::size_t(ok)];
-          double sum = 0;
-          for (int t = 0; t < 25; ++t) {
-            const long gi = oi + t % 5 - 2, gj = oj + t / 5 - 2;
-            if (gi < 0 || gj < 0) continue;
-            double m = 0, k = 0;
-            for (std::size_t oz = 0; oz < 5; ++oz) {
-              const long gk = ok + long(oz) - 2;
-              if (gk < 0) continue;
-              const int n = column[t].find(pack(gi, gj, gk));
-              if (n < 0) continue;
-              const double x = C.value(in, std::size_t(n));
-              m += mz[oz] * x;
-              k += kz[oz] * x;
-            }
-            sum += across[t] * m + along[t] * k;
-          }
-          out[c] = h * sum;
-        }
-      });
+  for_each_line(C.grid.lines, C.grid.keys,
+                [&](long oi, long oj, std::size_t first, std::size_t last) {
+                  LineCursor column[5];
+                  for (int ox = 0; ox < 5; ++ox)
+                    if (oi + ox - 2 >= 0)
+                      column[ox] = LineCursor(C.grid.keys, C.grid.lines.line(oi + ox - 2, oj));
+                  const auto &mx = I.mass[std::size_t(oi)], &kx = I.stiffness[std::size_t(oi)];
+                  for (std::size_t c = first; c < last; ++c) {
+                    if (!S.row[c]) continue;
+                    const long k = long(keys[c] & kKeyMask);
+                    double sum = 0;
+                    for (std::size_t ox = 0; ox < 5; ++ox) {
+                      if (oi + long(ox) - 2 < 0) continue;
+                      const int at = column[ox].find(pack(oi + long(ox) - 2, oj, k));
+                      if (at >= 0) sum += kx[ox] * p[std::size_t(at)] + mx[ox] * q[std::size_t(at)];
+                    }
+                    out[c] = h * sum;
+                  }
+                });
 }
 
 // Calls f(cell, point, w) for every point of screened cell r with its 27 weights w.
@@ -165,20 +189,45 @@ QuadraticSystem assemble_quadratic_system(const OctreeLevel& L, const QuadraticC
 
 double multiply(const QuadraticSystem& S, const std::vector<double>& in, std::vector<double>& out) {
   const QuadraticCells& C = *S.cells;
-  stiffness_product(S, in, out);
+  // The coefficients with the ties applied (a copy only where there are ties: the depths whose
+  // active cells reach the domain's faces).
+  std::vector<double> tied;
+  if (C.has_ties) {
+    tied = in;
+    apply_ties(C, tied);
+  }
+  const std::vector<double>& x = C.has_ties ? tied : in;
+  stiffness_product(S, x.data(), out);
   // Screening, one group at a time: each point adds  w_p B_c(p) chi(p)  to its 27 cells' rows.
   for (std::size_t g = 0; g < 27; ++g)
     tbb::parallel_for(S.group_begin[g], S.group_begin[g + 1], [&](std::size_t r) {
       const auto& cells = S.screened_cells[r];
+      const std::vector<double>& xt = x;
       double x[27], sum[27] = {};
       for (int q = 0; q < 27; ++q)
-        x[q] = cells[std::size_t(q)] >= 0 ? C.value(in, std::size_t(cells[std::size_t(q)])) : 0.0;
-      for_each_screened_point(S, r, [&](double weight, const double* w) {
+        x[q] = cells[std::size_t(q)] >= 0 ? xt[std::size_t(cells[std::size_t(q)])] : 0.0;
+      // chi(p) and the rows' terms one axis at a time (the weights are products of three).
+      for (std::uint32_t q = S.point_begin[r]; q < S.point_begin[r + 1]; ++q) {
+        const auto& a = S.screened_points[q].axis_weight;
         double chi = 0;
-        for (int q = 0; q < 27; ++q) chi += w[q] * x[q];
-        chi *= weight;
-        for (int q = 0; q < 27; ++q) sum[q] += w[q] * chi;
-      });
+        for (int z = 0; z < 3; ++z) {
+          double along_y = 0;
+          for (int y = 0; y < 3; ++y) {
+            const double* row = x + 3 * y + 9 * z;
+            along_y += a[std::size_t(3 + y)] * (a[0] * row[0] + a[1] * row[1] + a[2] * row[2]);
+          }
+          chi += a[std::size_t(6 + z)] * along_y;
+        }
+        chi *= S.screened_points[q].weight;
+        for (int z = 0; z < 3; ++z)
+          for (int y = 0; y < 3; ++y) {
+            const double yz = a[std::size_t(3 + y)] * a[std::size_t(6 + z)] * chi;
+            double* row = sum + 3 * y + 9 * z;
+            row[0] += a[0] * yz;
+            row[1] += a[1] * yz;
+            row[2] += a[2] * yz;
+          }
+      }
       for (int q = 0; q < 27; ++q) {
         const int c = cells[std::size_t(q)];
         if (c >= 0 && S.row[std::size_t(c)]) out[std::size_t(c)] += S.screening * sum[q];
