@@ -151,6 +151,7 @@ PoissonOptions poisson_options(const py::dict& o) {
   PoissonOptions p;
   p.depth = get<int>(o, "depth", p.depth);
   p.full_depth = get<int>(o, "full_depth", p.full_depth);
+  p.degree = get<int>(o, "degree", p.degree);
   p.refine_dilation = get<int>(o, "refine_dilation", p.refine_dilation);
   p.point_weight = get<double>(o, "alpha", p.point_weight);
   p.samples_per_node = get<double>(o, "samples_per_node", p.samples_per_node);

@@ -242,6 +242,13 @@ with tempfile.TemporaryDirectory() as d:
         r = run("poisson", p("cp.ply"), "-o", p(f"{boundary}.ply"), "--depth", "6", "--boundary", boundary, "-q")
         check(f"poisson {boundary}", r.returncode == 0, r.stderr)
     check("poisson free = neumann (degree 1)", open(p("free.ply"), "rb").read() == open(p("neumann.ply"), "rb").read())
+    for boundary in ("neumann", "free"):
+        r = run("poisson", p("cp.ply"), "-o", p(f"{boundary}2.ply"), "--depth", "6", "--boundary", boundary,
+                "--degree", "2", "-q")
+        check(f"poisson degree 2 {boundary}", r.returncode == 0, r.stderr)
+    check("poisson free != neumann (degree 2)", open(p("free2.ply"), "rb").read() != open(p("neumann2.ply"), "rb").read())
+    for bad in ("0", "3", "1.5"):
+        expect_error(f"poisson degree {bad}", ["poisson", p("cp.ply"), "-o", out, "--degree", bad], "degree", [out])
 
     # sample / eval / eval-points on a shared mesh, and their bad input.
     meshes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "data", "meshes")

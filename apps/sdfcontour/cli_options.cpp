@@ -143,7 +143,7 @@ void PoissonArgs::add_to(CLI::App* app) {
                         "256, 10 above (a 512^3 grid: 1.4-2.2 GB in all)"
                       : "Finest octree depth")
       ->capture_default_str();
-  app->add_option("--degree", options.degree,
+  app->add_option("--degree", degree,
                   "Poisson elements: 1, trilinear; 2, quadratic B-splines (PoissonRecon's default; "
                   "smoother, slower)")
       ->capture_default_str();
@@ -194,7 +194,8 @@ PoissonOptions PoissonArgs::resolved() const {
   PoissonOptions o = options;
   require_range("--alpha", o.point_weight, 0, 1e4);
   o.depth = whole_number_or_auto("--depth", depth, 1, 16);
-  require_range("--degree", o.degree, 1, 2);
+  if (degree != "1" && degree != "2") throw Error("--degree must be 1 or 2, got '" + degree + "'");
+  o.degree = std::stoi(degree);
   require_range("--full-depth", o.full_depth, 0, o.depth == 0 ? 8 : o.depth);
   o.refine_dilation = whole_number_or_auto("--refine-dilation", dilation, 1, 4);
   require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);

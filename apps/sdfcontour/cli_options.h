@@ -69,6 +69,7 @@ struct PoissonArgs {
   std::string boundary = "neumann";
   std::string depth = "8";     ///< "auto" (contour only): from the grid's resolution
   std::string dilation = "2";  ///< likewise
+  std::string degree = "1";    ///< "1" or "2" (parsed here, so a bad one gets our one-line error)
 
   void add_to(CLI::App* app);
   /// The options, range-checked; depth 0 for "auto".

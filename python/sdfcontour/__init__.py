@@ -53,6 +53,13 @@ def _brick_size(brick_size):
     return int(brick_size)
 
 
+def _degree(degree):
+    """The Poisson elements' degree, checked: 1 or 2."""
+    if isinstance(degree, bool) or degree not in (1, 2):
+        raise ValueError(f"degree must be 1 or 2, got {degree!r}")
+    return int(degree)
+
+
 def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
              brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
              solver_tolerance, progress, finest_solver_tolerance=1e-3):
@@ -141,7 +148,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
-            batch_size=65536, progress=False, return_stats=False):
+            degree=1, batch_size=65536, progress=False, return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -202,7 +209,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         First halo around a brick in spacings (0: automatic).
     depth : int or "auto"
         Poisson octree depth; "auto" follows the grid's resolution.
-    full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance, finest_solver_tolerance
+    full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance, finest_solver_tolerance, degree
         Screened Poisson options, as in :func:`poisson`.
     refine_dilation : int or "auto"
         As in :func:`poisson`; "auto": 2 below 256 samples per axis, 1 from 256 (CLI
@@ -245,6 +252,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
                  solver_tolerance, progress, finest_solver_tolerance)
+    o["degree"] = _degree(degree)
     o["sign_constraints"] = _switch("sign_constraints", sign_constraints)
     if not isinstance(carve, (bool, np.bool_)):
         raise ValueError(f"carve must be True or False, got {carve!r}")
@@ -302,7 +310,7 @@ def _refine_dilation(value):
 
 def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_per_node=1.5,
             scale=1.1, boundary="neumann", solver_tolerance=1e-4, finest_solver_tolerance=1e-3,
-            refine_dilation=2):
+            refine_dilation=2, degree=1):
     """Screened Poisson reconstruction of oriented points: a watertight mesh.
 
     Parameters
@@ -333,6 +341,9 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     refine_dilation : int
         Each depth refines the cells within this many cells (1-4) of the points' cells: 1 is
         cheaper and less accurate where points are sparse (CLI ``--refine-dilation``).
+    degree : {1, 2}
+        The elements: 1, trilinear; 2, quadratic B-splines (PoissonRecon's default), smoother
+        and slower (CLI ``--degree``).
 
     Returns
     -------
@@ -347,7 +358,7 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
              samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
              solver_tolerance=float(solver_tolerance),
              finest_solver_tolerance=float(finest_solver_tolerance),
-             refine_dilation=_refine_dilation(refine_dilation))
+             refine_dilation=_refine_dilation(refine_dilation), degree=_degree(degree))
     W = None if weights is None else np.asarray(weights, dtype=np.float64)
     return _sdfcontour.poisson(np.asarray(P), np.asarray(N), W, o)
 

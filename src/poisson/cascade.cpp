@@ -13,15 +13,6 @@
 
 namespace sdfcontour::poisson {
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-}  // namespace
-
 bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
                       const std::vector<UnitPoint>& points) {
   const double iso =

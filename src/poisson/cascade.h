@@ -3,6 +3,7 @@
 // finite-element space with hanging nodes), starting from the prolonged coarser solution.
 #pragma once
 
+#include <chrono>
 #include <limits>
 #include <vector>
 
@@ -12,6 +13,11 @@
 #include "sdfcontour/poisson.h"
 
 namespace sdfcontour::poisson {
+
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 struct CascadeResult {
   std::vector<std::vector<double>> values;  ///< chi at each depth's nodes

@@ -14,11 +14,6 @@ namespace sdfcontour::poisson {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // The finer splats' integrals against each depth's B-splines, int grad B_c . V_{>=d}: a depth's
 // own splats directly, the finer ones' restricted from the depth below. Every finer splat lies
 // inside the finer depth's active cells, so the finer coefficient cells hold all that is nonzero.

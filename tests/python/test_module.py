@@ -219,6 +219,13 @@ def test_scattered_samples_contact_points_and_poisson():
     assert mean_abs(sphere, V_light) < 0.5 * mean_abs(sphere, V_full)
     with pytest.raises(ValueError, match="weight"):
         sdfcontour.poisson(P, N, weights=np.ones(3))
+    # Quadratic elements: as close on a sphere, a different function (so a different mesh).
+    V2, F2 = sdfcontour.poisson(P, N, depth=7, degree=2)
+    assert mean_abs(sphere, V2) < 0.01
+    assert V2.shape != Vp.shape or not np.array_equal(V2, Vp)
+    for bad in (0, 3, 1.5, True):
+        with pytest.raises(ValueError, match="degree"):
+            sdfcontour.poisson(P, N, degree=bad)
 
 
 def test_sample_and_distances():
