@@ -9,6 +9,8 @@
 
 #include "poisson/bspline.h"
 #include "poisson/conjugate_gradients.h"
+#include "poisson/extraction.h"
+#include "poisson/indicator.h"
 #include "poisson/octree.h"
 #include "poisson/points.h"
 #include "poisson/quadratic_basis.h"
@@ -325,4 +327,37 @@ TEST(PoissonQuadratic, ReconstructsASphere) {
   }
   o.degree = 3;
   EXPECT_THROW(poisson_reconstruct(input, o), Error);
+}
+
+// chi quadratic along every edge (a sphere's squared distance): with chi at the edges' midpoints
+// the extracted vertices lie on the sphere to round-off; interpolated linearly they miss it by a
+// fraction of a cell.
+TEST(PoissonQuadratic, EdgeRootsOfAQuadraticFieldAreExact) {
+  const auto points = sphere_points(2000, 6);
+  const MortonRuns runs(points, 6);
+  const Octree tree = build_octree(points, runs, 3, 6);
+  const Vector3d centre(0.5, 0.5, 0.5);
+  auto field = [&](const Vector3d& p) { return 0.5 - 4 * ((p - centre).squaredNorm() - 0.09); };
+  std::vector<std::vector<double>> values(tree.levels.size());
+  for (int d = tree.min_depth; d <= tree.finest; ++d)
+    for (Key key : tree.level(d).nodes) {
+      const auto n = unpack(key);
+      values[std::size_t(d)].push_back(
+          field(Vector3d(double(n[0]), double(n[1]), double(n[2])) / double(tree.level(d).res)));
+    }
+  const Indicator chi(tree, values);
+  const UnitPoints frame;  // unit cube in, unit cube out
+  auto worst_miss = [&](const Mesh& mesh) {
+    double worst = 0;
+    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+      worst = std::max(
+          worst, std::abs((frame.to_unit(mesh.vertices.row(v).transpose()) - centre).norm() - 0.3));
+    return worst;
+  };
+  const Mesh exact = extract_iso_surface(chi, 0.5, frame, nullptr, field);
+  const Mesh linear = extract_iso_surface(chi, 0.5, frame, nullptr);
+  EXPECT_EQ(exact.vertices.rows(), linear.vertices.rows());
+  EXPECT_TRUE(mesh_topology(exact).closed);
+  EXPECT_LT(worst_miss(exact), 1e-12);
+  EXPECT_GT(worst_miss(linear), 1e-4);  // a cell is 1/64
 }

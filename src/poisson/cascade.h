@@ -4,7 +4,9 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "normal_field.h"
@@ -26,6 +28,9 @@ struct CascadeResult {
   /// The points' weighted mean of chi, when the solve evaluates chi more exactly than the node
   /// values' trilinear interpolation does (degree 2); NaN otherwise.
   double iso_value = std::numeric_limits<double>::quiet_NaN();
+  /// chi at a unit-cube point, where the node values' trilinear interpolation is not chi
+  /// (degree 2); empty otherwise.
+  std::function<double(const Eigen::Vector3d&)> evaluate;
 };
 
 /// Whether more than 1% of the coarsest depth's face nodes are inside (chi >= the points' mean

@@ -1,6 +1,7 @@
 #include "extraction.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "../cube_polygons.h"
@@ -264,8 +265,28 @@ Key global_edge(Key cell, int e) {
 
 }  // namespace
 
+namespace {
+
+// Where on [0, 1] the quadratic through (0, v0), (1/2, vm), (1, v1) crosses 0, v0 and v1 of
+// opposite signs (so it crosses once); the linear interpolation if it is nearly linear.
+double quadratic_root(double v0, double vm, double v1) {
+  const double linear = v0 / (v0 - v1);
+  // q(t) = a t^2 + b t + v0.
+  const double a = 2 * v0 - 4 * vm + 2 * v1, b = -3 * v0 + 4 * vm - v1;
+  if (std::abs(a) <= 1e-12 * (std::abs(v0) + std::abs(v1))) return linear;
+  const double disc = b * b - 4 * a * v0;
+  if (disc < 0) return linear;
+  const double s = std::sqrt(disc);
+  for (const double t : {(-b + s) / (2 * a), (-b - s) / (2 * a)})
+    if (t >= 0 && t <= 1) return t;
+  return linear;
+}
+
+}  // namespace
+
 Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame,
-                         const std::atomic<bool>* cancel) {
+                         const std::atomic<bool>* cancel,
+                         const std::function<double(const Eigen::Vector3d&)>& along_edges) {
   const SurfaceCells surface(chi, iso);
   std::vector<Key> cells;
   std::vector<detail::CubeCase> cases;
@@ -317,7 +338,10 @@ Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& fra
                              static_cast<double>(k));
     Eigen::Vector3d p1 = p0;
     p1[axis] += 1;
-    const Eigen::Vector3d unit = (p0 + v0 / (v0 - v1) * (p1 - p0)) / double(R);
+    const double t = along_edges
+                         ? quadratic_root(v0, iso - along_edges((0.5 * (p0 + p1)) / double(R)), v1)
+                         : v0 / (v0 - v1);
+    const Eigen::Vector3d unit = (p0 + t * (p1 - p0)) / double(R);
     mesh.vertices.row(Eigen::Index(e)) = frame.from_unit(unit).transpose();
   });
   std::vector<detail::PolygonOutput> out(chunks);

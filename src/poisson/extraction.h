@@ -5,6 +5,8 @@
 // is watertight.
 #pragma once
 
+#include <functional>
+
 #include "indicator.h"
 #include "points.h"
 #include "sdfcontour/types.h"
@@ -13,7 +15,11 @@ namespace sdfcontour::poisson {
 
 /// The surface chi = iso, outward (chi < iso outside), in the input's units (via frame).
 /// `cancel` (optional) is checked as the surface cells are gathered (throws Cancelled).
+/// With `along_edges` (chi at any unit-cube point, quadratic along each finest edge: degree-2
+/// elements), a vertex is the root of the quadratic through the edge's two node values and chi at
+/// its midpoint; otherwise linear interpolation, exact for trilinear chi.
 Mesh extract_iso_surface(const Indicator& chi, double iso, const UnitPoints& frame,
-                         const std::atomic<bool>* cancel = nullptr);
+                         const std::atomic<bool>* cancel = nullptr,
+                         const std::function<double(const Eigen::Vector3d&)>& along_edges = {});
 
 }  // namespace sdfcontour::poisson

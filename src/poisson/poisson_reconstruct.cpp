@@ -148,14 +148,22 @@ PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_point
     result.sign_violations = c.violations;
     result.sign_violations_left = c.violations_left;
     stage.start("extraction");
-    result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
+    // Degree 2: chi along the edges is the solved chi plus the corrections, which are trilinear
+    // (node values' changes).
+    const Indicator unconstrained_chi(tree, std::move(solved));
+    std::function<double(const Eigen::Vector3d&)> along_edges;
+    if (solution.evaluate)
+      along_edges = [&](const Eigen::Vector3d& p) {
+        return solution.evaluate(p) + (chi.at(p) - unconstrained_chi.at(p));
+      };
+    result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel, along_edges);
     // The corrections move the surface by a fraction of a sample spacing; where they would change
     // its topology (a handle across a crease, a piece; bubbles smaller than the correction's
     // radius aside), the solved chi's surface is kept. Without a correction there is nothing to
     // compare.
     if (c.sweeps > 0) {
-      Mesh unconstrained =
-          extract_iso_surface(Indicator(tree, std::move(solved)), result.iso_value, unit, o.cancel);
+      Mesh unconstrained = extract_iso_surface(unconstrained_chi, result.iso_value, unit, o.cancel,
+                                               solution.evaluate);
       if (significant_topology(result.mesh, sign_options.radius) !=
           significant_topology(unconstrained, sign_options.radius)) {
         result.mesh = std::move(unconstrained);
@@ -164,7 +172,7 @@ PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_point
     }
   } else {
     stage.start("extraction");
-    result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel);
+    result.mesh = extract_iso_surface(chi, result.iso_value, unit, o.cancel, solution.evaluate);
   }
 
   // Sampling density at each vertex, in points per unit area of the input's units.

@@ -125,16 +125,24 @@ CascadeResult solve_coarse_to_fine_quadratic(Octree& tree, NormalField& field,
     }
     result.levels.push_back(stats);
   }
-  // The iso-value from chi itself at each point's finest active cell.
-  auto chi = [&](const Eigen::Vector3d& p) {
-    for (int d = tree.finest; d >= tree.min_depth; --d) {
-      const OctreeLevel& L = tree.level(d);
+  // chi at a point: from the finest depth whose active cell holds it (the coefficients are kept
+  // for the extraction's edges).
+  struct Coefficients {
+    std::vector<QuadraticCells> cells;
+    std::vector<std::vector<double>> x;
+  };
+  auto kept = std::make_shared<Coefficients>(Coefficients{std::move(cells), std::move(x)});
+  const Octree& octree = tree;
+  auto chi = [kept, &octree](const Eigen::Vector3d& p) {
+    for (int d = octree.finest; d >= octree.min_depth; --d) {
+      const OctreeLevel& L = octree.level(d);
       const auto c = cell_of(p, L.res);
       if (L.cell(pack(c[0], c[1], c[2])) >= 0)
-        return evaluate(L, cells[std::size_t(d)], x[std::size_t(d)], c, p);
+        return evaluate(L, kept->cells[std::size_t(d)], kept->x[std::size_t(d)], c, p);
     }
     return 0.0;
   };
+  result.evaluate = chi;
   result.iso_value =
       deterministic_sum(points.size(),
                         [&](std::size_t q) { return points[q].weight * chi(points[q].p); }) /
