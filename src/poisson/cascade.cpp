@@ -13,6 +13,16 @@
 
 namespace sdfcontour::poisson {
 
+PoissonLevelStats level_stats(const OctreeLevel& L, const std::vector<char>& solved,
+                              const CgState& state, double assembly_seconds,
+                              Clock::time_point solve_start) {
+  long unknowns = 0;
+  for (char u : solved) unknowns += u;
+  return PoissonLevelStats{L.depth,          long(L.cells.size()),      unknowns,
+                           state.iterations, state.relative_residual,   state.converged,
+                           assembly_seconds, seconds_since(solve_start)};
+}
+
 bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
                       const std::vector<UnitPoint>& points) {
   const double iso =
@@ -121,16 +131,7 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
       const auto solve_start = Clock::now();
       const CgState state =
           conjugate_gradients(L, solved, std::move(system), x, d == tree.finest ? cg_finest : cg);
-      long unknowns = 0;
-      for (char u : solved) unknowns += u;
-      return PoissonLevelStats{d,
-                               long(L.cells.size()),
-                               unknowns,
-                               state.iterations,
-                               state.relative_residual,
-                               state.converged,
-                               prolong_seconds + assembly,
-                               seconds_since(solve_start)};
+      return level_stats(L, solved, state, prolong_seconds + assembly, solve_start);
     };
     std::vector<char> solved;
     PoissonLevelStats stats = solve(solved);

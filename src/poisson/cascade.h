@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "conjugate_gradients.h"
 #include "normal_field.h"
 #include "octree.h"
 #include "points.h"
@@ -20,6 +21,12 @@ using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
+
+/// One depth's statistics: its unknowns counted from `solved`, the solver's state, the seconds
+/// spent before the solve (prolongation, right-hand side, assembly) and since `solve_start`.
+PoissonLevelStats level_stats(const OctreeLevel& L, const std::vector<char>& solved,
+                              const CgState& state, double assembly_seconds,
+                              Clock::time_point solve_start);
 
 struct CascadeResult {
   std::vector<std::vector<double>> values;  ///< chi at each depth's nodes

@@ -90,16 +90,7 @@ CascadeResult solve_coarse_to_fine_quadratic(Octree& tree, NormalField& field,
           [&](std::size_t c) { return system.diagonal[c]; }, x[s],
           d == tree.finest ? cg_finest : cg);
       apply_ties(C, x[s]);
-      long unknowns = 0;
-      for (char u : C.solved) unknowns += u;
-      return PoissonLevelStats{d,
-                               long(L.cells.size()),
-                               unknowns,
-                               state.iterations,
-                               state.relative_residual,
-                               state.converged,
-                               prolong_seconds + assembly,
-                               seconds_since(solve_start)};
+      return level_stats(L, C.solved, state, prolong_seconds + assembly, solve_start);
     };
     PoissonLevelStats stats = solve();
     result.values[s] = node_values(L, cells[s], x[s]);

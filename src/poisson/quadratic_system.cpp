@@ -2,6 +2,7 @@
 
 #include "bspline.h"
 #include "deterministic_sum.h"
+#include "system.h"
 
 namespace sdfcontour::poisson {
 
@@ -120,16 +121,10 @@ QuadraticSystem assemble_quadratic_system(const OctreeLevel& L, const QuadraticC
     S.row[c] = C.solved[c] || (tied && C.solved[std::size_t(C.mirror[c])]);
     if (tied && S.row[c]) S.ring.push_back(std::uint32_t(c));
   }
-  // Screened cells by group (a counting sort, each group in key order).
+  // Screened cells by group, each group in key order.
   const std::size_t cells = screening > 0 ? runs.cells.size() : 0;
-  std::vector<std::size_t> at(cells);
-  for (std::size_t r = 0; r < cells; ++r)
-    ++S.group_begin[std::size_t(group_of(runs.cell(L, r))) + 1];
-  for (std::size_t g = 1; g < 28; ++g) S.group_begin[g] += S.group_begin[g - 1];
-  {
-    auto next = S.group_begin;
-    for (std::size_t r = 0; r < cells; ++r) at[r] = next[std::size_t(group_of(runs.cell(L, r)))]++;
-  }
+  const std::vector<std::size_t> at = group_order<27>(
+      cells, [&](std::size_t r) { return group_of(runs.cell(L, r)); }, S.group_begin);
   S.point_begin.assign(cells + 1, 0);
   for (std::size_t r = 0; r < cells; ++r)
     S.point_begin[at[r] + 1] = runs.cells[r][2] - runs.cells[r][1];

@@ -140,15 +140,9 @@ LevelSystem assemble_system(const OctreeLevel& L, const std::vector<char>& solve
   const std::size_t cells = screening > 0 ? runs.cells.size() : 0;
   S.screened_corners.resize(cells);
   S.point_begin.resize(cells + 1);
-  // Grouped by parity (a counting sort, each group in key order).
-  std::vector<std::size_t> at(cells);
-  for (std::size_t r = 0; r < cells; ++r)
-    ++S.parity_begin[std::size_t(parity(runs.cell(L, r))) + 1];
-  for (std::size_t g = 1; g < 9; ++g) S.parity_begin[g] += S.parity_begin[g - 1];
-  {
-    auto next = S.parity_begin;
-    for (std::size_t r = 0; r < cells; ++r) at[r] = next[std::size_t(parity(runs.cell(L, r)))]++;
-  }
+  // Grouped by parity, each group in key order.
+  const std::vector<std::size_t> at = group_order<8>(
+      cells, [&](std::size_t r) { return parity(runs.cell(L, r)); }, S.parity_begin);
   S.point_begin[0] = 0;
   for (std::size_t run = 0; run < cells; ++run)
     S.point_begin[at[run] + 1] = runs.cells[run][2] - runs.cells[run][1];

@@ -35,6 +35,19 @@ struct UninitialisedAllocator : std::allocator<T> {
   }
 };
 
+/// The order of n items by group (group(r) in [0, G)), each group keeping the items' order (a
+/// counting sort): item r goes to position at[r]; group g is [begin[g], begin[g + 1]).
+template <std::size_t G, class Group>
+std::vector<std::size_t> group_order(std::size_t n, Group&& group,
+                                     std::array<std::size_t, G + 1>& begin) {
+  std::vector<std::size_t> at(n);
+  for (std::size_t r = 0; r < n; ++r) ++begin[std::size_t(group(r)) + 1];
+  for (std::size_t g = 1; g <= G; ++g) begin[g] += begin[g - 1];
+  auto next = begin;
+  for (std::size_t r = 0; r < n; ++r) at[r] = next[std::size_t(group(r))]++;
+  return at;
+}
+
 /// One depth's system: the stiffness  int grad phi_u . grad phi_v  plus the screening
 /// screening * sum_p w_p phi_u(p) phi_v(p), and the right-hand side. Nothing is stored per row:
 /// inside the domain the stiffness is the constant stencil h K (`interior_row`), on the domain's
