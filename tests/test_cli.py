@@ -180,6 +180,12 @@ with tempfile.TemporaryDirectory() as d:
         check(f"{method} deterministic mesh", outputs[0][0] == outputs[1][0])
         check(f"{method} deterministic points", outputs[0][1] == outputs[1][1])
 
+    # GCP's stage seconds add up to the total (the untangling runs twice and is summed).
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_t.ply"), "--stats", p("gcp_t.json"), "-q")
+    s = json.load(open(p("gcp_t.json")))
+    check("gcp stage seconds sum to the total", r.returncode == 0 and
+          abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
+
     # Scattered samples from a file, OBJ output, ASCII contact points.
     rng = np.random.default_rng(3)
     pts = rng.uniform(-1, 1, (4000, 3))

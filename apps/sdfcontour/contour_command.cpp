@@ -255,8 +255,8 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   }
   double total = 0;
   nlohmann::json stage_json = nlohmann::json::object();
-  for (const auto& s : r.stages) {
-    stage_json[s.name] = s.seconds;
+  for (const auto& s : r.stages) {  // a stage that runs twice (untangling) sums its runs
+    stage_json[s.name] = stage_json.value(s.name, 0.0) + s.seconds;
     total += s.seconds;
   }
   j["seconds"] = stage_json;
