@@ -23,6 +23,27 @@ PoissonLevelStats level_stats(const OctreeLevel& L, const std::vector<char>& sol
                            assembly_seconds, seconds_since(solve_start)};
 }
 
+bool fall_back_to_dirichlet(const OctreeLevel& coarsest, const std::vector<double>& x,
+                            const std::vector<UnitPoint>& points, const PoissonOptions& o,
+                            PoissonBoundary& boundary) {
+  if (boundary == PoissonBoundary::Dirichlet || !o.dirichlet_fallback ||
+      !far_field_inside(coarsest, x, points))
+    return false;
+  boundary = PoissonBoundary::Dirichlet;
+  if (o.progress)
+    o.progress("poisson: the far field came out inside; solving again with Dirichlet boundaries");
+  return true;
+}
+
+void report_unconverged(const PoissonLevelStats& stats, bool finest, const PoissonOptions& o) {
+  if (stats.converged || !o.progress) return;
+  std::ostringstream message;
+  message << "poisson: depth " << stats.depth << " stopped at relative residual "
+          << stats.relative_residual << " after " << stats.iterations << " iterations (tolerance "
+          << (finest ? o.finest_solver_tolerance : o.solver_tolerance) << ")";
+  o.progress(message.str());
+}
+
 bool far_field_inside(const OctreeLevel& C, const std::vector<double>& x,
                       const std::vector<UnitPoint>& points) {
   const double iso =
@@ -136,26 +157,14 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     std::vector<char> solved;
     PoissonLevelStats stats = solve(solved);
     if (d == tree.min_depth) {
-      if (boundary != PoissonBoundary::Dirichlet && o.dirichlet_fallback &&
-          far_field_inside(L, x, points)) {
-        boundary = PoissonBoundary::Dirichlet;
+      if (fall_back_to_dirichlet(L, x, points, o, boundary)) {
         result.boundary_fallback = true;
-        if (o.progress)
-          o.progress(
-              "poisson: the far field came out inside; solving again with Dirichlet boundaries");
         stats = solve(solved);
       }
       release_field();
       field.runs[std::size_t(d)] = CellRuns();
     }
-    if (!stats.converged && o.progress) {
-      std::ostringstream message;
-      message << "poisson: depth " << d << " stopped at relative residual "
-              << stats.relative_residual << " after " << stats.iterations
-              << " iterations (tolerance "
-              << (d == tree.finest ? o.finest_solver_tolerance : o.solver_tolerance) << ")";
-      o.progress(message.str());
-    }
+    report_unconverged(stats, d == tree.finest, o);
     result.levels.push_back(stats);
   }
   return result;

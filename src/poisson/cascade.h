@@ -28,6 +28,16 @@ PoissonLevelStats level_stats(const OctreeLevel& L, const std::vector<char>& sol
                               const CgState& state, double assembly_seconds,
                               Clock::time_point solve_start);
 
+/// After the coarsest depth's solve: whether to solve again with Dirichlet boundaries, because
+/// `boundary` is not Dirichlet, the fallback is on and far_field_inside(coarsest, x, points). If
+/// so, sets boundary to Dirichlet and says so through the options' progress.
+bool fall_back_to_dirichlet(const OctreeLevel& coarsest, const std::vector<double>& x,
+                            const std::vector<UnitPoint>& points, const PoissonOptions& options,
+                            PoissonBoundary& boundary);
+
+/// Says through the options' progress that a depth stopped short of its tolerance, if it did.
+void report_unconverged(const PoissonLevelStats& stats, bool finest, const PoissonOptions& options);
+
 struct CascadeResult {
   std::vector<std::vector<double>> values;  ///< chi at each depth's nodes
   std::vector<PoissonLevelStats> levels;

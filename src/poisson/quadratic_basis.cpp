@@ -46,7 +46,13 @@ QuadraticCells quadratic_cells(const OctreeLevel& L, PoissonBoundary boundary) {
   // Offset keys: active cell c shifted by -1..1 per axis is key c + 0..2.
   C.grid.keys = shifted_union(L.cells, {0, 0, 0}, {2, 2, 2}, L.res + 1);
   C.grid.lines = LineIndex(C.grid.keys);
+  tie_to_boundary(L, boundary, C);
+  return C;
+}
+
+void tie_to_boundary(const OctreeLevel& L, PoissonBoundary boundary, QuadraticCells& C) {
   const std::size_t n = C.size();
+  C.has_ties = false;
   C.mirror.resize(n);
   C.sign.resize(n);
   C.solved.assign(n, 0);
@@ -91,7 +97,6 @@ QuadraticCells quadratic_cells(const OctreeLevel& L, PoissonBoundary boundary) {
                   }
                 });
   for (std::size_t c = 0; c < n && !C.has_ties; ++c) C.has_ties = C.mirror[c] != int(c);
-  return C;
 }
 
 void apply_ties(const QuadraticCells& C, std::vector<double>& x) {

@@ -44,10 +44,6 @@ struct QuadraticCells {
   std::size_t size() const { return grid.keys.size(); }
   /// Index of cell (i, j, k) (each in -1..res), or -1.
   int find(long i, long j, long k) const { return grid.find(i, j, k); }
-  /// x read through the ties.
-  double value(const std::vector<double>& x, std::size_t c) const {
-    return sign[c] * x[std::size_t(mirror[c])];
-  }
 };
 
 /// The (up to) 25 lines of a cell grid around line (oi, oj) (offset indices): lines (oi + ox - 2,
@@ -96,6 +92,10 @@ class StencilLines {
 
 /// The coefficient cells of L with the boundary's ties and the solved cells.
 QuadraticCells quadratic_cells(const OctreeLevel& L, PoissonBoundary boundary);
+
+/// Sets C's ties and solved cells (mirror, sign, solved, has_ties) for a boundary; the cells
+/// themselves do not depend on it.
+void tie_to_boundary(const OctreeLevel& L, PoissonBoundary boundary, QuadraticCells& C);
 
 /// Sets every tied coefficient of x from its mirror.
 void apply_ties(const QuadraticCells& C, std::vector<double>& x);

@@ -68,7 +68,7 @@ CascadeResult solve_coarse_to_fine_quadratic(Octree& tree, NormalField& field,
     coarser = d == tree.min_depth
                   ? std::vector<Eigen::Vector3d>(grid.keys.size(), Eigen::Vector3d::Zero())
                   : prolong_splines(coarser_grid, grid, coarser);
-    std::vector<double> divergence = finer[s];
+    std::vector<double> divergence = std::move(finer[s]);
     quadratic_divergence(L, cells[s], tables[s], grid, coarser, divergence);
     const double screening = o.point_weight * area_per_point * std::ldexp(1.0, d);
     const double prolong_seconds = seconds_since(level_start);
@@ -94,26 +94,18 @@ CascadeResult solve_coarse_to_fine_quadratic(Octree& tree, NormalField& field,
     };
     PoissonLevelStats stats = solve();
     result.values[s] = node_values(L, cells[s], x[s]);
-    if (d == tree.min_depth && boundary != PoissonBoundary::Dirichlet && o.dirichlet_fallback &&
-        far_field_inside(L, result.values[s], points)) {
-      boundary = PoissonBoundary::Dirichlet;
+    if (d == tree.min_depth && fall_back_to_dirichlet(L, result.values[s], points, o, boundary)) {
       result.boundary_fallback = true;
-      if (o.progress)
-        o.progress(
-            "poisson: the far field came out inside; solving again with Dirichlet boundaries");
-      cells = all_cells(tree, boundary);
+      // The cells stay; only their ties and unknowns follow the boundary (the finer integrals,
+      // against untied B-splines, hold).
+      for (int e = tree.min_depth; e <= tree.finest; ++e)
+        tie_to_boundary(tree.level(e), boundary, cells[std::size_t(e)]);
       stats = solve();
       result.values[s] = node_values(L, cells[s], x[s]);
     }
     add_on_grid(field.splat_cells[s], field.splat[s], grid, coarser);
     coarser_grid = std::move(grid);
-    std::vector<double>().swap(finer[s]);
-    if (!stats.converged && o.progress) {
-      std::ostringstream message;
-      message << "poisson: depth " << d << " stopped at relative residual "
-              << stats.relative_residual << " after " << stats.iterations << " iterations";
-      o.progress(message.str());
-    }
+    report_unconverged(stats, d == tree.finest, o);
     result.levels.push_back(stats);
   }
   // chi at a point: from the finest depth whose active cell holds it (the coefficients are kept
