@@ -291,6 +291,8 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["carved_vertices"] = r.carving ? r.carving->vertices_moved : 0L;
   stats["projected_vertices"] = r.projection ? r.projection->vertices_moved : 0L;
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;
+  stats["side_repaired_samples"] = r.side_repair ? r.side_repair->repaired : 0L;
+  stats["wrong_side_left"] = r.side_repair ? r.side_repair->left : 0L;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

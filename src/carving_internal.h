@@ -45,6 +45,18 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
                              const std::vector<int>& which, double slack, double longest,
                              const std::vector<int>* among = nullptr);
 
+/// The point of the triangles `among` nearest to p, the vertices of the feature (triangle, edge
+/// or vertex) it lies on, the feature's outward (pseudo)normal, and p's height above it along
+/// that normal (its sign is p's side of the mesh). triangle < 0 if `among` is empty.
+struct NearestFeature {
+  int triangle = -1;
+  std::vector<int> vertices;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+  double height = 0;
+};
+NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
+                               const Eigen::Vector3d& p, const std::vector<int>& among);
+
 /// The samples with |value| <= reach (ascending) whose ball, grown by `grow`, meets a triangle
 /// around one of `vertices`.
 std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& around,

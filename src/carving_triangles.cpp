@@ -207,6 +207,26 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
   return long(std::count(held.begin(), held.end(), 1));
 }
 
+NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
+                               const Eigen::Vector3d& p, const std::vector<int>& among) {
+  NearestFeature out;
+  if (among.empty()) return out;
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+  std::vector<Triangle> triangles;
+  triangles.reserve(among.size());
+  for (int t : among) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+  const Tree tree(triangles.begin(), triangles.end());
+  const auto [nearest, primitive] = tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
+  out.triangle = among[std::size_t(primitive - triangles.cbegin())];
+  out.point = Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z());
+  out.normal = feature_normal(mesh, around, out.triangle,
+                              barycentric(mesh, out.triangle, out.point), out.vertices);
+  out.height = (p - out.point).dot(out.normal);
+  return out;
+}
+
 SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
                              const PointMatrix& points, const Eigen::VectorXd& values,
                              const std::vector<int>& which, double slack, double longest,

@@ -462,6 +462,14 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                           result.band_spacing, carving);
       });
       untangle(before);
+      // The untangling can undo the moves that put a sample next to a thin gap on its side.
+      if (options.side_repair == Switch::On ||
+          (options.side_repair == Switch::Auto && carving.side_passes > 0))
+        result.side_repair =
+            stages.run("side repair", "denting the mesh off wrong-side samples", [&] {
+              return repair_sample_sides(*result.mesh, carving_samples.points,
+                                         carving_samples.values, result.band_spacing);
+            });
     }
     if (result.clipped_to_grid) clip_to_grid();
     if (method == Method::Gcp && grid) check_on_zero_set(*grid, result);

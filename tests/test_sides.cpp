@@ -8,6 +8,7 @@
 #include "sdfcontour/mesh_sdf.h"
 #include "sdfcontour/mesh_transform.h"
 #include "sdfcontour/pipeline.h"
+#include "sdfcontour/self_intersections.h"
 #include "test_support.h"
 
 using namespace sdfcontour;
@@ -96,6 +97,33 @@ TEST(Sides, NoSampleOnTheWrongSideOfTheCarvedMesh) {
               << "\n";
     EXPECT_EQ(wrong.wrong, 0) << "deepest " << wrong.deepest << " h";
   });
+}
+
+// Where a gap or crease is narrower than a spacing, carving's one-feature moves are spikes that the
+// untangling undoes, and an outside sample stays inside the mesh: one on the boot at 32^3, one on
+// the plane's wing at 64^3. The side repair dents the sheet over it (side_repair.h) without a
+// crossing.
+TEST(Sides, RepairDentsTheMeshOffSamplesInThinGaps) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
+  for (const auto& [name, n] : {std::pair<const char*, int>{"boot", 32}, {"plane", 64}}) {
+    SCOPED_TRACE(std::string(name) + " " + std::to_string(n));
+    const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
+    const Grid grid = sample_grid(sdf, n, Bounds{});
+    ContourOptions without;
+    without.side_repair = Switch::Off;
+    const ContourResult a = contour(grid_input(grid), nullptr, ContourOptions{});
+    const ContourResult b = contour(grid_input(grid), nullptr, without);
+    ASSERT_TRUE(a.fallback.empty()) << a.fallback;
+    ASSERT_TRUE(a.side_repair.has_value());
+    EXPECT_FALSE(b.side_repair.has_value());
+    const Sides repaired = wrong_sides(grid, *a.mesh), left = wrong_sides(grid, *b.mesh);
+    std::cout << name << " " << n << "^3: wrong side " << left.wrong << " -> " << repaired.wrong
+              << " (" << a.side_repair->vertices_moved << " vertices dented)\n";
+    EXPECT_GE(left.wrong, 1);
+    EXPECT_EQ(repaired.wrong, 0);
+    EXPECT_EQ(a.side_repair->left, 0);
+    EXPECT_TRUE(self_intersecting_triangles(*a.mesh).empty());
+  }
 }
 
 // From 128 samples per axis the solved surface is already within the samples' noise, and the

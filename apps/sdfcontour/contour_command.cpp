@@ -29,7 +29,7 @@ struct ContourArgs {
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, serial_triangulation = false, no_sign_constraints = false,
-       sign_constraints = false, no_carve = false;
+       sign_constraints = false, no_carve = false, no_side_repair = false;
   double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
          sign_margin = SignConstraintOptions{}.margin,
          sign_trigger = SignConstraintOptions{}.trigger;
@@ -136,6 +136,7 @@ ContourOptions contour_options(const ContourArgs& a) {
   require_range("--sign-trigger", a.sign_trigger, 0, 1);
   opt.sign_constraints.trigger = a.sign_trigger;
   if (a.no_carve) opt.carve = Switch::Off;
+  if (a.no_side_repair) opt.side_repair = Switch::Off;
   if (const auto rounds =
           parse_count_or_auto("--side-passes", a.side_passes, 100, "a whole number of rounds")) {
     opt.carving.side_passes = *rounds;
@@ -228,6 +229,11 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                        {"vertices_reverted", r.untangling->vertices_reverted},
                        {"intersections_found", r.untangling->intersections_found},
                        {"intersections_left", r.untangling->intersections_left}};
+  if (r.side_repair)
+    j["side_repair"] = {{"wrong_side", r.side_repair->wrong_side},
+                        {"repaired", r.side_repair->repaired},
+                        {"left", r.side_repair->left},
+                        {"vertices_moved", r.side_repair->vertices_moved}};
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
@@ -378,6 +384,10 @@ Command add_contour_command(CLI::App& app) {
               "inside a sample's sphere (which holds no surface) moves onto it: the band's "
               "samples, or below 128 samples per axis with --band auto every sample within 16 "
               "spacings; not on values smoothed for noise");
+  c->add_flag("--no-side-repair", a->no_side_repair,
+              "GCP carving: leave the samples that carving's untangling left on the wrong side of "
+              "the mesh; by default (where --side-passes runs) each dents the nearest sheet onto "
+              "its side where that crosses and folds nothing and moves no other sample's side");
   c->add_option("--side-passes", a->side_passes,
                 "GCP carving: rounds in which each sample within a spacing of the surface that a "
                 "triangle cuts, or that lies on the wrong side of the mesh, moves the nearest "

@@ -1,0 +1,51 @@
+// Side repair: the last samples on the wrong side of a finished mesh, moved to their sides by
+// smooth local dents that cross nothing.
+//
+// Carving's triangle rounds move one feature (a triangle, edge or vertex) per sample, and the
+// untangling undoes every move that pushed one sheet through another. Where a gap or notch is
+// narrower than a spacing (the plane's wing at 32^3 and 64^3, a crease of the boot, the cat and the
+// goat head at 32^3), the reconstruction fills it, the one-feature move is a spike the carving
+// holds back or the untangling undoes, and an outside sample stays inside the mesh
+// (docs/carving.md). Here each such sample dents the sheet nearest to it as a whole patch, with a
+// smooth falloff, and the dent is kept only if the mesh still crosses nothing and no sample near it
+// lands on the wrong side.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+struct SideRepairOptions {
+  /// Samples with |value| up to this many spacings are checked.
+  double reach = 3;
+  /// Geodesic radii of the dent tried, in spacings, smallest first.
+  double radius = 0.5;
+  int radius_doublings = 2;
+  /// At most this many wrong-side samples are repaired (each costs a crossing test); the rest
+  /// are counted as left.
+  int max_samples = 256;
+};
+
+struct SideRepairStats {
+  long wrong_side = 0;  ///< samples within reach on the wrong side before the repair
+  long repaired = 0;    ///< of those, samples a dent put on their side
+  long left = 0;        ///< samples still on the wrong side
+  long vertices_moved = 0;
+};
+
+/// Moves the vertices of `mesh` (closed, oriented, free of self-intersections; in place) so that
+/// the samples (points n x 3, values n, negative inside) within options.reach spacings of the
+/// surface lie on their own sides: for each that does not, ascending, the vertices within a
+/// geodesic radius of its nearest point whose normals face the same way move along the nearest
+/// feature's normal, by (1 - (d/R)^2)^2 of the move that puts the sample |value| beyond the sheet
+/// (else half of it). A dent is kept only if the sample then lies on its side, no sample near
+/// the moved vertices has come to the wrong side, and no moved triangle crosses another. The
+/// connectivity is unchanged; the result does not depend on the thread count. Throws Error for
+/// mismatched sizes, non-finite samples or a spacing that is not positive.
+SideRepairStats repair_sample_sides(Mesh& mesh, const PointMatrix& points,
+                                    const Eigen::VectorXd& values, double spacing,
+                                    const SideRepairOptions& options = {});
+
+}  // namespace sdfcontour
