@@ -7,6 +7,7 @@ normals; the stronger the screening, the rounder the result. We report the resid
 alpha, MeshLab (Kazhdan's code, degree 2) at alpha 2 and 8, and Open3D (degree 1, alpha fixed at 2).
 
 Usage: /usr/bin/python3 bench/screening_strength.py [--cli build/sdfcontour] [--depths 6,7,8]
+       [--degree 1|2] [--alphas 1,2,3,4,6,8]
 """
 import argparse
 import os
@@ -35,6 +36,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cli", default=os.path.join(HERE, "..", "build", "sdfcontour"))
     ap.add_argument("--depths", default="6,7,8")
+    ap.add_argument("--degree", default="1", help="our elements' degree (MeshLab's are 2)")
+    ap.add_argument("--alphas", default="1,2,3,4,6,8", help="our screening weights")
     args = ap.parse_args()
     n = 60000
     i = np.arange(n)
@@ -50,7 +53,9 @@ def main():
         cloud.normals = o3d.utility.Vector3dVector(normals)
         o3d.io.write_point_cloud(pts, cloud)
         out = os.path.join(d, "out.ply")
-        print("| depth | Open3D (alpha 2) | MeshLab alpha 2 | MeshLab alpha 8 | ours alpha 1 / 2 / 3 / 4 / 6 / 8 |")
+        alphas = [float(a) for a in args.alphas.split(",")]
+        print("| depth | Open3D (alpha 2) | MeshLab alpha 2 | MeshLab alpha 8 | ours (degree %s) alpha %s |"
+              % (args.degree, " / ".join(args.alphas.split(","))))
         print("|---|---|---|---|---|")
         for depth in map(int, args.depths.split(",")):
             subprocess.run([sys.executable, os.path.join(HERE, "open3d_poisson.py"), pts, out, str(depth)],
@@ -63,8 +68,9 @@ def main():
                                check=True, capture_output=True, cwd=d)
                 row.append(f"{anisotropy(out):.3f}")
             ours = []
-            for alpha in (1, 2, 3, 4, 6, 8):
-                subprocess.run([args.cli, "poisson", pts, "-o", out, "--depth", str(depth), "--alpha", str(alpha), "-q"],
+            for alpha in alphas:
+                subprocess.run([args.cli, "poisson", pts, "-o", out, "--depth", str(depth), "--alpha", str(alpha),
+                                "--degree", args.degree, "-q"],
                                check=True, capture_output=True)
                 ours.append(f"{anisotropy(out):.3f}")
             print(f"| {depth} | " + " | ".join(row) + " | " + " / ".join(ours) + " |", flush=True)

@@ -21,8 +21,8 @@ struct SideRepairOptions {
   /// Samples with |value| up to this many spacings are checked.
   double reach = 3;
   /// Geodesic radii of the dent tried, in spacings, smallest first.
-  double radius = 0.5;
-  int radius_doublings = 2;
+  double radius = 0.25;
+  int radius_doublings = 3;
   /// At most this many wrong-side samples are repaired (each costs a crossing test); the rest
   /// are counted as left.
   int max_samples = 256;
