@@ -217,7 +217,8 @@ NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
   std::vector<Triangle> triangles;
   triangles.reserve(among.size());
   for (int t : among) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
-  const Tree tree(triangles.begin(), triangles.end());
+  Tree tree(triangles.begin(), triangles.end());
+  tree.do_not_accelerate_distance_queries();  // one query: no kd-tree of hints
   const auto [nearest, primitive] = tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
   out.triangle = among[std::size_t(primitive - triangles.cbegin())];
   out.point = Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z());

@@ -29,6 +29,10 @@ constexpr int kDentsPerSample = 3;
 // Two triangles sharing an edge whose unit normals' dot product falls below this have folded.
 constexpr double kFoldCos = -0.9;
 
+// A wrong-side sample's nearest point on the mesh is sought within this many spacings (those on
+// the shared meshes lie within 0.8).
+constexpr double kSearch = 2;
+
 enum class DentShape { Shift, Flatten };
 
 // The triangles with a vertex within `radius` of p.
@@ -116,7 +120,8 @@ class SideRepair {
         points_(points),
         values_(values),
         spacing_(spacing),
-        options_(options) {}
+        options_(options),
+        zeros_(Eigen::VectorXd::Zero(values.size())) {}
 
   SideRepairStats run() {
     SideRepairStats stats;
@@ -182,15 +187,33 @@ class SideRepair {
     return false;
   }
 
-  // Tries dents of growing radius, both shapes and shrinking depth for sample s; keeps the
-  // first that works.
+  // Whether a triangle around `vertices` crosses another of the triangles `among` (which hold
+  // every triangle that can reach them): the crossing test on that part of the mesh alone.
+  bool crosses(const std::vector<int>& among, const std::vector<int>& vertices) const {
+    const std::vector<char> moving = triangles_of(mesh_, around_, vertices);
+    std::unordered_map<int, int> index;
+    Mesh part;
+    part.triangles.resize(Eigen::Index(among.size()), 3);
+    std::vector<char> watch(among.size(), 0);
+    for (std::size_t q = 0; q < among.size(); ++q) {
+      const int t = among[q];
+      watch[q] = moving[std::size_t(t)];
+      for (int c = 0; c < 3; ++c)
+        part.triangles(Eigen::Index(q), c) =
+            index.emplace(mesh_.triangles(t, c), int(index.size())).first->second;
+    }
+    part.vertices.resize(Eigen::Index(index.size()), 3);
+    for (const auto& [v, i] : index) part.vertices.row(i) = mesh_.vertices.row(v);
+    return !self_intersecting_triangles(part, &watch).empty();
+  }
+
+  // Tries dents of growing radius and both shapes for sample s; keeps the first that works.
   void repair(int s, std::vector<char>& moved) {
     const double r = std::abs(values_[s]);
     for (int doubling = 0; doubling <= options_.radius_doublings; ++doubling) {
       const double radius = options_.radius * spacing_ * std::pow(2.0, doubling);
       for (const DentShape shape : {DentShape::Shift, DentShape::Flatten})
-        for (const double depth : {1.0, 0.5})
-          if (try_dents(s, radius, shape, depth * r * (1 + kBeyond), moved)) return;
+        if (try_dents(s, radius, shape, r * (1 + kBeyond), moved)) return;
     }
   }
 
@@ -201,7 +224,7 @@ class SideRepair {
     PointMatrix& V = mesh_.vertices;
     const Eigen::Vector3d p = points_.row(s).transpose();
     const double side = values_[s] > 0 ? 1 : -1;
-    const double search = (options_.reach + 1) * spacing_;
+    const double search = kSearch * spacing_;
     std::map<int, Eigen::RowVector3d> before;
     for (int step = 0; step < kDentsPerSample; ++step) {
       const detail::NearestFeature at = nearest(p, search);
@@ -228,15 +251,19 @@ class SideRepair {
       for (const auto& [v, start] : before) V.row(v) = start;
       return false;
     };
-    if (vertices.empty()) return undo();
-    if (folds(before)) return undo();
-    // The samples whose side the dent can change: s, and those whose balls, grown by the move,
-    // meet the moved triangles. Their nearest points lie within `local` of p.
-    std::vector<int> which = detail::samples_near_vertices(
-        mesh_, around_, vertices, points_, values_, options_.reach * spacing_, longest);
+    if (vertices.empty() || folds(before)) return undo();
+    const detail::NearestFeature now = nearest(p, search);
+    if (now.triangle < 0 || !(side * now.height > 0)) return undo();
+    // The samples whose side the dent can change: those the moved triangles swept over, all
+    // within `longest` of where they are now. Their nearest points lie within `local` of p.
+    std::vector<int> which;
+    for (int n :
+         detail::samples_near_vertices(mesh_, around_, vertices, points_, zeros_, 0, longest))
+      if (n == s || (values_[n] != 0 && std::abs(values_[n]) <= options_.reach * spacing_))
+        which.push_back(n);
     if (!std::binary_search(which.begin(), which.end(), s))
       which.insert(std::upper_bound(which.begin(), which.end(), s), s);
-    const double local = search + 2 * (options_.reach * spacing_ + longest) + radius;
+    const double local = search + radius + 2 * longest + spacing_;
     const std::vector<int> among = triangles_near(mesh_, points_.row(s).transpose(), local);
     const double inf = std::numeric_limits<double>::infinity();
     const detail::SideCheck after =
@@ -247,8 +274,7 @@ class SideRepair {
       if (wrong && (!was || which[w] == s)) return undo();
       if (!wrong && was) fixed.push_back(which[w]);
     }
-    const std::vector<char> watch = triangles_of(mesh_, around_, vertices);
-    if (!self_intersecting_triangles(mesh_, &watch).empty()) return undo();
+    if (crosses(among, vertices)) return undo();
     for (int n : fixed) wrong_[std::size_t(n)] = 0;
     for (int v : vertices) moved[std::size_t(v)] = 1;
     return true;
@@ -260,7 +286,8 @@ class SideRepair {
   const Eigen::VectorXd& values_;
   const double spacing_;
   const SideRepairOptions options_;
-  std::vector<char> wrong_;  // per sample: on the wrong side now
+  const Eigen::VectorXd zeros_;  // a zero per sample: balls of radius 0
+  std::vector<char> wrong_;      // per sample: on the wrong side now
 };
 
 }  // namespace

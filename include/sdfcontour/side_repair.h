@@ -20,7 +20,8 @@ namespace sdfcontour {
 struct SideRepairOptions {
   /// Samples with |value| up to this many spacings are checked.
   double reach = 3;
-  /// Geodesic radii of the dent tried, in spacings, smallest first.
+  /// Geodesic radii of the dents tried, in spacings: `radius`, then doubled `radius_doublings`
+  /// times (the smallest first: the plane's tail at 32^3 needs a quarter spacing).
   double radius = 0.25;
   int radius_doublings = 3;
   /// At most this many wrong-side samples are repaired (each costs a crossing test); the rest
@@ -38,12 +39,14 @@ struct SideRepairStats {
 /// Moves the vertices of `mesh` (closed, oriented, free of self-intersections; in place) so that
 /// the samples (points n x 3, values n, negative inside) within options.reach spacings of the
 /// surface lie on their own sides: for each that does not, ascending, the vertices within a
-/// geodesic radius of its nearest point whose normals face the same way move along the nearest
+/// geodesic radius R of its nearest point whose normals face the same way move along the nearest
 /// feature's normal, by (1 - (d/R)^2)^2 of the move that puts the sample |value| beyond the sheet
-/// (else half of it). A dent is kept only if the sample then lies on its side, no sample near
-/// the moved vertices has come to the wrong side, and no moved triangle crosses another. The
-/// connectivity is unchanged; the result does not depend on the thread count. Throws Error for
-/// mismatched sizes, non-finite samples or a spacing that is not positive.
+/// (all by the feature's move, or each to the plane |value| behind the sample), again for the
+/// sheet nearest next (up to 3). A dent is kept only if the sample then lies on its side, no
+/// sample the moved triangles swept over has come to the wrong side, no two triangles sharing an
+/// edge fold onto each other and no moved triangle crosses another; else the next radius or
+/// shape is tried. The connectivity is unchanged; the result does not depend on the thread count.
+/// Throws Error for mismatched sizes, non-finite samples or a spacing that is not positive.
 SideRepairStats repair_sample_sides(Mesh& mesh, const PointMatrix& points,
                                     const Eigen::VectorXd& values, double spacing,
                                     const SideRepairOptions& options = {});

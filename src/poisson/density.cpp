@@ -98,7 +98,9 @@ double assign_areas_and_depths(std::vector<UnitPoint>& points, const SamplingDen
     total_area += s.area;
     // Depth where a node of side h holds sigma * h^2 = samples_per_node points.
     const double ideal = 0.5 * std::log2(sigma / samples_per_node);
-    s.depth = std::clamp(int(std::lround(ideal)), min_depth, max_depth);
+    const double depth = std::clamp(ideal, double(min_depth), double(max_depth));
+    s.depth = std::min(int(std::floor(depth)), max_depth);
+    s.finer_share = s.depth < max_depth ? depth - s.depth : 0.0;
   }
   return total_area / double(points.size());
 }

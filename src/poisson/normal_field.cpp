@@ -19,6 +19,11 @@ CellRuns cell_runs(const OctreeLevel& L, const MortonRuns& runs) {
 
 namespace {
 
+// The share of point s's normal splatted at depth d.
+double splat_share(const UnitPoint& s, int d) {
+  return s.depth == d ? 1 - s.finer_share : s.depth + 1 == d ? s.finer_share : 0.0;
+}
+
 // The depth-d splat coefficients on the cells they touch (G), each gathered from the points of the
 // 27 cells around it (no per-cell table of 27 sums: 648 bytes per cell holding points, 1.2 GB for
 // bunny 512^3's depth 10, and filling it took longer than the gather).
@@ -29,7 +34,7 @@ void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<U
   const double inverse_volume = 1.0 / (L.h * L.h * L.h);
   tbb::parallel_for(std::size_t(0), runs.cells.size(), [&](std::size_t r) {
     for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2] && !has_splat[r]; ++q)
-      has_splat[r] = points[morton.point(q)].depth == d;
+      has_splat[r] = splat_share(points[morton.point(q)], d) > 0;
   });
   // Source cell r's splats on the cell (dx, dy, dz) away, summed over its points in order.
   auto splat_of = [&](std::uint32_t r, int dx, int dy, int dz) {
@@ -37,13 +42,14 @@ void splat_depth(const OctreeLevel& L, const CellRuns& runs, const std::vector<U
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (std::uint32_t q = runs.cells[r][1]; q < runs.cells[r][2]; ++q) {
       const UnitPoint& s = points[morton.point(q)];
-      if (s.depth != d) continue;
+      const double share = splat_share(s, d);
+      if (share == 0) continue;
       double w[3];
       const int offset[3] = {dx, dy, dz};
       for (int a = 0; a < 3; ++a)
         w[a] = quadratic_weights(std::clamp(s.p[a] * double(L.res) - double(cell[std::size_t(a)]),
                                             0.0, 1.0))[std::size_t(offset[a] + 1)];
-      const Eigen::Vector3d weighted = s.area * s.weight * inverse_volume * s.n;
+      const Eigen::Vector3d weighted = share * s.area * s.weight * inverse_volume * s.n;
       sum += w[0] * w[1] * w[2] * weighted;
     }
     return sum;

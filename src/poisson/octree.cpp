@@ -12,6 +12,11 @@ void build_nodes(OctreeLevel& L) {
   L.node_lines = LineIndex(L.nodes);
 }
 
+// The depth a point is resolved at: one finer than its nearest splat depth.
+int resolved_depth(const UnitPoint& s) {
+  return s.depth + (s.finer_share >= 0.5) + 1;
+}
+
 // The depth-(d-1) cells to refine: those holding a point splatted at depth d-1 or finer (runs in
 // Morton order), dilated. Each point is resolved one depth finer than its splat, where its
 // screening term sharpens the surface; refining sparse points further makes bubbles around them.
@@ -20,7 +25,7 @@ std::vector<Key> cells_to_refine(const std::vector<UnitPoint>& points, const Mor
   std::vector<Key> refine;
   runs.for_each_run(d - 1, [&](const std::array<long, 3>& c, std::size_t first, std::size_t last) {
     for (std::size_t r = first; r < last; ++r)
-      if (points[runs.point(r)].depth + 1 >= d) {
+      if (resolved_depth(points[runs.point(r)]) >= d) {
         refine.push_back(pack(c[0], c[1], c[2]));
         break;
       }

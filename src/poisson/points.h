@@ -19,7 +19,11 @@ struct UnitPoint {
   Eigen::Vector3d n;  ///< unit normal
   double area = 0;    ///< surface area it stands for (unit-cube units), set from the density
   double weight = 1;  ///< confidence in (0, 1]: scales its normal and screening terms
-  int depth = 0;      ///< the depth its normal is splatted at
+  int depth = 0;      ///< the coarser of the two depths its normal is splatted at
+  /// The share of its normal splatted at depth + 1, the rest at depth: its ideal depth's
+  /// fractional part (Kazhdan et al. 2006, non-uniform samples), so the splat moves smoothly
+  /// with the density instead of jumping a whole depth.
+  double finer_share = 0;
 };
 
 /// The points mapped into the unit cube: unit = (p - centre) / size + 1/2.
