@@ -9,6 +9,11 @@
 
 namespace sdfcontour::detail {
 
+/// Throws Error ("`what`: ...") unless points (n x 3) and values (n) match and are finite and the
+/// spacing is positive and finite: the samples whose balls carving and side repair keep clear.
+void check_ball_samples(const char* what, const PointMatrix& points, const Eigen::VectorXd& values,
+                        double spacing);
+
 /// The triangles around each vertex: those of vertex v are triangles[offsets[v] .. offsets[v+1]).
 /// Built once per mesh (carving moves vertices, never triangles).
 struct VertexTriangles {

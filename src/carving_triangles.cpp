@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 #include <vector>
 
 #include "carving_internal.h"
@@ -96,6 +97,18 @@ struct Request {
 };
 
 }  // namespace
+
+void check_ball_samples(const char* what, const PointMatrix& points, const Eigen::VectorXd& values,
+                        double spacing) {
+  const std::string name(what);
+  if (points.rows() != values.size())
+    throw Error(name + ": " + std::to_string(points.rows()) + " points but " +
+                std::to_string(values.size()) + " values");
+  if (!(spacing > 0) || !std::isfinite(spacing))
+    throw Error(name + ": the spacing must be positive and finite");
+  if (!values.allFinite() || !points.allFinite())
+    throw Error(name + ": the samples must be finite");
+}
 
 VertexTriangles::VertexTriangles(const Mesh& mesh) {
   const TriangleMatrix& F = mesh.triangles;

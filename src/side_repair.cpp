@@ -295,13 +295,7 @@ class SideRepair {
 SideRepairStats repair_sample_sides(Mesh& mesh, const PointMatrix& points,
                                     const Eigen::VectorXd& values, double spacing,
                                     const SideRepairOptions& options) {
-  if (points.rows() != values.size())
-    throw Error("side repair: " + std::to_string(points.rows()) + " points but " +
-                std::to_string(values.size()) + " values");
-  if (!(spacing > 0) || !std::isfinite(spacing))
-    throw Error("side repair: the spacing must be positive and finite");
-  if (!values.allFinite() || !points.allFinite())
-    throw Error("side repair: the samples must be finite");
+  detail::check_ball_samples("side repair", points, values, spacing);
   if (!(options.reach >= 0) || !std::isfinite(options.reach) || !(options.radius > 0) ||
       !std::isfinite(options.radius) || options.radius_doublings < 0 || options.max_samples < 0)
     throw Error(

@@ -246,13 +246,7 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
 
 CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
                         double spacing, const CarvingOptions& options) {
-  if (points.rows() != values.size())
-    throw Error("sphere carving: " + std::to_string(points.rows()) + " points but " +
-                std::to_string(values.size()) + " values");
-  if (!(spacing > 0) || !std::isfinite(spacing))
-    throw Error("sphere carving: the spacing must be positive and finite");
-  if (!values.allFinite() || !points.allFinite())
-    throw Error("sphere carving: the samples must be finite");
+  detail::check_ball_samples("sphere carving", points, values, spacing);
   if (options.passes < 0 || options.halvings < 0 || options.side_passes < 0 ||
       !(options.max_turn_degrees >= 0) || !(options.max_turn_degrees <= 180) ||
       !(options.side_reach >= 0) || !std::isfinite(options.side_reach))

@@ -113,8 +113,7 @@ TEST(SelfIntersections, GcpMeshesOfThinShapesDoNotCrossThemselves) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   for (const char* name : {"plane", "wingnut"}) {
     SCOPED_TRACE(name);
-    const MeshSdf sdf(normalize_mesh(read_mesh(kMeshes + name + ".obj"), 0.9));
-    const Grid grid = sample_grid(sdf, 32, Bounds{});
+    const Grid grid = test::shared_mesh_grid(name, 32);
     const ContourResult r = contour(grid_input(grid), nullptr, ContourOptions{});
     ASSERT_TRUE(r.fallback.empty()) << r.fallback;
     ASSERT_TRUE(r.untangling.has_value());

@@ -4,13 +4,17 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <filesystem>
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "sdfcontour/io.h"
+#include "sdfcontour/mesh_sdf.h"
+#include "sdfcontour/mesh_transform.h"
 #include "sdfcontour/samples.h"
+#include "sdfcontour/signed_distance.h"
 
 namespace sdfcontour::test {
 
@@ -35,18 +39,26 @@ inline std::filesystem::path temp_dir(const std::string& name) {
 }
 
 /// Skips the calling test, with the reason, unless `path` exists (an optional peer or data).
-#define SDFCONTOUR_REQUIRE_PATH(path, what)                                        \
-  do {                                                                             \
+#define SDFCONTOUR_REQUIRE_PATH(path, what)                                                   \
+  do {                                                                                        \
     if (!std::filesystem::exists(path)) GTEST_SKIP() << "needs " << what << " at " << (path); \
   } while (0)
 
 /// Skips the calling test unless Debian's python3 can import `module`.
-#define SDFCONTOUR_REQUIRE_PYTHON_MODULE(module)                                          \
-  do {                                                                                    \
-    if (std::system("/usr/bin/python3 -c 'import " module "' 2>/dev/null") != 0)          \
-      GTEST_SKIP() << "needs Debian's python3 with " module " (apt-get install python3-" \
-                   << module << ")";                                                      \
+#define SDFCONTOUR_REQUIRE_PYTHON_MODULE(module)                                                   \
+  do {                                                                                             \
+    if (std::system("/usr/bin/python3 -c 'import " module "' 2>/dev/null") != 0)                   \
+      GTEST_SKIP() << "needs Debian's python3 with " module " (apt-get install python3-" << module \
+                   << ")";                                                                         \
   } while (0)
+
+/// The exact SDF grid (n^3 over [-1, 1]^3) of the shared mesh `name` (in
+/// ../shared/data/meshes), scaled as `sdfcontour sample` does (longest side 1.8, centred).
+inline Grid shared_mesh_grid(const std::string& name, int n) {
+  const MeshSdf sdf(
+      normalize_mesh(read_mesh(SDFCONTOUR_SHARED_DIR "/data/meshes/" + name + ".obj"), 0.9));
+  return sample_grid(sdf, n, Bounds{});
+}
 
 /// n points uniformly random in [-1, 1]^3.
 inline PointMatrix random_points(int n, unsigned seed) {
