@@ -41,7 +41,8 @@ struct SideRepairStats {
 /// surface lie on their own sides: for each that does not, ascending, the vertices within a
 /// geodesic radius R of its nearest point whose normals face the same way move along the nearest
 /// feature's normal, by (1 - (d/R)^2)^2 of the move that puts the sample |value| beyond the sheet
-/// (all by the feature's move, or each to the plane |value| behind the sample), again for the
+/// (all by the feature's move, or each to the plane |value| behind the sample; else half that
+/// depth), again for the
 /// sheet nearest next (up to 3). A dent is kept only if the sample then lies on its side, no
 /// sample the moved triangles swept over has come to the wrong side, no two triangles sharing an
 /// edge fold onto each other and no moved triangle crosses another; else the next radius or
