@@ -21,8 +21,10 @@ namespace {
 // much (relative) further.
 constexpr double kBeyond = 1e-6;
 // A vertex joins a dent only if its normal is within this angle's cosine of the feature's: the
-// patch stays on the sheet nearest the sample, not the other side of a thin part.
+// patch stays on the sheet nearest the sample, not the other side of a thin part. Where every such
+// dent fails, the dents are tried again on every vertex within the radius (kAnySheetCos).
 constexpr double kSameSheetCos = 0.5;
+constexpr double kAnySheetCos = -2;
 // A sample in a crease of the mesh can need a dent in each of its sheets: at most this many.
 constexpr int kDentsPerSample = 3;
 
@@ -34,6 +36,14 @@ constexpr double kFoldCos = -0.9;
 constexpr double kSearch = 2;
 
 enum class DentShape { Shift, Flatten };
+
+// One try: the geodesic radius, the least cosine of a moved vertex's normal to the feature's,
+// the shape, and how far behind the sample the sheet goes.
+struct Dent {
+  double radius, min_cos;
+  DentShape shape;
+  double target;
+};
 
 // The triangles with a vertex within `radius` of p.
 std::vector<int> triangles_near(const Mesh& mesh, const Eigen::Vector3d& p, double radius) {
@@ -66,7 +76,8 @@ Eigen::Vector3d vertex_normal(const Mesh& mesh, const detail::VertexTriangles& a
 // feature's vertices, not through a vertex that faces away.
 std::vector<std::pair<int, double>> dent_patch(const Mesh& mesh,
                                                const detail::VertexTriangles& around,
-                                               const detail::NearestFeature& at, double radius) {
+                                               const detail::NearestFeature& at, double radius,
+                                               double min_cos) {
   const PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
   std::unordered_map<int, double> dist;
@@ -84,7 +95,7 @@ std::vector<std::pair<int, double>> dent_patch(const Mesh& mesh,
     queue.pop();
     if (d > dist[v] || d >= radius || done.count(v)) continue;
     done.insert(v);
-    if (vertex_normal(mesh, around, v).dot(at.normal) < kSameSheetCos) continue;
+    if (vertex_normal(mesh, around, v).dot(at.normal) < min_cos) continue;
     out.push_back({v, d});
     for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
       for (int c = 0; c < 3; ++c) {
@@ -211,18 +222,20 @@ class SideRepair {
   // (boot 64^3: 2 of its 15 samples need that); keeps the first that works.
   void repair(int s, std::vector<char>& moved) {
     const double r = std::abs(values_[s]);
-    for (int doubling = 0; doubling <= options_.radius_doublings; ++doubling) {
-      const double radius = options_.radius * spacing_ * std::pow(2.0, doubling);
-      for (const DentShape shape : {DentShape::Shift, DentShape::Flatten})
-        for (const double depth : {1.0, 0.5})
-          if (try_dents(s, radius, shape, depth * r * (1 + kBeyond), moved)) return;
-    }
+    for (const double min_cos : {kSameSheetCos, kAnySheetCos})
+      for (int doubling = 0; doubling <= options_.radius_doublings; ++doubling) {
+        const double radius = options_.radius * spacing_ * std::pow(2.0, doubling);
+        for (const DentShape shape : {DentShape::Shift, DentShape::Flatten})
+          for (const double depth : {1.0, 0.5})
+            if (try_dents(s, {radius, min_cos, shape, depth * r * (1 + kBeyond)}, moved)) return;
+      }
   }
 
   // Dents the sheet nearest to sample s until s lies on its side (a sample in a crease can need
   // a dent in each of its sheets), `target` behind it; keeps the dents if s is then on its side,
   // no sample near them comes to the wrong side and no moved triangle crosses another.
-  bool try_dents(int s, double radius, DentShape shape, double target, std::vector<char>& moved) {
+  bool try_dents(int s, const Dent& dent, std::vector<char>& moved) {
+    const double radius = dent.radius;
     PointMatrix& V = mesh_.vertices;
     const Eigen::Vector3d p = points_.row(s).transpose();
     const double side = values_[s] > 0 ? 1 : -1;
@@ -231,13 +244,13 @@ class SideRepair {
     for (int step = 0; step < kDentsPerSample; ++step) {
       const detail::NearestFeature at = nearest(p, search);
       if (at.triangle < 0 || side * at.height > 0) break;
-      for (const auto& [v, d] : dent_patch(mesh_, around_, at, radius)) {
+      for (const auto& [v, d] : dent_patch(mesh_, around_, at, radius, dent.min_cos)) {
         const double t = d / radius, w = (1 - t * t) * (1 - t * t);
         // How far v must go along -side * normal: all of the feature's point's way (shift), or
         // its own way to the plane `target` behind p (flatten; none if already behind it).
-        const double way = shape == DentShape::Shift
-                               ? side * at.height + target
-                               : side * (V.row(v).transpose() - p).dot(at.normal) + target;
+        const double way = dent.shape == DentShape::Shift
+                               ? side * at.height + dent.target
+                               : side * (V.row(v).transpose() - p).dot(at.normal) + dent.target;
         if (!(way > 0)) continue;
         before.emplace(v, V.row(v));
         V.row(v) -= (side * w * way) * at.normal.transpose();

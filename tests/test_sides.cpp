@@ -102,7 +102,7 @@ TEST(Sides, NoSampleOnTheWrongSideOfTheCarvedMesh) {
 // Where a gap or crease is narrower than a spacing, carving's one-feature moves are spikes that the
 // untangling undoes, and an outside sample stays inside the mesh: one on the plane's tail at 32^3,
 // 24 on the penguin at 32^3. The side repair dents the sheet over them (side_repair.h) without a
-// crossing: none left on the plane, 3 on the penguin (their dents would fold the mesh).
+// crossing: none left on the plane, 2 on the penguin (their dents would fold the mesh).
 TEST(Sides, RepairDentsTheMeshOffSamplesInThinGaps) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   for (const char* name : {"plane", "penguin"}) {
