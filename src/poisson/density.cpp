@@ -90,7 +90,8 @@ double SamplingDensity::points_per_area(const Eigen::Vector3d& p) const {
 }
 
 double assign_areas_and_depths(std::vector<UnitPoint>& points, const SamplingDensity& density,
-                               double samples_per_node, int min_depth, int max_depth) {
+                               double samples_per_node, int min_depth, int max_depth,
+                               bool fractional) {
   double total_area = 0;
   for (auto& s : points) {
     const double sigma = std::max(density.points_per_area(s.p), 1e-300);
@@ -98,6 +99,10 @@ double assign_areas_and_depths(std::vector<UnitPoint>& points, const SamplingDen
     total_area += s.area;
     // Depth where a node of side h holds sigma * h^2 = samples_per_node points.
     const double ideal = 0.5 * std::log2(sigma / samples_per_node);
+    if (!fractional) {
+      s.depth = std::clamp(int(std::lround(ideal)), min_depth, max_depth);
+      continue;
+    }
     const double depth = std::clamp(ideal, double(min_depth), double(max_depth));
     s.depth = std::min(int(std::floor(depth)), max_depth);
     s.finer_share = s.depth < max_depth ? depth - s.depth : 0.0;

@@ -110,7 +110,7 @@ PoissonResult reconstruct(const std::function<poisson::UnitPoints()>& unit_point
   const MortonRuns runs(unit.points, D);
   const SamplingDensity density(unit.points, runs, std::max(1, D - 2));
   const double area_per_point =
-      assign_areas_and_depths(unit.points, density, o.samples_per_node, d_min, D);
+      assign_areas_and_depths(unit.points, density, o.samples_per_node, d_min, D, o.degree == 2);
 
   stage.start("octree");
   Octree tree = build_octree(unit.points, runs, d_min, D, o.refine_dilation, o.cancel);
