@@ -261,3 +261,29 @@ TEST(PoissonStages, DensityOfARegularGridIsOneOverSpacingSquared) {
     EXPECT_NEAR(density.points_per_area(p) * s * s, 1.0, 0.1) << p.transpose();
   EXPECT_LT(density.points_per_area(Vector3d(0.5, 0.5, 0.9)), 1e-9);
 }
+
+// A plane sampled 1/128 apart holds ~1.5 points per node at depth 0.5 log2(128^2 / 1.5) = 6.29:
+// degree 1 splats every normal at the nearest depth, 6; degree 2 shares it between depths 6 and 7,
+// the fractional part (~0.29) going to depth 7.
+TEST(PoissonStages, SplatDepthIsNearestOrSharedByTheFractionalPart) {
+  std::vector<UnitPoint> points;
+  const double s = 1.0 / 128;
+  for (double x = 0.2; x < 0.8; x += s)
+    for (double y = 0.2; y < 0.8; y += s) points.push_back(unit_point(Vector3d(x, y, 0.51)));
+  const MortonRuns runs(points, 8);
+  const SamplingDensity density(points, runs, 6);
+  const std::size_t middle = points.size() / 2;  // the patch's centre, away from its edges
+  const double ideal = 0.5 * std::log2(density.points_per_area(points[middle].p) / 1.5);
+  ASSERT_NEAR(ideal, 6.29, 0.08);
+  std::vector<UnitPoint> nearest = points, shared = points;
+  assign_areas_and_depths(nearest, density, 1.5, 2, 8, false);
+  assign_areas_and_depths(shared, density, 1.5, 2, 8, true);
+  EXPECT_EQ(nearest[middle].depth, 6);
+  EXPECT_EQ(nearest[middle].finer_share, 0);
+  EXPECT_EQ(shared[middle].depth, 6);
+  EXPECT_NEAR(shared[middle].finer_share, ideal - 6, 1e-12);
+  // Clamped at the finest depth: no share finer than it.
+  assign_areas_and_depths(shared, density, 1.5, 2, 6, true);
+  EXPECT_EQ(shared[middle].depth, 6);
+  EXPECT_EQ(shared[middle].finer_share, 0);
+}
