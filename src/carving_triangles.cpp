@@ -220,10 +220,20 @@ long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
   return long(std::count(held.begin(), held.end(), 1));
 }
 
+// The feature of triangle t holding q, p's nearest point on the mesh.
+static NearestFeature feature_at(const Mesh& mesh, const VertexTriangles& around, int t,
+                                 const Eigen::Vector3d& q, const Eigen::Vector3d& p) {
+  NearestFeature out;
+  out.triangle = t;
+  out.point = q;
+  out.normal = feature_normal(mesh, around, t, barycentric(mesh, t, q), out.vertices);
+  out.height = (p - q).dot(out.normal);
+  return out;
+}
+
 NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
                                const Eigen::Vector3d& p, const std::vector<int>& among) {
-  NearestFeature out;
-  if (among.empty()) return out;
+  if (among.empty()) return {};
   const PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
   auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
@@ -233,12 +243,8 @@ NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
   Tree tree(triangles.begin(), triangles.end());
   tree.do_not_accelerate_distance_queries();  // one query: no kd-tree of hints
   const auto [nearest, primitive] = tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
-  out.triangle = among[std::size_t(primitive - triangles.cbegin())];
-  out.point = Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z());
-  out.normal = feature_normal(mesh, around, out.triangle,
-                              barycentric(mesh, out.triangle, out.point), out.vertices);
-  out.height = (p - out.point).dot(out.normal);
-  return out;
+  return feature_at(mesh, around, among[std::size_t(primitive - triangles.cbegin())],
+                    Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z()), p);
 }
 
 SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
@@ -278,12 +284,13 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
     const Eigen::Vector3d p = points.row(s).transpose();
     const auto [nearest, primitive] =
         tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
-    const Eigen::Index t = index[std::size_t(primitive - triangles.cbegin())];
-    out.nearest[w] = int(t);
-    const Eigen::Vector3d q(nearest.x(), nearest.y(), nearest.z());
-    std::vector<int> feature;
-    const Eigen::Vector3d n = feature_normal(mesh, around, t, barycentric(mesh, t, q), feature);
-    const double side = values[s] > 0 ? 1 : -1, height = (p - q).dot(n);
+    const int t = index[std::size_t(primitive - triangles.cbegin())];
+    out.nearest[w] = t;
+    NearestFeature at =
+        feature_at(mesh, around, t, Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z()), p);
+    const Eigen::Vector3d q = at.point, n = at.normal;
+    std::vector<int>& feature = at.vertices;
+    const double side = values[s] > 0 ? 1 : -1, height = at.height;
     wrong[w] = !(side * height > 0);
     if (!wrong[w] && (p - q).norm() >= r - slack) return;
     out.failed[w] = 1;

@@ -241,9 +241,11 @@ class SideRepair {
     const double side = values_[s] > 0 ? 1 : -1;
     const double search = kSearch * spacing_;
     std::map<int, Eigen::RowVector3d> before;
-    for (int step = 0; step < kDentsPerSample; ++step) {
+    bool on_side = false;
+    for (int step = 0;; ++step) {
       const detail::NearestFeature at = nearest(p, search);
-      if (at.triangle < 0 || side * at.height > 0) break;
+      on_side = at.triangle >= 0 && side * at.height > 0;
+      if (at.triangle < 0 || on_side || step == kDentsPerSample) break;
       for (const auto& [v, d] : dent_patch(mesh_, around_, at, radius, dent.min_cos)) {
         const double t = d / radius, w = (1 - t * t) * (1 - t * t);
         // How far v must go along -side * normal: all of the feature's point's way (shift), or
@@ -266,16 +268,13 @@ class SideRepair {
       for (const auto& [v, start] : before) V.row(v) = start;
       return false;
     };
-    if (vertices.empty() || folds(before)) return undo();
-    const detail::NearestFeature now = nearest(p, search);
-    if (now.triangle < 0 || !(side * now.height > 0)) return undo();
+    if (vertices.empty() || !on_side || folds(before)) return undo();
     // The samples whose side the dent can change: those the moved triangles swept over, all
     // within `longest` of where they are now. Their nearest points lie within `local` of p.
     std::vector<int> which;
     for (int n :
          detail::samples_near_vertices(mesh_, around_, vertices, points_, zeros_, 0, longest))
-      if (n == s || (values_[n] != 0 && std::abs(values_[n]) <= options_.reach * spacing_))
-        which.push_back(n);
+      if (values_[n] != 0 && std::abs(values_[n]) <= options_.reach * spacing_) which.push_back(n);
     if (!std::binary_search(which.begin(), which.end(), s))
       which.insert(std::upper_bound(which.begin(), which.end(), s), s);
     const double local = search + radius + 2 * longest + spacing_;

@@ -48,6 +48,14 @@ Vector3d node_position(const OctreeLevel& L, Key key) {
   return Vector3d(double(i), double(j), double(k)) / double(L.res);
 }
 
+// Points s apart on a square grid over [0.2, 0.8)^2 of the plane z = 0.51.
+std::vector<UnitPoint> plane_patch(double s) {
+  std::vector<UnitPoint> points;
+  for (double x = 0.2; x < 0.8; x += s)
+    for (double y = 0.2; y < 0.8; y += s) points.push_back(unit_point(Vector3d(x, y, 0.51)));
+  return points;
+}
+
 }  // namespace
 
 // A discrete harmonic function with linear boundary values is that linear function (trilinear
@@ -251,10 +259,8 @@ TEST(PoissonStages, IndicatorAndExtractionReproduceALinearField) {
 
 // Points on a regular grid of a plane, spacing s, have density 1 / s^2 away from the edges.
 TEST(PoissonStages, DensityOfARegularGridIsOneOverSpacingSquared) {
-  std::vector<UnitPoint> points;
   const double s = 1.0 / 128;
-  for (double x = 0.2; x < 0.8; x += s)
-    for (double y = 0.2; y < 0.8; y += s) points.push_back(unit_point(Vector3d(x, y, 0.51)));
+  const std::vector<UnitPoint> points = plane_patch(s);
   const MortonRuns runs(points, 8);
   const SamplingDensity density(points, runs, 6);
   for (const Vector3d& p : {Vector3d(0.5, 0.5, 0.51), Vector3d(0.4, 0.6, 0.51)})
@@ -266,10 +272,7 @@ TEST(PoissonStages, DensityOfARegularGridIsOneOverSpacingSquared) {
 // degree 1 splats every normal at the nearest depth, 7; degree 2 shares it between depths 6 and 7,
 // the fractional part (~0.71) going to depth 7.
 TEST(PoissonStages, SplatDepthIsNearestOrSharedByTheFractionalPart) {
-  std::vector<UnitPoint> points;
-  const double s = 1.0 / 128;
-  for (double x = 0.2; x < 0.8; x += s)
-    for (double y = 0.2; y < 0.8; y += s) points.push_back(unit_point(Vector3d(x, y, 0.51)));
+  const std::vector<UnitPoint> points = plane_patch(1.0 / 128);
   const MortonRuns runs(points, 8);
   const SamplingDensity density(points, runs, 6);
   const std::size_t middle = points.size() / 2;  // the patch's centre, away from its edges

@@ -42,12 +42,12 @@ struct SideRepairStats {
 /// geodesic radius R of its nearest point whose normals face the same way move along the nearest
 /// feature's normal, by (1 - (d/R)^2)^2 of the move that puts the sample |value| beyond the sheet
 /// (all by the feature's move, or each to the plane |value| behind the sample; else half that
-/// depth), again for the
-/// sheet nearest next (up to 3). A dent is kept only if the sample then lies on its side, no
-/// sample the moved triangles swept over has come to the wrong side, no two triangles sharing an
-/// edge fold onto each other and no moved triangle crosses another; else the next radius or
-/// shape is tried. The connectivity is unchanged; the result does not depend on the thread count.
-/// Throws Error for mismatched sizes, non-finite samples or a spacing that is not positive.
+/// depth), again for the sheet nearest next (up to 3). A dent is kept only if the sample then lies
+/// on its side, no sample the moved triangles swept over has come to the wrong side, no two
+/// triangles sharing an edge fold onto each other and no moved triangle crosses another; else the
+/// next radius or shape is tried. The connectivity is unchanged; the result does not depend on the
+/// thread count. Throws Error for mismatched sizes, non-finite samples or a spacing that is not
+/// positive.
 SideRepairStats repair_sample_sides(Mesh& mesh, const PointMatrix& points,
                                     const Eigen::VectorXd& values, double spacing,
                                     const SideRepairOptions& options = {});
