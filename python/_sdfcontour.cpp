@@ -293,6 +293,11 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;
   stats["side_repaired_samples"] = r.side_repair ? r.side_repair->repaired : 0L;
   stats["wrong_side_left"] = r.side_repair ? r.side_repair->left : 0L;
+  py::dict seconds;  // per stage, as the CLI's --stats "seconds" (repeated stages summed)
+  for (const StageTime& t : r.stages)
+    seconds[t.name.c_str()] =
+        t.seconds + (seconds.contains(t.name) ? seconds[t.name.c_str()].cast<double>() : 0.0);
+  stats["seconds"] = seconds;
   // Where the grid's values were read from: the caller's own buffer unless it had to be converted.
   if (view) stats["grid_address"] = std::uintptr_t(view->data);
   out["stats"] = stats;

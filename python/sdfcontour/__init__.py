@@ -219,7 +219,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     progress : bool
         Show the stages on stderr.
     return_stats : bool
-        Also return a dict of counts (samples, band samples, for a callable the evaluations).
+        Also return a dict of counts (samples, band samples, for a callable the evaluations) and
+        ``stats["seconds"]``, the seconds spent in each stage (as the CLI's ``--stats``).
 
     Returns
     -------

@@ -3,6 +3,7 @@
 Run with the module installed (pip install --no-build-isolation .) and the CLI built:
     SDFCONTOUR_CLI=build/sdfcontour python -m pytest tests/python
 """
+import json
 import os
 import signal
 import subprocess
@@ -56,12 +57,23 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
         pytest.skip("../shared/data/meshes is missing")
     subprocess.run([CLI, "sample", mesh, "--res", "32", "-o", str(tmp_path / "b"), "-q"], check=True,
                    stdout=subprocess.DEVNULL)
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "cli.ply"), "-q"],
-                   check=True, stdout=subprocess.DEVNULL)
+    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "-o", str(tmp_path / "cli.ply"), "-q",
+                    "--stats", str(tmp_path / "cli.json")], check=True, stdout=subprocess.DEVNULL)
     V_cli, F_cli = sdfcontour.read_mesh(tmp_path / "cli.ply")
-    V, F, stats = sdfcontour.contour(np.load(tmp_path / "b.npy"), return_stats=True)
+    grid = np.load(tmp_path / "b.npy")
+    start = time.perf_counter()
+    V, F, stats = sdfcontour.contour(grid, return_stats=True)
+    elapsed = time.perf_counter() - start
     np.testing.assert_array_equal(V, V_cli)
     np.testing.assert_array_equal(F, F_cli)
+    # The seconds per stage: the CLI's stages but reading and writing files, and together no
+    # longer than the call.
+    with open(tmp_path / "cli.json") as f:
+        cli_stages = set(json.load(f)["seconds"]) - {"input", "output"}
+    assert set(stats["seconds"]) == cli_stages
+    assert {"contact_points", "poisson", "carving"} <= cli_stages
+    assert all(s >= 0 for s in stats["seconds"].values())
+    assert sum(stats["seconds"].values()) <= elapsed
     # At 32^3 the automatic setting turns the sign constraints on; forcing them gives the same mesh.
     assert stats["sign_constraints"] and stats["sign_violations"] > 0
     assert not stats["sign_constraints_dropped"]
