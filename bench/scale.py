@@ -10,7 +10,9 @@ unaffected, GCP detects the truncation), all float32. L1 against the normalised 
 `sdfcontour eval`.
 
 Usage: /usr/bin/python3 bench/scale.py [--res 64,128,256,512] [--meshes bunny,spot,armadillo]
-       [--out docs/scale.md] [--work /tmp/sdfcontour_scale]
+       [--repeats 1] [--out docs/scale.md] [--work /tmp/sdfcontour_scale]
+With --repeats N every method runs N times per grid and the median time is reported (peak RSS:
+the largest).
 Needs Debian's python3-skimage, python3-openvdb and python3-vtk9.
 """
 import argparse
@@ -108,6 +110,7 @@ def main():
     ap.add_argument("--vdb-res", default="128,256", help="resolutions of the .vdb comparison")
     ap.add_argument("--work", default="/tmp/sdfcontour_scale")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--repeats", type=int, default=1, help="runs per method and grid; the median time is kept")
     ap.add_argument("--peer", nargs=3, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.peer:
@@ -127,13 +130,21 @@ def main():
                 if method == "mt-rt" and res > args.mtrt_max:
                     continue
                 out = os.path.join(args.work, f"out_{method}.ply")
-                if method in ("gcp", "mt-rt", "mc"):
-                    seconds, rss, _, err = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--method", method,
-                                                  "-q"])
-                else:
-                    wall, rss, stdout, err = timed([*self_cmd, method, prefix + ".npy", out])
-                    seconds = json.loads(stdout)["seconds"] if wall is not None else None
-                row = {"mesh": name, "res": res, "method": method, "seconds": seconds, "rss_mb": rss,
+                times, rss, err = [], None, None
+                for _ in range(args.repeats):
+                    if method in ("gcp", "mt-rt", "mc"):
+                        seconds, r, _, err = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--method",
+                                                    method, "-q"])
+                    else:
+                        wall, r, stdout, err = timed([*self_cmd, method, prefix + ".npy", out])
+                        seconds = json.loads(stdout)["seconds"] if wall is not None else None
+                    if seconds is None:
+                        break
+                    times.append(seconds)
+                    rss = max(rss or 0, r)
+                # The median of the runs: one run's time moves by 10-30% with the machine's load.
+                seconds = float(np.median(times)) if times and err is None else None
+                row = {"mesh": name, "res": res, "method": method, "seconds": seconds, "runs": times, "rss_mb": rss,
                        "L1": l1(args.cli, out, gt) if seconds is not None else None, "error": err}
                 rows.append(row)
                 print(json.dumps(row), flush=True)
