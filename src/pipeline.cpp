@@ -445,6 +445,11 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
       sum.intersections_found += u.intersections_found;
       sum.intersections_left += u.intersections_left;
     };
+    // Where carving moves vertices only (no side passes, from 128 samples per axis by default),
+    // one untangling after both stages, back to the reconstruction's positions, replaces one
+    // after each: the search over the mesh is most of an untangling's cost.
+    const bool untangle_once = project && carve && carving.side_passes == 0;
+    PointMatrix reconstructed;
     if (project) {
       const PointMatrix before = result.mesh->vertices;
       result.projection =
@@ -453,10 +458,13 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                                              contact_depths, result.band_spacing,
                                              options.projection);
           });
-      untangle(before);
+      if (untangle_once)
+        reconstructed = before;
+      else
+        untangle(before);
     }
     if (carve) {
-      const PointMatrix before = result.mesh->vertices;
+      const PointMatrix before = untangle_once ? std::move(reconstructed) : result.mesh->vertices;
       result.carving = stages.run("carving", "carving the mesh out of the samples' spheres", [&] {
         return carve_mesh(*result.mesh, carving_samples.points, carving_samples.values,
                           result.band_spacing, carving);
