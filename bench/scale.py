@@ -113,6 +113,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=1, help="runs per method and grid; the median time is kept")
     ap.add_argument("--peer", nargs=3, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.repeats < 1:
+        ap.error("--repeats must be at least 1")
     if args.peer:
         return peer(*args.peer)
     os.makedirs(args.work, exist_ok=True)
