@@ -62,11 +62,13 @@ struct NearestFeature {
 NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
                                const Eigen::Vector3d& p, const std::vector<int>& among);
 
-/// The samples with |value| <= reach (ascending) whose ball, grown by `grow`, meets a triangle
-/// around one of `vertices`.
+/// The samples with |value| <= reach (ascending) whose ball of radius ball * |value| + grow meets
+/// a triangle around one of `vertices` (ball 1: the sample's own ball, grown; 0: a ball of radius
+/// `grow` about the sample's point).
 std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& around,
                                        const std::vector<int>& vertices, const PointMatrix& points,
-                                       const Eigen::VectorXd& values, double reach, double grow);
+                                       const Eigen::VectorXd& values, double reach, double grow,
+                                       double ball);
 
 /// The triangles within `rings` rings (triangles sharing a vertex) of `seeds` (ascending; entries
 /// < 0 are skipped).

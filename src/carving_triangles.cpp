@@ -149,7 +149,8 @@ std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& aroun
 
 std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& around,
                                        const std::vector<int>& vertices, const PointMatrix& points,
-                                       const Eigen::VectorXd& values, double reach, double grow) {
+                                       const Eigen::VectorXd& values, double reach, double grow,
+                                       double ball) {
   std::vector<int> seeds;
   for (int v : vertices)
     for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
@@ -168,7 +169,8 @@ std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& 
     const double r = std::abs(values[s]);
     if (!(r <= reach)) return;
     const K::Point_3 p(points(s, 0), points(s, 1), points(s, 2));
-    near[std::size_t(s)] = tree.do_intersect(K::Sphere_3(p, (r + grow) * (r + grow)));
+    const double radius = ball * r + grow;
+    near[std::size_t(s)] = tree.do_intersect(K::Sphere_3(p, radius * radius));
   });
   std::vector<int> out;
   for (std::size_t s = 0; s < near.size(); ++s)

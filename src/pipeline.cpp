@@ -451,7 +451,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     const bool untangle_once = project && carve && carving.side_passes == 0;
     PointMatrix reconstructed;
     if (project) {
-      const PointMatrix before = result.mesh->vertices;
+      PointMatrix before = result.mesh->vertices;
       result.projection =
           stages.run("projection", "projecting the mesh onto the contact points", [&] {
             return project_to_contact_points(*result.mesh, lent.points, lent.normals,
@@ -459,7 +459,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                                              options.projection);
           });
       if (untangle_once)
-        reconstructed = before;
+        reconstructed = std::move(before);
       else
         untangle(before);
     }

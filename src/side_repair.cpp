@@ -131,8 +131,7 @@ class SideRepair {
         points_(points),
         values_(values),
         spacing_(spacing),
-        options_(options),
-        zeros_(Eigen::VectorXd::Zero(values.size())) {}
+        options_(options) {}
 
   SideRepairStats run() {
     SideRepairStats stats;
@@ -272,9 +271,9 @@ class SideRepair {
     // The samples whose side the dent can change: those the moved triangles swept over, all
     // within `longest` of where they are now. Their nearest points lie within `local` of p.
     std::vector<int> which;
-    for (int n :
-         detail::samples_near_vertices(mesh_, around_, vertices, points_, zeros_, 0, longest))
-      if (values_[n] != 0 && std::abs(values_[n]) <= options_.reach * spacing_) which.push_back(n);
+    for (int n : detail::samples_near_vertices(mesh_, around_, vertices, points_, values_,
+                                               options_.reach * spacing_, longest, 0))
+      if (values_[n] != 0) which.push_back(n);
     if (!std::binary_search(which.begin(), which.end(), s))
       which.insert(std::upper_bound(which.begin(), which.end(), s), s);
     const double local = search + radius + 2 * longest + spacing_;
@@ -300,8 +299,7 @@ class SideRepair {
   const Eigen::VectorXd& values_;
   const double spacing_;
   const SideRepairOptions options_;
-  const Eigen::VectorXd zeros_;  // a zero per sample: balls of radius 0
-  std::vector<char> wrong_;      // per sample: on the wrong side now
+  std::vector<char> wrong_;  // per sample: on the wrong side now
 };
 
 }  // namespace

@@ -283,7 +283,7 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
     // The samples to check again: those still failing, and those whose balls, grown by the
     // longest push, the pushed vertices' triangles meet (a sample on the surface has none).
     const std::vector<int> near =
-        detail::samples_near_vertices(mesh, around, pushed, points, values, reach, longest);
+        detail::samples_near_vertices(mesh, around, pushed, points, values, reach, longest, 1);
     std::vector<int> again;
     std::set_union(check.begin(), check.end(), near.begin(), near.end(), std::back_inserter(again));
     carve_triangles(mesh, around, points, values, spacing, options,
