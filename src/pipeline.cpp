@@ -49,7 +49,7 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
   if (points.rows() == 0 || !(spacing > 0)) return 8;
   const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
   const double samples_per_axis = extent / spacing + 1;
-  return samples_per_axis > 257 ? 10 : samples_per_axis > 129 ? 9 : 8;
+  return samples_per_axis > 513 ? 11 : samples_per_axis > 257 ? 10 : samples_per_axis > 129 ? 9 : 8;
 }
 
 bool auto_sign_constraints(double samples_per_axis) {

@@ -166,7 +166,7 @@ TEST(Band, AutoBandFollowsTheResolution) {
 }
 
 // The automatic Poisson depth follows the samples per axis across the band's extent: the octree's
-// finest cells stay at most about half a spacing wide up to depth 10.
+// finest cells stay at most about half a spacing wide up to depth 11.
 TEST(Band, AutoPoissonDepthFollowsTheResolution) {
   PointMatrix corners(2, 3);
   corners << -0.9, -0.9, -0.9, 0.9, 0.9, 0.9;
@@ -174,6 +174,7 @@ TEST(Band, AutoPoissonDepthFollowsTheResolution) {
   EXPECT_EQ(auto_poisson_depth(corners, extent / 100), 8);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 200), 9);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 460), 10);
-  EXPECT_EQ(auto_poisson_depth(corners, extent / 2000), 10);  // deeper is the user's choice
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 920), 11);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 4000), 11);  // deeper is the user's choice
   EXPECT_EQ(auto_poisson_depth(PointMatrix(0, 3), 0.01), 8);
 }

@@ -140,7 +140,8 @@ void PoissonArgs::add_to(CLI::App* app) {
   app->add_option("--depth", depth,
                   depth == "auto"
                       ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 up to "
-                        "256, 10 above (a 512^3 grid: 1.4-2.2 GB in all)"
+                        "256, 10 up to 512, 11 above (in all: a 512^3 grid 1.4-2.2 GB, "
+                        "1024^3 8.4 GB)"
                       : "Finest octree depth")
       ->capture_default_str();
   app->add_option("--degree", degree,
