@@ -141,7 +141,7 @@ void PoissonArgs::add_to(CLI::App* app) {
                   depth == "auto"
                       ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 up to "
                         "256, 10 up to 512, 11 above (in all: a 512^3 grid 1.4-2.2 GB, "
-                        "1024^3 8.4 GB)"
+                        "1024^3 6.1-8.4 GB)"
                       : "Finest octree depth")
       ->capture_default_str();
   app->add_option("--degree", degree,
