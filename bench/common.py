@@ -17,7 +17,10 @@ def timed(cmd):
     r = subprocess.run(["/usr/bin/time", "-f", "TIME %e %M", *cmd], capture_output=True, text=True)
     m = re.search(r"TIME ([\d.]+) (\d+)", r.stderr)
     if r.returncode != 0 or not m:
-        return None, None, r.stdout, r.stderr.strip().splitlines()[-2:]
+        # The program's own last lines, not those /usr/bin/time appends (its exit status, TIME).
+        own = [line for line in r.stderr.strip().splitlines()
+               if not line.startswith(("TIME ", "Command exited with non-zero status", "Command terminated by signal"))]
+        return None, None, r.stdout, own[-2:] or [f"exit status {r.returncode}"]
     return float(m.group(1)), int(m.group(2)) / 1024, r.stdout, None
 
 
