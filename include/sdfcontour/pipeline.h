@@ -162,8 +162,8 @@ struct ContourResult {
 /// per axis, 9 up to 257, 10 up to 513, 11 above. Measured (bench/scale.py, docs/scale.md): at
 /// 256^3 depth 8 is coarser than the grid (GCP's L1 1.27x MC's) and depth 9 gives 0.59x; at 512^3
 /// depth 9 gives 1.3-1.9x MC's L1 (bunny, spot, armadillo) and depth 10 0.57-0.95x; at 1024^3
-/// (bunny) depth 10 gives 1.43x MC's L1 and depth 11 0.70x, in 8.4 GB instead of 6.9 GB. Deeper
-/// than 11 is left to the user (--depth): each depth needs ~4x the memory.
+/// depth 10 gives 1.43x MC's L1 (bunny, 6.9 GB) and depth 11 0.61-0.74x (bunny, spot, armadillo;
+/// 6.1-8.4 GB). Deeper than 11 is left to the user (--depth): each depth needs ~4x the memory.
 int auto_poisson_depth(const PointMatrix& points, double spacing);
 
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
