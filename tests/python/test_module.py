@@ -190,6 +190,19 @@ def test_grid_is_read_in_place(dtype):
     np.testing.assert_array_equal(V, V2)
 
 
+def test_memory_mapped_grid_is_read_in_place(tmp_path):
+    # A grid larger than memory arrives as np.load(..., mmap_mode="r"): read-only, never copied.
+    grid = full_grid(sphere, 24).astype(np.float32)
+    np.save(tmp_path / "g.npy", grid)
+    mapped = np.load(tmp_path / "g.npy", mmap_mode="r")
+    assert not mapped.flags.writeable
+    V, F, stats = sdfcontour.contour(mapped, method="mc", return_stats=True)
+    assert stats["grid_address"] == mapped.ctypes.data
+    V2, F2 = sdfcontour.contour(grid, method="mc")
+    np.testing.assert_array_equal(V, V2)
+    np.testing.assert_array_equal(F, F2)
+
+
 @pytest.mark.parametrize("f", [sphere, torus], ids=["sphere", "torus"])
 def test_callable_is_sampled_near_the_surface_only(f):
     n = 128
