@@ -244,8 +244,10 @@ NpyArray read_npy(const std::string& path) {
 
 namespace {
 
-void write_npy_bytes(const std::string& path, const std::vector<std::size_t>& shape,
-                     const char* descr, const char* data, std::size_t bytes) {
+// Writes a .npy file of `shape` and dtype `descr` atomically; `write_data` writes the values.
+template <class WriteData>
+void write_npy_file(const std::string& path, const std::vector<std::size_t>& shape,
+                    const char* descr, WriteData&& write_data) {
   std::string shape_text = "(";
   for (std::size_t i = 0; i < shape.size(); ++i)
     shape_text += (i ? ", " : "") + std::to_string(shape[i]);
@@ -263,22 +265,47 @@ void write_npy_bytes(const std::string& path, const std::vector<std::size_t>& sh
   const char len_bytes[2] = {char(len & 0xff), char(len >> 8)};
   out.write(len_bytes, 2);
   out.write(header.data(), std::streamsize(header.size()));
-  out.write(data, std::streamsize(bytes));
+  write_data(out);
   file.commit();
 }
 
 }  // namespace
 
+void write_npy(const std::string& path, const std::vector<std::size_t>& shape, const double* values,
+               std::size_t count, ScalarType type) {
+  std::size_t expected = 1;
+  for (std::size_t d : shape) expected *= d;
+  if (count != expected)
+    throw InternalError("write_npy: " + std::to_string(count) + " values for shape of " +
+                        std::to_string(expected));
+  if (type == ScalarType::Float64) {
+    write_npy_file(path, shape, "<f8", [&](std::ostream& out) {
+      out.write(reinterpret_cast<const char*>(values), std::streamsize(count * sizeof(double)));
+    });
+    return;
+  }
+  // Converted a chunk at a time: a 1024^3 grid needs no 4 GB float copy.
+  write_npy_file(path, shape, "<f4", [&](std::ostream& out) {
+    std::vector<float> chunk;
+    for (std::size_t at = 0; at < count; at += std::size_t(1) << 20) {
+      const std::size_t k = std::min(count - at, std::size_t(1) << 20);
+      chunk.assign(values + at, values + at + k);
+      out.write(reinterpret_cast<const char*>(chunk.data()), std::streamsize(k * sizeof(float)));
+    }
+  });
+}
+
 void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
                const std::vector<double>& data) {
-  write_npy_bytes(path, shape, "<f8", reinterpret_cast<const char*>(data.data()),
-                  data.size() * sizeof(double));
+  write_npy(path, shape, data.data(), data.size(), ScalarType::Float64);
 }
 
 void write_npy_float32(const std::string& path, const std::vector<std::size_t>& shape,
                        const std::vector<float>& data) {
-  write_npy_bytes(path, shape, "<f4", reinterpret_cast<const char*>(data.data()),
-                  data.size() * sizeof(float));
+  write_npy_file(path, shape, "<f4", [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(data.data()),
+              std::streamsize(data.size() * sizeof(float)));
+  });
 }
 
 void release_resident_pages(const SdfInput& input) {

@@ -1,3 +1,5 @@
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 
 #include "sdfcontour/npy.h"
@@ -36,6 +38,28 @@ TEST(Npy, RoundTripFloat64) {
   const NpyArray a = read_npy(path);
   EXPECT_EQ(a.shape, (std::vector<std::size_t>{2, 3, 4}));
   EXPECT_EQ(a.data, data);
+}
+
+// Values written straight from a buffer: float64 exactly, float32 as each value's nearest float
+// (converted in chunks, so past one chunk of 2^20 values too); a count that is not the shape's
+// product is a bug of the caller.
+TEST(Npy, WritesABufferAsFloat64OrFloat32) {
+  const auto dir = test::temp_dir("npy_buffer");
+  const std::size_t n = (std::size_t(1) << 20) + 8;
+  std::vector<double> data(n);
+  for (std::size_t i = 0; i < n; ++i) data[i] = std::sin(0.001 * double(i)) / 3;
+  write_npy((dir / "d.npy").string(), {n}, data.data(), n, ScalarType::Float64);
+  EXPECT_EQ(read_npy((dir / "d.npy").string()).data, data);
+  write_npy((dir / "f.npy").string(), {8, n / 8}, data.data(), n, ScalarType::Float32);
+  const NpyArray f = read_npy((dir / "f.npy").string());
+  EXPECT_EQ(f.shape, (std::vector<std::size_t>{8, n / 8}));
+  ASSERT_EQ(f.data.size(), n);
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < n; ++i) same += f.data[i] == double(float(data[i]));
+  EXPECT_EQ(same, n);
+  EXPECT_THROW(write_npy((dir / "x.npy").string(), {3}, data.data(), 2, ScalarType::Float32),
+               InternalError);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.npy"));
 }
 
 TEST(Npy, ReadsFloat32AndGridLayout) {

@@ -50,6 +50,11 @@ std::shared_ptr<const MappedNpy> map_npy(const std::string& path);
 /// array or any other dtype.
 NpyArray read_npy(const std::string& path);
 
+/// Writes `count` values (C order; count must be product(shape), else InternalError) as a
+/// float64 or float32 (`type`) .npy file, atomically. Float32 is converted a chunk at a time, so
+/// the writer holds no copy of the values.
+void write_npy(const std::string& path, const std::vector<std::size_t>& shape, const double* values,
+               std::size_t count, ScalarType type);
 /// Writes `data` (C order, product(shape) values) as a float64 .npy file, atomically.
 void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
                const std::vector<double>& data);
