@@ -300,14 +300,6 @@ void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
   write_npy(path, shape, data.data(), data.size(), ScalarType::Float64);
 }
 
-void write_npy_float32(const std::string& path, const std::vector<std::size_t>& shape,
-                       const std::vector<float>& data) {
-  write_npy_file(path, shape, "<f4", [&](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(data.data()),
-              std::streamsize(data.size() * sizeof(float)));
-  });
-}
-
 void release_resident_pages(const SdfInput& input) {
   const GridInput* grid = std::get_if<GridInput>(&input);
   if (!grid || !grid->file_mapped || !grid->view.data) return;

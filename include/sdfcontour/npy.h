@@ -58,9 +58,6 @@ void write_npy(const std::string& path, const std::vector<std::size_t>& shape, c
 /// Writes `data` (C order, product(shape) values) as a float64 .npy file, atomically.
 void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
                const std::vector<double>& data);
-/// The same as float32.
-void write_npy_float32(const std::string& path, const std::vector<std::size_t>& shape,
-                       const std::vector<float>& data);
 
 /// What an input holds: a grid of shape (nx, ny, nz) or scattered samples of shape (n, 4).
 /// Interprets an array as a grid (3 dimensions; positions from `bounds`) or as scattered samples
