@@ -52,6 +52,10 @@ bool auto_sign_constraints(double samples_per_axis) {
   return samples_per_axis < 128;
 }
 
+bool auto_carve_sides(double samples_per_axis) {
+  return samples_per_axis < 128;
+}
+
 namespace {
 
 using detail::NotDistances;

@@ -233,7 +233,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   }
   in.carving = options.carving;
   if (options.carve_sides == Switch::Off ||
-      (options.carve_sides == Switch::Auto && grid && band.samples_per_axis >= 128))
+      (options.carve_sides == Switch::Auto && !auto_carve_sides(band.samples_per_axis)))
     in.carving.side_passes = 0;
   return in;
 }

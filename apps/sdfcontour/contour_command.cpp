@@ -392,7 +392,8 @@ Command add_contour_command(CLI::App& app) {
                 "GCP carving: rounds in which each sample within a spacing of the surface that a "
                 "triangle cuts, or that lies on the wrong side of the mesh, moves the nearest "
                 "triangle, edge or vertex behind its sphere; 0: vertices only; auto: 12 below 128 "
-                "samples per axis, 0 above (bunny 256^3: it would cost 11 s)")
+                "samples per axis (a .vdb's or scattered samples' band: its extent in spacings), "
+                "0 above (bunny 256^3: 11% lower L1 for 2.3-2.8x the run's time)")
       ->capture_default_str();
   c->add_option("--projection", a->projection,
                 "GCP: move each vertex along its normal onto a quadric fitted to the contact "

@@ -46,6 +46,13 @@ Switch parse_switch(const std::string& what, const std::string& name);
 /// 3.5-8% at 256^3 and 512^3, where the solved surface is already within the samples' noise.
 bool auto_sign_constraints(double samples_per_axis);
 
+/// Whether GCP carving's triangle rounds (CarvingOptions::side_passes) run by default, for samples
+/// `samples_per_axis` across (a grid's largest dimension; for scattered samples and OpenVDB level
+/// sets the band's extent in spacings): below 128. Above, they lower L1 by ~11% for 2.3-2.8x the
+/// whole run's time (bunny 256^3: grid 3.98e-5 -> 3.55e-5 and 14 -> 40 s; .vdb of half width 3
+/// 4.15e-5 -> 3.75e-5 and 14 -> 31 s).
+bool auto_carve_sides(double samples_per_axis);
+
 struct ContourOptions {
   Method method = Method::Gcp;
   bool want_mesh = true;     ///< produce the method's mesh
@@ -71,9 +78,8 @@ struct ContourOptions {
   /// spacings. Auto: on, except on values smoothed for noise (their spheres are not empty).
   Switch carve = Switch::Auto;
   CarvingOptions carving;
-  /// GCP carving's triangle phase (CarvingOptions::side_passes). Auto: on below 128 samples per
-  /// axis of a grid (and on scattered samples), off above, where it costs more than it gains
-  /// (bunny 256^3: 11 s, against 17 s for the rest).
+  /// GCP carving's triangle phase (CarvingOptions::side_passes). Auto: where auto_carve_sides
+  /// says so, for every kind of input.
   Switch carve_sides = Switch::Auto;
   /// GCP: after carving and its untangling, dent the mesh off the samples still on the wrong side
   /// (side_repair.h). Auto: where carving's triangle phase ran.
