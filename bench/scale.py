@@ -10,7 +10,9 @@ unaffected, GCP detects the truncation), all float32. L1 against the normalised 
 `sdfcontour eval`.
 
 Usage: /usr/bin/python3 bench/scale.py [--res 64,128,256,512] [--meshes bunny,spot,armadillo]
-       [--repeats 1] [--out docs/scale.md] [--work /tmp/sdfcontour_scale]
+       [--repeats 1] [--out docs/results/scale.md] [--work /tmp/sdfcontour_scale]
+(docs/scale.md reads these tables against the issue's targets and keeps every session's
+measurements; --out overwrites its file with this run's tables alone.)
 With --repeats N every method runs N times per grid and the median time is reported (peak RSS:
 the largest).
 Needs Debian's python3-skimage, python3-openvdb and python3-vtk9.
@@ -201,9 +203,9 @@ def report(args, rows, vdb_rows):
     print(text)
     if args.out:
         with open(args.out, "w") as f:
-            f.write("# GCP at scale\n\n`/usr/bin/python3 bench/scale.py " + " ".join(sys.argv[1:]).replace(
+            f.write("# GCP at scale: one run of the bench\n\n`/usr/bin/python3 bench/scale.py " + " ".join(sys.argv[1:]).replace(
                 "--out " + args.out, "").strip() + "` on 2 cores; see the script's docstring for what is timed. "
-                "Ratios are geometric means over the meshes.\n\n" + text + "\n\n## Rows\n\n")
+                "Ratios are geometric means over the meshes; `docs/scale.md` reads them against the targets.\n\n" + text + "\n\n## Rows\n\n")
             f.write("| mesh | grid | method | s | MB | L1 |\n|---|---|---|---|---|---|\n")
             for r in rows:
                 f.write(f"| {r['mesh']} | {r['res']}³ | {r['method']} | "
