@@ -255,13 +255,10 @@ BandSamples select_band(const Samples& samples, const BandOptions& given, double
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < n; ++i)
     if (keep(samples.values[i])) kept.push_back(i);
-  out.samples.points.resize(Eigen::Index(kept.size()), 3);
-  out.samples.values.resize(Eigen::Index(kept.size()));
+  out.samples = samples_at(samples, kept);
   out.source.resize(kept.size());
   out.core.resize(kept.size());
   for (std::size_t r = 0; r < kept.size(); ++r) {
-    out.samples.points.row(Eigen::Index(r)) = samples.points.row(kept[r]);
-    out.samples.values[Eigen::Index(r)] = samples.values[kept[r]];
     out.core[r] = keep.core(samples.values[kept[r]]);
     out.source[r] = long(kept[r]);
   }

@@ -248,12 +248,7 @@ class BrickRunner {
   bool triangulate_local(const std::vector<int>& local, bool everything, Samples& ls,
                          Triangulation& tri) const {
     if (local.size() < 4 && !everything) return false;
-    ls.points.resize(Eigen::Index(local.size()), 3);
-    ls.values.resize(Eigen::Index(local.size()));
-    for (std::size_t r = 0; r < local.size(); ++r) {
-      ls.points.row(Eigen::Index(r)) = s_.points.row(local[r]);
-      ls.values[Eigen::Index(r)] = s_.values[local[r]];
-    }
+    ls = samples_at(s_, local);
     TriangulationOptions topt;
     topt.parallel = false;  // bricks are the parallel unit
     try {

@@ -63,17 +63,10 @@ bool grid_sides_inside(const GridView& grid) {
 
 // The band's samples proper, without the margin that only closes their stars.
 Samples core_samples(const BandSamples& band) {
-  const Samples& s = band.samples;
-  const Eigen::Index n = Eigen::Index(std::count(band.core.begin(), band.core.end(), 1));
-  Samples out;
-  out.points.resize(n, 3);
-  out.values.resize(n);
-  for (Eigen::Index i = 0, q = 0; i < s.values.size(); ++i)
-    if (band.core[std::size_t(i)]) {
-      out.points.row(q) = s.points.row(i);
-      out.values[q++] = s.values[i];
-    }
-  return out;
+  std::vector<Eigen::Index> core;
+  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
+    if (band.core[std::size_t(i)]) core.push_back(i);
+  return samples_at(band.samples, core);
 }
 
 // The band's own samples within `reach` of the surface, whose sides the indicator keeps.
@@ -82,14 +75,8 @@ SignedSamples samples_near_surface(const BandSamples& band, double reach) {
   std::vector<Eigen::Index> near;
   for (Eigen::Index i = 0; i < s.values.size(); ++i)
     if (band.core[std::size_t(i)] && std::abs(s.values[i]) <= reach) near.push_back(i);
-  SignedSamples sides;
-  sides.points.resize(Eigen::Index(near.size()), 3);
-  sides.values.resize(Eigen::Index(near.size()));
-  for (std::size_t q = 0; q < near.size(); ++q) {
-    sides.points.row(Eigen::Index(q)) = s.points.row(near[q]);
-    sides.values[Eigen::Index(q)] = s.values[near[q]];
-  }
-  return sides;
+  Samples picked = samples_at(s, near);
+  return SignedSamples{std::move(picked.points), std::move(picked.values)};
 }
 
 // The reconstruction of result.contact_points into result.mesh. The points and normals go to

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstddef>
+#include <vector>
 
 #include "sdfcontour/types.h"
 
@@ -13,6 +14,19 @@ struct Samples {
   PointMatrix points;      ///< n x 3 sample positions
   Eigen::VectorXd values;  ///< n signed distances, values(i) at points.row(i)
 };
+
+/// The samples at `rows` (indices into `samples`), in that order.
+template <class Index>
+Samples samples_at(const Samples& samples, const std::vector<Index>& rows) {
+  Samples out;
+  out.points.resize(Eigen::Index(rows.size()), 3);
+  out.values.resize(Eigen::Index(rows.size()));
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    out.points.row(Eigen::Index(r)) = samples.points.row(Eigen::Index(rows[r]));
+    out.values[Eigen::Index(r)] = samples.values[Eigen::Index(rows[r])];
+  }
+  return out;
+}
 
 /// Axis-aligned box [min, max].
 struct Bounds {
