@@ -1,7 +1,10 @@
 // contour()'s mesh from contact points (gcp, gtcp): screened Poisson reconstruction, then GCP's
 // projection, carving and untangling, and the checks that the values were distances.
+#include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <vector>
 
 #include "pipeline_stages.h"
 #include "sdfcontour/field_agreement.h"
