@@ -144,14 +144,6 @@ BandSamples band_stage(const GridView* grid, const ScatteredInput* scattered,
   });
 }
 
-// |value| of each contact point's sample (named by index into the band's samples).
-Eigen::VectorXd contact_point_depths(const BandSamples& band, const ContactPoints& cp) {
-  Eigen::VectorXd depths(Eigen::Index(cp.samples.size()));
-  for (std::size_t q = 0; q < cp.samples.size(); ++q)
-    depths[Eigen::Index(q)] = std::abs(band.samples.values[cp.samples[q]]);
-  return depths;
-}
-
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
@@ -185,8 +177,6 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   if (contact_mesh) {
     detail::check_contact_point_count(grid, options, *result.contact_points);
     inputs = detail::prepare_reconstruction(band, band_options, grid, options, result);
-    if (inputs->project)
-      inputs->contact_depths = contact_point_depths(band, *result.contact_points);
   }
   // Contact points name their samples by input index.
   if (result.contact_points)

@@ -77,7 +77,8 @@ void check_contact_point_count(const GridView* grid, const ContourOptions& optio
                                const ContactPoints& cp);
 
 // The reconstruction's inputs from the band (result.poisson_depth and result.sign_constraints
-// set); `band_options` as the band was selected with. `contact_depths` is not filled.
+// set); `band_options` as the band was selected with. result.contact_points must still name their
+// samples by index into `band.samples`.
 ReconstructionInputs prepare_reconstruction(const BandSamples& band,
                                             const BandOptions& band_options, const GridView* grid,
                                             const ContourOptions& options, ContourResult& result);
