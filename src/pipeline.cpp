@@ -20,12 +20,22 @@ const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
 const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
                                                             {"delaunay", GradientSource::Delaunay},
                                                             {"knn", GradientSource::Knn}};
+const detail::NameTable<Reconstruction> kReconstructions = {{"auto", Reconstruction::Auto},
+                                                            {"poisson", Reconstruction::Poisson},
+                                                            {"local", Reconstruction::Local}};
 const detail::NameTable<Switch> kSwitches = {
     {"auto", Switch::Auto}, {"on", Switch::On}, {"off", Switch::Off}};
 }  // namespace
 
 Switch parse_switch(const std::string& what, const std::string& name) {
   return detail::parse_name(kSwitches, what, name);
+}
+
+Reconstruction parse_reconstruction(const std::string& name) {
+  return detail::parse_name(kReconstructions, "reconstruction", name);
+}
+std::string reconstruction_name(Reconstruction reconstruction) {
+  return detail::name_of(kReconstructions, reconstruction);
 }
 
 Method parse_method(const std::string& name) {
@@ -46,6 +56,10 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
   const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
   const double samples_per_axis = extent / spacing + 1;
   return samples_per_axis > 513 ? 11 : samples_per_axis > 257 ? 10 : samples_per_axis > 129 ? 9 : 8;
+}
+
+int auto_subdivisions(double samples_per_axis) {
+  return samples_per_axis < 48 ? 2 : samples_per_axis < 192 ? 1 : 0;
 }
 
 bool auto_sign_constraints(double samples_per_axis) {
@@ -101,6 +115,11 @@ void check_input_for_method(const GridView* grid, const ScatteredInput* scattere
   }
   if (options.method == Method::Mc && !grid)
     throw Error("method mc needs a grid input, not scattered samples");
+  if (!grid && options.reconstruction == Reconstruction::Local &&
+      (options.method == Method::Gcp || options.method == Method::Gtcp))
+    throw Error(
+        "the local reconstruction needs a grid input (scattered samples and .vdb level "
+        "sets: --reconstruction poisson)");
   if (options.method == Method::Gtcp && !shape)
     throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
 }
@@ -173,15 +192,20 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   detail::SampleTriangulations triangulations =
       detail::contact_point_stage(band, shape, options, result, stages);
   const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
+  const bool local = contact_mesh && grid && options.reconstruction == Reconstruction::Local;
+  if (local) {
+    detail::check_contact_point_count(grid, options, *result.contact_points);
+    detail::reconstruct_locally(*grid, options, result, stages);
+  }
   std::optional<detail::ReconstructionInputs> inputs;
-  if (contact_mesh) {
+  if (contact_mesh && !local) {
     detail::check_contact_point_count(grid, options, *result.contact_points);
     inputs = detail::prepare_reconstruction(band, band_options, grid, options, result);
   }
   // Contact points name their samples by input index.
   if (result.contact_points)
     for (int& i : result.contact_points->samples) i = int(band.source[std::size_t(i)]);
-  if (contact_mesh) {
+  if (contact_mesh && !local) {
     // Nothing after the reconstruction needs the samples or triangulations: free them first.
     band = BandSamples();
     triangulations = {};

@@ -90,4 +90,9 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
 void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
                       const ContourOptions& options, ContourResult& result, Stages& stages);
 
+// GCP's or GTCP's mesh into result.mesh by the local reconstruction of result.contact_points on
+// `grid`'s cells (result.local, result.reconstruction set).
+void reconstruct_locally(const GridView& grid, const ContourOptions& options, ContourResult& result,
+                         Stages& stages);
+
 }  // namespace sdfcontour::detail

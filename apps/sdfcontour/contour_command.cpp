@@ -23,7 +23,8 @@ namespace {
 struct ContourArgs {
   std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
                                      weights = "james", band = "auto", truncation = "auto", grid,
-                                     brick_size = "auto", side_passes = "auto", projection = "auto";
+                                     brick_size = "auto", side_passes = "auto", projection = "auto",
+                                     reconstruction = "auto", subdivisions = "auto";
   int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double james_epsilon = GradientOptions{}.james_epsilon,
@@ -34,6 +35,7 @@ struct ContourArgs {
          sign_margin = SignConstraintOptions{}.margin,
          sign_trigger = SignConstraintOptions{}.trigger;
   ContactProjectionOptions projection_options;
+  LocalReconstructionOptions local;
   std::uint64_t seed = 0;
   RunOptions run;
   PoissonArgs poisson = [] {
@@ -142,6 +144,15 @@ ContourOptions contour_options(const ContourArgs& a) {
     opt.carving.side_passes = *rounds;
     opt.carve_sides = *rounds > 0 ? Switch::On : Switch::Off;
   }
+  opt.reconstruction = parse_reconstruction(a.reconstruction);
+  opt.subdivisions =
+      parse_count_or_auto("--subdivisions", a.subdivisions, 4, "a whole number of levels")
+          .value_or(-1);
+  require_range("--local-reach", a.local.reach, 0, 1);
+  require_range("--local-feature-ratio", a.local.feature_ratio, 0, 1);
+  require_range("--local-robust-rounds", a.local.robust_rounds, 0, 100);
+  require_range("--local-min-points", a.local.min_points, 1, 1000);
+  opt.local = a.local;
   opt.project = parse_switch("--projection", a.projection);
   for (const ProjectionOption& p : kProjectionOptions)
     require_range(p.name, a.projection_options.*p.field, p.lo, p.hi);
@@ -212,6 +223,15 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["sign_violations_left"] = r.sign_violations_left;
     j["sign_constraints_dropped"] = r.sign_constraints_dropped;
   }
+  if (r.local)
+    j["local"] = {{"cells", r.local->cells},
+                  {"vertices", r.local->vertices},
+                  {"split_cells", r.local->split_cells},
+                  {"crossing_cells", r.local->crossing_cells},
+                  {"feature_vertices", r.local->feature_vertices},
+                  {"clamped", r.local->clamped}};
+  if (r.mesh && (opt.method == Method::Gcp || opt.method == Method::Gtcp))
+    j["reconstruction"] = reconstruction_name(r.reconstruction);
   if (r.projection)
     j["projection"] = {{"vertices_moved", r.projection->vertices_moved},
                        {"largest_move", r.projection->largest_move}};
@@ -394,6 +414,35 @@ Command add_contour_command(CLI::App& app) {
                 "triangle, edge or vertex behind its sphere; 0: vertices only; auto: 12 below 128 "
                 "samples per axis (a .vdb's or scattered samples' band: its extent in spacings), "
                 "0 above (bunny 256^3: 11% lower L1 for 2.3-2.8x the run's time)")
+      ->capture_default_str();
+  c->add_option(
+       "--reconstruction", a->reconstruction,
+       "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
+       "crosses, from the contact points near it; topology from the samples' signs), "
+       "'poisson' (the paper's screened Poisson solve, then projection and carving), or "
+       "'auto' (poisson: measured more accurate so far, docs/local.md). Scattered samples and "
+       ".vdb level sets always take poisson")
+      ->capture_default_str();
+  c->add_option(
+       "--subdivisions", a->subdivisions,
+       "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
+       "the contact points (auto: 2 below 48 samples per axis, 1 below 192, else 0)")
+      ->capture_default_str();
+  c->add_option("--local-reach", a->local.reach,
+                "GCP local reconstruction: contact points within this many spacings of a cell "
+                "feed its vertex")
+      ->capture_default_str();
+  c->add_option("--local-feature-ratio", a->local.feature_ratio,
+                "GCP local reconstruction: a cell's planes make an edge or corner where the "
+                "quadric's smaller eigenvalues exceed this fraction of its largest")
+      ->capture_default_str();
+  c->add_option("--local-robust-rounds", a->local.robust_rounds,
+                "GCP local reconstruction: reweighting rounds that discount planes missing the "
+                "vertex")
+      ->capture_default_str();
+  c->add_option("--local-min-points", a->local.min_points,
+                "GCP local reconstruction: a cell with fewer contact points places its vertex "
+                "from its edge crossings")
       ->capture_default_str();
   c->add_option("--projection", a->projection,
                 "GCP: move each vertex along its normal onto a quadric fitted to the contact "

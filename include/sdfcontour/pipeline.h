@@ -12,6 +12,7 @@
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/contact_projection.h"
 #include "sdfcontour/gradients.h"
+#include "sdfcontour/local_reconstruction.h"
 #include "sdfcontour/noise.h"
 #include "sdfcontour/npy.h"
 #include "sdfcontour/poisson.h"
@@ -34,6 +35,19 @@ enum class GradientSource { Regular, Delaunay, Knn };
 /// "regular", "delaunay", "knn" <-> GradientSource; parse throws Error for other names.
 GradientSource parse_gradient_source(const std::string& name);
 std::string gradient_source_name(GradientSource source);
+
+/// How GCP's mesh is made from its contact points: the paper's global screened Poisson solve
+/// (with projection, carving and their repairs), or the local reconstruction
+/// (local_reconstruction.h: a vertex per surface cell from the contact points near it).
+enum class Reconstruction { Auto, Poisson, Local };
+
+/// "auto", "poisson", "local" <-> Reconstruction; parse throws Error for other names.
+Reconstruction parse_reconstruction(const std::string& name);
+std::string reconstruction_name(Reconstruction reconstruction);
+
+/// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
+/// dimension).
+int auto_subdivisions(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.
 enum class Switch { Auto, On, Off };
@@ -65,6 +79,23 @@ struct ContourOptions {
   BandOptions band;
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
+  /// GCP's mesh. Auto: Poisson, measured more accurate so far (bench/local.py, docs/local.md:
+  /// at 32^3 on the shared meshes GCP-Poisson's L1 is below GCP-local's on every mesh). Local
+  /// needs a grid's cells: scattered samples and .vdb level sets always take Poisson.
+  Reconstruction reconstruction = Reconstruction::Auto;
+  LocalReconstructionOptions local;
+  /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no
+  /// residual limit (the subdivided mesh's new vertices are chords, not a smooth surface). Measured
+  /// on bunny at 32^3 with 2 subdivisions: L1 2.14e-3 with the Poisson path's options, 1.37e-3.
+  ContactProjectionOptions local_projection = [] {
+    ContactProjectionOptions p;
+    p.radius = 1.25;
+    p.max_residual = 0;
+    return p;
+  }();
+  /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
+  /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.
+  int subdivisions = -1;
   PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes; depth 0: automatic
   /// GCP: the samples within sign_band spacings of the surface (in the band proper) constrain the
   /// indicator so that each ends on its own side of the mesh (poisson.h, SignedSamples). Auto:
@@ -131,7 +162,10 @@ struct ContourResult {
   double band_spacing = 0;           ///< the spacing h the band is measured in
   Truncation truncation;             ///< the truncation found or given
   std::optional<BrickStats> bricks;  ///< when GCP ran in bricks
-  int poisson_depth = 0;             ///< the depth the mesh was reconstructed at
+  /// gcp, gtcp: the reconstruction that made the mesh (Poisson or Local, never Auto)
+  Reconstruction reconstruction = Reconstruction::Poisson;
+  std::optional<LocalReconstructionStats> local;  ///< when the local reconstruction ran
+  int poisson_depth = 0;                          ///< the depth the mesh was reconstructed at
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes

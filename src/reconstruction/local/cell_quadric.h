@@ -1,0 +1,27 @@
+// Internal: the quadric error of a cell's tangent planes and its rank-truncated, robust minimiser.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace sdfcontour::detail {
+
+/// A tangent plane: a point on it and its unit normal.
+struct TangentPlane {
+  Eigen::Vector3d point, normal;
+};
+
+struct QuadricSolution {
+  Eigen::Vector3d position;
+  int rank = 0;  ///< directions solved for: 1 a plane, 2 an edge, 3 a corner
+};
+
+/// The point that minimises sum_i w_i (n_i . (x - p_i))^2 over `planes` (not empty), solving only
+/// for directions whose eigenvalue of sum w_i n_i n_i^T exceeds `feature_ratio` times the largest
+/// and keeping the planes' weighted centroid along the others. `robust_rounds` reweightings follow
+/// (w_i = 1 / (1 + (r_i / robust_scale)^2) for the plane's miss r_i), so that planes that disagree
+/// with the rest lose their pull; robust_scale is a length.
+QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double feature_ratio,
+                                 int robust_rounds, double robust_scale);
+
+}  // namespace sdfcontour::detail

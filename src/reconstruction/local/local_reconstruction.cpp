@@ -1,0 +1,248 @@
+// The local reconstruction (local_reconstruction.h): active cells and their polygons, a vertex per
+// polygon from the contact points near the cell, a quad per sign-changing grid edge.
+#include "sdfcontour/local_reconstruction.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "../../cube_polygons.h"
+#include "cell_quadric.h"
+#include "surface_cells.h"
+
+namespace sdfcontour {
+
+namespace {
+
+using detail::ActiveCell;
+using detail::SurfaceCells;
+using detail::TangentPlane;
+
+// Contact points sorted by the cell that holds them (ties by position, so the order of the input
+// rows does not matter), for the gathering around each cell.
+struct BinnedPoints {
+  std::vector<std::int64_t> cell;  // ascending
+  std::vector<int> row;            // the point's row in the input
+};
+
+BinnedPoints bin_points(const SurfaceCells& cells, const PointMatrix& points) {
+  const Eigen::Index k = points.rows();
+  std::vector<std::pair<std::int64_t, int>> keyed(std::size_t(k), {0, 0});
+  tbb::parallel_for(Eigen::Index(0), k, [&](Eigen::Index r) {
+    keyed[std::size_t(r)] = {cells.key_of_point(points.row(r).transpose()), int(r)};
+  });
+  tbb::parallel_sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
+    if (a.first != b.first) return a.first < b.first;
+    const auto pa = points.row(a.second), pb = points.row(b.second);
+    for (int d = 0; d < 3; ++d)
+      if (pa[d] != pb[d]) return pa[d] < pb[d];
+    return a.second < b.second;
+  });
+  BinnedPoints out;
+  out.cell.reserve(keyed.size());
+  out.row.reserve(keyed.size());
+  for (const auto& [key, r] : keyed) {
+    out.cell.push_back(key);
+    out.row.push_back(r);
+  }
+  return out;
+}
+
+// The rows of the contact points in the cell grown by `reach` (in the grid's units per axis).
+void gather_points(const SurfaceCells& cells, const BinnedPoints& bins, const PointMatrix& points,
+                   const std::array<int, 3>& at, const Eigen::Vector3d& reach,
+                   std::vector<int>& rows) {
+  rows.clear();
+  const Eigen::Vector3d lo = cells.corner(at) - reach;
+  const Eigen::Vector3d hi = cells.corner(at) + cells.spacing + reach;
+  for (int di = -1; di <= 1; ++di)
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int dk = -1; dk <= 1; ++dk) {
+        const std::array<int, 3> n{at[0] + di, at[1] + dj, at[2] + dk};
+        if (!cells.contains_cell(n)) continue;
+        const std::int64_t key = cells.key(n);
+        auto [first, last] = std::equal_range(bins.cell.begin(), bins.cell.end(), key);
+        for (auto it = first; it != last; ++it) {
+          const int r = bins.row[std::size_t(it - bins.cell.begin())];
+          const Eigen::Vector3d p = points.row(r).transpose();
+          if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) rows.push_back(r);
+        }
+      }
+}
+
+// Where the polygon's contact points come from in a cell with several polygons: each point goes
+// to the polygon with a crossing nearest to it, among those whose outward direction its normal
+// agrees with.
+int polygon_of_point(const detail::CellPolygons& polys, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& n) {
+  int best = -1;
+  double best_distance = 0;
+  for (int q = 0; q < polys.count; ++q) {
+    if (n.dot(polys.outward[q]) <= 0) continue;
+    for (int e = polys.first_crossing[q]; e < polys.first_crossing[q + 1]; ++e) {
+      const double d = (polys.crossing[e] - p).squaredNorm();
+      if (best < 0 || d < best_distance) best = q, best_distance = d;
+    }
+  }
+  return best;
+}
+
+struct VertexResult {
+  Eigen::Vector3d position;
+  bool from_crossings = false, feature = false, clamped = false;
+};
+
+VertexResult place_vertex(const std::vector<TangentPlane>& planes,
+                          const std::vector<TangentPlane>& crossings, const Eigen::Vector3d& lo,
+                          const Eigen::Vector3d& hi, double h,
+                          const LocalReconstructionOptions& options) {
+  VertexResult out;
+  out.from_crossings = int(planes.size()) < options.min_points;
+  const detail::QuadricSolution s =
+      detail::minimise_quadric(out.from_crossings ? crossings : planes, options.feature_ratio,
+                               options.robust_rounds, options.robust_scale * h);
+  out.feature = s.rank >= 2;
+  out.position = s.position.cwiseMax(lo).cwiseMin(hi);
+  out.clamped = out.position != s.position;
+  return out;
+}
+
+// Every polygon's vertex, in cell order then polygon order.
+PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
+                          const PointMatrix& normals, const LocalReconstructionOptions& options,
+                          LocalReconstructionStats& stats) {
+  const BinnedPoints bins = bin_points(cells, points);
+  const Eigen::Vector3d reach = options.reach * cells.spacing;
+  const double h = cells.spacing.maxCoeff();
+  PointMatrix vertices(cells.vertex_count(), 3);
+  std::vector<std::array<char, 3>> flags(std::size_t(vertices.rows()), {0, 0, 0});
+  tbb::parallel_for(std::size_t(0), cells.active.size(), [&](std::size_t c) {
+    const ActiveCell& cell = cells.active[c];
+    const std::array<int, 3> at = cells.cell_of_key(cell.key);
+    const detail::CellPolygons polys = cells.polygons(cell);
+    std::vector<int> rows;
+    auto planes_near = [&](const Eigen::Vector3d& reach_here) {
+      gather_points(cells, bins, points, at, reach_here, rows);
+      std::vector<std::vector<TangentPlane>> planes(std::size_t(polys.count));
+      for (int r : rows) {
+        const Eigen::Vector3d p = points.row(r).transpose(), n = normals.row(r).transpose();
+        const int q = polys.count == 1 ? (n.dot(polys.outward[0]) > 0 ? 0 : -1)
+                                       : polygon_of_point(polys, p, n);
+        if (q >= 0) planes[std::size_t(q)].push_back({p, n});
+      }
+      return planes;
+    };
+    const std::vector<std::vector<TangentPlane>> planes = planes_near(reach);
+    const Eigen::Vector3d lo = cells.corner(at), hi = lo + cells.spacing;
+    for (int q = 0; q < polys.count; ++q) {
+      std::vector<TangentPlane> crossings;
+      for (int e = polys.first_crossing[q]; e < polys.first_crossing[q + 1]; ++e)
+        crossings.push_back({polys.crossing[e], polys.crossing_normal[e]});
+      VertexResult v = place_vertex(planes[std::size_t(q)], crossings, lo, hi, h, options);
+      if (v.clamped && !v.from_crossings) {
+        // A feature just outside the cell (planes from beyond its sides): the cell's own points.
+        std::vector<TangentPlane> own;
+        for (const TangentPlane& t : planes[std::size_t(q)])
+          if ((t.point.array() >= lo.array()).all() && (t.point.array() <= hi.array()).all())
+            own.push_back(t);
+        if (int(own.size()) >= options.min_points) {
+          const VertexResult w = place_vertex(own, crossings, lo, hi, h, options);
+          if (!w.clamped) v = w;
+        }
+      }
+      const Eigen::Index id = cell.first_vertex + q;
+      vertices.row(id) = v.position.transpose();
+      flags[std::size_t(id)] = {char(v.from_crossings), char(v.feature), char(v.clamped)};
+    }
+  });
+  for (const auto& f : flags) {
+    stats.crossing_cells += f[0];
+    stats.feature_vertices += f[1];
+    stats.clamped += f[2];
+  }
+  return vertices;
+}
+
+// The two triangles of quad q (counter-clockwise seen from outside): split along the diagonal
+// whose triangles turn least from each other, so that a quad bent over an edge folds along it.
+void split_quad(const PointMatrix& v, const std::array<int, 4>& q, int* out) {
+  auto normal = [&](int a, int b, int c) {
+    const Eigen::Vector3d pa = v.row(a).transpose();
+    return Eigen::Vector3d((v.row(b).transpose() - pa).cross(v.row(c).transpose() - pa));
+  };
+  auto cosine = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    const double n = a.norm() * b.norm();
+    return n > 0 ? a.dot(b) / n : -1.0;
+  };
+  const double c02 = cosine(normal(q[0], q[1], q[2]), normal(q[0], q[2], q[3]));
+  const double c13 = cosine(normal(q[0], q[1], q[3]), normal(q[1], q[2], q[3]));
+  const std::array<int, 6> along02{q[0], q[1], q[2], q[0], q[2], q[3]};
+  const std::array<int, 6> along13{q[0], q[1], q[3], q[1], q[2], q[3]};
+  const auto& pick = c13 > c02 ? along13 : along02;
+  std::copy(pick.begin(), pick.end(), out);
+}
+
+// A polygon with a segment vertex is fanned from it: its diagonals then join the segment vertex,
+// never the two cell vertices it keeps apart.
+void fan_from_segment_vertex(const std::array<int, 8>& p, int size, int first_extra, int* out) {
+  int apex = 0;
+  while (p[std::size_t(apex)] < first_extra) ++apex;
+  for (int q = 1; q + 1 < size; ++q) {
+    *out++ = p[std::size_t(apex)];
+    *out++ = p[std::size_t((apex + q) % size)];
+    *out++ = p[std::size_t((apex + q + 1) % size)];
+  }
+}
+
+void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra, Mesh& mesh) {
+  std::vector<Eigen::Index> first(polygons.size.size() + 1, 0);
+  for (std::size_t i = 0; i < polygons.size.size(); ++i)
+    first[i + 1] = first[i] + polygons.size[i] - 2;
+  mesh.triangles.resize(first.back(), 3);
+  tbb::parallel_for(std::size_t(0), polygons.size.size(), [&](std::size_t i) {
+    int* out = mesh.triangles.data() + 3 * first[i];
+    const auto& p = polygons.vertices[i];
+    if (polygons.size[i] == 4)
+      split_quad(mesh.vertices, {p[0], p[1], p[2], p[3]}, out);
+    else
+      fan_from_segment_vertex(p, polygons.size[i], first_extra, out);
+  });
+}
+
+}  // namespace
+
+Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
+                          const PointMatrix& normals, const LocalReconstructionOptions& options,
+                          LocalReconstructionStats* stats_out) {
+  if (points.rows() != normals.rows())
+    throw Error("local reconstruction: " + std::to_string(points.rows()) + " contact points but " +
+                std::to_string(normals.rows()) + " normals");
+  if (!points.allFinite() || !normals.allFinite())
+    throw Error("local reconstruction: contact points or normals are not finite");
+  if (!(options.reach >= 0 && options.reach <= 1))
+    throw Error("local reconstruction: reach must lie in [0, 1] spacings");
+  LocalReconstructionStats stats;
+  const SurfaceCells cells = detail::find_surface_cells(grid);
+  Mesh mesh;
+  mesh.vertices = cell_vertices(cells, points, normals, options, stats);
+  const detail::DualPolygons polygons = cells.dual_polygons();
+  const Eigen::Index cell_vertex_count = mesh.vertices.rows();
+  mesh.vertices.conservativeResize(
+      cell_vertex_count + Eigen::Index(polygons.extra_positions.size()), 3);
+  for (std::size_t e = 0; e < polygons.extra_positions.size(); ++e)
+    mesh.vertices.row(cell_vertex_count + Eigen::Index(e)) =
+        polygons.extra_positions[e].transpose();
+  triangulate_polygons(polygons, int(cell_vertex_count), mesh);
+  stats.cells = long(cells.active.size());
+  stats.vertices = long(mesh.vertices.rows());
+  for (const ActiveCell& cell : cells.active) stats.split_cells += cell.polygon_count > 1;
+  if (stats_out) *stats_out = stats;
+  return mesh;
+}
+
+}  // namespace sdfcontour

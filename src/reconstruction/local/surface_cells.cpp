@@ -1,0 +1,139 @@
+#include "surface_cells.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../../cube_polygons.h"
+
+namespace sdfcontour::detail {
+
+std::array<int, 3> corner_of(const std::array<int, 3>& cell, int c) {
+  return {cell[0] + (c & 1), cell[1] + (c >> 1 & 1), cell[2] + (c >> 2 & 1)};
+}
+
+double value_at(const GridView& grid, const std::array<int, 3>& p) {
+  return grid.value(grid.index(p[0], p[1], p[2]));
+}
+
+namespace {
+
+// The field's gradient at a sample: central differences, one-sided on the grid's sides.
+Eigen::Vector3d gradient_at(const GridView& grid, const std::array<int, 3>& p,
+                            const Eigen::Vector3d& h) {
+  Eigen::Vector3d g;
+  for (int d = 0; d < 3; ++d) {
+    std::array<int, 3> lo = p, hi = p;
+    lo[d] = std::max(p[d] - 1, 0);
+    hi[d] = std::min(p[d] + 1, grid.dims[d] - 1);
+    g[d] = (value_at(grid, hi) - value_at(grid, lo)) / ((hi[d] - lo[d]) * h[d]);
+  }
+  return g;
+}
+
+// The cells of slab i (cells (i, *, *)) that the surface crosses, with their polygons' edges.
+template <class T>
+void slab_cells(const GridView& grid, const T* values, int i, std::vector<ActiveCell>& out) {
+  const auto& n = grid.dims;
+  const std::int64_t slab = std::int64_t(i) * (n[1] - 1) * (n[2] - 1);
+  double v[8];
+  for (int j = 0; j + 1 < n[1]; ++j)
+    for (int k = 0; k + 1 < n[2]; ++k) {
+      for (int c = 0; c < 8; ++c)
+        v[c] = double(values[grid.index(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1))]);
+      const CubeCase cube = cube_case(v);
+      if (!cube.mixed()) continue;
+      ActiveCell cell;
+      cell.key = slab + std::int64_t(j) * (n[2] - 1) + k;
+      cell.inside = cube.inside;
+      cell.connected = cube.insides_connected;
+      cell.polygon_of_edge.fill(-1);
+      cube_polygons(cube, [&](const int* edges, int size) {
+        for (int e = 0; e < size; ++e)
+          cell.polygon_of_edge[std::size_t(edges[e])] = cell.polygon_count;
+        ++cell.polygon_count;
+      });
+      out.push_back(cell);
+    }
+}
+
+}  // namespace
+
+std::array<int, 3> SurfaceCells::cell_of_key(std::int64_t key) const {
+  const int k = int(key % cell_dims[2]);
+  key /= cell_dims[2];
+  return {int(key / cell_dims[1]), int(key % cell_dims[1]), k};
+}
+
+std::int64_t SurfaceCells::key_of_point(const Eigen::Vector3d& p) const {
+  std::array<int, 3> c;
+  for (int d = 0; d < 3; ++d) {
+    const double t = std::floor((p[d] - min[d]) / spacing[d]);
+    c[std::size_t(d)] = int(std::clamp(t, 0.0, double(cell_dims[std::size_t(d)] - 1)));
+  }
+  return key(c);
+}
+
+long SurfaceCells::find(std::int64_t k) const {
+  const auto it = std::lower_bound(active.begin(), active.end(), k,
+                                   [](const ActiveCell& c, std::int64_t x) { return c.key < x; });
+  return it != active.end() && it->key == k ? long(it - active.begin()) : -1;
+}
+
+CellPolygons SurfaceCells::polygons(const ActiveCell& cell) const {
+  const CubeTables& T = cube_tables();
+  const std::array<int, 3> at = cell_of_key(cell.key);
+  CellPolygons out;
+  out.count = cell.polygon_count;
+  int next = 0;
+  for (int q = 0; q < out.count; ++q) {
+    out.first_crossing[std::size_t(q)] = next;
+    Eigen::Vector3d outward = Eigen::Vector3d::Zero();
+    for (int e = 0; e < 12; ++e) {
+      if (cell.polygon_of_edge[std::size_t(e)] != q) continue;
+      const int c0 = T.edge_low_corner[e], c1 = c0 | 1 << (e / 4);
+      const std::array<int, 3> p0 = corner_of(at, c0), p1 = corner_of(at, c1);
+      const double f0 = value_at(grid, p0), f1 = value_at(grid, p1);
+      const double t = f0 / (f0 - f1);
+      const Eigen::Vector3d x0 = corner(p0), x1 = corner(p1);
+      Eigen::Vector3d g =
+          (1 - t) * gradient_at(grid, p0, spacing) + t * gradient_at(grid, p1, spacing);
+      if (!(g.norm() > 0)) g = Eigen::Vector3d::Unit(e / 4) * (f1 > f0 ? 1 : -1);
+      out.crossing[std::size_t(next)] = x0 + t * (x1 - x0);
+      out.crossing_normal[std::size_t(next)] = g.normalized();
+      outward += g.normalized();
+      ++next;
+    }
+    out.outward[std::size_t(q)] = outward;
+  }
+  out.first_crossing[std::size_t(out.count)] = next;
+  return out;
+}
+
+SurfaceCells find_surface_cells(const GridView& grid) {
+  SurfaceCells cells;
+  cells.grid = grid;
+  for (int d = 0; d < 3; ++d) cells.cell_dims[std::size_t(d)] = grid.dims[std::size_t(d)] - 1;
+  cells.min = grid.bounds.min;
+  cells.spacing = grid.spacing();
+  std::vector<std::vector<ActiveCell>> slabs(std::size_t(cells.cell_dims[0]));
+  tbb::parallel_for(0, cells.cell_dims[0], [&](int i) {
+    grid.visit([&](const auto* values) { slab_cells(grid, values, i, slabs[std::size_t(i)]); });
+  });
+  std::size_t total = 0;
+  for (const auto& s : slabs) total += s.size();
+  cells.active.reserve(total);
+  int next_vertex = 0;
+  for (auto& s : slabs) {
+    for (ActiveCell& c : s) {
+      c.first_vertex = next_vertex;
+      next_vertex += c.polygon_count;
+      cells.active.push_back(c);
+    }
+    std::vector<ActiveCell>().swap(s);
+  }
+  return cells;
+}
+
+}  // namespace sdfcontour::detail

@@ -1,0 +1,82 @@
+// Internal: the grid cells the zero level set crosses, their marching-cubes polygons, and the
+// quads of the dual mesh (one per sign-changing grid edge inside the grid).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "sdfcontour/samples.h"
+
+namespace sdfcontour::detail {
+
+/// A cell with corners of both signs. Cell (i, j, k) spans samples (i..i+1, j..j+1, k..k+1).
+struct ActiveCell {
+  std::int64_t key = 0;        ///< (i * (ny - 1) + j) * (nz - 1) + k
+  int first_vertex = 0;        ///< its first polygon's vertex id
+  std::uint8_t inside = 0;     ///< CubeCase::inside
+  std::uint8_t connected = 0;  ///< CubeCase::insides_connected
+  std::int8_t polygon_count = 0;
+  std::array<std::int8_t, 12> polygon_of_edge{};  ///< local edge -> its polygon, -1: no crossing
+};
+
+/// One cell's polygons with their edge crossings (linear interpolation) and outward directions.
+struct CellPolygons {
+  int count = 0;
+  std::array<int, 5> first_crossing{};  ///< polygon q's crossings: [first[q], first[q + 1])
+  std::array<Eigen::Vector3d, 12> crossing, crossing_normal;  ///< normals: the field's gradient
+  std::array<Eigen::Vector3d, 4> outward;  ///< sum of the polygon's crossing normals
+};
+
+/// A sign-changing grid edge's polygon: the vertices of the four cells around it, counter-clockwise
+/// seen from the edge's outside end. Where two face-adjacent cells' polygons meet along both of
+/// the face's segments (an ambiguous face that one polygon crosses twice on each side), the two
+/// vertices would be joined twice; each segment then gets a vertex of its own between them, so a
+/// polygon has up to 8 vertices.
+struct DualPolygons {
+  std::vector<std::array<int, 8>> vertices;
+  std::vector<std::int8_t> size;
+  /// The segment vertices' positions, numbered after the cells' vertices.
+  std::vector<Eigen::Vector3d> extra_positions;
+};
+
+struct SurfaceCells {
+  GridView grid;
+  std::array<int, 3> cell_dims{};  ///< grid dims minus one
+  Eigen::Vector3d min, spacing;
+  std::vector<ActiveCell> active;  ///< ascending keys
+
+  std::int64_t key(const std::array<int, 3>& c) const {
+    return (std::int64_t(c[0]) * cell_dims[1] + c[1]) * cell_dims[2] + c[2];
+  }
+  std::array<int, 3> cell_of_key(std::int64_t key) const;
+  bool contains_cell(const std::array<int, 3>& c) const {
+    for (int d = 0; d < 3; ++d)
+      if (c[d] < 0 || c[d] >= cell_dims[d]) return false;
+    return true;
+  }
+  /// The position of cell c's lowest corner.
+  Eigen::Vector3d corner(const std::array<int, 3>& c) const {
+    return min + Eigen::Vector3d(c[0], c[1], c[2]).cwiseProduct(spacing);
+  }
+  /// The key of the cell holding p (clamped to the grid).
+  std::int64_t key_of_point(const Eigen::Vector3d& p) const;
+  /// Index into `active` of the cell with this key, or -1.
+  long find(std::int64_t key) const;
+  int vertex_count() const {
+    return active.empty() ? 0 : active.back().first_vertex + active.back().polygon_count;
+  }
+  CellPolygons polygons(const ActiveCell& cell) const;
+  /// The dual mesh's polygons (dual_polygons.cpp).
+  DualPolygons dual_polygons() const;
+};
+
+/// Grid point of cell `cell`'s corner c (bits x=1, y=2, z=4), and a grid point's value.
+std::array<int, 3> corner_of(const std::array<int, 3>& cell, int c);
+double value_at(const GridView& grid, const std::array<int, 3>& p);
+
+/// The cells of `grid` that its zero level set crosses (inside: value < 0), in key order.
+SurfaceCells find_surface_cells(const GridView& grid);
+
+}  // namespace sdfcontour::detail
