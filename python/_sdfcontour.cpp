@@ -188,6 +188,8 @@ ContourOptions contour_options(const py::dict& o) {
     c.carve_sides = rounds > 0 ? Switch::On : Switch::Off;
   }
   c.project = parse_switch("projection", get<std::string>(o, "projection", "auto"));
+  c.reconstruction = parse_reconstruction(get<std::string>(o, "reconstruction", "auto"));
+  c.subdivisions = get<int>(o, "subdivisions", -1);
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
@@ -290,6 +292,12 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["sign_constraints_dropped"] = r.sign_constraints_dropped;
   stats["carved_vertices"] = r.carving ? r.carving->vertices_moved : 0L;
   stats["projected_vertices"] = r.projection ? r.projection->vertices_moved : 0L;
+  if (r.mesh) stats["reconstruction"] = reconstruction_name(r.reconstruction);
+  if (r.local) {
+    stats["local_cells"] = r.local->cells;
+    stats["local_feature_vertices"] = r.local->feature_vertices;
+    stats["local_crossing_cells"] = r.local->crossing_cells;
+  }
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;
   stats["side_repaired_samples"] = r.side_repair ? r.side_repair->repaired : 0L;
   stats["wrong_side_left"] = r.side_repair ? r.side_repair->left : 0L;

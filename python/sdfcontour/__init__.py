@@ -133,6 +133,15 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
     return out
 
 
+def _count_or_auto(name, value, most):
+    """-1 for "auto", else a whole number from 0 to `most`; ValueError otherwise."""
+    if isinstance(value, str) and value == "auto":
+        return -1
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) and 0 <= value <= most:
+        return int(value)
+    raise ValueError(f"{name} must be a whole number from 0 to {most} or 'auto', got {value!r}")
+
+
 def _switch(name, value):
     """True, False or "auto" as the library's on/off/auto; anything else is a ValueError."""
     if isinstance(value, str) and value == "auto":
@@ -148,7 +157,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
-            degree=1, batch_size=65536, progress=False, return_stats=False):
+            degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
+            progress=False, return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -202,6 +212,15 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         GCP: move each vertex of the reconstruction along its normal onto a quadric fitted to
         the contact points around it, where they fit one to 0.005 spacings ("auto", the
         default: on at every resolution; CLI ``--projection``).
+    reconstruction : "auto", "poisson" or "local"
+        GCP's mesh from its contact points: "poisson" (the paper's screened Poisson solve, then
+        projection and carving), "local" (a vertex per grid cell the surface crosses, from the
+        contact points in it; topology from the samples' signs; grids and callables only), or
+        "auto" (poisson, measured more accurate so far: docs/local.md). CLI
+        ``--reconstruction``.
+    subdivisions : int or "auto"
+        Local reconstruction: midpoint subdivisions before projection onto the contact points
+        (0 to 4; "auto": 2 below 48 samples per axis, 1 below 192, else 0).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
@@ -258,15 +277,13 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     if not isinstance(carve, (bool, np.bool_)):
         raise ValueError(f"carve must be True or False, got {carve!r}")
     o["carve"] = bool(carve)
-    if isinstance(side_passes, str) and side_passes == "auto":
-        o["side_passes"] = -1
-    elif (isinstance(side_passes, (int, np.integer)) and not isinstance(side_passes, bool)
-          and 0 <= side_passes <= 100):
-        o["side_passes"] = int(side_passes)
-    else:
-        raise ValueError(f"side_passes must be a whole number from 0 to 100 or 'auto', "
-                         f"got {side_passes!r}")
+    o["side_passes"] = _count_or_auto("side_passes", side_passes, 100)
     o["projection"] = _switch("projection", projection)
+    if reconstruction not in ("auto", "poisson", "local"):
+        raise ValueError(f"reconstruction must be 'auto', 'poisson' or 'local', "
+                         f"got {reconstruction!r}")
+    o["reconstruction"] = reconstruction
+    o["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
     if isinstance(refine_dilation, str) and refine_dilation == "auto":
         o["refine_dilation_text"] = "auto"
     else:
