@@ -56,6 +56,14 @@ void expect_closed_manifold(const Mesh& m) {
   EXPECT_GT(signed_volume(m), 0) << "not outward oriented";
 }
 
+// With no contact points (edge crossings only): closed, manifold, and marching cubes' topology.
+void expect_dual_of_marching_cubes(const Grid& g) {
+  const Mesh m = local_reconstruction(view_of(g), PointMatrix(0, 3), PointMatrix(0, 3));
+  expect_closed_manifold(m);
+  EXPECT_EQ(mesh_topology(m).euler_characteristic,
+            mesh_topology(marching_cubes(g)).euler_characteristic);
+}
+
 Grid grid_of(const AnalyticShape& shape, int n) {
   return sample_grid(shape, n, Bounds{});
 }
@@ -66,12 +74,6 @@ ContactPoints exact_points(const Grid& g, const AnalyticShape& shape, double ban
   for (std::size_t i = 0; i < g.size(); ++i)
     near[i] = std::abs(g.values[Eigen::Index(i)]) <= band * h;
   return exact_contact_points(g.to_samples().points, shape, &near);
-}
-
-// Distance from p to the box of half extents e (a point on or outside it: positive).
-double box_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& e) {
-  const Eigen::Vector3d q = p.cwiseAbs() - e;
-  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
 }
 
 }  // namespace
@@ -110,7 +112,7 @@ TEST(LocalReconstruction, BoxEdgesAndCornersAreExact) {
   const Mesh m = local_reconstruction(view_of(g), cp.points, cp.normals, {}, &stats);
   expect_closed_manifold(m);
   for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
-    EXPECT_NEAR(box_distance(m.vertices.row(v).transpose(), e), 0, 1e-6) << "vertex " << v;
+    EXPECT_NEAR(box->distance(m.vertices.row(v).transpose()), 0, 1e-6) << "vertex " << v;
   for (int c = 0; c < 8; ++c) {
     const Eigen::Vector3d corner((c & 1 ? 1 : -1) * e[0], (c & 2 ? 1 : -1) * e[1],
                                  (c & 4 ? 1 : -1) * e[2]);
@@ -127,7 +129,6 @@ TEST(LocalReconstruction, GcpBoxFacesAreExact) {
   // to 0.02 spacings on average (0.014 measured). (Its corners are not: GCP's gradients bend next
   // to a corner, where the field is not linear, and no contact point lands within h / 2 of it.)
   const auto box = make_builtin_shape("box");
-  const Eigen::Vector3d e(0.6, 0.45, 0.35);
   const Grid g = grid_of(*box, 24);
   ContourOptions options;
   options.reconstruction = Reconstruction::Local;
@@ -139,7 +140,7 @@ TEST(LocalReconstruction, GcpBoxFacesAreExact) {
   expect_closed_manifold(*r.mesh);
   double sum = 0;
   for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v)
-    sum += std::abs(box_distance(r.mesh->vertices.row(v).transpose(), e));
+    sum += std::abs(box->distance(r.mesh->vertices.row(v).transpose()));
   EXPECT_LT(sum / double(r.mesh->vertices.rows()), 0.02 * g.spacing().maxCoeff());
 }
 
@@ -147,17 +148,8 @@ TEST(LocalReconstruction, EveryCornerConfigurationIsClosedAndManifold) {
   // Each of the 254 mixed sign patterns of one cube inside positive padding, with the grid's
   // crossings as the only Hermite data (no contact points).
   for (int mask = 1; mask < 255; ++mask) {
-    Grid g;
-    g.dims = {4, 4, 4};
-    g.values = Eigen::VectorXd::Constant(64, 1.0);
-    for (int c = 0; c < 8; ++c)
-      g.values[Eigen::Index(g.index(1 + (c & 1), 1 + (c >> 1 & 1), 1 + (c >> 2 & 1)))] =
-          (mask >> c & 1) ? -0.3 - 0.1 * c : 0.2 + 0.05 * c;
-    const Mesh m = local_reconstruction(view_of(g), PointMatrix(0, 3), PointMatrix(0, 3));
     SCOPED_TRACE("mask " + std::to_string(mask));
-    expect_closed_manifold(m);
-    EXPECT_EQ(mesh_topology(m).euler_characteristic,
-              mesh_topology(marching_cubes(g)).euler_characteristic);
+    expect_dual_of_marching_cubes(test::single_cube_grid(mask));
   }
 }
 
@@ -175,11 +167,8 @@ TEST(LocalReconstruction, RandomFieldsAreClosedAndManifold) {
           const bool side = std::min({i, j, k}) == 0 || std::max({i, j, k}) == 9;
           g.values[Eigen::Index(g.index(i, j, k))] = side ? 1.0 : value(rng);
         }
-    const Mesh m = local_reconstruction(view_of(g), PointMatrix(0, 3), PointMatrix(0, 3));
     SCOPED_TRACE("trial " + std::to_string(trial));
-    expect_closed_manifold(m);
-    EXPECT_EQ(mesh_topology(m).euler_characteristic,
-              mesh_topology(marching_cubes(g)).euler_characteristic);
+    expect_dual_of_marching_cubes(g);
   }
 }
 

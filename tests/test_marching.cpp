@@ -82,13 +82,7 @@ TEST(Marching, CubesHandleEveryCornerConfiguration) {
   // A 2x2x2 grid for each of the 254 mixed sign patterns, inside a padded 4x4x4 grid of
   // positive values so that each pattern's surface must close.
   for (int mask = 1; mask < 255; ++mask) {
-    Grid g;
-    g.dims = {4, 4, 4};
-    g.values = Eigen::VectorXd::Constant(64, 1.0);
-    for (int c = 0; c < 8; ++c)
-      g.values[Eigen::Index(g.index(1 + (c & 1), 1 + (c >> 1 & 1), 1 + (c >> 2 & 1)))] =
-          (mask >> c & 1) ? -0.3 - 0.1 * c : 0.2 + 0.05 * c;
-    const Mesh m = marching_cubes(g);
+    const Mesh m = marching_cubes(test::single_cube_grid(mask));
     const MeshTopology t = mesh_topology(m);
     EXPECT_TRUE(t.closed && t.consistently_oriented) << "mask " << mask;
     EXPECT_GT(signed_volume(m), 0) << "mask " << mask;

@@ -70,6 +70,18 @@ inline PointMatrix random_points(int n, unsigned seed) {
   return p;
 }
 
+/// A 4^3 grid of positive values whose middle cube's corner c is inside (negative) where bit c
+/// of `mask` is set: one of the 254 mixed sign patterns, padded so that its surface must close.
+inline Grid single_cube_grid(int mask) {
+  Grid g;
+  g.dims = {4, 4, 4};
+  g.values = Eigen::VectorXd::Constant(64, 1.0);
+  for (int c = 0; c < 8; ++c)
+    g.values[Eigen::Index(g.index(1 + (c & 1), 1 + (c >> 1 & 1), 1 + (c >> 2 & 1)))] =
+        (mask >> c & 1) ? -0.3 - 0.1 * c : 0.2 + 0.05 * c;
+  return g;
+}
+
 /// The n^3 grid over [-1, 1]^3 as scattered points.
 inline PointMatrix grid_points(int n) {
   Grid g;
