@@ -8,17 +8,22 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
 
 #include "progress_bar.h"
 #include "sdfcontour/contact_point_errors.h"
+#include "sdfcontour/coordinates.h"
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/mesh_sdf.h"
+#include "sdfcontour/mesh_union.h"
 #include "sdfcontour/metrics.h"
+#include "sdfcontour/option_ranges.h"
 #include "sdfcontour/pipeline.h"
 #include "sdfcontour/signed_distance.h"
 
@@ -119,11 +124,15 @@ py::array to_numpy(Matrix&& m) {
                              owned->data(), owner);
 }
 
+// The module's Python side has checked dtypes and shapes already; these checks stand guard for a
+// direct call (a failed conversion is a null array, never dereferenced).
 PointMatrix points_from(const py::array_t<double, py::array::c_style | py::array::forcecast>& a,
                         const char* what) {
+  if (!a) throw Error(std::string(what) + " must be an array of numbers");
   if (a.ndim() != 2 || a.shape(1) != 3) throw Error(std::string(what) + " must have shape (n, 3)");
   PointMatrix m(a.shape(0), 3);
   std::copy(a.data(), a.data() + a.size(), m.data());
+  require_coordinates(m, what);
   return m;
 }
 
@@ -131,14 +140,18 @@ Mesh mesh_from(const py::array& V, const py::array& F) {
   Mesh mesh;
   mesh.vertices =
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(V), "V");
-  auto f = py::array_t<int, py::array::c_style | py::array::forcecast>::ensure(F);
+  if (!(F.dtype().kind() == 'i' || F.dtype().kind() == 'u'))
+    throw Error("F must be an array of whole numbers (vertex indices)");
+  // Checked in 64 bits before narrowing, so an index of 2^32 + 1 is refused, not wrapped to 1.
+  auto f = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(F);
   if (!f || f.ndim() != 2 || f.shape(1) != 3) throw Error("F must have shape (m, 3)");
   mesh.triangles.resize(f.shape(0), 3);
-  std::copy(f.data(), f.data() + f.size(), mesh.triangles.data());
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
-    for (int k = 0; k < 3; ++k)
-      if (mesh.triangles(t, k) < 0 || mesh.triangles(t, k) >= mesh.vertices.rows())
-        throw Error("F indexes a vertex that V does not have");
+  for (py::ssize_t i = 0; i < f.size(); ++i) {
+    const std::int64_t v = f.data()[i];
+    if (v < 0 || v >= std::int64_t(mesh.vertices.rows()))
+      throw Error("F indexes a vertex that V does not have");
+    mesh.triangles.data()[i] = int(v);
+  }
   return mesh;
 }
 
@@ -208,7 +221,12 @@ ContourOptions contour_options(const py::dict& o) {
 SdfInput sdf_input(const py::array& array, const Bounds& bounds, double spacing, py::object& keep) {
   if (array.ndim() == 3) {
     GridInput grid;
-    for (int a = 0; a < 3; ++a) grid.view.dims[a] = int(array.shape(a));
+    for (int a = 0; a < 3; ++a) {
+      if (array.shape(a) > std::numeric_limits<int>::max())
+        throw Error("the grid has " + std::to_string(array.shape(a)) +
+                    " samples along an axis; at most 2147483647 are supported");
+      grid.view.dims[a] = int(array.shape(a));
+    }
     grid.view.bounds = bounds;
     const bool contiguous = array.flags() & py::array::c_style;
     if (contiguous && array.dtype().is(py::dtype::of<float>())) {
@@ -278,6 +296,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   py::dict stats;
   stats["samples"] = r.samples;
   stats["band_samples"] = r.band_samples;
+  stats["isolated_samples"] = r.isolated_samples;
   stats["hidden_samples"] = r.hidden;
   stats["poisson_depth"] = r.poisson_depth;
   stats["value_scale"] = r.value_scale;
@@ -342,7 +361,8 @@ py::array run_sample(const py::array& V, const py::array& F, int resolution,
   bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
   bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
   Grid grid = run_interruptible([mesh, resolution, bounds](std::atomic<bool>&) {
-    const MeshSdf sdf(mesh);
+    require_closed_mesh(mesh, "the mesh");
+    const MeshSdf sdf(union_of_overlapping_parts(mesh));
     return sample_grid(sdf, resolution, bounds);
   });
   auto* owned = new Eigen::VectorXd(std::move(grid.values));
@@ -411,6 +431,12 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
         py::arg("hi"));
   m.def("auto_band", &sdfcontour::auto_band, py::arg("samples_per_axis"));
+  m.def("option_ranges", [] {
+    py::dict ranges;  // Python keyword -> (lo, hi)
+    for (const OptionRange& r : option_ranges())
+      if (*r.python) ranges[r.python] = py::make_tuple(r.lo, r.hi);
+    return ranges;
+  });
   m.def("distances", &run_distances, py::arg("V"), py::arg("F"), py::arg("V_gt"), py::arg("F_gt"),
         py::arg("samples"), py::arg("seed"));
 }

@@ -1,5 +1,6 @@
 #include "atomic_file.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -61,10 +62,25 @@ extern "C" void remove_and_die(int signal) {
 }  // namespace
 
 AtomicFile::AtomicFile(const std::string& path) : path_(path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    // A device, FIFO or a link to one (/dev/stdout): written in place; a rename would replace
+    // it with a regular file.
+    in_place_ = true;
+    stream_.open(path, std::ios::binary);
+    if (!stream_) throw IoError("cannot write '" + path + "': " + std::strerror(errno));
+    return;
+  }
+  std::error_code ec;
+  if (std::filesystem::is_symlink(path, ec)) {
+    // A link to a regular file (or to nothing yet): the file behind it is replaced, the link kept.
+    const auto target = std::filesystem::weakly_canonical(path, ec);
+    if (!ec) path_ = target.string();
+  }
   // The pid and a random suffix keep concurrent writers of the same target apart.
   std::random_device rd;
   temporary_path_ =
-      path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(rd() % 100000);
+      path_ + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(rd() % 100000);
   register_temporary(temporary_path_);
   stream_.open(temporary_path_, std::ios::binary | std::ios::trunc);
   if (!stream_) {
@@ -74,7 +90,7 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
 }
 
 AtomicFile::~AtomicFile() {
-  if (!committed_) {
+  if (!committed_ && !in_place_) {
     stream_.close();
     std::remove(temporary_path_.c_str());
     unregister_temporary(slot_of(temporary_path_));
@@ -85,6 +101,10 @@ void AtomicFile::commit() {
   stream_.flush();
   if (!stream_) throw IoError("write to '" + path_ + "' failed");
   stream_.close();
+  if (in_place_) {
+    committed_ = true;
+    return;
+  }
   {
     std::lock_guard<std::mutex> lock(g_batch_mutex);
     if (g_batch_open) {
@@ -130,6 +150,12 @@ void require_writable(const std::string& path) {
   std::error_code ec;
   const fs::path p(path);
   if (fs::is_directory(p, ec)) throw IoError("cannot write '" + path + "': it is a directory");
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {  // a device or FIFO: in place
+    if (::access(path.c_str(), W_OK) != 0)
+      throw IoError("cannot write '" + path + "': " + std::strerror(errno));
+    return;
+  }
   const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::is_directory(folder, ec))
     throw IoError("cannot write '" + path + "': folder '" + folder.string() + "' does not exist");
@@ -138,8 +164,11 @@ void require_writable(const std::string& path) {
 }
 
 void remove_temporary_files_on_signals() {
-  std::signal(SIGINT, remove_and_die);
-  std::signal(SIGTERM, remove_and_die);
+  // Every signal whose default action terminates the process: a closed terminal (SIGHUP), a
+  // closed pipe (SIGPIPE, progress piped into head), timers and limits.
+  for (int signal : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGALRM, SIGUSR1, SIGUSR2, SIGXCPU,
+                     SIGXFSZ, SIGVTALRM, SIGPROF})
+    std::signal(signal, remove_and_die);
 }
 
 }  // namespace sdfcontour

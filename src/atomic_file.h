@@ -8,7 +8,9 @@ namespace sdfcontour {
 
 /// Opens `<path>.tmp-XXXX` for binary writing; commit() flushes and renames it over `path`.
 /// If commit() is never called (an exception, say), the destructor removes the temporary file,
-/// so a half-written output never appears under the final name. While an OutputBatch is open,
+/// so a half-written output never appears under the final name. A path that names a device or
+/// FIFO (/dev/stdout, or a link to one) is written in place instead; a link to a regular file
+/// keeps the link and replaces the file behind it. While an OutputBatch is open,
 /// commit() only completes the file: the rename waits for the batch.
 class AtomicFile {
  public:
@@ -27,6 +29,7 @@ class AtomicFile {
   std::string temporary_path_;
   std::ofstream stream_;
   bool committed_ = false;
+  bool in_place_ = false;  ///< a device or FIFO, written directly
 };
 
 /// All outputs of one run, renamed together: while a batch is open, completed AtomicFiles wait
@@ -46,7 +49,8 @@ class OutputBatch {
 /// a folder itself. Checked before long work, so a bad output path fails fast.
 void require_writable(const std::string& path);
 
-/// On SIGINT and SIGTERM, removes every temporary output file, then dies of the signal.
+/// On every terminating signal (SIGINT, SIGTERM, SIGHUP, SIGPIPE, ...), removes every temporary
+/// output file, then dies of the signal.
 void remove_temporary_files_on_signals();
 
 }  // namespace sdfcontour

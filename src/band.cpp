@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "sdfcontour/point_clusters.h"
+
 namespace sdfcontour {
 
 namespace {
@@ -238,23 +240,64 @@ BandSamples select_band(const Grid& grid, const BandOptions& options) {
   return select_band(view_of(grid), options);
 }
 
+namespace {
+
+// The side of a cube holding one sample on average, measured in the box of the central 98% of
+// the samples on each axis, so that a stray sample far away does not inflate it.
+double robust_spacing(const PointMatrix& points) {
+  const Eigen::Index n = points.rows();
+  Eigen::Vector3d extent;
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> x(points.col(a).data(), points.col(a).data() + n);
+    const auto lo = x.begin() + long(0.01 * double(n - 1)),
+               hi = x.begin() + long(0.99 * double(n - 1));
+    std::nth_element(x.begin(), lo, x.end());
+    const double low = *lo;
+    std::nth_element(x.begin(), hi, x.end());
+    extent[a] = *hi - low;
+  }
+  // The central 98% of each axis holds 0.98^3 of uniformly spread samples.
+  const double volume = extent.prod(), inner = 0.98 * 0.98 * 0.98 * double(n);
+  // A flat box still has a spacing: measure it in the largest extent then.
+  return volume > 0 ? std::cbrt(volume / inner) : extent.maxCoeff() / std::cbrt(inner);
+}
+
+}  // namespace
+
 BandSamples select_band(const Samples& samples, const BandOptions& given, double spacing) {
   const Eigen::Index n = samples.points.rows();
-  const Eigen::Vector3d extent =
-      samples.points.colwise().maxCoeff() - samples.points.colwise().minCoeff();
-  // A flat box still has a spacing: measure it in the largest extent then.
-  const double volume = extent.prod();
-  const double h = spacing > 0  ? spacing
-                   : volume > 0 ? std::cbrt(volume / double(n))
-                                : extent.maxCoeff() / std::cbrt(n);
-  BandOptions options = given;
+  const double h0 = spacing > 0 ? spacing : robust_spacing(samples.points);
+  // A sample with fewer than 3 others within a few spacings (a stray row far from the rest)
+  // makes no tetrahedron of its own size: its gradient, and so its contact point, would come
+  // from tetrahedra spanning the gap. Such samples are dropped, and counted.
+  std::vector<char> usable(static_cast<std::size_t>(n), 1);
   BandSamples out;
+  if (h0 > 0) {
+    const std::vector<int> cluster = point_clusters(samples.points, kIsolationReach * h0);
+    std::vector<int> members(std::size_t(*std::max_element(cluster.begin(), cluster.end()) + 1));
+    for (int c : cluster) ++members[std::size_t(c)];
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (members[std::size_t(cluster[std::size_t(i)])] < 4) usable[std::size_t(i)] = 0;
+    out.isolated = long(std::count(usable.begin(), usable.end(), 0));
+    if (out.isolated == long(n))
+      throw Error("every sample lies alone, more than " + shortest(kIsolationReach) +
+                  " spacings from 3 others: no surface can be found");
+  }
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = -low;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (usable[std::size_t(i)]) {
+      low = low.cwiseMin(samples.points.row(i).transpose());
+      high = high.cwiseMax(samples.points.row(i).transpose());
+    }
+  const Eigen::Vector3d extent = high - low;
+  const double h = h0;
+  BandOptions options = given;
   out.samples_per_axis = extent.maxCoeff() / h + 1;
   if (options.band == 0) options.band = auto_band(out.samples_per_axis);
   const BandTest keep = begin_band(out, samples.values, options, h);
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < n; ++i)
-    if (keep(samples.values[i])) kept.push_back(i);
+    if (usable[std::size_t(i)] && keep(samples.values[i])) kept.push_back(i);
   out.samples = samples_at(samples, kept);
   out.source.resize(kept.size());
   out.core.resize(kept.size());

@@ -21,25 +21,36 @@ namespace {
 using Eigen::Vector3d;
 using Box = BrickBox;
 
-// Samples bucketed by brick, each bucket in ascending sample order.
+using Cell = std::array<long, 3>;
+
+// Samples bucketed by brick, each bucket in ascending sample order. Only bricks that hold samples
+// exist (sorted by cell, so numbered as a dense grid would order them): objects far apart cost
+// nothing for the empty space between them.
 struct BrickGrid {
   Vector3d origin;
   double side = 0;
-  std::array<int, 3> dims{1, 1, 1};
-  std::vector<long> offsets;  // dims product + 1
+  std::vector<Cell> cells;    // the occupied bricks' cells, ascending
+  std::vector<long> offsets;  // cells.size() + 1
   std::vector<int> members;
 
-  int count() const { return dims[0] * dims[1] * dims[2]; }
-  int id(int i, int j, int k) const { return (i * dims[1] + j) * dims[2] + k; }
-  std::array<int, 3> cell_of(const Vector3d& p) const {
-    std::array<int, 3> c;
-    for (int a = 0; a < 3; ++a)
-      c[std::size_t(a)] = std::clamp(int(std::floor((p[a] - origin[a]) / side)), 0, dims[a] - 1);
+  int count() const { return int(cells.size()); }
+  Cell cell_of(const Vector3d& p) const {
+    Cell c;
+    for (int a = 0; a < 3; ++a) {
+      // Clamped far beyond any real grid, so the conversion is defined for any query box.
+      const double x = std::clamp(std::floor((p[a] - origin[a]) / side), -1e15, 1e15);
+      c[std::size_t(a)] = long(x);
+    }
     return c;
   }
+  // The brick at `c`, or -1 if it holds no samples.
+  int find(const Cell& c) const {
+    const auto it = std::lower_bound(cells.begin(), cells.end(), c);
+    return it != cells.end() && *it == c ? int(it - cells.begin()) : -1;
+  }
   Box box(int b) const {
-    const int k = b % dims[2], j = b / dims[2] % dims[1], i = b / (dims[1] * dims[2]);
-    const Vector3d lo = origin + side * Vector3d(i, j, k);
+    const Cell& c = cells[std::size_t(b)];
+    const Vector3d lo = origin + side * Vector3d(double(c[0]), double(c[1]), double(c[2]));
     return {lo, lo + Vector3d::Constant(side)};
   }
 };
@@ -47,16 +58,17 @@ struct BrickGrid {
 BrickGrid bucket(const PointMatrix& points, double side) {
   BrickGrid g;
   g.origin = points.colwise().minCoeff().transpose();
-  const Vector3d extent = points.colwise().maxCoeff().transpose() - g.origin;
   g.side = side;
-  for (int a = 0; a < 3; ++a)
-    g.dims[std::size_t(a)] = std::max(1, int(std::ceil(extent[a] / side + 1e-9)));
   const Eigen::Index n = points.rows();
+  std::vector<Cell> cell(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) cell[std::size_t(i)] = g.cell_of(points.row(i).transpose());
+  g.cells = cell;
+  std::sort(g.cells.begin(), g.cells.end());
+  g.cells.erase(std::unique(g.cells.begin(), g.cells.end()), g.cells.end());
   std::vector<int> brick_of(static_cast<std::size_t>(n));
-  g.offsets.assign(std::size_t(g.count()) + 1, 0);
+  g.offsets.assign(g.cells.size() + 1, 0);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const auto c = g.cell_of(points.row(i).transpose());
-    brick_of[std::size_t(i)] = g.id(c[0], c[1], c[2]);
+    brick_of[std::size_t(i)] = g.find(cell[std::size_t(i)]);
     ++g.offsets[std::size_t(brick_of[std::size_t(i)]) + 1];
   }
   for (int b = 0; b < g.count(); ++b) g.offsets[std::size_t(b) + 1] += g.offsets[std::size_t(b)];
@@ -67,19 +79,34 @@ BrickGrid bucket(const PointMatrix& points, double side) {
   return g;
 }
 
-// The samples inside `box`, ascending.
+// The samples inside `box`, ascending. The box's cells are looked up one by one, or, where it
+// spans more cells than there are occupied bricks, the occupied bricks are scanned instead.
 std::vector<int> gather(const BrickGrid& g, const PointMatrix& points, const Box& box) {
-  const auto lo = g.cell_of(box.min), hi = g.cell_of(box.max);
+  const Cell lo = g.cell_of(box.min), hi = g.cell_of(box.max);
+  std::vector<int> bricks;
+  double span = 1;
+  for (int a = 0; a < 3; ++a) span *= double(hi[std::size_t(a)] - lo[std::size_t(a)] + 1);
+  if (span <= double(g.count())) {
+    for (long i = lo[0]; i <= hi[0]; ++i)
+      for (long j = lo[1]; j <= hi[1]; ++j)
+        for (long k = lo[2]; k <= hi[2]; ++k)
+          if (const int b = g.find({i, j, k}); b >= 0) bricks.push_back(b);
+  } else {
+    for (int b = 0; b < g.count(); ++b) {
+      const Cell& c = g.cells[std::size_t(b)];
+      bool inside = true;
+      for (int a = 0; a < 3; ++a)
+        inside = inside && c[std::size_t(a)] >= lo[std::size_t(a)] &&
+                 c[std::size_t(a)] <= hi[std::size_t(a)];
+      if (inside) bricks.push_back(b);
+    }
+  }
   std::vector<int> out;
-  for (int i = lo[0]; i <= hi[0]; ++i)
-    for (int j = lo[1]; j <= hi[1]; ++j)
-      for (int k = lo[2]; k <= hi[2]; ++k) {
-        const int b = g.id(i, j, k);
-        for (long m = g.offsets[std::size_t(b)]; m < g.offsets[std::size_t(b) + 1]; ++m) {
-          const int s = g.members[std::size_t(m)];
-          if (box.contains(Vector3d(points.row(s).transpose()))) out.push_back(s);
-        }
-      }
+  for (const int b : bricks)
+    for (long m = g.offsets[std::size_t(b)]; m < g.offsets[std::size_t(b) + 1]; ++m) {
+      const int s = g.members[std::size_t(m)];
+      if (box.contains(Vector3d(points.row(s).transpose()))) out.push_back(s);
+    }
   std::sort(out.begin(), out.end());
   return out;
 }

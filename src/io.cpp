@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "atomic_file.h"
+#include "file_checks.h"
 #include "mesh_files.h"
+#include "sdfcontour/coordinates.h"
 
 namespace sdfcontour {
 
@@ -70,6 +72,10 @@ void write_mesh(const std::string& path, const Mesh& mesh, PlyFormat ply_format)
   const std::string ext = extension(path);
   if (ext != "ply" && ext != "obj")
     throw Error("cannot write a mesh to '" + path + "': use a .ply or .obj extension");
+  if (mesh.triangles.rows() == 0) throw Error("cannot write '" + path + "': the mesh is empty");
+  require_coordinates(mesh.vertices, "the mesh for '" + path + "'");
+  if (mesh.triangles.minCoeff() < 0 || mesh.triangles.maxCoeff() >= mesh.vertices.rows())
+    throw Error("cannot write '" + path + "': a triangle indexes a vertex the mesh does not have");
   AtomicFile file(path);
   if (ext == "ply") {
     write_ply(file.stream(), mesh.vertices, nullptr, &mesh.triangles, ply_format);
@@ -90,6 +96,7 @@ namespace {
 
 // The whole file, or IoError.
 std::string file_bytes(const std::string& path) {
+  require_readable_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -123,6 +130,7 @@ Mesh read_mesh(const std::string& path) {
   mesh.triangles.resize(Eigen::Index(triangles.size()), 3);
   for (std::size_t f = 0; f < triangles.size(); ++f)
     mesh.triangles.row(Eigen::Index(f)) << triangles[f][0], triangles[f][1], triangles[f][2];
+  require_coordinates(mesh.vertices, "'" + path + "'");
   return mesh;
 }
 
@@ -146,6 +154,7 @@ OrientedPoints read_oriented_points(const std::string& path) {
     out.points.row(Eigen::Index(i)) << soup.points[i][0], soup.points[i][1], soup.points[i][2];
     out.normals.row(Eigen::Index(i)) << soup.normals[i][0], soup.normals[i][1], soup.normals[i][2];
   }
+  require_coordinates(out.points, "'" + path + "'");
   return out;
 }
 

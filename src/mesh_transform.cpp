@@ -117,3 +117,15 @@ bool clip_mesh_to_box(Mesh& mesh, const Eigen::Vector3d& min, const Eigen::Vecto
 }
 
 }  // namespace sdfcontour
+
+namespace sdfcontour {
+
+void append_mesh(Mesh& mesh, const Mesh& part) {
+  const Eigen::Index v = mesh.vertices.rows(), t = mesh.triangles.rows();
+  mesh.vertices.conservativeResize(v + part.vertices.rows(), 3);
+  mesh.vertices.bottomRows(part.vertices.rows()) = part.vertices;
+  mesh.triangles.conservativeResize(t + part.triangles.rows(), 3);
+  mesh.triangles.bottomRows(part.triangles.rows()) = part.triangles.array() + int(v);
+}
+
+}  // namespace sdfcontour

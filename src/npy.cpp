@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "atomic_file.h"
+#include "file_checks.h"
 
 namespace sdfcontour {
 
@@ -28,10 +29,9 @@ constexpr std::size_t kMaxHeaderBytes = 1 << 16;
 class MappedFile {
  public:
   explicit MappedFile(const std::string& path) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-      throw IoError("cannot read '" + path + "': it is a directory");
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    require_readable_file(path);
+    // Non-blocking: a FIFO swapped in after the check must not block the open.
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd_ < 0) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
     struct stat st {};
     if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {

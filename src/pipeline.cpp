@@ -185,6 +185,10 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     rescale_to_distances(*grid, options, measured, band_options, result);
   BandSamples band = band_stage(grid, scattered, band_options, stages);
   result.band_samples = int(band.samples.values.size());
+  result.isolated_samples = band.isolated;
+  if (band.isolated > 0 && options.progress)
+    options.progress("dropped " + std::to_string(band.isolated) +
+                     " isolated samples (fewer than 3 others nearby)");
   result.band_spacing = band.spacing;
   result.band_spacings = band.band;
   result.truncation = band.truncation;

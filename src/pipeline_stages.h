@@ -64,6 +64,7 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
 // What GCP's or GTCP's reconstruction needs once the band's samples are freed.
 struct ReconstructionInputs {
   PoissonOptions poisson;          // the depth and dilation chosen
+  bool auto_depth = false;         // the depth follows each cluster's extent (ContourOptions 0)
   SignedSamples sides;             // samples whose sides the indicator keeps (may be empty)
   bool project = false;            // move the vertices onto the contact points
   Eigen::VectorXd contact_depths;  // with `project`: |value| of each contact point's sample

@@ -11,6 +11,7 @@
 #include "sdfcontour/marching.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/mesh_transform.h"
+#include "sdfcontour/point_clusters.h"
 
 namespace sdfcontour::detail {
 
@@ -24,6 +25,9 @@ constexpr double kMostOffZeroSet = 0.01;
 // not only the band's 8: the farther balls are large (64^3: wingnut and hammer 6-7% lower L1,
 // bunny 1%; every sample gains little more; docs/carving.md). Finer grids gain less for more.
 constexpr double kCarvingBand = 16;
+
+// Contact points this many spacings apart (and farther) belong to separate Poisson solves.
+constexpr double kClusterGap = 16;
 
 // GCP's mesh must lie on the field's zero set: more than 1% of its vertices a spacing or more
 // off it means the contact points were not on the surface (a smooth implicit whose gradient norm
@@ -85,26 +89,71 @@ SignedSamples samples_near_surface(const BandSamples& band, double reach) {
 // The reconstruction of result.contact_points into result.mesh. The points and normals go to
 // the reconstruction rather than a copy of them (at 512^3, 180 MB): freed there once mapped into
 // its own copy unless asked for, else given back.
+void add_poisson_result(PoissonResult&& p, ContourResult& result) {
+  if (!result.mesh) result.mesh.emplace();
+  append_mesh(*result.mesh, p.mesh);
+  result.sign_violations += p.sign_violations;
+  result.sign_violations_left += p.sign_violations_left;
+  result.sign_constraints_dropped |= p.sign_constraints_dropped;
+  for (const auto& [name, seconds] : p.seconds) result.poisson_stages.push_back({name, seconds});
+}
+
+// One screened Poisson solve per cluster of contact points (point_clusters): objects far apart in
+// a scene each get an octree over their own extent, instead of one octree whose cells are
+// larger than they are. One cluster is the plain, single solve.
 void poisson_stage(ReconstructionInputs& in, const ContourOptions& options, ContourResult& result,
                    Stages& stages) {
   ContactPoints& lent = *result.contact_points;
   const std::string count = std::to_string(lent.size());
-  OrientedPoints oriented{std::move(lent.points), std::move(lent.normals), {}};
-  PoissonResult p =
-      stages.run("poisson", "screened Poisson reconstruction of " + count + " points", [&] {
-        SignConstraintOptions sopt = options.sign_constraints;
-        sopt.radius = options.sign_radius * result.band_spacing;
-        if (!options.want_points && !in.project)
-          return poisson_reconstruct(std::move(oriented), in.poisson, in.sides, sopt);
-        return poisson_reconstruct(oriented, in.poisson, in.sides, sopt);
+  SignConstraintOptions sopt = options.sign_constraints;
+  sopt.radius = options.sign_radius * result.band_spacing;
+  const double cell = kClusterGap * result.band_spacing;
+  const std::vector<int> cluster = point_clusters(lent.points, cell);
+  const int clusters = cluster.empty() ? 0 : *std::max_element(cluster.begin(), cluster.end()) + 1;
+  result.mesh.reset();
+  result.sign_violations = result.sign_violations_left = 0;
+  if (clusters <= 1) {
+    OrientedPoints oriented{std::move(lent.points), std::move(lent.normals), {}};
+    PoissonResult p =
+        stages.run("poisson", "screened Poisson reconstruction of " + count + " points", [&] {
+          if (!options.want_points && !in.project)
+            return poisson_reconstruct(std::move(oriented), in.poisson, in.sides, sopt);
+          return poisson_reconstruct(oriented, in.poisson, in.sides, sopt);
+        });
+    lent.points = std::move(oriented.points);
+    lent.normals = std::move(oriented.normals);
+    add_poisson_result(std::move(p), result);
+    return;
+  }
+  stages.run(
+      "poisson",
+      "screened Poisson reconstruction of " + count + " points in " + std::to_string(clusters) +
+          " separate clusters",
+      [&] {
+        int deepest = 0;
+        for (int c = 0; c < clusters; ++c) {
+          OrientedPoints part;
+          std::vector<int> rows;
+          for (std::size_t r = 0; r < cluster.size(); ++r)
+            if (cluster[r] == c) rows.push_back(int(r));
+          part.points = lent.points(rows, Eigen::all);
+          part.normals = lent.normals(rows, Eigen::all);
+          // The sides that matter: samples near this cluster's points.
+          const Eigen::AlignedBox3d box(
+              part.points.colwise().minCoeff().transpose().array() - cell,
+              part.points.colwise().maxCoeff().transpose().array() + cell);
+          std::vector<int> near;
+          for (Eigen::Index s = 0; s < in.sides.points.rows(); ++s)
+            if (box.contains(in.sides.points.row(s).transpose())) near.push_back(int(s));
+          const SignedSamples sides{in.sides.points(near, Eigen::all), in.sides.values(near)};
+          PoissonOptions popt = in.poisson;
+          if (in.auto_depth) popt.depth = auto_poisson_depth(part.points, result.band_spacing);
+          deepest = std::max(deepest, popt.depth);
+          add_poisson_result(poisson_reconstruct(part, popt, sides, sopt), result);
+        }
+        result.poisson_depth = deepest;
+        return 0;
       });
-  lent.points = std::move(oriented.points);
-  lent.normals = std::move(oriented.normals);
-  result.mesh = std::move(p.mesh);
-  result.sign_violations = p.sign_violations;
-  result.sign_violations_left = p.sign_violations_left;
-  result.sign_constraints_dropped = p.sign_constraints_dropped;
-  for (const auto& [name, seconds] : p.seconds) result.poisson_stages.push_back({name, seconds});
 }
 
 // A surface that runs out of the grid (a cropped scan's TSDF) ends at its sides, as marching
@@ -195,6 +244,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   popt = options.poisson;
   popt.progress = options.progress;
   popt.cancel = options.cancel;
+  in.auto_depth = popt.depth == 0;
   if (popt.depth == 0) popt.depth = auto_poisson_depth(band.samples.points, band.spacing);
   result.poisson_depth = popt.depth;
   if (popt.refine_dilation == 0) popt.refine_dilation = band.samples_per_axis < 256 ? 2 : 1;

@@ -7,6 +7,8 @@
 #include <string>
 #include <utility>
 
+#include "sdfcontour/coordinates.h"
+
 namespace sdfcontour {
 
 Eigen::Vector3d GridGeometry::spacing() const {
@@ -76,6 +78,10 @@ void validate_grid(const GridView& grid) {
   for (int a = 0; a < 3; ++a)
     if (!(grid.bounds.min[a] < grid.bounds.max[a]))
       throw Error("bounds must have min < max on every axis");
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(grid.bounds.min[a]) <= kLargestCoordinate &&
+          std::abs(grid.bounds.max[a]) <= kLargestCoordinate))
+      throw Error("bounds must be finite and at most 1e30 in size on every axis");
   const std::size_t bad =
       grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
   if (bad < grid.size())

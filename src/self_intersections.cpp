@@ -34,13 +34,17 @@ class TriangleCubes {
     std::nth_element(extents.begin(), middle, extents.end());
     origin_ = all.min();
     const Eigen::Vector3d extent = all.max() - all.min();
-    cell_ = std::max(2 * *middle, 1e-9 * std::max(extent.maxCoeff(), 1e-300));
-    // Keys must fit in 63 bits whatever the spread, and no triangle may sit in too many cubes:
-    // coarser cubes only cost more tests.
-    while (((extent / cell_).array() + 1).prod() > 1e17 ||
-           ((extent / cell_).array() + 1).prod() > 64.0 * double(boxes.size()))
-      cell_ *= 2;
-    for (int a = 0; a < 3; ++a) size_[a] = long(extent[a] / cell_) + 1;
+    cell_ = std::max(2 * *middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
+    // Only occupied cubes are stored, so empty space between far-apart parts costs nothing; but
+    // the triangles may not sit in too many cubes in all (a few huge ones would): coarser cubes
+    // only cost more tests.
+    auto entries = [&] {
+      double sum = 0;
+      for (const auto& b : boxes) sum += (((b.max() - b.min()).array() / cell_).floor() + 2).prod();
+      return sum;
+    };
+    while (entries() > 64.0 * double(boxes.size()) + 1e6) cell_ *= 2;
+    for (int a = 0; a < 3; ++a) size_[a] = long(std::min(extent[a] / cell_, 1e15)) + 1;
     std::vector<long> offsets(boxes.size() + 1, 0);
     tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
       const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
@@ -69,8 +73,8 @@ class TriangleCubes {
     for (long k = lo[2]; k <= hi[2]; ++k)
       for (long j = lo[1]; j <= hi[1]; ++j)
         for (long i = lo[0]; i <= hi[0]; ++i) {
-          const long here = key(i, j, k);
-          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<long, int>{here, -1});
+          const Key here = key(i, j, k);
+          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<Key, int>{here, -1});
           for (; it != keyed_.end() && it->first == here; ++it) {
             const std::size_t u = std::size_t(it->second);
             if (!box.intersects(current[u])) continue;
@@ -88,12 +92,14 @@ class TriangleCubes {
           std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), 0L, size_[a] - 1);
     return c;
   }
-  long key(long i, long j, long k) const { return (k * size_[1] + j) * size_[0] + i; }
+  // z slowest, x fastest; three longs, so no spread of the parts can overflow a key.
+  using Key = std::array<long, 3>;
+  static Key key(long i, long j, long k) { return {k, j, i}; }
 
   double cell_ = 1;
   Eigen::Vector3d origin_;
   long size_[3] = {1, 1, 1};
-  std::vector<std::pair<long, int>> keyed_;  // (cube key, triangle), sorted
+  std::vector<std::pair<Key, int>> keyed_;  // (cube key, triangle), sorted
 };
 
 Point vertex_point(const Mesh& mesh, int v) {

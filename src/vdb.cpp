@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "atomic_file.h"
+#include "file_checks.h"
 #include "isolated_call.h"
 #include "openvdb_module.h"
 
@@ -19,6 +20,7 @@ namespace {
 // OpenVDB's reader is not meant for hostile bytes: refuse anything that does not start like a
 // .vdb file (magic number 0x56444220, "VDB " little-endian) before handing it over.
 void check_magic(const std::string& path) {
+  require_readable_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot read '" + path + "': " + std::strerror(errno));
   unsigned char magic[8] = {};

@@ -72,6 +72,39 @@ TEST(Bricks, EqualTheGlobalTriangulation) {
   EXPECT_GT(stats.bricks, 8);
 }
 
+// Two objects a billion spacings apart: only bricks that hold samples exist, so memory and time
+// follow the samples, not the empty space between them, and both objects get their contact points.
+TEST(Bricks, ObjectsFarApartCostTheirSamplesOnly) {
+  const auto torus = make_builtin_shape("torus");
+  const Grid grid = sample_grid(*torus, 20, Bounds{});
+  const BandSamples near = select_band(grid, BandOptions{});
+  const Eigen::Index n = near.samples.points.rows();
+  const double shift = 1e9 * near.spacing;
+  Samples both = near.samples;
+  both.points.conservativeResize(2 * n, 3);
+  both.values.conservativeResize(2 * n);
+  both.points.bottomRows(n) = near.samples.points.rowwise() + Eigen::RowVector3d(shift, 0, 0);
+  both.values.tail(n) = near.samples.values;
+  std::vector<char> core = near.core;
+  core.insert(core.end(), near.core.begin(), near.core.end());
+  BrickOptions o;
+  o.size = 8;
+  o.halo = 4;
+  BrickStats stats;
+  const ContactPoints cp = brick_contact_points(both, near.spacing, {}, {}, o, &stats, {}, &core);
+  EXPECT_LT(stats.bricks, 100);
+  const ContactPoints alone =
+      brick_contact_points(near.samples, near.spacing, {}, {}, o, nullptr, {}, &near.core);
+  long far = 0;
+  for (Eigen::Index r = 0; r < cp.points.rows(); ++r) {
+    Eigen::Vector3d c = cp.points.row(r).transpose();
+    if (c.x() > shift / 2) c.x() -= shift, ++far;
+    EXPECT_LT(std::abs(torus->distance(c)), 0.5 * near.spacing);
+  }
+  EXPECT_NEAR(double(far), double(alone.size()), 0.02 * double(alone.size()));
+  EXPECT_NEAR(double(cp.size() - far), double(alone.size()), 0.02 * double(alone.size()));
+}
+
 // The automatic side: the largest candidate that still gives 4 bricks per thread, and the
 // automatic bricks' contact points are the global ones.
 TEST(Bricks, AutomaticSizeKeepsFourBricksPerThread) {

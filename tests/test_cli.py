@@ -7,40 +7,11 @@ Usage: test_cli.py PATH_TO_SDFCONTOUR
 import json
 import os
 import subprocess
-import sys
 import tempfile
 
 import numpy as np
 
-CLI = sys.argv[1]
-passed = failed = 0
-
-
-def run(*args, env=None):
-    return subprocess.run([CLI, *args], capture_output=True, text=True, timeout=300, env=env)
-
-
-def check(name, condition, detail=""):
-    global passed, failed
-    if condition:
-        passed += 1
-    else:
-        failed += 1
-        print(f"FAIL {name}: {detail}")
-
-
-def expect_error(name, args, needle, out_files=(), env=None):
-    r = run(*args, env=env)
-    lines = r.stderr.strip().splitlines()
-    errors = [line for line in lines if line.startswith("sdfcontour: error:")]
-    check(name + " exit code", r.returncode != 0, f"exit {r.returncode}")
-    check(name + " one error line, last", len(errors) == 1 and lines[-1] == errors[0], repr(r.stderr))
-    check(name + " message", bool(lines) and lines[-1].startswith("sdfcontour: error:") and needle in lines[-1],
-          repr(r.stderr))
-    for f in out_files:
-        check(name + " no output", not os.path.exists(f), f)
-        leftovers = [p for p in os.listdir(os.path.dirname(f)) if ".tmp-" in p]
-        check(name + " no temporary files", not leftovers, leftovers)
+from cli_checks import CLI, check, expect_error, finish, run
 
 
 with tempfile.TemporaryDirectory() as d:
@@ -96,7 +67,7 @@ with tempfile.TemporaryDirectory() as d:
                  "cannot write")
 
     # Outputs appear together or not at all: a bad second output path fails before any work, and
-    # SIGINT / SIGTERM at any moment leave neither outputs nor temporary files.
+    # A terminating signal at any moment leaves neither outputs nor temporary files.
     expect_error("bad points path", ["contour", p("good.npy"), "-o", out, "--points", p("no/dir/cp.ply")],
                  "cannot write", [out])
     expect_error("stats is a folder", ["contour", p("good.npy"), "-o", out, "--stats", d], "directory", [out])
@@ -104,7 +75,9 @@ with tempfile.TemporaryDirectory() as d:
     import time as _time
     sig_dir = p("signals")
     os.mkdir(sig_dir)
-    for delay, sig in [(0.3, signal.SIGINT), (0.8, signal.SIGTERM), (1.5, signal.SIGINT)]:
+    # Every terminating signal alike: a closed terminal (SIGHUP), a closed pipe (SIGPIPE).
+    for delay, sig in [(0.3, signal.SIGINT), (0.8, signal.SIGTERM), (1.5, signal.SIGINT), (0.8, signal.SIGHUP),
+                       (1.2, signal.SIGPIPE), (0.6, signal.SIGALRM)]:
         proc = subprocess.Popen([CLI, "contour", "builtin:torus@72", "-o", os.path.join(sig_dir, "m.ply"), "--points",
                                  os.path.join(sig_dir, "cp.ply"), "--depth", "7", "-q"],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -328,5 +301,4 @@ with tempfile.TemporaryDirectory() as d:
         expect_error("sample scale inf", ["sample", os.path.join(meshes, "cube.obj"), "--res", "8", "--scale", "inf", "-o",
                                           p("o")], "--scale", [p("o.npy")])
 
-print(f"{passed} passed, {failed} failed")
-sys.exit(1 if failed else 0)
+finish()

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "atomic_file.h"
+#include "sdfcontour/option_ranges.h"
 
 namespace sdfcontour::cli {
 
@@ -127,7 +128,7 @@ void RunOptions::say(const std::string& message) const {
 }
 
 std::unique_ptr<tbb::global_control> RunOptions::limit_threads() const {
-  require_range("--threads", threads, 0, 4096);
+  require_in_range("--threads", threads, "--threads");
   if (threads == 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                std::size_t(threads));
@@ -193,16 +194,21 @@ int whole_number_or_auto(const std::string& option, const std::string& text, int
 
 PoissonOptions PoissonArgs::resolved() const {
   PoissonOptions o = options;
-  require_range("--alpha", o.point_weight, 0, 1e4);
-  o.depth = whole_number_or_auto("--depth", depth, 1, 16);
+  require_in_range("--alpha", o.point_weight, "--alpha");
+  o.depth = whole_number_or_auto("--depth", depth, int(option_range("--depth").lo),
+                                 int(option_range("--depth").hi));
   if (degree != "1" && degree != "2") throw Error("--degree must be 1 or 2, got '" + degree + "'");
   o.degree = std::stoi(degree);
-  require_range("--full-depth", o.full_depth, 0, o.depth == 0 ? 8 : o.depth);
-  o.refine_dilation = whole_number_or_auto("--refine-dilation", dilation, 1, 4);
-  require_range("--samples-per-node", o.samples_per_node, 0.01, 1e6);
-  require_range("--scale", o.scale, 1, 16);
-  require_range("--solver-tolerance", o.solver_tolerance, 1e-16, 0.5);
-  require_range("--finest-solver-tolerance", o.finest_solver_tolerance, 1e-16, 0.5);
+  require_in_range("--full-depth", o.full_depth, "--full-depth");
+  if (o.depth > 0 && o.full_depth > o.depth) throw Error("--full-depth must be at most --depth");
+  o.refine_dilation =
+      whole_number_or_auto("--refine-dilation", dilation, int(option_range("--refine-dilation").lo),
+                           int(option_range("--refine-dilation").hi));
+  require_in_range("--samples-per-node", o.samples_per_node, "--samples-per-node");
+  require_in_range("--scale", o.scale, "--scale");
+  require_in_range("--solver-tolerance", o.solver_tolerance, "--solver-tolerance");
+  require_in_range("--finest-solver-tolerance", o.finest_solver_tolerance,
+                   "--finest-solver-tolerance");
   o.boundary = parse_poisson_boundary(boundary);
   return o;
 }

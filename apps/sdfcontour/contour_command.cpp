@@ -8,11 +8,13 @@
 #include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
+#include "file_checks.h"
 #include "progress_bar.h"
 #include "sdfcontour/builtin_shapes.h"
 #include "sdfcontour/contact_point_errors.h"
 #include "sdfcontour/io.h"
 #include "sdfcontour/npy.h"
+#include "sdfcontour/option_ranges.h"
 #include "sdfcontour/pipeline.h"
 #include "sdfcontour/vdb.h"
 
@@ -107,9 +109,9 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.want_points = !a.points.empty();
   opt.gradient_source = parse_gradient_source(a.gradient);
   opt.gradient.weighting = parse_gradient_weighting(a.weights);
-  require_range("--knn", a.knn, 3, 1000);
-  require_range("--james-epsilon", a.james_epsilon, 0, 1e6);
-  require_range("--tie-tolerance", a.tie_tolerance, 0, 1);
+  require_in_range("--knn", a.knn, "--knn");
+  require_in_range("--james-epsilon", a.james_epsilon, "--james-epsilon");
+  require_in_range("--tie-tolerance", a.tie_tolerance, "--tie-tolerance");
   opt.knn = a.knn;
   opt.gradient.james_epsilon = a.james_epsilon;
   opt.contact.tie_tolerance = a.tie_tolerance;
@@ -120,8 +122,10 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.bricks.size = parse_count_or_auto("--brick-size", a.brick_size, 1000000,
                                         "a whole number of spacings, 0 for no bricks")
                         .value_or(BrickOptions::kAutoSize);
-  if (!(a.brick_halo >= 0) || !std::isfinite(a.brick_halo))
-    throw Error("--brick-halo must be a non-negative number of spacings (0: automatic)");
+  if (opt.bricks.size != 0 && opt.bricks.size != BrickOptions::kAutoSize)
+    require_in_range("--brick-size", opt.bricks.size, "--brick-size");
+  require_in_range("--brick-halo", a.brick_halo, "--brick-halo");
+  require_in_range("--margin", a.margin, "--margin");
   opt.bricks.halo = a.brick_halo;
   opt.band.margin = a.margin;
   require_range("--sign-band", a.sign_band, 0, 1e6);
@@ -140,13 +144,15 @@ ContourOptions contour_options(const ContourArgs& a) {
   if (a.no_carve) opt.carve = Switch::Off;
   if (a.no_side_repair) opt.side_repair = Switch::Off;
   if (const auto rounds =
-          parse_count_or_auto("--side-passes", a.side_passes, 100, "a whole number of rounds")) {
+          parse_count_or_auto("--side-passes", a.side_passes, int(option_range("--side-passes").hi),
+                              "a whole number of rounds")) {
     opt.carving.side_passes = *rounds;
     opt.carve_sides = *rounds > 0 ? Switch::On : Switch::Off;
   }
   opt.reconstruction = parse_reconstruction(a.reconstruction);
   opt.subdivisions =
-      parse_count_or_auto("--subdivisions", a.subdivisions, 4, "a whole number of levels")
+      parse_count_or_auto("--subdivisions", a.subdivisions, int(option_range("--subdivisions").hi),
+                          "a whole number of levels")
           .value_or(-1);
   require_range("--local-reach", a.local.reach, 0, 1);
   require_range("--local-feature-ratio", a.local.feature_ratio, 0, 1);
@@ -191,6 +197,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                            {"band_spacings", r.band_spacings},
                            {"spacing", r.band_spacing},
                            {"samples", r.band_samples},
+                           {"isolated_samples_dropped", r.isolated_samples},
                            {"truncation_detected", r.truncation.detected()}};
     if (r.truncation.inside < std::numeric_limits<double>::infinity())
       band["truncation_inside"] = r.truncation.inside;
@@ -311,6 +318,7 @@ void print_summary(const ContourResult& r, double total) {
 int run_contour(const ContourArgs& a) {
   if (a.output.empty() && a.points.empty())
     throw Error("nothing to write: give -o OUT and/or --points FILE");
+  require_distinct_files({a.input}, {a.output, a.points, a.run.stats});
   for (const std::string* path : {&a.output, &a.points, &a.run.stats})
     if (!path->empty()) require_writable(*path);
   OutputBatch outputs;  // every file appears at the end, or none
@@ -329,6 +337,10 @@ int run_contour(const ContourArgs& a) {
   }
   const double load_seconds = seconds_since(t0);
   ContourResult r = contour(in.input, in.shape.get(), opt);
+  if (r.isolated_samples > 0)
+    std::cerr << "sdfcontour: warning: dropped " << r.isolated_samples
+              << " isolated samples (fewer than 3 others within " << kIsolationReach
+              << " spacings): strays far from the rest cannot place the surface\n";
   r.stages.insert(r.stages.begin(), {"input", load_seconds});
 
   const auto tw = std::chrono::steady_clock::now();

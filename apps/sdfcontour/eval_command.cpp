@@ -2,6 +2,7 @@
 // points against a ground-truth mesh. Both print JSON.
 #include "cli_options.h"
 #include "commands.h"
+#include "file_checks.h"
 #include "sdfcontour/contact_point_errors.h"
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_properties.h"
@@ -20,6 +21,7 @@ struct EvalArgs {
 int run_eval(const EvalArgs& a) {
   if (a.samples == 0 || a.samples > 100000000)
     throw Error("--samples must be between 1 and 100000000");
+  require_distinct_files({a.recon, a.gt}, {a.output});
   const Mesh recon = read_mesh(a.recon), gt = read_mesh(a.gt);
   const SurfaceDistances d = surface_distances(recon, gt, a.samples, a.seed);
   const MeshTopology t = mesh_topology(recon);
@@ -46,6 +48,7 @@ int run_eval(const EvalArgs& a) {
 }
 
 int run_eval_points(const EvalArgs& a) {
+  require_distinct_files({a.recon, a.gt}, {a.output});
   const OrientedPoints points = read_oriented_points(a.recon);
   const MeshSdf sdf(read_mesh(a.gt));
   const ContactPointErrors e = contact_point_errors(points.points, points.normals, sdf);

@@ -21,8 +21,17 @@ int main(int argc, char** argv) {
       cli::add_eval_commands(app, eval_points)};
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One line in the project's format, exit 1, as every other bad input gets.
+    std::string what = e.what();
+    for (char& c : what)
+      if (c == '\n') c = ' ';
+    std::cerr << "sdfcontour: error: " << what << " (see sdfcontour --help)\n";
+    return 1;
   }
   remove_temporary_files_on_signals();
   try {

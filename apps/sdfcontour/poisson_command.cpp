@@ -4,6 +4,7 @@
 #include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
+#include "file_checks.h"
 #include "sdfcontour/io.h"
 #include "sdfcontour/npy.h"
 
@@ -52,6 +53,7 @@ nlohmann::json summary_json(const PoissonCommandArgs& a, const PoissonOptions& o
 }
 
 int run_poisson(const PoissonCommandArgs& a) {
+  require_distinct_files({a.input}, {a.output, a.run.stats, a.densities});
   for (const std::string* path : {&a.output, &a.run.stats, &a.densities})
     if (!path->empty()) require_writable(*path);
   OutputBatch outputs;

@@ -1,16 +1,20 @@
 // sdfcontour sample: a closed mesh -> its normalised copy, SDF samples (a grid, a truncated grid,
 // an OpenVDB level set or random points) and their exact contact points.
+#include <filesystem>
 #include <iostream>
 #include <limits>
 
 #include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
+#include "file_checks.h"
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_sdf.h"
 #include "sdfcontour/mesh_transform.h"
+#include "sdfcontour/mesh_union.h"
 #include "sdfcontour/npy.h"
+#include "sdfcontour/option_ranges.h"
 #include "sdfcontour/vdb.h"
 
 namespace sdfcontour::cli {
@@ -29,7 +33,7 @@ struct SampleArgs {
 void check(const SampleArgs& a, bool vdb) {
   if ((a.resolution > 0) == (a.random > 0))
     throw Error("give exactly one of --res N and --random COUNT");
-  if (a.resolution == 1 || a.resolution > 1024) throw Error("--res must be between 2 and 1024");
+  if (a.resolution != 0) require_in_range("--res", a.resolution, "--res");
   require_range("--scale", a.scale, 1e-6, 1e6);
   if (!(a.truncate >= 0) || !std::isfinite(a.truncate))
     throw Error("--truncate must be a non-negative number of spacings");
@@ -77,6 +81,20 @@ Samples write_random(const SampleArgs& a, const MeshSdf& sdf, const Bounds& boun
   return samples;
 }
 
+// The mesh as one closed surface: overlapping parts united, what is left said on stderr.
+Mesh closed_surface(const Mesh& mesh, const RunOptions& run) {
+  require_closed_mesh(mesh, "the mesh");
+  MeshUnionStats u;
+  Mesh out = union_of_overlapping_parts(mesh, &u);
+  if (u.parts_united > 0)
+    run.say("united " + std::to_string(u.parts_united + 1) + " overlapping parts into one surface");
+  if (u.crossings_left > 0)
+    std::cerr << "sdfcontour: warning: the mesh crosses itself (" << u.crossings_left
+              << " pairs of triangles): inside is where its winding number is not zero, and "
+                 "distances near the crossings are to every triangle\n";
+  return out;
+}
+
 int run_sample(const SampleArgs& a) {
   const bool vdb = is_vdb_path(a.prefix);
   check(a, vdb);
@@ -85,12 +103,18 @@ int run_sample(const SampleArgs& a) {
   const Bounds bounds = parse_bounds(a.bounds);
   // x.vdb writes x.vdb, x_mesh.ply and x_gtcp.ply; a prefix writes PREFIX.npy and the rest.
   const std::string stem = vdb ? a.prefix.substr(0, a.prefix.size() - 4) : a.prefix;
-  for (const std::string& path :
-       {vdb ? a.prefix : stem + ".npy", stem + "_gtcp.ply", stem + "_mesh.ply"})
-    require_writable(path);
+  const std::string name = std::filesystem::path(stem).filename().string();
+  std::error_code ec;
+  if (name.empty() || name == "." || name == ".." || std::filesystem::is_directory(stem, ec))
+    throw Error("-o '" + a.prefix +
+                "' names a folder: give a file name prefix (dir/bunny writes dir/bunny.npy, ...)");
+  const std::vector<std::string> paths = {vdb ? a.prefix : stem + ".npy", stem + "_gtcp.ply",
+                                          stem + "_mesh.ply"};
+  require_distinct_files({a.mesh}, paths);
+  for (const std::string& path : paths) require_writable(path);
   OutputBatch outputs;
   run.say("reading " + a.mesh);
-  const Mesh mesh = normalize_mesh(read_mesh(a.mesh), a.scale);
+  const Mesh mesh = closed_surface(normalize_mesh(read_mesh(a.mesh), a.scale), run);
   const MeshSdf sdf(mesh);
   Samples samples;
   if (a.resolution > 0) {

@@ -73,7 +73,12 @@ struct BandSamples {
   /// choices (auto_band, auto_sign_constraints) go by.
   double samples_per_axis = 0;
   Truncation truncation;
+  /// Scattered samples dropped as isolated (fewer than 3 others within kIsolationReach spacings).
+  long isolated = 0;
 };
+
+/// Scattered samples with fewer than 3 others this many spacings around are dropped as strays.
+constexpr double kIsolationReach = 4;
 
 /// The automatic band, in spacings, for samples `samples_per_axis` across: 8 below 128, 4 from
 /// 128, 3 from 256. Measured against every sample (`bench/band.py`, docs/band.md, 6 shared meshes,
@@ -91,7 +96,9 @@ BandSamples select_band(const GridView& grid, const BandOptions& options);
 BandSamples select_band(const Grid& grid, const BandOptions& options);
 
 /// The same for scattered samples; h is `spacing` if positive, else the side of a cube holding
-/// one sample on average (the bounding box's volume / n, cube root).
+/// one sample on average (measured in the box of the central 98% of the samples on each axis).
+/// Isolated samples (a clump of fewer than 4 with no other within kIsolationReach * h) are
+/// dropped and counted in BandSamples::isolated; throws Error if every sample is.
 BandSamples select_band(const Samples& samples, const BandOptions& options, double spacing = 0);
 
 /// Throws Error unless `band` is positive (infinity allowed), `margin` non-negative and finite,

@@ -10,6 +10,10 @@ namespace sdfcontour {
 /// mesh.
 Mesh normalize_mesh(const Mesh& mesh, double half_extent);
 
+/// Appends `part`'s vertices and triangles to `mesh` (its triangles renumbered after `mesh`'s
+/// vertices).
+void append_mesh(Mesh& mesh, const Mesh& part);
+
 /// Cuts `mesh` to the box [min, max]: triangles outside are dropped, triangles across a side are
 /// cut along it (new vertices exactly on the side, shared by the triangles on both sides of an
 /// edge, so the cut mesh stays connected), unused vertices removed. Vertices on a side count as

@@ -159,6 +159,7 @@ struct ContourResult {
   std::optional<ContactPoints> contact_points;
   int samples = 0;                   ///< samples in the input
   int band_samples = 0;              ///< of those, in the band (triangulated); 0 for mc alone
+  long isolated_samples = 0;         ///< scattered samples dropped as strays (BandSamples)
   double band_spacing = 0;           ///< the spacing h the band is measured in
   Truncation truncation;             ///< the truncation found or given
   std::optional<BrickStats> bricks;  ///< when GCP ran in bricks

@@ -7,25 +7,34 @@ tetrahedra (``"mt-rt"``, ``"mt-dt"``) are there too.
 
 Conventions: a grid ``a`` of shape (nx, ny, nz) has ``a[i, j, k]`` at ``lo + (i*hx, j*hy, k*hz)``
 over ``bounds=(lo, hi)`` (default ``(-1, 1)``, samples at both ends); values are negative inside;
-normals point outward. Bad input raises ``ValueError`` (with the command-line tool's message),
-files ``OSError``; Ctrl-C raises ``KeyboardInterrupt``.
+normals point outward. Bad input raises ``ValueError`` (with the command-line tool's message;
+an argument of the wrong type raises ``ArgumentTypeError``, both a ``TypeError`` and a
+``ValueError``), files ``OSError``; Ctrl-C raises ``KeyboardInterrupt``.
 
 Examples
 --------
 >>> import numpy as np, sdfcontour
->>> x = np.linspace(-1, 1, 64)
->>> grid = np.linalg.norm(np.stack(np.meshgrid(x, x, x, indexing="ij")), axis=0) - 0.6
+>>> x = _np.linspace(-1, 1, 64)
+>>> grid = _np.linalg.norm(_np.stack(_np.meshgrid(x, x, x, indexing="ij")), axis=0) - 0.6
 >>> V, F = sdfcontour.contour(grid)                    # GCP
 >>> V, F = sdfcontour.contour(grid, method="mc")       # marching cubes
->>> V, F = sdfcontour.contour(lambda p: np.linalg.norm(p, axis=1) - 0.6, resolution=128)
+>>> V, F = sdfcontour.contour(lambda p: _np.linalg.norm(p, axis=1) - 0.6, resolution=128)
 """
-import numpy as np
+import warnings as _warnings
 
-from . import _sdfcontour
+import numpy as _np
 
-__all__ = ["contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh"]
+from . import _checks, _sdfcontour
+from ._checks import ArgumentTypeError
+
+__all__ = ["contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh",
+           "ArgumentTypeError", "DroppedSamplesWarning"]
 
 METHODS = ("gcp", "gtcp", "mc", "mt-rt", "mt-dt")
+
+
+class DroppedSamplesWarning(UserWarning):
+    """Scattered samples were dropped as isolated strays (``stats["isolated_samples"]``)."""
 
 
 def _bounds(bounds):
@@ -34,12 +43,14 @@ def _bounds(bounds):
         bounds = (-1.0, 1.0)
     try:
         lo, hi = bounds
-        lo = np.broadcast_to(np.asarray(lo, dtype=float), (3,)).copy()
-        hi = np.broadcast_to(np.asarray(hi, dtype=float), (3,)).copy()
-    except (TypeError, ValueError):
+        lo = _np.broadcast_to(_checks.numbers_array("bounds", lo).astype(float), (3,)).copy()
+        hi = _np.broadcast_to(_checks.numbers_array("bounds", hi).astype(float), (3,)).copy()
+    except ValueError:
         raise ValueError("bounds must be (lo, hi), each a number or 3 numbers") from None
-    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
-        raise ValueError("bounds: lo must be less than hi on every axis, all finite")
+    limit = _checks.LARGEST_COORDINATE
+    if not (_np.all(_np.abs(lo) <= limit) and _np.all(_np.abs(hi) <= limit) and _np.all(lo < hi)):
+        raise ValueError(f"bounds: lo must be less than hi on every axis, all finite and at most "
+                         f"{limit:g} in size")
     return lo, hi
 
 
@@ -48,9 +59,12 @@ def _brick_size(brick_size):
         if brick_size != "auto":
             raise ValueError(f"brick_size must be a whole number or 'auto', got {brick_size!r}")
         return -1  # the core chooses
-    if int(brick_size) < 0:
-        raise ValueError("brick_size must be >= 1, 0 for no bricks, or 'auto'")
-    return int(brick_size)
+    if isinstance(brick_size, (int, _np.integer)) and brick_size == 0:
+        return 0  # one triangulation
+    try:
+        return _checks.in_range("brick_size", brick_size, whole=True)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{error} (or 0 for no bricks, or 'auto')") from None
 
 
 def _degree(degree):
@@ -66,44 +80,64 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
     if method not in METHODS:
         raise ValueError(f"unknown method '{method}' (known: {', '.join(METHODS)})")
     auto_band = isinstance(band, str) and band == "auto"
-    if band == "all":
+    if isinstance(band, str) and band == "all":
         band = float("inf")
     elif auto_band:
         band = 0.0  # the core picks it from the resolution
-    o = dict(method=method, band=float(band), margin=float(margin), truncation=str(truncation),
-             gradient=gradient, weights=weights, knn=int(knn), fn=bool(fn),
-             tie_tolerance=float(tie_tolerance), brick_size=_brick_size(brick_size),
-             brick_halo=float(brick_halo), full_depth=int(full_depth), alpha=float(alpha),
-             samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
-             solver_tolerance=float(solver_tolerance),
-             finest_solver_tolerance=float(finest_solver_tolerance), progress=bool(progress))
-    if depth == "auto":
+    elif not (_checks.number("band", band) > 0 and band == band):
+        raise ValueError(f"band must be a positive number of spacings (or 'all' or 'auto'), "
+                         f"got {band!r}")
+    if not isinstance(truncation, str):
+        raise _checks.ArgumentTypeError(f"truncation must be 'auto', 'none' or a number as text, got "
+                        f"{truncation!r}")
+    if truncation not in ("auto", "none"):
+        try:
+            given = float(truncation)
+        except ValueError:
+            given = float("nan")
+        if not 0 < given < float("inf"):
+            raise ValueError(f"truncation must be 'auto', 'none' or a positive number as text, "
+                             f"got {truncation!r}")
+    o = dict(method=method, band=float(band), margin=_checks.in_range("margin", margin),
+             truncation=truncation,
+             gradient=_checks.choice("gradient", gradient, ("regular", "delaunay", "knn")),
+             weights=_checks.choice("weights", weights, ("james", "volume", "uniform")),
+             knn=_checks.in_range("knn", knn, whole=True), fn=_checks.flag("fn", fn),
+             tie_tolerance=_checks.in_range("tie_tolerance", tie_tolerance),
+             brick_size=_brick_size(brick_size),
+             brick_halo=_checks.in_range("brick_halo", brick_halo),
+             full_depth=_checks.in_range("full_depth", full_depth, whole=True),
+             alpha=_checks.in_range("alpha", alpha),
+             samples_per_node=_checks.in_range("samples_per_node", samples_per_node),
+             scale=_checks.in_range("scale", scale),
+             boundary=_checks.choice("boundary", boundary, ("neumann", "dirichlet", "free")),
+             solver_tolerance=_checks.in_range("solver_tolerance", solver_tolerance),
+             finest_solver_tolerance=_checks.in_range("finest_solver_tolerance",
+                                                      finest_solver_tolerance),
+             progress=_checks.flag("progress", progress))
+    if isinstance(depth, str) and depth == "auto":
         o["depth_text"] = "auto"
     else:
-        o["depth"] = int(depth)
-    for name in ("band", "margin", "alpha", "samples_per_node", "scale", "solver_tolerance",
-                 "finest_solver_tolerance"):
-        if not o[name] == o[name]:  # NaN
-            raise ValueError(f"{name} must be a number, got NaN")
-    if not (o["band"] > 0 or auto_band):
-        raise ValueError("band must be positive (or 'all' or 'auto')")
-    if not (0 <= o["alpha"] <= 1e4):
-        raise ValueError("alpha must be between 0 and 10000")
-    if depth != "auto" and not (1 <= o["depth"] <= 16):
-        raise ValueError("depth must be between 1 and 16, or 'auto'")
+        try:
+            o["depth"] = _checks.in_range("depth", depth, whole=True)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{error}, or 'auto'") from None
+        if o["full_depth"] > o["depth"]:
+            raise ValueError("full_depth must be at most depth")
     return o
 
 
 def _input_array(sdf):
     """The samples as an array the core reads: a grid, an (n, 4) array, or (points, values)."""
     if isinstance(sdf, tuple) and len(sdf) == 2:
-        points, values = (np.asarray(a, dtype=float) for a in sdf)
+        points = _checks.numbers_array("points", sdf[0]).astype(float)
+        values = _checks.numbers_array("values", sdf[1]).astype(float)
         if points.ndim != 2 or points.shape[1] != 3 or values.shape != (points.shape[0],):
             raise ValueError("(points, values) must have shapes (n, 3) and (n,)")
-        return np.column_stack([points, values])
-    array = np.asarray(sdf)
-    if array.dtype.kind not in "fiu":
-        raise ValueError(f"the samples must be numbers, got an array of dtype {array.dtype}")
+        return _np.column_stack([points, values])
+    array = _checks.numbers_array("the samples", sdf)
+    if array.ndim == 3 and max(array.shape) > 2**31 - 1:
+        raise ValueError(f"the grid has shape {array.shape}: at most 2147483647 samples per axis")
     return array
 
 
@@ -113,6 +147,7 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
     if callable(sdf):
         if resolution is None:
             raise ValueError("a callable SDF needs a resolution (samples per axis)")
+        _callable_budget(resolution, batch_size)
         from ._callable import sample_callable
         # The band the core will use (0: auto, from the samples per axis).
         band = options["band"] or _sdfcontour.auto_band(int(resolution))
@@ -130,14 +165,39 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
         array = _input_array(sdf)
     out = _sdfcontour.contour(array, lo, hi, 0.0, options, want_mesh, want_points)
     out["stats"].update(stats)
+    if out["stats"].get("isolated_samples", 0) > 0:
+        _warnings.warn(f"dropped {out['stats']['isolated_samples']} isolated samples (fewer than "
+                       f"3 others within 4 spacings): strays far from the rest cannot place the "
+                       f"surface", DroppedSamplesWarning, stacklevel=3)
     return out
+
+
+def _callable_budget(resolution, batch_size):
+    """Refuses a callable's resolution or batch whose arrays cannot fit, before allocating."""
+    if isinstance(resolution, bool) or not isinstance(resolution, (int, _np.integer)) \
+            or not 2 <= resolution <= 2048:
+        raise ValueError(f"resolution must be a whole number from 2 to 2048, got {resolution!r}")
+    if isinstance(batch_size, bool) or not isinstance(batch_size, (int, _np.integer)) \
+            or not 1 <= batch_size <= 2**26:
+        raise ValueError(f"batch_size must be a whole number from 1 to {2**26}, got "
+                         f"{batch_size!r}")
+    import os
+    needed = 8.0 * float(resolution) ** 3  # the sampler's float64 grid
+    try:
+        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return
+    if needed > 0.5 * memory:
+        raise ValueError(f"resolution {resolution} needs a {resolution}^3 grid of "
+                         f"{needed / 2**30:.1f} GiB, more than half of this machine's "
+                         f"{memory / 2**30:.1f} GiB; choose a smaller resolution")
 
 
 def _count_or_auto(name, value, most):
     """-1 for "auto", else a whole number from 0 to `most`; ValueError otherwise."""
     if isinstance(value, str) and value == "auto":
         return -1
-    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) and 0 <= value <= most:
+    if isinstance(value, (int, _np.integer)) and not isinstance(value, bool) and 0 <= value <= most:
         return int(value)
     raise ValueError(f"{name} must be a whole number from 0 to {most} or 'auto', got {value!r}")
 
@@ -146,7 +206,7 @@ def _switch(name, value):
     """True, False or "auto" as the library's on/off/auto; anything else is a ValueError."""
     if isinstance(value, str) and value == "auto":
         return "auto"
-    if isinstance(value, (bool, np.bool_)):
+    if isinstance(value, (bool, _np.bool_)):
         return "on" if value else "off"
     raise ValueError(f"{name} must be True, False or 'auto', got {value!r}")
 
@@ -274,7 +334,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
                  solver_tolerance, progress, finest_solver_tolerance)
     o["degree"] = _degree(degree)
     o["sign_constraints"] = _switch("sign_constraints", sign_constraints)
-    if not isinstance(carve, (bool, np.bool_)):
+    if not isinstance(carve, (bool, _np.bool_)):
         raise ValueError(f"carve must be True or False, got {carve!r}")
     o["carve"] = bool(carve)
     o["side_passes"] = _count_or_auto("side_passes", side_passes, 100)
@@ -319,7 +379,7 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
 
 
 def _refine_dilation(value):
-    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
+    if isinstance(value, (int, _np.integer)) and not isinstance(value, (bool, _np.bool_)) \
             and 1 <= value <= 4:
         return int(value)
     raise ValueError(f"refine_dilation must be a whole number from 1 to 4 (or 'auto' for contour), "
@@ -372,13 +432,32 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     --------
     >>> V, F = sdfcontour.poisson(P, N, depth=8, alpha=10)
     """
-    o = dict(depth=int(depth), alpha=float(alpha), full_depth=int(full_depth),
-             samples_per_node=float(samples_per_node), scale=float(scale), boundary=boundary,
-             solver_tolerance=float(solver_tolerance),
-             finest_solver_tolerance=float(finest_solver_tolerance),
+    o = dict(depth=_checks.in_range("depth", depth, whole=True),
+             alpha=_checks.in_range("alpha", alpha),
+             full_depth=_checks.in_range("full_depth", full_depth, whole=True),
+             samples_per_node=_checks.in_range("samples_per_node", samples_per_node),
+             scale=_checks.in_range("scale", scale),
+             boundary=_checks.choice("boundary", boundary, ("neumann", "dirichlet", "free")),
+             solver_tolerance=_checks.in_range("solver_tolerance", solver_tolerance),
+             finest_solver_tolerance=_checks.in_range("finest_solver_tolerance",
+                                                      finest_solver_tolerance),
              refine_dilation=_refine_dilation(refine_dilation), degree=_degree(degree))
-    W = None if weights is None else np.asarray(weights, dtype=np.float64)
-    return _sdfcontour.poisson(np.asarray(P), np.asarray(N), W, o)
+    if o["full_depth"] > o["depth"]:
+        raise ValueError("full_depth must be at most depth")
+    P = _checks.points("P", P)
+    N = _checks.points("N", N)
+    if len(N) != len(P):
+        raise ValueError(f"P and N must have the same number of rows, got {len(P)} and {len(N)}")
+    if len(P) == 0:
+        raise ValueError("P is empty: no points to reconstruct from")
+    W = None
+    if weights is not None:
+        W = _checks.numbers_array("weights", weights).astype(_np.float64)
+        if W.shape != (len(P),):
+            raise ValueError(f"weights must have shape ({len(P)},), got {W.shape}")
+        if not _np.all((W > 0) & (W <= 1)):
+            raise ValueError("weights must lie in (0, 1]")
+    return _sdfcontour.poisson(P, N, W, o)
 
 
 def sample(V, F, resolution=64, bounds=None):
@@ -404,7 +483,9 @@ def sample(V, F, resolution=64, bounds=None):
     >>> grid = sdfcontour.sample(V, F, resolution=64)
     """
     lo, hi = _bounds(bounds)
-    return _sdfcontour.sample(np.asarray(V), np.asarray(F), int(resolution), lo, hi)
+    V = _checks.points("V", V)
+    F = _checks.faces("F", F, len(V))
+    return _sdfcontour.sample(V, F, _checks.in_range("resolution", resolution, whole=True), lo, hi)
 
 
 def distances(V, F, V_gt, F_gt, samples=200000, seed=1):
@@ -421,8 +502,14 @@ def distances(V, F, V_gt, F_gt, samples=200000, seed=1):
     --------
     >>> sdfcontour.distances(V, F, V_gt, F_gt)["L1"]
     """
-    return _sdfcontour.distances(np.asarray(V), np.asarray(F), np.asarray(V_gt),
-                                 np.asarray(F_gt), int(samples), int(seed))
+    V, V_gt = _checks.points("V", V), _checks.points("V_gt", V_gt)
+    F, F_gt = _checks.faces("F", F, len(V)), _checks.faces("F_gt", F_gt, len(V_gt))
+    _checks.number("samples", samples)
+    if not (isinstance(samples, (int, _np.integer)) and 1 <= samples <= 100_000_000):
+        raise ValueError(f"samples must be a whole number from 1 to 100000000, got {samples!r}")
+    if not (isinstance(seed, (int, _np.integer)) and 0 <= seed < 2**64):
+        raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, got {seed!r}")
+    return _sdfcontour.distances(V, F, V_gt, F_gt, int(samples), int(seed))
 
 
 def read_mesh(path):
@@ -455,4 +542,8 @@ def write_mesh(path, V, F, ascii=False):
     --------
     >>> sdfcontour.write_mesh("out.ply", V, F)
     """
-    _sdfcontour.write_mesh(str(path), np.asarray(V), np.asarray(F), bool(ascii))
+    V = _checks.points("V", V)
+    F = _checks.faces("F", F, len(V))
+    if len(F) == 0:
+        raise ValueError("the mesh is empty (F has no rows): nothing to write")
+    _sdfcontour.write_mesh(str(path), V, F, _checks.flag("ascii", ascii))

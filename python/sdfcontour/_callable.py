@@ -14,6 +14,8 @@ import sys
 
 import numpy as np
 
+from ._checks import ArgumentTypeError
+
 
 def _axis_indices(n, step):
     idx = np.arange(0, n, step)
@@ -26,7 +28,10 @@ def _evaluate(f, points, batch_size, counter):
     out = np.empty(len(points))
     for start in range(0, len(points), batch_size):
         chunk = points[start:start + batch_size]
-        values = np.asarray(f(chunk), dtype=float).reshape(-1)
+        raw = np.asarray(f(chunk))
+        if raw.dtype.kind not in "fiu":
+            raise ArgumentTypeError(f"the SDF must return real numbers, got an array of dtype {raw.dtype}")
+        values = raw.astype(float).reshape(-1)
         if values.shape != (len(chunk),):
             raise ValueError(f"the SDF returned {values.size} values for {len(chunk)} points")
         if not np.all(np.isfinite(values)):

@@ -20,12 +20,17 @@ clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INST
   tests/fuzz/fuzz_vdb.cpp src/vdb.cpp src/openvdb_loader.cpp src/openvdb_module.cpp \
   src/isolated_call.cpp src/samples.cpp src/atomic_file.cpp -lopenvdb -lImath-3_1 -ltbb \
   -o "$out/fuzz_vdb"
+# Meshes through sample's checks, union and signed distance (CGAL, TBB).
+clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_mesh_sample.cpp \
+  src/mesh_sdf.cpp src/mesh_union.cpp src/mesh_properties.cpp src/self_intersections.cpp \
+  src/coordinates.cpp src/signed_distance.cpp src/samples.cpp src/mesh_transform.cpp \
+  -ltbb -lgmp -lmpfr -o "$out/fuzz_mesh_sample"
 # OpenVDB reads in a child process (src/isolated_call.h; its sanitizer reports on hostile files are
 # printed but end only the child, which the parent reports as an error), which inherits libFuzzer's malloc limit:
 # a huge allocation there is the child's failure, which the parent turns into an error, so only
 # ASan's own size limit applies to it.
-declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000")
-for target in npy mesh_files vdb; do
+declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000" [mesh_sample]="")
+for target in npy mesh_files vdb mesh_sample; do
   corpus="$out/corpus_$target"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/$target/* "$corpus/"

@@ -1,0 +1,31 @@
+// The accepted range of every numeric option, one table for the command-line tool and the Python
+// module alike: each names the option as both spell it, so each can say what is wrong in its
+// own words.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace sdfcontour {
+
+/// One numeric option: its CLI name ("--alpha"), its Python keyword ("alpha", empty where Python
+/// has none) and the closed range [lo, hi] of accepted values.
+struct OptionRange {
+  const char* cli;
+  const char* python;
+  double lo, hi;
+};
+
+/// Every numeric option's range. The limits keep a run finite in time and memory (a complete
+/// octree of depth 9 already has 134 million cells) and its arithmetic in range.
+const std::vector<OptionRange>& option_ranges();
+
+/// The range of the option with this CLI name; throws InternalError if there is none.
+const OptionRange& option_range(const std::string& cli_name);
+
+/// Throws Error ("`name` must be a finite number between lo and hi, got value") unless `value`
+/// is in the range of the option whose CLI name is `cli_name`; `name` is how the caller spells
+/// the option (its CLI name, or its Python keyword).
+void require_in_range(const std::string& cli_name, double value, const std::string& name);
+
+}  // namespace sdfcontour
