@@ -1,5 +1,7 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Composite.h>
+#include <openvdb/tools/LevelSetSphere.h>
 
 #include <fstream>
 
@@ -130,4 +132,57 @@ TEST(Vdb, HostileFilesEndAsErrors) {
   }
   EXPECT_GT(refused, 0);
   EXPECT_GT(read + refused, 100);
+}
+
+// Level sets far apart in one file (a scene): read sparse, bricked by their samples, one Poisson
+// solve per object, so time and memory follow the active voxels, not the 10^6 voxels between
+// them. A stray voxel 10^9 voxels away is dropped as isolated, never sized into a grid.
+TEST(Vdb, FarApartLevelSetsCostTheirVoxelsOnly) {
+  openvdb::initialize();
+  const auto dir = test::temp_dir("vdb_far");
+  const double voxel = 0.05, radius = 0.6;
+  for (const double apart : {1e5, 1e6}) {
+    SCOPED_TRACE(apart);
+    auto scene = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.f);
+    auto other = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        float(radius), openvdb::Vec3f(float(apart * voxel), 0, 0), float(voxel), 3.f);
+    openvdb::tools::csgUnion(*scene, *other);
+    scene->setName("surface");
+    const std::string path = (dir / "scene.vdb").string();
+    write_grids(path, {scene});
+    const VdbLevelSet ls = read_vdb_level_set(path);
+    ContourOptions o;
+    o.band.truncation_mode = TruncationMode::Given;
+    o.band.truncation = ls.background;
+    const ContourResult r = contour(ScatteredInput{ls.samples, ls.voxel_size}, nullptr, o);
+    int near = 0, far = 0;
+    for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i) {
+      Eigen::Vector3d p = r.mesh->vertices.row(i).transpose();
+      const bool is_far = p.x() > apart * voxel / 2;
+      if (is_far) p.x() -= apart * voxel;
+      (is_far ? far : near) += 1;
+      EXPECT_LT(std::abs(p.norm() - radius), 0.25 * voxel);
+    }
+    EXPECT_GT(near, 100);
+    EXPECT_GT(far, 100);
+  }
+  // A handful of voxels and one stray far away: the stray is dropped, the rest contoured at once.
+  auto few = openvdb::FloatGrid::create(3 * float(voxel));
+  few->setGridClass(openvdb::GRID_LEVEL_SET);
+  few->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+  few->setName("surface");
+  for (const auto& c : {openvdb::Coord(0, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, 1, 0),
+                        openvdb::Coord(0, 0, 1), openvdb::Coord(1, 1, 0),
+                        openvdb::Coord(1000000000, 0, 0)})
+    few->tree().setValue(c, c.x() > 0 && c.y() > 0 ? -0.01f : 0.02f);
+  const std::string path = (dir / "few.vdb").string();
+  write_grids(path, {few});
+  const VdbLevelSet ls = read_vdb_level_set(path);
+  EXPECT_EQ(ls.samples.values.size(), 6);
+  ContourOptions o;
+  o.poisson.depth = 5;
+  const ContourResult r = contour(ScatteredInput{ls.samples, ls.voxel_size}, nullptr, o);
+  EXPECT_EQ(r.isolated_samples, 1);
+  EXPECT_LT(r.mesh->vertices.cwiseAbs().maxCoeff(), 4 * voxel);
 }
