@@ -315,6 +315,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   if (r.local) {
     stats["local_cells"] = r.local->cells;
     stats["local_feature_vertices"] = r.local->feature_vertices;
+    stats["local_field_misses"] = r.local->field_misses;
     stats["local_crossing_cells"] = r.local->crossing_cells;
   }
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;

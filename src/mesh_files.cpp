@@ -258,9 +258,11 @@ PolygonSoup parse_ply(std::string_view bytes, const std::string& name) {
   PlyBody body(bytes.substr(body_start), format, name);
   PolygonSoup soup;
   for (const Element& e : elements) {
-    // Every item takes at least a byte: a count beyond the bytes left is a lie.
+    // Every item takes at least its properties' bytes (binary) or a digit and a separator each
+    // (ASCII): a count beyond the bytes left is a lie.
     std::size_t min_bytes = 0;
-    for (const Property& p : e.properties) min_bytes += size_of(p.list ? p.count_type : p.type);
+    for (const Property& p : e.properties)
+      min_bytes += format == 0 ? 2 : size_of(p.list ? p.count_type : p.type);
     if (e.count > 0 && min_bytes == 0)
       fail(name, kind, "an element '" + e.name + "' without properties");
     if (e.count > body.remaining() / std::max<std::size_t>(min_bytes, 1) + 1)

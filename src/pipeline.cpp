@@ -59,7 +59,7 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
 }
 
 int auto_subdivisions(double samples_per_axis) {
-  return samples_per_axis < 48 ? 2 : samples_per_axis < 192 ? 1 : 0;
+  return samples_per_axis < 96 ? 2 : samples_per_axis < 192 ? 1 : 0;
 }
 
 bool auto_sign_constraints(double samples_per_axis) {
@@ -199,7 +199,9 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   const bool local = contact_mesh && grid && options.reconstruction == Reconstruction::Local;
   if (local) {
     detail::check_contact_point_count(grid, options, *result.contact_points);
-    detail::reconstruct_locally(*grid, options, result, stages);
+    const detail::ReconstructionInputs in =
+        detail::prepare_reconstruction(band, band_options, grid, options, result);
+    detail::reconstruct_locally(*grid, in, options, result, stages);
   }
   std::optional<detail::ReconstructionInputs> inputs;
   if (contact_mesh && !local) {

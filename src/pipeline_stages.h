@@ -63,12 +63,13 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
 
 // What GCP's or GTCP's reconstruction needs once the band's samples are freed.
 struct ReconstructionInputs {
-  PoissonOptions poisson;          // the depth and dilation chosen
-  bool auto_depth = false;         // the depth follows each cluster's extent (ContourOptions 0)
-  SignedSamples sides;             // samples whose sides the indicator keeps (may be empty)
-  bool project = false;            // move the vertices onto the contact points
-  Eigen::VectorXd contact_depths;  // with `project`: |value| of each contact point's sample
-  bool carve = false;              // carve the mesh out of `carving_samples`' spheres
+  PoissonOptions poisson;   // the depth and dilation chosen
+  bool auto_depth = false;  // the depth follows each cluster's extent (ContourOptions 0)
+  SignedSamples sides;      // samples whose sides the indicator keeps (may be empty)
+  bool project = false;     // move the vertices onto the contact points
+  ContactProjectionOptions projection;  // how (the Poisson path's or the local one's)
+  Eigen::VectorXd contact_depths;       // with `project`: |value| of each contact point's sample
+  bool carve = false;                   // carve the mesh out of `carving_samples`' spheres
   Samples carving_samples;
   CarvingOptions carving;
 };
@@ -88,12 +89,18 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
 // result.contact_points, then (GCP) projection, carving and the undoing of moves that cross the
 // mesh, clipped to the grid's box where the surface leaves it. Throws NotDistances where the mesh
 // shows that the values were not distances.
+// Projection onto the contact points and carving out of the samples' spheres, as `in` says, each
+// move undone where it makes the mesh cross itself.
+void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
+                  ContourResult& result, Stages& stages);
+
 void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
                       const ContourOptions& options, ContourResult& result, Stages& stages);
 
 // GCP's or GTCP's mesh into result.mesh by the local reconstruction of result.contact_points on
-// `grid`'s cells (result.local, result.reconstruction set).
-void reconstruct_locally(const GridView& grid, const ContourOptions& options, ContourResult& result,
-                         Stages& stages);
+// `grid`'s cells (result.local, result.reconstruction set), subdivided, then projected and carved
+// as `inputs` (prepare_reconstruction's) say.
+void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
+                         const ContourOptions& options, ContourResult& result, Stages& stages);
 
 }  // namespace sdfcontour::detail

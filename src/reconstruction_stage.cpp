@@ -179,6 +179,8 @@ void untangle(const PointMatrix& before, ContourResult& result, Stages& stages) 
   sum.intersections_left += u.intersections_left;
 }
 
+}  // namespace
+
 // GCP's moves after the reconstruction: onto the contact points, out of the samples' spheres,
 // each undone where it made the mesh cross itself.
 void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
@@ -194,7 +196,7 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
     result.projection =
         stages.run("projection", "projecting the mesh onto the contact points", [&] {
           return project_to_contact_points(*result.mesh, cp.points, cp.normals, in.contact_depths,
-                                           result.band_spacing, options.projection);
+                                           result.band_spacing, in.projection);
         });
     if (untangle_once)
       reconstructed = std::move(before);
@@ -216,8 +218,6 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
       return repair_sample_sides(*result.mesh, samples.points, samples.values, result.band_spacing);
     });
 }
-
-}  // namespace
 
 void check_contact_point_count(const GridView* grid, const ContourOptions& options,
                                const ContactPoints& cp) {
@@ -255,11 +255,13 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
       method == Method::Gcp &&
       (options.enforce_signs == Switch::Auto ? auto_sign_constraints(band.samples_per_axis)
                                              : options.enforce_signs == Switch::On);
-  if (result.sign_constraints)
+  if (result.sign_constraints && options.reconstruction != Reconstruction::Local)
     in.sides = samples_near_surface(band, options.sign_band * band.spacing);
   // Projection is on at every resolution with auto (ContourOptions::project). It weighs each
   // contact point by its sample's |value| (the points still name the band's samples here).
   in.project = method == Method::Gcp && options.project != Switch::Off;
+  const bool local = options.reconstruction == Reconstruction::Local;
+  in.projection = local ? options.local_projection : options.projection;
   if (in.project) {
     const std::vector<int>& from = result.contact_points->samples;
     in.contact_depths.resize(Eigen::Index(from.size()));

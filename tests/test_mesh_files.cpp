@@ -71,6 +71,13 @@ TEST(MeshFiles, PlyInEveryFormat) {
   EXPECT_EQ(a.points[0][0], double(0.1f));  // a float property holds a float
   ASSERT_EQ(a.normals.size(), 2u);
   EXPECT_EQ(a.normals[1][0], 1.0);
+  // ASCII items shorter than their binary size (double properties written as "0"): all read.
+  std::string many = "ply\nformat ascii 1.0\nelement vertex 100\n";
+  for (const char* c : {"x", "y", "z", "nx", "ny", "nz"})
+    many += std::string("property double ") + c + "\n";
+  many += "end_header\n";
+  for (int i = 0; i < 100; ++i) many += "0 0 0 0 0 1\n";
+  EXPECT_EQ(parse_ply(many, "short.ply").points.size(), 100u);
 }
 
 TEST(MeshFiles, HostilePlyIsRefused) {

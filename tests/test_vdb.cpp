@@ -172,9 +172,9 @@ TEST(Vdb, FarApartLevelSetsCostTheirVoxelsOnly) {
   few->setGridClass(openvdb::GRID_LEVEL_SET);
   few->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
   few->setName("surface");
-  for (const auto& c : {openvdb::Coord(0, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, 1, 0),
-                        openvdb::Coord(0, 0, 1), openvdb::Coord(1, 1, 0),
-                        openvdb::Coord(1000000000, 0, 0)})
+  for (const auto& c :
+       {openvdb::Coord(0, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, 1, 0),
+        openvdb::Coord(0, 0, 1), openvdb::Coord(1, 1, 0), openvdb::Coord(1000000000, 0, 0)})
     few->tree().setValue(c, c.x() > 0 && c.y() > 0 ? -0.01f : 0.02f);
   const std::string path = (dir / "few.vdb").string();
   write_grids(path, {few});

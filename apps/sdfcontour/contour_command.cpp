@@ -158,6 +158,8 @@ ContourOptions contour_options(const ContourArgs& a) {
   require_range("--local-feature-ratio", a.local.feature_ratio, 0, 1);
   require_range("--local-robust-rounds", a.local.robust_rounds, 0, 100);
   require_range("--local-min-points", a.local.min_points, 1, 1000);
+  require_range("--local-depth-scale", a.local.depth_scale, 0, 1e6);
+  require_range("--local-max-field-miss", a.local.max_field_miss, 0, 1e6);
   opt.local = a.local;
   opt.project = parse_switch("--projection", a.projection);
   for (const ProjectionOption& p : kProjectionOptions)
@@ -236,6 +238,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                   {"split_cells", r.local->split_cells},
                   {"crossing_cells", r.local->crossing_cells},
                   {"feature_vertices", r.local->feature_vertices},
+                  {"field_misses", r.local->field_misses},
                   {"clamped", r.local->clamped}};
   if (r.mesh && (opt.method == Method::Gcp || opt.method == Method::Gtcp))
     j["reconstruction"] = reconstruction_name(r.reconstruction);
@@ -455,6 +458,15 @@ Command add_contour_command(CLI::App& app) {
   c->add_option("--local-min-points", a->local.min_points,
                 "GCP local reconstruction: a cell with fewer contact points places its vertex "
                 "from its edge crossings")
+      ->capture_default_str();
+  c->add_option("--local-max-field-miss", a->local.max_field_miss,
+                "GCP local reconstruction: a vertex farther than this many spacings from the "
+                "cell's interpolated zero set falls back to the edge crossings (0: no check)")
+      ->capture_default_str();
+  c->add_option("--local-depth-scale", a->local.depth_scale,
+                "GCP local reconstruction: a contact point from a sample |value| away weighs "
+                "1 / (1 + (|value| / (this many spacings))^2), in the cell quadrics and the "
+                "projection (0: all alike)")
       ->capture_default_str();
   c->add_option("--projection", a->projection,
                 "GCP: move each vertex along its normal onto a quadric fitted to the contact "

@@ -33,6 +33,16 @@ struct LocalReconstructionOptions {
   /// Cells with fewer contact points than this use their edge crossings instead (linear
   /// interpolation, with the grid's central-difference gradient as normal).
   int min_points = 1;
+  /// A contact point from a sample |value| away weighs 1 / (1 + (|value| / (depth_scale
+  /// spacings))^2): a far sample's gradient error moves its point |value| times as far. 0: every
+  /// point weighs the same (also when no depths are given).
+  double depth_scale = 0;
+  /// A vertex on a smooth patch (not an edge or corner, where the interpolant itself cuts the
+  /// feature) farther than this many spacings from the zero set of the cell's trilinear
+  /// interpolant (|value| / |gradient| there) disagrees with the samples' own sign changes
+  /// (contact points of a field that is only roughly a distance): the cell falls back to its edge
+  /// crossings. 0: no check.
+  double max_field_miss = 0.5;
 };
 
 struct LocalReconstructionStats {
@@ -42,16 +52,19 @@ struct LocalReconstructionStats {
   long crossing_cells = 0;    ///< vertices placed from edge crossings (too few contact points)
   long feature_vertices = 0;  ///< vertices whose quadric had rank 2 or 3 (an edge or a corner)
   long clamped = 0;           ///< vertices whose quadric's minimiser left the cell, clamped to it
+  long field_misses = 0;      ///< vertices off the cell's interpolated zero set (max_field_miss)
 };
 
 /// The local reconstruction of the zero level set of `grid` (inside: value < 0) from contact
 /// points `points` (k x 3) with unit outward `normals` (k x 3) of the same field. Returns a mesh
 /// whose vertices each lie in their own cell, triangles counter-clockwise seen from outside.
+/// `depths` (k, or empty) are the |value|s of the points' samples, for options.depth_scale.
 /// The result depends only on the inputs, not on their row order or the thread count.
 /// Throws Error for mismatched sizes or non-finite points or normals.
 Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
                           const PointMatrix& normals,
                           const LocalReconstructionOptions& options = {},
-                          LocalReconstructionStats* stats = nullptr);
+                          LocalReconstructionStats* stats = nullptr,
+                          const Eigen::VectorXd& depths = Eigen::VectorXd());
 
 }  // namespace sdfcontour

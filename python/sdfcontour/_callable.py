@@ -102,3 +102,39 @@ def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False):
             if len(ie):
                 grid[ie, je, ke] = _evaluate(f, position(ie, je, ke), batch_size, counter)
     return grid, counter[0]
+
+
+def vertex_normals(V, F):
+    """Area-weighted unit vertex normals of the mesh (V, F)."""
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    out = np.zeros_like(V)
+    for k in range(3):
+        np.add.at(out, F[:, k], n)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return np.divide(out, length, out=np.zeros_like(out), where=length > 0)
+
+
+def refine_on_zero_set(f, V, F, h, batch_size, iterations=2):
+    """Moves each vertex along its normal onto f's zero set: secant steps on f along the normal
+    (the normal is the outward direction, so f must increase along it), each move at most h / 2;
+    a vertex where f does not increase along its normal, or whose |f| would grow, stays. Returns
+    the new vertices, how many moved, and the evaluations spent."""
+    V = np.array(V, dtype=np.float64)
+    normals = vertex_normals(V, F)
+    step = 1e-3 * h
+    counter = [0]
+    moved = np.zeros(len(V), dtype=bool)
+    value = _evaluate(f, V, batch_size, counter)
+    for _ in range(iterations):
+        ahead = _evaluate(f, V + step * normals, batch_size, counter)
+        slope = (ahead - value) / step
+        usable = slope > 0.1  # a distance grows by ~1 per unit length along the outward normal
+        move = np.zeros(len(V))
+        move[usable] = np.clip(-value[usable] / slope[usable], -0.5 * h, 0.5 * h)
+        trial = V + move[:, None] * normals
+        trial_value = _evaluate(f, trial, batch_size, counter)
+        better = usable & (np.abs(trial_value) < np.abs(value))
+        V[better] = trial[better]
+        value[better] = trial_value[better]
+        moved |= better
+    return V, int(moved.sum()), counter[0]

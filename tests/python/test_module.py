@@ -206,12 +206,17 @@ def test_memory_mapped_grid_is_read_in_place(tmp_path):
 @pytest.mark.parametrize("f", [sphere, torus], ids=["sphere", "torus"])
 def test_callable_is_sampled_near_the_surface_only(f):
     n = 128
-    V, F, stats = sdfcontour.contour(f, resolution=n, return_stats=True)
+    V, F, stats = sdfcontour.contour(f, resolution=n, refine=False, return_stats=True)
     assert stats["evaluations"] == round(stats["evaluated_fraction"] * n ** 3)
     assert stats["evaluated_fraction"] <= 0.15
     Vg, Fg = sdfcontour.contour(full_grid(f, n))
     assert abs(mean_abs(f, V) - mean_abs(f, Vg)) <= 0.05 * mean_abs(f, Vg)
     assert mean_abs(f, V) < 0.05 * 2 / (n - 1)
+    # Refined on the callable (the default): the same triangles, every vertex on the zero set.
+    Vr, Fr, stats = sdfcontour.contour(f, resolution=n, return_stats=True)
+    np.testing.assert_array_equal(Fr, F)
+    assert stats["refined_vertices"] > 0.9 * len(V) and stats["refine_evaluations"] <= 5 * len(V)
+    assert mean_abs(f, Vr) < 1e-3 * mean_abs(f, V)
 
 
 def test_callable_marching_cubes_equals_the_full_grid():

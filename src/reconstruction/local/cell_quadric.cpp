@@ -41,12 +41,13 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
 
 QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double feature_ratio,
                                  int robust_rounds, double robust_scale) {
-  std::vector<double> weight(planes.size(), 1.0);
+  std::vector<double> weight(planes.size());
+  for (std::size_t i = 0; i < planes.size(); ++i) weight[i] = planes[i].weight;
   QuadricSolution solution = solve_weighted(planes, weight, feature_ratio);
   for (int round = 0; round < robust_rounds; ++round) {
     for (std::size_t i = 0; i < planes.size(); ++i) {
       const double miss = planes[i].normal.dot(solution.position - planes[i].point) / robust_scale;
-      weight[i] = 1 / (1 + miss * miss);
+      weight[i] = planes[i].weight / (1 + miss * miss);
     }
     solution = solve_weighted(planes, weight, feature_ratio);
   }

@@ -6,9 +6,10 @@
 
 namespace sdfcontour::detail {
 
-/// A tangent plane: a point on it and its unit normal.
+/// A tangent plane: a point on it, its unit normal and its weight (how much it is trusted).
 struct TangentPlane {
   Eigen::Vector3d point, normal;
+  double weight = 1;
 };
 
 struct QuadricSolution {
@@ -19,8 +20,8 @@ struct QuadricSolution {
 /// The point that minimises sum_i w_i (n_i . (x - p_i))^2 over `planes` (not empty), solving only
 /// for directions whose eigenvalue of sum w_i n_i n_i^T exceeds `feature_ratio` times the largest
 /// and keeping the planes' weighted centroid along the others. `robust_rounds` reweightings follow
-/// (w_i = 1 / (1 + (r_i / robust_scale)^2) for the plane's miss r_i), so that planes that disagree
-/// with the rest lose their pull; robust_scale is a length.
+/// (w_i = weight_i / (1 + (r_i / robust_scale)^2) for the plane's miss r_i), so that planes that
+/// disagree with the rest lose their pull; robust_scale is a length.
 QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double feature_ratio,
                                  int robust_rounds, double robust_scale);
 

@@ -94,8 +94,33 @@ int polygon_of_point(const detail::CellPolygons& polys, const Eigen::Vector3d& p
 
 struct VertexResult {
   Eigen::Vector3d position;
-  bool from_crossings = false, feature = false, clamped = false;
+  bool from_crossings = false, feature = false, clamped = false, field_miss = false;
 };
+
+// The distance from p (in cell `at`) to the zero set of the cell's trilinear interpolant, to
+// first order: |value| / |gradient| at p.
+double trilinear_miss(const SurfaceCells& cells, const std::array<int, 3>& at,
+                      const Eigen::Vector3d& p) {
+  const Eigen::Vector3d t =
+      ((p - cells.corner(at)).array() / cells.spacing.array()).min(1.0).max(0.0).matrix();
+  double value = 0;
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+  for (int c = 0; c < 8; ++c) {
+    const double f = detail::value_at(cells.grid, detail::corner_of(at, c));
+    double w = 1;
+    Eigen::Vector3d dw = Eigen::Vector3d::Ones();
+    for (int d = 0; d < 3; ++d) {
+      const bool high = c >> d & 1;
+      const double wd = high ? t[d] : 1 - t[d];
+      w *= wd;
+      for (int e = 0; e < 3; ++e) dw[e] *= e == d ? (high ? 1 : -1) / cells.spacing[d] : wd;
+    }
+    value += w * f;
+    gradient += dw * f;
+  }
+  const double g = gradient.norm();
+  return g > 0 ? std::abs(value) / g : INFINITY;
+}
 
 VertexResult place_vertex(const std::vector<TangentPlane>& planes,
                           const std::vector<TangentPlane>& crossings, const Eigen::Vector3d& lo,
@@ -114,13 +139,14 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
 
 // Every polygon's vertex, in cell order then polygon order.
 PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
-                          const PointMatrix& normals, const LocalReconstructionOptions& options,
+                          const PointMatrix& normals, const Eigen::VectorXd& weights,
+                          const LocalReconstructionOptions& options,
                           LocalReconstructionStats& stats) {
   const BinnedPoints bins = bin_points(cells, points);
   const Eigen::Vector3d reach = options.reach * cells.spacing;
   const double h = cells.spacing.maxCoeff();
   PointMatrix vertices(cells.vertex_count(), 3);
-  std::vector<std::array<char, 3>> flags(std::size_t(vertices.rows()), {0, 0, 0});
+  std::vector<std::array<char, 4>> flags(std::size_t(vertices.rows()), {0, 0, 0, 0});
   tbb::parallel_for(std::size_t(0), cells.active.size(), [&](std::size_t c) {
     const ActiveCell& cell = cells.active[c];
     const std::array<int, 3> at = cells.cell_of_key(cell.key);
@@ -133,7 +159,7 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
         const Eigen::Vector3d p = points.row(r).transpose(), n = normals.row(r).transpose();
         const int q = polys.count == 1 ? (n.dot(polys.outward[0]) > 0 ? 0 : -1)
                                        : polygon_of_point(polys, p, n);
-        if (q >= 0) planes[std::size_t(q)].push_back({p, n});
+        if (q >= 0) planes[std::size_t(q)].push_back({p, n, weights.size() ? weights[r] : 1.0});
       }
       return planes;
     };
@@ -144,6 +170,12 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       for (int e = polys.first_crossing[q]; e < polys.first_crossing[q + 1]; ++e)
         crossings.push_back({polys.crossing[e], polys.crossing_normal[e]});
       VertexResult v = place_vertex(planes[std::size_t(q)], crossings, lo, hi, h, options);
+      // (Not at a feature: there the interpolant itself cuts the corner.)
+      if (!v.from_crossings && !v.feature && options.max_field_miss > 0 &&
+          trilinear_miss(cells, at, v.position) > options.max_field_miss * h) {
+        v = place_vertex({}, crossings, lo, hi, h, options);
+        v.field_miss = true;
+      }
       if (v.clamped && !v.from_crossings) {
         // A feature just outside the cell (planes from beyond its sides): the cell's own points.
         std::vector<TangentPlane> own;
@@ -157,13 +189,15 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       }
       const Eigen::Index id = cell.first_vertex + q;
       vertices.row(id) = v.position.transpose();
-      flags[std::size_t(id)] = {char(v.from_crossings), char(v.feature), char(v.clamped)};
+      flags[std::size_t(id)] = {char(v.from_crossings), char(v.feature), char(v.clamped),
+                                char(v.field_miss)};
     }
   });
   for (const auto& f : flags) {
     stats.crossing_cells += f[0];
     stats.feature_vertices += f[1];
     stats.clamped += f[2];
+    stats.field_misses += f[3];
   }
   return vertices;
 }
@@ -218,7 +252,7 @@ void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra,
 
 Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
                           const PointMatrix& normals, const LocalReconstructionOptions& options,
-                          LocalReconstructionStats* stats_out) {
+                          LocalReconstructionStats* stats_out, const Eigen::VectorXd& depths) {
   if (points.rows() != normals.rows())
     throw Error("local reconstruction: " + std::to_string(points.rows()) + " contact points but " +
                 std::to_string(normals.rows()) + " normals");
@@ -226,10 +260,19 @@ Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
     throw Error("local reconstruction: contact points or normals are not finite");
   if (!(options.reach >= 0 && options.reach <= 1))
     throw Error("local reconstruction: reach must lie in [0, 1] spacings");
+  if (depths.size() != 0 && depths.size() != points.rows())
+    throw Error("local reconstruction: depths must be empty or one per contact point");
+  if (!(options.depth_scale >= 0) || !std::isfinite(options.depth_scale))
+    throw Error("local reconstruction: depth_scale must be a non-negative number of spacings");
   LocalReconstructionStats stats;
   const SurfaceCells cells = detail::find_surface_cells(grid);
   Mesh mesh;
-  mesh.vertices = cell_vertices(cells, points, normals, options, stats);
+  Eigen::VectorXd weights;
+  if (depths.size() && options.depth_scale > 0) {
+    const double scale = options.depth_scale * grid.spacing().maxCoeff();
+    weights = 1 / (1 + (depths.array() / scale).square());
+  }
+  mesh.vertices = cell_vertices(cells, points, normals, weights, options, stats);
   const detail::DualPolygons polygons = cells.dual_polygons();
   const Eigen::Index cell_vertex_count = mesh.vertices.rows();
   mesh.vertices.conservativeResize(

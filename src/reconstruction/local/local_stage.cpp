@@ -5,13 +5,15 @@
 
 namespace sdfcontour::detail {
 
-void reconstruct_locally(const GridView& grid, const ContourOptions& options, ContourResult& result,
-                         Stages& stages) {
+void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
+                         const ContourOptions& options, ContourResult& result, Stages& stages) {
   const ContactPoints& cp = *result.contact_points;
   LocalReconstructionStats stats;
   Mesh mesh = stages.run(
-      "local", "local reconstruction from " + std::to_string(cp.size()) + " contact points",
-      [&] { return local_reconstruction(grid, cp.points, cp.normals, options.local, &stats); });
+      "local", "local reconstruction from " + std::to_string(cp.size()) + " contact points", [&] {
+        return local_reconstruction(grid, cp.points, cp.normals, options.local, &stats,
+                                    inputs.contact_depths);
+      });
   const int levels =
       options.subdivisions >= 0
           ? options.subdivisions
@@ -22,15 +24,7 @@ void reconstruct_locally(const GridView& grid, const ContourOptions& options, Co
       return std::move(mesh);
     });
   result.mesh = std::move(mesh);
-  if (options.project != Switch::Off) {
-    const PointMatrix before = result.mesh->vertices;
-    result.projection = stages.run("projection", "projecting onto the contact points", [&] {
-      return project_to_contact_points(*result.mesh, cp.points, cp.normals, Eigen::VectorXd(),
-                                       grid.spacing().maxCoeff(), options.local_projection);
-    });
-    result.untangling = stages.run("untangling", "undoing moves that cross the mesh",
-                                   [&] { return revert_self_intersections(*result.mesh, before); });
-  }
+  refine_stage(inputs, options, result, stages);
   result.local = stats;
   result.reconstruction = Reconstruction::Local;
 }
