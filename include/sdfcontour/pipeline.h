@@ -46,7 +46,8 @@ Reconstruction parse_reconstruction(const std::string& name);
 std::string reconstruction_name(Reconstruction reconstruction);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
-/// dimension).
+/// dimension): 2 below 96, 1 below 192, else 0 (64^3: bunny 4.00e-4 with 2 against 4.57e-4 with
+/// 1, spot 1.45e-4 against 1.91e-4; docs/local.md).
 int auto_subdivisions(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.

@@ -175,3 +175,10 @@ def test_random_arguments_raise_python_errors_only():
                 call(a, b)
             except (TypeError, ValueError, OSError):
                 pass
+
+
+def test_an_axis_beyond_32_bits_is_refused_not_wrapped():
+    # 2**32 + 4 samples along x without the memory (a zero stride), as a memory-map would be.
+    huge = np.lib.stride_tricks.as_strided(np.zeros(1), shape=(2**32 + 4, 2, 2), strides=(0, 0, 0))
+    with pytest.raises(ValueError, match="2147483647"):
+        sdfcontour.contour(huge, method="mc")
