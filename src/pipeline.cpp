@@ -59,7 +59,7 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
 }
 
 int auto_subdivisions(double samples_per_axis) {
-  return samples_per_axis < 96 ? 2 : samples_per_axis < 192 ? 1 : 0;
+  return samples_per_axis < 96 ? 2 : 1;
 }
 
 bool auto_sign_constraints(double samples_per_axis) {

@@ -430,19 +430,18 @@ Command add_contour_command(CLI::App& app) {
                 "samples per axis (a .vdb's or scattered samples' band: its extent in spacings), "
                 "0 above (bunny 256^3: 11% lower L1 for 2.3-2.8x the run's time)")
       ->capture_default_str();
-  c->add_option(
-       "--reconstruction", a->reconstruction,
-       "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
-       "crosses, from the contact points near it; topology from the samples' signs), "
-       "'poisson' (the paper's screened Poisson solve, then projection and carving), or "
-       "'auto' (poisson: 3% more accurate at 64^3 on the shared meshes, docs/local.md; "
-       "Python's callables get local). Scattered samples and "
-       ".vdb level sets always take poisson")
+  c->add_option("--reconstruction", a->reconstruction,
+                "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
+                "crosses, from the contact points near it; topology from the samples' signs), "
+                "'poisson' (the paper's screened Poisson solve, then projection and carving), or "
+                "'auto' (poisson: 3% more accurate at 64^3 on the shared meshes, docs/local.md; "
+                "Python's callables get local). Scattered samples and "
+                ".vdb level sets always take poisson")
       ->capture_default_str();
   c->add_option(
        "--subdivisions", a->subdivisions,
        "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
-       "the contact points (auto: 2 below 96 samples per axis, 1 below 192, else 0)")
+       "the contact points (auto: 2 below 96 samples per axis, else 1)")
       ->capture_default_str();
   c->add_option("--local-reach", a->local.reach,
                 "GCP local reconstruction: contact points within this many spacings of a cell "

@@ -282,7 +282,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
-        (0 to 4; "auto": 2 below 96 samples per axis, 1 below 192, else 0).
+        (0 to 4; "auto": 2 below 96 samples per axis, else 1).
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
