@@ -202,6 +202,7 @@ ContourOptions contour_options(const py::dict& o) {
   }
   c.project = parse_switch("projection", get<std::string>(o, "projection", "auto"));
   c.reconstruction = parse_reconstruction(get<std::string>(o, "reconstruction", "auto"));
+  c.fallback_to_mc = get<bool>(o, "fallback_to_mc", c.fallback_to_mc);
   c.subdivisions = get<int>(o, "subdivisions", -1);
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);

@@ -246,7 +246,7 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
     const GridView* grid = grid_view_of(input);
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
         !options.fallback_to_mc)
-      throw Error(e.what());
+      throw Error(std::string(e.what()) + ": the values do not behave as distances");
     ContourResult result;
     result.samples = int(grid->size());
     result.fallback = std::string(e.what()) + ": the values do not behave as distances";

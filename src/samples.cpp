@@ -84,9 +84,13 @@ void validate_grid(const GridView& grid) {
       throw Error("bounds must be finite and at most 1e30 in size on every axis");
   const std::size_t bad =
       grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
-  if (bad < grid.size())
-    throw Error("grid values contain a NaN, infinite or too large (over 1e100) value (at index " +
-                std::to_string(bad) + ")");
+  if (bad < grid.size()) {
+    // Named by its (i, j, k), as the user's array indexes it (C order).
+    const std::size_t nz = std::size_t(grid.dims[2]), nyz = std::size_t(grid.dims[1]) * nz;
+    throw Error("grid values contain a NaN, infinite or too large (over 1e100) value (at [" +
+                std::to_string(bad / nyz) + ", " + std::to_string(bad % nyz / nz) + ", " +
+                std::to_string(bad % nz) + "])");
+  }
 }
 
 void validate_grid(const Grid& grid) {

@@ -340,6 +340,13 @@ int run_contour(const ContourArgs& a) {
   }
   const double load_seconds = seconds_since(t0);
   ContourResult r = contour(in.input, in.shape.get(), opt);
+  // Every decision that changes what the user gets is said, even with --quiet.
+  if (!r.fallback.empty())
+    std::cerr << "sdfcontour: warning: GCP returned marching cubes' mesh: " << r.fallback << "\n";
+  if (r.value_scale != 1)
+    std::cerr << "sdfcontour: warning: the values were rescaled by " << r.value_scale
+              << " to distances (they change by " << 1 / r.value_scale
+              << " per unit length near the surface)\n";
   if (r.isolated_samples > 0)
     std::cerr << "sdfcontour: warning: dropped " << r.isolated_samples
               << " isolated samples (fewer than 3 others within " << kIsolationReach

@@ -28,9 +28,19 @@ from . import _checks, _sdfcontour
 from ._checks import ArgumentTypeError
 
 __all__ = ["contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh",
-           "ArgumentTypeError", "DroppedSamplesWarning"]
+           "ArgumentTypeError", "DroppedSamplesWarning", "FallbackWarning", "RescaleWarning"]
 
 METHODS = ("gcp", "gtcp", "mc", "mt-rt", "mt-dt")
+
+
+class FallbackWarning(UserWarning):
+    """GCP could not trust the values as distances and returned marching cubes' mesh
+    (``stats["fallback"]`` says why; ``strict=True`` makes it an error)."""
+
+
+class RescaleWarning(UserWarning):
+    """The values changed by m per unit length near the surface, not 1, and were divided by m
+    (``stats["value_scale"]``)."""
 
 
 class DroppedSamplesWarning(UserWarning):
@@ -165,6 +175,13 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
         array = _input_array(sdf)
     out = _sdfcontour.contour(array, lo, hi, 0.0, options, want_mesh, want_points)
     out["stats"].update(stats)
+    if out["stats"].get("fallback"):
+        _warnings.warn(f"GCP returned marching cubes' mesh: {out['stats']['fallback']}",
+                       FallbackWarning, stacklevel=3)
+    if out["stats"].get("value_scale", 1.0) != 1.0:
+        _warnings.warn(f"the values were rescaled by {out['stats']['value_scale']:.4g} to "
+                       f"distances (they change by {1 / out['stats']['value_scale']:.4g} per unit "
+                       f"length near the surface)", RescaleWarning, stacklevel=3)
     if out["stats"].get("isolated_samples", 0) > 0:
         _warnings.warn(f"dropped {out['stats']['isolated_samples']} isolated samples (fewer than "
                        f"3 others within 4 spacings): strays far from the rest cannot place the "
@@ -218,7 +235,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
-            refine="auto", progress=False, return_stats=False):
+            refine="auto", strict=False, progress=False, return_stats=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -230,9 +247,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     bounds : (lo, hi), optional
         The grid's box: positions of the first and last samples, each a number or 3 numbers.
         Default (-1, 1). Ignored for scattered samples.
-    method : {"gcp", "mc", "mt-rt", "mt-dt"}
-        GCP (default), marching cubes (grids only), marching tetrahedra on the regular or the
-        Delaunay triangulation.
+    method : {"gcp", "gtcp", "mc", "mt-rt", "mt-dt"}
+        GCP (default), GTCP (exact contact points: built-in shapes, CLI only), marching cubes
+        (grids only), marching tetrahedra on the regular or the Delaunay triangulation.
     resolution : int, optional
         Samples per axis for a callable ``sdf``.
     band : float, "auto" or "all"
@@ -297,6 +314,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         ``--refine-dilation``).
     batch_size : int
         Points per call of a callable ``sdf``.
+    strict : bool
+        Where GCP cannot trust the values as distances it returns marching cubes' mesh with a
+        ``FallbackWarning`` (``stats["fallback"]``); ``strict=True`` raises ValueError instead.
     refine : bool or "auto"
         GCP with a callable ``sdf``: move each vertex along its normal onto the callable's zero
         set (two secant steps, each move at most half a spacing; a vertex whose field does not
@@ -362,6 +382,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     else:
         o["refine_dilation"] = _refine_dilation(refine_dilation)
     refine = _switch("refine", refine)
+    o["fallback_to_mc"] = not _checks.flag("strict", strict)
     out = _run(sdf, bounds, resolution, batch_size, o, True, False)
     if callable(sdf) and method == "gcp" and refine != "off":
         from ._callable import refine_on_zero_set

@@ -182,3 +182,25 @@ def test_an_axis_beyond_32_bits_is_refused_not_wrapped():
     huge = np.lib.stride_tricks.as_strided(np.zeros(1), shape=(2**32 + 4, 2, 2), strides=(0, 0, 0))
     with pytest.raises(ValueError, match="2147483647"):
         sdfcontour.contour(huge, method="mc")
+
+
+def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
+    x = np.linspace(-1, 1, 48)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    # A smooth implicit, no distance: (x^2+y^2+z^2+R^2-r^2)^2 - 4R^2(x^2+y^2).
+    implicit = (X**2 + Y**2 + Z**2 + 0.55**2 - 0.25**2) ** 2 - 4 * 0.55**2 * (X**2 + Y**2)
+    with pytest.warns(sdfcontour.FallbackWarning, match="marching cubes"):
+        V, F, stats = sdfcontour.contour(implicit, return_stats=True)
+    assert stats["fallback"]
+    with pytest.raises(ValueError, match="distances"):
+        sdfcontour.contour(implicit, strict=True)
+    # A distance scaled by 3: rescaled, and said.
+    sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.6
+    with pytest.warns(sdfcontour.RescaleWarning, match="rescaled"):
+        V, F, stats = sdfcontour.contour(3 * sphere, return_stats=True)
+    assert stats["value_scale"] == pytest.approx(1 / 3, rel=0.05)
+    # A NaN is named by its (i, j, k).
+    sphere[3, 4, 5] = np.nan
+    with pytest.raises(ValueError, match=r"\[3, 4, 5\]"):
+        sdfcontour.contour(sphere)
+    assert "np" not in dir(sdfcontour)
