@@ -99,6 +99,22 @@ TEST(Sides, NoSampleOnTheWrongSideOfTheCarvedMesh) {
   });
 }
 
+// The local reconstruction, carved the same way: no sample within 3 spacings of the surface on
+// the wrong side of its mesh either.
+TEST(Sides, NoSampleOnTheWrongSideOfTheLocalMesh) {
+  SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
+  for_each_shared_grid([](const char* name, int n, const Grid& grid) {
+    ContourOptions options;
+    options.reconstruction = Reconstruction::Local;
+    const ContourResult r = contour(grid_input(grid), nullptr, options);
+    ASSERT_EQ(r.reconstruction, Reconstruction::Local);
+    const Sides wrong = wrong_sides(grid, *r.mesh);
+    std::cout << name << " " << n << "^3 local: wrong side " << wrong.wrong << " (deepest "
+              << wrong.deepest << " h)\n";
+    EXPECT_EQ(wrong.wrong, 0) << "deepest " << wrong.deepest << " h";
+  });
+}
+
 // Where a gap or crease is narrower than a spacing, carving's one-feature moves are spikes that the
 // untangling undoes, and an outside sample stays inside the mesh: four on the plane's tail at 32^3,
 // one on its wing at 64^3. The side repair dents the sheet over them (side_repair.h) without a
