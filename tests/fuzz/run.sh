@@ -11,14 +11,14 @@ out=build-fuzz
 mkdir -p "$out/findings"
 flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
        -Iinclude -I/usr/include/eigen3)
-clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp \
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp src/file_checks.cpp \
   -ltbb -o "$out/fuzz_npy"
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/mesh_files.cpp -o "$out/fuzz_mesh_files"
 # The OpenVDB module is linked in (openvdb_loader.cpp then uses it instead of loading it).
 clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
   -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' \
   tests/fuzz/fuzz_vdb.cpp src/vdb.cpp src/openvdb_loader.cpp src/openvdb_module.cpp \
-  src/isolated_call.cpp src/samples.cpp src/atomic_file.cpp -lopenvdb -lImath-3_1 -ltbb \
+  src/isolated_call.cpp src/samples.cpp src/atomic_file.cpp src/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb \
   -o "$out/fuzz_vdb"
 # Meshes through sample's checks, union and signed distance (CGAL, TBB).
 clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_mesh_sample.cpp \
