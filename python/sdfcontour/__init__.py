@@ -84,6 +84,24 @@ def _degree(degree):
     return int(degree)
 
 
+def _poisson_options(full_depth, alpha, samples_per_node, scale, boundary, solver_tolerance,
+                     finest_solver_tolerance):
+    """The screened Poisson options that contour() and poisson() share, checked."""
+    return dict(full_depth=_checks.in_range("full_depth", full_depth, whole=True),
+                alpha=_checks.in_range("alpha", alpha),
+                samples_per_node=_checks.in_range("samples_per_node", samples_per_node),
+                scale=_checks.in_range("scale", scale),
+                boundary=_checks.choice("boundary", boundary, ("neumann", "dirichlet", "free")),
+                solver_tolerance=_checks.in_range("solver_tolerance", solver_tolerance),
+                finest_solver_tolerance=_checks.in_range("finest_solver_tolerance",
+                                                         finest_solver_tolerance))
+
+
+def _full_depth_within(options):
+    if options["full_depth"] > options["depth"]:
+        raise ValueError("full_depth must be at most depth")
+
+
 def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
              brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
              solver_tolerance, progress, finest_solver_tolerance=1e-3):
@@ -116,15 +134,9 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
              tie_tolerance=_checks.in_range("tie_tolerance", tie_tolerance),
              brick_size=_brick_size(brick_size),
              brick_halo=_checks.in_range("brick_halo", brick_halo),
-             full_depth=_checks.in_range("full_depth", full_depth, whole=True),
-             alpha=_checks.in_range("alpha", alpha),
-             samples_per_node=_checks.in_range("samples_per_node", samples_per_node),
-             scale=_checks.in_range("scale", scale),
-             boundary=_checks.choice("boundary", boundary, ("neumann", "dirichlet", "free")),
-             solver_tolerance=_checks.in_range("solver_tolerance", solver_tolerance),
-             finest_solver_tolerance=_checks.in_range("finest_solver_tolerance",
-                                                      finest_solver_tolerance),
-             progress=_checks.flag("progress", progress))
+             progress=_checks.flag("progress", progress),
+             **_poisson_options(full_depth, alpha, samples_per_node, scale, boundary,
+                                solver_tolerance, finest_solver_tolerance))
     if isinstance(depth, str) and depth == "auto":
         o["depth_text"] = "auto"
     else:
@@ -132,8 +144,7 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
             o["depth"] = _checks.in_range("depth", depth, whole=True)
         except (TypeError, ValueError) as error:
             raise ValueError(f"{error}, or 'auto'") from None
-        if o["full_depth"] > o["depth"]:
-            raise ValueError("full_depth must be at most depth")
+        _full_depth_within(o)
     return o
 
 
@@ -476,17 +487,10 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     >>> V, F = sdfcontour.poisson(P, N, depth=8, alpha=10)
     """
     o = dict(depth=_checks.in_range("depth", depth, whole=True),
-             alpha=_checks.in_range("alpha", alpha),
-             full_depth=_checks.in_range("full_depth", full_depth, whole=True),
-             samples_per_node=_checks.in_range("samples_per_node", samples_per_node),
-             scale=_checks.in_range("scale", scale),
-             boundary=_checks.choice("boundary", boundary, ("neumann", "dirichlet", "free")),
-             solver_tolerance=_checks.in_range("solver_tolerance", solver_tolerance),
-             finest_solver_tolerance=_checks.in_range("finest_solver_tolerance",
-                                                      finest_solver_tolerance),
-             refine_dilation=_refine_dilation(refine_dilation), degree=_degree(degree))
-    if o["full_depth"] > o["depth"]:
-        raise ValueError("full_depth must be at most depth")
+             refine_dilation=_refine_dilation(refine_dilation), degree=_degree(degree),
+             **_poisson_options(full_depth, alpha, samples_per_node, scale, boundary,
+                                solver_tolerance, finest_solver_tolerance))
+    _full_depth_within(o)
     P = _checks.points("P", P)
     N = _checks.points("N", N)
     if len(N) != len(P):
