@@ -1,0 +1,155 @@
+// Marching cubes brick by brick: the joined pieces are the whole grid's mesh, bit for bit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <random>
+#include <tuple>
+#include <vector>
+
+#include "sdfcontour/brick_marching.h"
+#include "sdfcontour/marching.h"
+#include "sdfcontour/mesh_properties.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+// The mesh with vertices sorted by position and triangles named by sorted ranks, each rotated to
+// start at its smallest rank, sorted: equal for two meshes iff they have the same vertex
+// positions (bit for bit) and the same triangles, whatever the order.
+using Canonical = std::pair<std::vector<std::array<double, 3>>, std::vector<std::array<int, 3>>>;
+Canonical canonical(const Mesh& m) {
+  const int n = int(m.vertices.rows());
+  std::vector<int> order(static_cast<std::size_t>(n)), rank(static_cast<std::size_t>(n));
+  for (int v = 0; v < n; ++v) order[std::size_t(v)] = v;
+  auto at = [&](int v) {
+    return std::array<double, 3>{m.vertices(v, 0), m.vertices(v, 1), m.vertices(v, 2)};
+  };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return at(a) < at(b); });
+  Canonical c;
+  for (int r = 0; r < n; ++r) {
+    rank[std::size_t(order[std::size_t(r)])] = r;
+    c.first.push_back(at(order[std::size_t(r)]));
+  }
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+    std::array<int, 3> tri{rank[std::size_t(m.triangles(t, 0))],
+                           rank[std::size_t(m.triangles(t, 1))],
+                           rank[std::size_t(m.triangles(t, 2))]};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    c.second.push_back(tri);
+  }
+  std::sort(c.second.begin(), c.second.end());
+  return c;
+}
+
+// The samples [first, first + dims) of `grid`, as a grid of their own (float32 if asked).
+struct Block {
+  std::vector<double> f64;
+  std::vector<float> f32;
+  GridView view;
+};
+Block block_of(const Grid& grid, std::array<int, 3> first, std::array<int, 3> dims, bool single) {
+  Block b;
+  for (int i = 0; i < dims[0]; ++i)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int k = 0; k < dims[2]; ++k) {
+        const double v =
+            grid.values[Eigen::Index(grid.index(first[0] + i, first[1] + j, first[2] + k))];
+        b.f64.push_back(v);
+        b.f32.push_back(float(v));
+      }
+  b.view.dims = dims;
+  b.view.type = single ? ScalarType::Float32 : ScalarType::Float64;
+  b.view.data = single ? static_cast<const void*>(b.f32.data()) : b.f64.data();
+  return b;
+}
+
+// Cuts the grid's cells into bricks of `side` cells (the last ones shorter) and joins the pieces.
+Mesh bricked(const Grid& grid, int side, bool single) {
+  std::vector<MeshPiece> pieces;
+  for (int i = 0; i + 1 < grid.dims[0]; i += side)
+    for (int j = 0; j + 1 < grid.dims[1]; j += side)
+      for (int k = 0; k + 1 < grid.dims[2]; k += side) {
+        const std::array<int, 3> first{i, j, k};
+        std::array<int, 3> dims;
+        for (int a = 0; a < 3; ++a)
+          dims[std::size_t(a)] = std::min(side, grid.dims[a] - 1 - first[a]) + 1;
+        const Block b = block_of(grid, first, dims, single);
+        pieces.push_back(marching_cubes_brick(b.view, grid, first));
+      }
+  return join_mesh_pieces(pieces);
+}
+
+// The grid with float32-rounded values, so that the whole-grid run sees what a float32 block does.
+Grid rounded(Grid g) {
+  for (Eigen::Index p = 0; p < g.values.size(); ++p) g.values[p] = double(float(g.values[p]));
+  return g;
+}
+
+}  // namespace
+
+TEST(BrickMarching, JoinedPiecesAreTheWholeGridsMeshBitForBit) {
+  // wingnut: thin parts and sharp edges cut by the seams; bricks of 7 and 16 cells, the last
+  // ones shorter, in float64 and float32.
+  const Grid grid = test::shared_mesh_grid("wingnut", 37);
+  for (const bool single : {false, true}) {
+    const Grid whole = single ? rounded(grid) : grid;
+    const Mesh expected = marching_cubes(whole);
+    ASSERT_GT(expected.triangles.rows(), 1000);
+    for (const int side : {7, 16}) {
+      SCOPED_TRACE("side " + std::to_string(side) + (single ? " float32" : " float64"));
+      const Mesh joined = bricked(whole, side, single);
+      EXPECT_EQ(canonical(joined), canonical(expected));
+      const MeshTopology t = mesh_topology(joined);
+      EXPECT_TRUE(t.closed && t.consistently_oriented);
+    }
+  }
+}
+
+TEST(BrickMarching, AmbiguousFacesAndCentroidsAgreeAcrossSeams) {
+  // Random signs: most faces ambiguous, many polygons that need a centroid vertex.
+  Grid grid;
+  grid.dims = {15, 14, 13};
+  grid.bounds.min = Eigen::Vector3d(-0.3, 0.1, 2.0);
+  grid.bounds.max = Eigen::Vector3d(0.9, 0.7, 3.1);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  grid.values.resize(Eigen::Index(grid.size()));
+  for (auto& v : grid.values) v = u(rng);
+  const Mesh expected = marching_cubes(grid);
+  for (const int side : {1, 2, 5}) {
+    SCOPED_TRACE("side " + std::to_string(side));
+    EXPECT_EQ(canonical(bricked(grid, side, false)), canonical(expected));
+  }
+}
+
+TEST(BrickMarching, RefusesBadBricks) {
+  Grid grid;
+  grid.dims = {8, 8, 8};
+  grid.values = Eigen::VectorXd::Constant(512, 1.0);
+  grid.values[Eigen::Index(grid.index(5, 6, 7))] = std::nan("");
+  const Block b = block_of(grid, {4, 4, 4}, {4, 4, 4}, false);
+  try {
+    marching_cubes_brick(b.view, grid, {4, 4, 4});
+    FAIL() << "a NaN was accepted";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "the grid has a non-finite value at [5, 6, 7]");
+  }
+  EXPECT_THROW(marching_cubes_brick(b.view, grid, {5, 4, 4}), Error);   // past the grid
+  EXPECT_THROW(marching_cubes_brick(b.view, grid, {-1, 4, 4}), Error);  // before it
+  const Block flat = block_of(grid, {0, 0, 0}, {1, 4, 4}, false);
+  EXPECT_THROW(marching_cubes_brick(flat.view, grid, {0, 0, 0}), Error);
+}
+
+TEST(BrickMarching, JoinRefusesOneKeyAtTwoPositions) {
+  MeshPiece a, b;
+  a.keys = {3};
+  a.vertices = PointMatrix::Zero(1, 3);
+  b.keys = {3};
+  b.vertices = PointMatrix::Ones(1, 3);
+  EXPECT_THROW(join_mesh_pieces({a, b}), InternalError);
+  b.vertices = PointMatrix::Zero(1, 3);
+  EXPECT_EQ(join_mesh_pieces({a, b}).vertices.rows(), 1);
+}
