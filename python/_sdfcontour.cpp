@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "progress_bar.h"
+#include "sdfcontour/brick_marching.h"
 #include "sdfcontour/contact_point_errors.h"
 #include "sdfcontour/coordinates.h"
 #include "sdfcontour/io.h"
@@ -265,6 +266,33 @@ SdfInput sdf_input(const py::array& array, const Bounds& bounds, double spacing,
               ") is neither a grid (nx, ny, nz) nor scattered samples (n, 4)");
 }
 
+// One brick of a larger grid by marching cubes (brick_marching.h): `block` holds the samples
+// [first, first + block.shape) of a grid of `dims` samples over [lo, hi]. Returns the piece's
+// global vertex keys (uint64, ascending), vertices and triangles; the GIL is released meanwhile
+// so that a Dask worker's threads run bricks side by side.
+py::tuple run_marching_cubes_brick(const py::array& block, const std::array<int, 3>& first,
+                                   const std::array<int, 3>& dims, const std::array<double, 3>& lo,
+                                   const std::array<double, 3>& hi) {
+  if (block.ndim() != 3) throw Error("a brick must be a 3D array");
+  GridGeometry grid;
+  grid.dims = dims;
+  grid.bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  grid.bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  py::object keep;
+  const SdfInput input = sdf_input(block, grid.bounds, 0.0, keep);
+  const GridView view = *grid_view_of(input);
+  MeshPiece piece;
+  {
+    py::gil_scoped_release release;
+    piece = marching_cubes_brick(view, grid, first);
+  }
+  auto* keys = new std::vector<std::uint64_t>(std::move(piece.keys));
+  py::capsule owner(keys, [](void* p) { delete static_cast<std::vector<std::uint64_t>*>(p); });
+  py::array_t<std::uint64_t> key_array({py::ssize_t(keys->size())}, keys->data(), owner);
+  return py::make_tuple(key_array, to_numpy(std::move(piece.vertices)),
+                        to_numpy(std::move(piece.triangles)));
+}
+
 py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
                      const std::array<double, 3>& hi, double spacing, const py::dict& options,
                      bool want_mesh, bool want_points) {
@@ -426,6 +454,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
   });
   m.def("contour", &run_contour, py::arg("array"), py::arg("lo"), py::arg("hi"), py::arg("spacing"),
         py::arg("options"), py::arg("want_mesh"), py::arg("want_points"));
+  m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
+        py::arg("dims"), py::arg("lo"), py::arg("hi"));
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
         py::arg("ascii"));

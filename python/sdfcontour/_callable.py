@@ -49,46 +49,64 @@ def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False):
     if batch_size < 1:
         raise ValueError("batch_size must be at least 1")
     h = (hi - lo) / (n - 1)
-    threshold = threshold * float(h.max())
-    levels = 0
-    while levels < 6 and (n - 1) >> (levels + 1) >= 4:
-        levels += 1
-    grid = np.full((n, n, n), np.nan)
     counter = [0]
+    grid = sample_block(f, lo, h, (0, 0, 0), (n, n, n), threshold * float(h.max()), batch_size,
+                        counter, progress)
+    return grid, counter[0]
+
+
+def sample_block(f, lo, h, first, dims, threshold, batch_size, counter, progress=False):
+    """The samples [first, first + dims) of the grid lo + index * h (float64 arrays of 3) of f:
+    exact where |f| <= threshold (a length), signed lower bounds elsewhere, as sample_callable.
+    A point's position depends on its global index only, so blocks of one grid agree where they
+    overlap. Adds the evaluations to counter[0]."""
+    first = np.asarray(first, dtype=np.int64)
+    dims = tuple(int(d) for d in dims)
+    levels = 0
+    while levels < 6 and (min(dims) - 1) >> (levels + 1) >= 4:
+        levels += 1
+    grid = np.full(dims, np.nan)
 
     def position(i, j, k):
-        return np.column_stack([lo[0] + i * h[0], lo[1] + j * h[1], lo[2] + k * h[2]])
+        return np.column_stack([lo[0] + (first[0] + i) * h[0], lo[1] + (first[1] + j) * h[1],
+                                lo[2] + (first[2] + k) * h[2]])
 
     # The coarsest level, everywhere.
-    coarse = _axis_indices(n, 1 << levels)
-    ci, cj, ck = (a.ravel() for a in np.meshgrid(coarse, coarse, coarse, indexing="ij"))
+    coarse = [_axis_indices(d, 1 << levels) for d in dims]
+    ci, cj, ck = (a.ravel() for a in np.meshgrid(*coarse, indexing="ij"))
     grid[ci, cj, ck] = _evaluate(f, position(ci, cj, ck), batch_size, counter)
     for level in range(levels - 1, -1, -1):
-        parent_axis = _axis_indices(n, 1 << (level + 1))
-        axis = _axis_indices(n, 1 << level)
-        is_parent = np.isin(axis, parent_axis)
-        # Each index's parents below and above on the coarser level (equal when it is one).
-        above = parent_axis[np.minimum(np.searchsorted(parent_axis, axis), len(parent_axis) - 1)]
-        below = parent_axis[np.maximum(np.searchsorted(parent_axis, axis, side="right") - 1, 0)]
+        axes, is_parent, above, below = [], [], [], []
+        for d in dims:
+            parent_axis = _axis_indices(d, 1 << (level + 1))
+            axis = _axis_indices(d, 1 << level)
+            axes.append(axis)
+            is_parent.append(np.isin(axis, parent_axis))
+            # Each index's parents below and above on the coarser level (equal when it is one).
+            above.append(parent_axis[np.minimum(np.searchsorted(parent_axis, axis),
+                                                len(parent_axis) - 1)])
+            below.append(parent_axis[np.maximum(np.searchsorted(parent_axis, axis, side="right")
+                                                - 1, 0)])
         tau = threshold + np.sqrt(3.0) * float(h.max()) * ((1 << level) - 1)
         if progress:
             print(f"[sdfcontour] sampling level {level}: {counter[0]} evaluations so far",
                   file=sys.stderr, flush=True)
         # A slab of i at a time bounds the temporary arrays.
-        slab = max(1, (1 << 22) // (len(axis) ** 2))
-        for first in range(0, len(axis), slab):
-            ii = np.arange(first, min(first + slab, len(axis)))
-            a, b, c = np.meshgrid(ii, np.arange(len(axis)), np.arange(len(axis)), indexing="ij")
+        slab = max(1, (1 << 22) // (len(axes[1]) * len(axes[2])))
+        for start in range(0, len(axes[0]), slab):
+            ii = np.arange(start, min(start + slab, len(axes[0])))
+            a, b, c = np.meshgrid(ii, np.arange(len(axes[1])), np.arange(len(axes[2])),
+                                  indexing="ij")
             a, b, c = a.ravel(), b.ravel(), c.ravel()
-            new = ~(is_parent[a] & is_parent[b] & is_parent[c])
+            new = ~(is_parent[0][a] & is_parent[1][b] & is_parent[2][c])
             a, b, c = a[new], b[new], c[new]
-            i, j, k = axis[a], axis[b], axis[c]
+            i, j, k = axes[0][a], axes[1][b], axes[2][c]
             bound = np.full(len(i), -np.inf)
             sign = np.ones(len(i))
             for corner in range(8):
-                qi = np.where(corner & 1, above[a], below[a])
-                qj = np.where(corner & 2, above[b], below[b])
-                qk = np.where(corner & 4, above[c], below[c])
+                qi = np.where(corner & 1, above[0][a], below[0][a])
+                qj = np.where(corner & 2, above[1][b], below[1][b])
+                qk = np.where(corner & 4, above[2][c], below[2][c])
                 value = grid[qi, qj, qk]
                 reach = np.sqrt(((i - qi) * h[0]) ** 2 + ((j - qj) * h[1]) ** 2 +
                                 ((k - qk) * h[2]) ** 2)
@@ -101,7 +119,7 @@ def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False):
             ie, je, ke = i[evaluate], j[evaluate], k[evaluate]
             if len(ie):
                 grid[ie, je, ke] = _evaluate(f, position(ie, je, ke), batch_size, counter)
-    return grid, counter[0]
+    return grid
 
 
 def vertex_normals(V, F):

@@ -76,6 +76,15 @@ def in_range(name, value, whole=False):
     return int(value) if whole else float(value)
 
 
+def whole_in(name, value, low, high):
+    """A whole number (not bool) from `low` to `high`, else TypeError or ValueError."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise ArgumentTypeError(f"{name} must be a whole number, got {value!r}")
+    if not low <= value <= high:
+        raise ValueError(f"{name} must be from {low} to {high}, got {value}")
+    return int(value)
+
+
 def flag(name, value):
     """True or False only: "no" is not False."""
     if not isinstance(value, (bool, np.bool_)):

@@ -1,0 +1,98 @@
+"""Joining bricks' mesh pieces (keys, V, F) into one mesh: vertices with equal keys become one, in
+ascending key order; triangles follow in brick order. Either in memory, or streamed into a binary
+PLY whose join holds only the keys in memory (8 bytes per vertex of a piece, 8 per vertex kept),
+the pieces' vertices and triangles staying on disk."""
+import os
+import shutil
+import tempfile
+
+import numpy as np
+
+_FACE = np.dtype([("n", "u1"), ("v", "<i4", (3,))])  # PLY's "list uchar int", 13 bytes
+_CHUNK = 1 << 20
+
+
+def _ply_header(vertices, triangles):
+    return (f"ply\nformat binary_little_endian 1.0\ncomment written by sdfcontour\n"
+            f"element vertex {vertices}\nproperty double x\nproperty double y\n"
+            f"property double z\nelement face {triangles}\n"
+            f"property list uchar int vertex_indices\nend_header\n").encode("ascii")
+
+
+def _require_int32(vertices):
+    if vertices > 2**31 - 1:
+        raise ValueError(f"the mesh has {vertices} vertices: PLY's and the library's int32 "
+                         f"indices hold at most 2147483647")
+
+
+def _check_same_positions(V, kept, inverse):
+    """Every copy of a vertex must sit where the kept copy does (the pieces' contract)."""
+    for start in range(0, len(inverse), _CHUNK):
+        part = slice(start, start + _CHUNK)
+        if not np.array_equal(V[part], V[kept[inverse[part]]]):
+            raise RuntimeError("internal error: two bricks place one vertex differently")
+
+
+def join_pieces(arrivals, count):
+    """(V, F, stats) from `arrivals`, pairs (brick number < count, (keys, V, F))."""
+    pieces = [None] * count
+    for b, piece in arrivals:
+        pieces[b] = piece
+    keys = np.concatenate([np.asarray(p[0], np.uint64) for p in pieces])
+    V = np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in pieces])
+    offsets = np.cumsum([0] + [len(p[0]) for p in pieces])
+    F = np.concatenate([np.asarray(p[2], np.int64).reshape(-1, 3) + offsets[b]
+                        for b, p in enumerate(pieces)])
+    _, kept, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    del keys
+    _require_int32(len(kept))
+    _check_same_positions(V, kept, inverse)
+    stats = {"vertices": len(kept), "triangles": len(F),
+             "empty_bricks": sum(len(p[2]) == 0 for p in pieces)}
+    return V[kept], inverse[F].astype(np.int32), stats
+
+
+def write_pieces_as_ply(arrivals, count, out):
+    """Streams the joined mesh of `arrivals` into the binary PLY `out` (atomically: a failure
+    leaves no file); returns the stats."""
+    folder = tempfile.mkdtemp(prefix=".sdfcontour-join-", dir=os.path.dirname(os.path.abspath(out)))
+    try:
+        names = {n: os.path.join(folder, n) for n in ("keys", "vertices", "faces", "mesh.ply")}
+        rows = [None] * count  # brick number -> (first face row, face rows)
+        occurrences = face_rows = empty = 0
+        with open(names["keys"], "wb") as kf, open(names["vertices"], "wb") as vf, \
+                open(names["faces"], "wb") as ff:
+            for b, (keys, V, F) in arrivals:
+                np.asarray(keys, np.uint64).tofile(kf)
+                np.asarray(V, np.float64).tofile(vf)
+                (np.asarray(F, np.int64) + occurrences).tofile(ff)
+                rows[b] = (face_rows, len(F))
+                occurrences += len(keys)
+                face_rows += len(F)
+                empty += len(F) == 0
+        keys = np.fromfile(names["keys"], np.uint64)
+        _, kept, inverse = np.unique(keys, return_index=True, return_inverse=True)
+        del keys
+        _require_int32(len(kept))
+        V = np.memmap(names["vertices"], np.float64, "r", shape=(occurrences, 3)) \
+            if occurrences else np.zeros((0, 3))
+        _check_same_positions(V, kept, inverse)
+        F = np.memmap(names["faces"], np.int64, "r", shape=(face_rows, 3)) \
+            if face_rows else np.zeros((0, 3), np.int64)
+        with open(names["mesh.ply"], "wb") as mesh:
+            mesh.write(_ply_header(len(kept), face_rows))
+            for start in range(0, len(kept), _CHUNK):
+                np.ascontiguousarray(V[kept[start:start + _CHUNK]]).tofile(mesh)
+            for first, size in rows:  # triangles in brick order, whatever order bricks finished
+                for start in range(first, first + size, _CHUNK):
+                    part = F[start:min(start + _CHUNK, first + size)]
+                    faces = np.empty(len(part), _FACE)
+                    faces["n"] = 3
+                    faces["v"] = inverse[part]
+                    faces.tofile(mesh)
+        del V, F
+        if face_rows:
+            os.replace(names["mesh.ply"], out)
+        return {"vertices": len(kept), "triangles": face_rows, "empty_bricks": empty}
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)

@@ -1,0 +1,397 @@
+"""sdfcontour.dask: contour a grid larger than one machine, brick by brick, on Dask.
+
+The grid's cells are cut into bricks of ``brick`` cells a side. Each brick is one Dask task: it
+reads its samples plus one more on each high side (the samples of the cells it owns) and returns
+the piece of the mesh that it owns, its vertices named by the grid edge they lie on. Pieces are
+joined by those names, so the mesh is the single-process mesh bit for bit, whatever ran where.
+Dask's scheduler does the rest: placement, retries on a lost worker, a remote cluster.
+
+>>> import sdfcontour.dask
+>>> V, F = sdfcontour.dask.contour("big.zarr", method="mc", brick=256)
+>>> stats = sdfcontour.dask.contour("big.zarr", out="big.ply", client="tcp://10.0.0.5:8786")
+"""
+import contextlib
+import os
+import sys
+import time
+
+import numpy as np
+
+from . import _bounds, _checks, _sdfcontour
+from ._io_join import join_pieces, write_pieces_as_ply
+
+__all__ = ["contour", "bricks", "brick_piece"]
+
+
+class BrickError(ValueError):
+    """A brick's data could not be contoured (NaN, wrong dtype or shape): names the brick."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Sources: picklable readers of one block of samples, opened again on each worker.
+
+class _NpyReader:
+    def __init__(self, path):
+        self.path = os.fspath(path)
+        array = np.load(self.path, mmap_mode="r")  # reads the header only
+        self.shape, self.dtype = array.shape, array.dtype
+
+    def read(self, first, dims):
+        array = np.load(self.path, mmap_mode="r")
+        return np.array(array[tuple(slice(f, f + d) for f, d in zip(first, dims))])
+
+
+class _ZarrReader:
+    def __init__(self, array):
+        self.array = array  # a zarr.Array pickles as its store and path, not its data
+        self.shape, self.dtype = array.shape, array.dtype
+
+    def read(self, first, dims):
+        return self.array[tuple(slice(f, f + d) for f, d in zip(first, dims))]
+
+
+class _Hdf5Reader:
+    def __init__(self, filename, name, shape, dtype):
+        self.filename, self.name, self.shape, self.dtype = filename, name, shape, dtype
+
+    def read(self, first, dims):
+        import h5py
+        with h5py.File(self.filename, "r") as f:
+            return f[self.name][tuple(slice(f0, f0 + d) for f0, d in zip(first, dims))]
+
+
+class _CallableReader:
+    """A callable SDF sampled block by block, near the surface only (marching cubes needs the
+    signs everywhere and the values at crossings: |f| <= one spacing)."""
+
+    def __init__(self, f, lo, hi, n, batch_size):
+        self.f, self.lo, self.batch_size = f, lo, batch_size
+        self.h = (hi - lo) / (n - 1)
+        self.shape, self.dtype = (n, n, n), np.dtype(np.float64)
+
+    def read(self, first, dims):
+        from ._callable import sample_block
+        counter = [0]
+        return sample_block(self.f, self.lo, self.h, first, dims, float(self.h.max()),
+                            self.batch_size, counter)
+
+
+def _open_path(path, dataset):
+    text = os.fspath(path)
+    if not os.path.exists(text):
+        raise OSError(f"cannot read '{text}': no such file or folder")
+    lower = text.rstrip("/").lower()
+    if lower.endswith(".npy"):
+        return _NpyReader(text)
+    if lower.endswith((".h5", ".hdf5", ".hdf")):
+        import h5py
+        with h5py.File(text, "r") as f:
+            names = []
+            f.visititems(lambda name, item: names.append(name)
+                         if isinstance(item, h5py.Dataset) else None)
+            if dataset is None:
+                if len(names) != 1:
+                    raise ValueError(f"'{text}' holds {len(names)} datasets {names[:5]}: name one "
+                                     f"with dataset=")
+                dataset = names[0]
+            if dataset not in f or not isinstance(f[dataset], h5py.Dataset):
+                raise ValueError(f"'{text}' has no dataset '{dataset}'")
+            return _Hdf5Reader(text, dataset, f[dataset].shape, f[dataset].dtype)
+    if os.path.isdir(text) or lower.endswith(".zarr"):
+        import zarr
+        try:
+            array = zarr.open(text, mode="r")
+        except Exception as e:  # zarr says why in its own words
+            raise OSError(f"cannot read '{text}' as zarr: {e}") from None
+        if dataset is not None:
+            array = array[dataset]
+        if not isinstance(array, zarr.Array):
+            raise ValueError(f"'{text}' is a zarr group: name its array with dataset=")
+        return _ZarrReader(array)
+    raise ValueError(f"cannot read '{text}': use a .npy, .zarr, .h5 or .hdf5 path")
+
+
+def _reader(source, bounds, resolution, batch_size, dataset):
+    """A reader for `source`, or a dask array (read through its own graph)."""
+    if callable(source):
+        if resolution is None:
+            raise ValueError("a callable SDF needs a resolution (samples per axis)")
+        n = _checks.whole_in("resolution", resolution, 2, 2**31 - 1)
+        lo, hi = _bounds(bounds)
+        return _CallableReader(source, lo, hi, int(n), int(batch_size))
+    if resolution is not None:
+        raise ValueError("resolution is for a callable SDF; a grid has its own shape")
+    if isinstance(source, (str, os.PathLike)):
+        return _open_path(source, dataset)
+    module = type(source).__module__.split(".")[0]
+    if module == "zarr":
+        return _ZarrReader(source)
+    if module == "h5py":
+        return _Hdf5Reader(source.file.filename, source.name, source.shape, source.dtype)
+    if module == "dask" or isinstance(source, np.ndarray):
+        return source
+    raise _checks.ArgumentTypeError(
+        f"source must be a path (.npy, .zarr, .h5), a zarr array, an HDF5 dataset, a dask or "
+        f"numpy array, or a callable SDF; got {type(source).__name__}")
+
+
+def _check_shape_and_dtype(shape, dtype):
+    if len(shape) != 3:
+        raise ValueError(f"the grid must have 3 axes (nx, ny, nz), got shape {tuple(shape)}")
+    if min(shape) < 2:
+        raise ValueError(f"the grid needs at least 2 samples on every axis, got {tuple(shape)}")
+    if max(shape) > 2**31 - 1:
+        raise ValueError(f"the grid has shape {tuple(shape)}: at most 2147483647 samples per axis")
+    if np.dtype(dtype).kind not in "fiu":
+        raise _checks.ArgumentTypeError(f"the grid must hold real numbers, not {np.dtype(dtype)}")
+
+
+# ---------------------------------------------------------------------------------------------
+# Bricks and their pieces.
+
+def bricks(shape, brick):
+    """The bricks of a grid of `shape` samples, `brick` cells a side (the last ones shorter):
+    a list of (index (3 ints), first sample (3 ints), samples (3 ints)), in C order. A brick holds
+    the samples of the cells it owns: its cells and one more sample on each high side."""
+    ranges = []
+    for n in shape:
+        starts = range(0, n - 1, brick)
+        ranges.append([(s, min(brick, n - 1 - s) + 1) for s in starts])
+    out = []
+    for a, (fa, da) in enumerate(ranges[0]):
+        for b, (fb, db) in enumerate(ranges[1]):
+            for c, (fc, dc) in enumerate(ranges[2]):
+                out.append(((a, b, c), (fa, fb, fc), (da, db, dc)))
+    return out
+
+
+def brick_piece(block, index, first, shape, lo, hi):
+    """The piece of the marching cubes mesh that one brick owns, from its block of samples (the
+    samples [first, first + block.shape) of a grid of `shape` samples over [lo, hi]).
+
+    Returns (keys (v,) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V). A grid edge's
+    vertex has the same key and bit for bit the same position in every brick that meets it, so
+    pieces from any scheduler join into the single-process mesh (`join_pieces`)."""
+    try:
+        block = np.asarray(block)
+        if block.dtype.kind not in "fiu":
+            raise ValueError(f"the grid must hold real numbers, not {block.dtype}")
+        if block.dtype not in (np.float32, np.float64):
+            block = block.astype(np.float64)
+        block = np.ascontiguousarray(block)
+        finite = np.isfinite(block)
+        if not finite.all():
+            i, j, k = (int(f + w) for f, w in zip(first, np.argwhere(~finite)[0]))
+            raise ValueError(f"the grid has a non-finite value at [{i}, {j}, {k}]")
+        if block.size == 0 or not (block.min() < 0 <= block.max()):  # no sign change: no piece
+            return (np.zeros(0, np.uint64), np.zeros((0, 3)), np.zeros((0, 3), np.int32))
+        return _sdfcontour.marching_cubes_brick(block, tuple(int(f) for f in first),
+                                                tuple(int(n) for n in shape),
+                                                tuple(float(x) for x in lo),
+                                                tuple(float(x) for x in hi))
+    except ValueError as e:
+        end = [int(f) + int(d) for f, d in zip(first, np.shape(block))]
+        raise BrickError(f"brick {tuple(int(x) for x in index)} (samples "
+                         f"[{first[0]}:{end[0]}, {first[1]}:{end[1]}, {first[2]}:{end[2]}]): "
+                         f"{e}") from None
+
+
+def _read_and_contour(reader, index, first, dims, shape, lo, hi):
+    try:
+        block = reader.read(first, dims)
+    except ValueError as e:
+        raise BrickError(f"brick {tuple(index)}: {e}") from None
+    return brick_piece(block, index, first, shape, lo, hi)
+
+
+# ---------------------------------------------------------------------------------------------
+# The client.
+
+@contextlib.contextmanager
+def _main_script_hidden():
+    """Hides the caller's script from the worker processes that a local cluster spawns: spawn
+    runs the main script again in each child (to find its functions), and a script that calls
+    contour() without an `if __name__ == "__main__":` guard would start clusters without end.
+    Our tasks never need it: cloudpickle sends functions of __main__ by value."""
+    main = sys.modules.get("__main__")
+    saved = {k: main.__dict__[k] for k in ("__file__", "__spec__") if main and k in main.__dict__}
+    try:
+        if "__file__" in saved:
+            del main.__file__
+        if "__spec__" in saved:
+            main.__spec__ = None
+        yield
+    finally:
+        if main is not None:
+            main.__dict__.update(saved)
+
+
+def _start_client(client):
+    """(client, whether we started it): a local cluster for None, a scheduler for an address."""
+    import distributed
+    if client is None:
+        cluster = distributed.LocalCluster(processes=True, threads_per_worker=1,
+                                           dashboard_address=None, silence_logs=40)
+        return distributed.Client(cluster), True
+    if isinstance(client, str):
+        return distributed.Client(client), True
+    if not isinstance(client, distributed.Client):
+        raise _checks.ArgumentTypeError(f"client must be a dask.distributed Client, a scheduler "
+                                        f"address or None, got {type(client).__name__}")
+    return client, False
+
+
+def _stop_client(client):
+    cluster = getattr(client, "cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def _one_line(error):
+    """The exception a failed brick raised, as the caller should see it: the brick's one line,
+    without Dask's traceback."""
+    import distributed
+    text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    if isinstance(error, OSError):
+        return OSError(text)
+    if isinstance(error, distributed.KilledWorker):
+        return RuntimeError(f"a brick's task killed {error.args[-1] if error.args else 'its'} "
+                            f"workers (out of memory?): {text}")
+    if isinstance(error, ValueError):
+        return ValueError(text)
+    return RuntimeError(f"{type(error).__name__}: {text}")
+
+
+def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
+            resolution=None, dataset=None, batch_size=65536, progress=False, return_stats=False):
+    """Contour a grid too large for one process, brick by brick on Dask.
+
+    Parameters
+    ----------
+    source : path, zarr array, HDF5 dataset, dask or numpy array, or callable
+        The grid (nx, ny, nz) of signed distances: a ``.npy`` file (memory-mapped on each
+        worker), a ``.zarr`` folder or zarr array, an ``.h5``/``.hdf5`` file (with ``dataset``)
+        or h5py dataset, a dask array, or a callable ``f(points (k, 3)) -> (k,)`` sampled on a
+        ``resolution``^3 grid, block by block on the workers and near the surface only.
+        Each task reads only its brick.
+    bounds : (lo, hi), optional
+        Positions of the first and last samples, each a number or 3 numbers. Default (-1, 1).
+    method : {"mc"}
+        Marching cubes. GCP's reconstruction is not brick-local yet, and its screened Poisson
+        solve is global: both are refused here with a ValueError.
+    brick : int
+        Cells per brick side (default 256: a float32 brick of 257^3 samples is 68 MB).
+    client : dask.distributed.Client, str or None
+        The Dask client to run on; a scheduler address ("tcp://host:8786") to connect to; or
+        None for a local cluster of one single-threaded worker process per core, closed after.
+    out : path, optional
+        Stream the joined mesh into this binary PLY (written atomically) instead of returning
+        it; the join then holds the mesh's keys on disk, never all pieces in memory.
+    resolution : int
+        Samples per axis for a callable source.
+    dataset : str, optional
+        The dataset inside an HDF5 file or zarr group.
+    progress : bool
+        Print the bricks done on stderr.
+
+    Returns
+    -------
+    V : ndarray (n, 3) float64, F : ndarray (m, 3) int32
+        Unless ``out`` is given; with ``return_stats``, also a stats dict. With ``out``, the stats
+        dict alone: bricks, empty_bricks, vertices, triangles, seconds.
+
+    Raises
+    ------
+    ValueError
+        Bad input: a wrong shape, a NaN (named by brick and [i, j, k]), no surface crossing.
+    OSError
+        A file that cannot be read or written.
+    """
+    if method in ("gcp", "gtcp", "mt-rt", "mt-dt"):
+        why = ("its screened Poisson solve is global and its local reconstruction is not "
+               "brick-local yet" if method == "gcp" else "it needs a triangulation of all samples")
+        raise ValueError(f"method '{method}' cannot run brick by brick on Dask: {why}; use "
+                         f"method='mc' here, or sdfcontour.contour() in one process")
+    _checks.choice("method", method, ("mc",))
+    brick = _checks.whole_in("brick", brick, 1, 2**20)
+    batch_size = _checks.whole_in("batch_size", batch_size, 1, 2**26)
+    progress = _checks.flag("progress", progress)
+    reader = _reader(source, bounds, resolution, batch_size, dataset)
+    shape = tuple(int(n) for n in reader.shape)
+    _check_shape_and_dtype(shape, reader.dtype)
+    lo, hi = _bounds(bounds)
+    if out is not None:
+        out = os.fspath(out)
+        if os.path.isdir(out):
+            raise OSError(f"cannot write '{out}': it is a folder")
+        if not out.lower().endswith(".ply"):
+            raise ValueError(f"cannot write '{out}': sdfcontour.dask writes binary PLY (.ply)")
+        parent = os.path.dirname(os.path.abspath(out))
+        if not os.path.isdir(parent):
+            raise OSError(f"cannot write '{out}': no folder '{parent}'")
+
+    with _main_script_hidden():
+        return _contour_on(reader, shape, lo, hi, int(brick), client, out, progress,
+                           return_stats)
+
+
+def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stats):
+    import dask
+    started = time.perf_counter()
+    dask_client, owned = _start_client(client)
+    try:
+        tasks = []
+        for index, first, dims in bricks(shape, brick):
+            if isinstance(reader, np.ndarray) or type(reader).__module__.startswith("dask"):
+                sl = tuple(slice(f, f + d) for f, d in zip(first, dims))
+                block = reader[sl]
+                task = dask.delayed(brick_piece, pure=True)(block, index, first, shape, lo, hi)
+            else:
+                task = dask.delayed(_read_and_contour, pure=True)(reader, index, first, dims,
+                                                                  shape, lo, hi)
+            tasks.append(task)
+        futures = dask_client.compute(tasks)
+        order = {f.key: b for b, f in enumerate(futures)}
+        done = _Progress(len(futures), progress)
+        results = _arrivals(futures, order, done)
+        if out is None:
+            V, F, stats = join_pieces(results, len(futures))
+        else:
+            stats = write_pieces_as_ply(results, len(futures), out)
+    finally:
+        if owned:
+            _stop_client(dask_client)
+    stats["bricks"] = len(futures)
+    stats["seconds"] = time.perf_counter() - started
+    if stats["triangles"] == 0:  # nothing was written
+        raise ValueError("the grid has no sign change: no surface to contour")
+    if out is not None:
+        return stats
+    return (V, F, stats) if return_stats else (V, F)
+
+
+class _Progress:
+    def __init__(self, total, enabled):
+        self.total, self.enabled, self.done = total, enabled, 0
+
+    def tick(self):
+        self.done += 1
+        if self.enabled:
+            print(f"[sdfcontour] bricks {self.done}/{self.total}", file=sys.stderr,
+                  end="\n" if self.done == self.total else "\r", flush=True)
+
+
+def _arrivals(futures, order, done):
+    """Yields (brick number, piece) as the bricks finish; a failed brick cancels the rest and
+    raises its own one-line error."""
+    import distributed
+    try:
+        for future, piece in distributed.as_completed(futures, with_results=True,
+                                                      raise_errors=True):
+            done.tick()
+            yield order[future.key], piece
+    except Exception as error:  # a brick failed: say which and why, in one line
+        for f in futures:
+            f.cancel()
+        raise _one_line(error) from None
