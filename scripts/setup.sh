@@ -7,7 +7,8 @@ packages=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libgtest-dev libopenvdb-dev libboost-iostreams-dev
   python3-numpy python3-scipy python3-skimage python3-matplotlib
-  python3-dev pybind11-dev python3-setuptools python3-venv python3-pip python3-pytest
+  python3-dev pybind11-dev python3-setuptools python3-wheel python3-venv python3-pip python3-pytest
+  python3-dask python3-distributed python3-zarr python3-h5py
 )
 missing=()
 for p in "${packages[@]}"; do

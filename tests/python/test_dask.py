@@ -1,0 +1,187 @@
+"""sdfcontour.dask (issue 38): a grid contoured brick by brick on a local cluster of 2 worker
+processes is the single-process mesh exactly, from every kind of source, across seams through
+thin parts and sharp edges, and after a worker is killed mid-run."""
+import os
+import sys
+
+import numpy as np
+import pytest
+
+import sdfcontour
+
+distributed = pytest.importorskip("distributed")
+zarr = pytest.importorskip("zarr")
+h5py = pytest.importorskip("h5py")
+import cloudpickle  # noqa: E402  (Dask's own dependency)
+
+import sdfcontour.dask  # noqa: E402
+
+# The workers cannot import this test file: send its functions by value.
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
+
+N = 129  # 128 cells a side: 8 bricks of 64
+LO, HI = np.array([-1.0, -1.0, -1.0]), np.array([1.0, 1.0, 1.0])
+H = (HI - LO) / (N - 1)
+
+
+def shape_sdf(p):
+    """A torus, a box whose edges and corners cross the seams at x = 0 and y = 0 (cell boundaries
+    of the 64-cell bricks), and a plate 0.3 spacings thick whose faces straddle the seam z = 0;
+    as a union (min), so that the signs are right and the values near each part are distances."""
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    torus = np.sqrt((np.sqrt(x ** 2 + z ** 2) - 0.55) ** 2 + (y - 0.5) ** 2) - 0.15
+    q = np.abs(p - np.array([0.0, -0.1, -0.45])) - np.array([0.3001, 0.2501, 0.2])
+    box = np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
+    plate_q = np.abs(p - np.array([0.4, -0.5, 0.0])) - np.array([0.3, 0.3, 0.15 * H[2]])
+    plate = np.linalg.norm(np.maximum(plate_q, 0), axis=1) + np.minimum(plate_q.max(axis=1), 0)
+    return np.minimum(np.minimum(torus, box), plate)
+
+
+def positions(n=N):
+    """The grid's sample positions, by the formula that the library and the callable sampler use
+    (lo + index * h), so that a callable and a stored grid see the same points."""
+    i = np.arange(n)
+    h = (HI - LO) / (n - 1)
+    X, Y, Z = np.meshgrid(LO[0] + i * h[0], LO[1] + i * h[1], LO[2] + i * h[2], indexing="ij")
+    return np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return shape_sdf(positions()).reshape(N, N, N).astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=40)
+    with distributed.Client(cluster) as c:
+        yield c
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def single(grid):
+    return sdfcontour.contour(grid, method="mc")
+
+
+def canonical(V, F):
+    """Vertices sorted by position, triangles by sorted ranks rotated to start at the smallest:
+    equal iff the meshes have the same positions bit for bit and the same triangles."""
+    order = np.lexsort(V.T[::-1])
+    rank = np.empty(len(V), np.int64)
+    rank[order] = np.arange(len(V))
+    T = rank[F]
+    shift = np.argmin(T, axis=1)
+    T = np.stack([T[np.arange(len(T)), (shift + s) % 3] for s in range(3)], axis=1)
+    return V[order], T[np.lexsort(T.T[::-1])]
+
+
+def assert_same_mesh(a, b):
+    ca, cb = canonical(*a), canonical(*b)
+    assert np.array_equal(ca[0], cb[0])
+    assert np.array_equal(ca[1], cb[1])
+
+
+def assert_closed_manifold(F):
+    """Every directed edge once, and its reverse once: closed, 2-manifold, oriented."""
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64)
+    code = directed[:, 0] * (F.max() + 1) + directed[:, 1]
+    reverse = directed[:, 1] * (F.max() + 1) + directed[:, 0]
+    assert len(np.unique(code)) == len(code), "an edge is used twice in one direction"
+    assert np.array_equal(np.sort(code), np.sort(reverse)), "an edge has one triangle"
+
+
+def test_eight_bricks_on_two_workers_are_the_single_process_mesh(grid, client, single):
+    V, F, stats = sdfcontour.dask.contour(grid, method="mc", brick=64, client=client,
+                                          return_stats=True)
+    assert stats["bricks"] == 8
+    assert_same_mesh((V, F), single)
+    assert_closed_manifold(F)
+    # The seams run through the thin plate and the box's edges: there are vertices on them.
+    for axis, value in ((0, 0.0), (1, 0.0), (2, 0.0)):
+        assert np.sum(np.abs(V[:, axis] - value) < 1e-12) > 10
+
+
+def test_sources_agree_zarr_hdf5_npy_dask_callable(grid, client, single, tmp_path):
+    import dask.array as da
+    z = zarr.open(str(tmp_path / "g.zarr"), mode="w", shape=grid.shape, chunks=(32, 32, 32),
+                  dtype="f4", fill_value=1.0, write_empty_chunks=False)
+    z[...] = np.minimum(grid, 1.0)  # truncated at 1: chunks far from the surface are not stored
+    assert z.nchunks_initialized < z.nchunks
+    with h5py.File(tmp_path / "g.h5", "w") as f:
+        f.create_dataset("sdf/values", data=grid, chunks=(32, 32, 32))
+    np.save(tmp_path / "g.npy", grid)
+    meshes = {
+        "zarr path": sdfcontour.dask.contour(str(tmp_path / "g.zarr"), brick=64, client=client),
+        "zarr array": sdfcontour.dask.contour(z, brick=50, client=client),
+        "hdf5 path": sdfcontour.dask.contour(tmp_path / "g.h5", brick=64, client=client),
+        "npy memory-map": sdfcontour.dask.contour(tmp_path / "g.npy", brick=40, client=client),
+        "dask array": sdfcontour.dask.contour(da.from_array(grid, chunks=64), brick=64,
+                                              client=client),
+    }
+    with h5py.File(tmp_path / "g.h5", "r") as f:
+        meshes["hdf5 dataset"] = sdfcontour.dask.contour(f["sdf/values"], brick=64, client=client)
+    # The callable is sampled in float64 near the surface only: compare it with the float64 grid.
+    V64, F64 = sdfcontour.contour(shape_sdf(positions()).reshape(N, N, N), method="mc")
+    callable_mesh = sdfcontour.dask.contour(shape_sdf, resolution=N, brick=64, client=client)
+    for name, mesh in meshes.items():
+        assert_same_mesh(mesh, single), name
+    assert_same_mesh(callable_mesh, (V64, F64))
+
+
+def test_streamed_ply_is_the_joined_mesh(grid, client, single, tmp_path):
+    out = tmp_path / "mesh.ply"
+    stats = sdfcontour.dask.contour(grid, brick=48, client=client, out=out)
+    V, F = sdfcontour.read_mesh(str(out))
+    assert (stats["vertices"], stats["triangles"]) == (len(V), len(F))
+    assert_same_mesh((V, F), single)
+    assert [p.name for p in tmp_path.iterdir()] == ["mesh.ply"]  # no temporary left
+
+
+def test_a_killed_worker_loses_nothing(client, tmp_path):
+    marker = str(tmp_path / "killed")
+
+    def dies_once(p):
+        # The first evaluation anywhere kills its worker process, as a crash or OOM kill would.
+        if not os.path.exists(marker):
+            open(marker, "w").close()
+            os._exit(1)
+        return shape_sdf(p)
+
+    n = 65
+    V, F = sdfcontour.dask.contour(dies_once, resolution=n, brick=32, client=client)
+    assert os.path.exists(marker)
+    expected = sdfcontour.dask.contour(shape_sdf, resolution=n, brick=64, client=client)
+    assert_same_mesh((V, F), expected)
+
+
+def test_a_bad_brick_stops_the_run_with_its_index(grid, client, tmp_path):
+    bad = grid.copy()
+    bad[70, 3, 100] = np.nan
+    out = tmp_path / "never.ply"
+    with pytest.raises(ValueError) as error:
+        sdfcontour.dask.contour(bad, brick=64, client=client, out=out)
+    message = str(error.value)
+    assert message == ("brick (1, 0, 1) (samples [64:129, 0:65, 64:129]): the grid has a "
+                       "non-finite value at [70, 3, 100]")
+    assert error.value.__cause__ is None and error.value.__suppress_context__
+    assert list(tmp_path.iterdir()) == []  # no output, no temporary
+
+
+@pytest.mark.parametrize("call, kind, words", [
+    (lambda c: sdfcontour.dask.contour(np.zeros((8, 8, 8)) + 1j, client=c), TypeError,
+     "real numbers"),
+    (lambda c: sdfcontour.dask.contour(np.ones((9, 9, 9)), client=c), ValueError, "no sign change"),
+    (lambda c: sdfcontour.dask.contour(np.ones((9, 9)), client=c), ValueError, "3 axes"),
+    (lambda c: sdfcontour.dask.contour(np.ones((9, 9, 9)), method="gcp", client=c), ValueError,
+     "not brick-local yet"),
+    (lambda c: sdfcontour.dask.contour("/nonexistent/g.zarr", client=c), OSError, "no such"),
+    (lambda c: sdfcontour.dask.contour(np.ones((9, 9, 9)), brick=0, client=c), ValueError,
+     "brick must be from 1"),
+    (lambda c: sdfcontour.dask.contour(shape_sdf, client=c), ValueError, "needs a resolution"),
+    (lambda c: sdfcontour.dask.contour(np.ones((9, 9, 9)), client=5), TypeError, "client must"),
+])
+def test_bad_input_is_one_clear_error(client, call, kind, words):
+    with pytest.raises(kind, match=words):
+        call(client)
