@@ -359,3 +359,21 @@ def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
         sdfcontour.contour(g, reconstruction="global")
     with pytest.raises(ValueError, match="subdivisions"):
         sdfcontour.contour(g, reconstruction="local", subdivisions=9)
+
+
+def test_pip_installs_the_command_beside_the_interpreter(tmp_path):
+    # `pip install .` puts a `sdfcontour` command next to the environment's python, which runs
+    # the C++ program carried in the package: the same mesh as the module's.
+    import sys
+    command = os.path.join(os.path.dirname(sys.executable), "sdfcontour")
+    if not os.path.exists(command):
+        pytest.skip("the module is not pip-installed here (run through PYTHONPATH)")
+    assert "contour" in subprocess.run([command, "--help"], capture_output=True, text=True,
+                                       check=True).stdout
+    g = full_grid(torus, 24)
+    np.save(tmp_path / "g.npy", g)
+    subprocess.run([command, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m.ply"),
+                    "--method", "mc", "--quiet"], check=True)
+    V, F = sdfcontour.read_mesh(str(tmp_path / "m.ply"))
+    V2, F2 = sdfcontour.contour(g, method="mc")
+    assert np.array_equal(V, V2) and np.array_equal(F, F2)
