@@ -8,4 +8,4 @@ def main():
     if not os.access(program, os.X_OK):
         sys.exit(f"sdfcontour: error: the program is not installed at {program}; reinstall the "
                  f"package (pip install .)")
-    os.execv(program, [program] + sys.argv[1:])
+    os.execv(program, ["sdfcontour"] + sys.argv[1:])
