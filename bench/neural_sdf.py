@@ -45,7 +45,7 @@ def train(mesh, out, hidden=64, depth=4, steps=3000, seed=0):
     centre = (V.max(0) + V.min(0)) / 2
     V = (V - centre) * (1.8 / (V.max(0) - V.min(0)).max())  # as `sdfcontour sample` normalises
     n = 160
-    grid = sdfcontour.sample(V, F, n)
+    grid = sdfcontour.sample(V, F, n, scale=None)  # normalised above
     axis = np.linspace(-1, 1, n)
     exact = RegularGridInterpolator((axis, axis, axis), grid)
     rng = np.random.default_rng(seed)

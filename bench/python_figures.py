@@ -77,7 +77,7 @@ def main():
     grids = {}
     def grid(n):
         if n not in grids:
-            grids[n] = sdfcontour.sample(V_gt, F_gt, resolution=n)
+            grids[n] = sdfcontour.sample(V_gt, F_gt, resolution=n, scale=None)
         return grids[n]
     g = grid(args.res)
     meshes = [("ground truth", (V_gt, F_gt))]

@@ -64,7 +64,7 @@ def main():
                     with open(stats) as f:
                         fell_back = bool(json.load(f).get("fallback"))
                     V, F = sdfcontour.read_mesh(out)
-                    own = sdfcontour.sample(V, F, resolution=n)
+                    own = sdfcontour.sample(V, F, resolution=n, scale=None)
                     wrong = (np.sign(own) != np.sign(grid)) & (grid != 0)
                     deepest = np.abs(grid[wrong]).max() / h if wrong.any() else 0.0
                     if variants is None:

@@ -22,6 +22,7 @@
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/mesh_sdf.h"
+#include "sdfcontour/mesh_transform.h"
 #include "sdfcontour/mesh_union.h"
 #include "sdfcontour/metrics.h"
 #include "sdfcontour/option_ranges.h"
@@ -312,9 +313,15 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
       },
       py::make_tuple(array, keep ? keep : py::object(py::none())));
   py::dict out;
+  py::dict stats;
   if (r.mesh) {
     if (r.mesh->triangles.rows() == 0)
       throw Error("the " + method_name(opt.method) + " mesh is empty: no surface was found");
+    const MeshTopology topology = mesh_topology(*r.mesh);
+    stats["closed"] = topology.closed;
+    stats["oriented"] = topology.consistently_oriented;
+    stats["manifold"] = topology.nonmanifold_edges == 0;  // no edge with more than 2 triangles
+    stats["components"] = connected_components(*r.mesh);
     out["V"] = to_numpy(std::move(r.mesh->vertices));
     out["F"] = to_numpy(std::move(r.mesh->triangles));
   }
@@ -322,7 +329,6 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
     out["P"] = to_numpy(std::move(r.contact_points->points));
     out["N"] = to_numpy(std::move(r.contact_points->normals));
   }
-  py::dict stats;
   stats["samples"] = r.samples;
   stats["band_samples"] = r.band_samples;
   stats["isolated_samples"] = r.isolated_samples;
@@ -383,10 +389,15 @@ py::tuple run_poisson(const py::array& P, const py::array& N, const py::object& 
                         to_numpy(std::move(r.mesh.triangles)));
 }
 
-py::array run_sample(const py::array& V, const py::array& F, int resolution,
-                     const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+// The grid of signed distances of a closed mesh, normalised first as the CLI's `sample` does
+// when `scale` > 0 (longest side spanning [-scale, scale], centred); returns (grid, the mesh's
+// vertices as sampled).
+py::tuple run_sample(const py::array& V, const py::array& F, int resolution,
+                     const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                     double scale) {
   if (resolution < 2 || resolution > 1024) throw Error("resolution must be between 2 and 1024");
-  const Mesh mesh = mesh_from(V, F);
+  Mesh mesh = mesh_from(V, F);
+  if (scale > 0) mesh = normalize_mesh(mesh, scale);
   Bounds bounds;
   bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
   bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
@@ -398,7 +409,8 @@ py::array run_sample(const py::array& V, const py::array& F, int resolution,
   auto* owned = new Eigen::VectorXd(std::move(grid.values));
   py::capsule owner(owned, [](void* p) { delete static_cast<Eigen::VectorXd*>(p); });
   const py::ssize_t n = resolution, d = sizeof(double);
-  return py::array_t<double>({n, n, n}, {n * n * d, n * d, d}, owned->data(), owner);
+  return py::make_tuple(py::array_t<double>({n, n, n}, {n * n * d, n * d, d}, owned->data(), owner),
+                        to_numpy(std::move(mesh.vertices)));
 }
 
 py::dict run_distances(const py::array& V, const py::array& F, const py::array& V_gt,
@@ -461,7 +473,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("ascii"));
   m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("W"), py::arg("options"));
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
-        py::arg("hi"));
+        py::arg("hi"), py::arg("scale"));
   m.def("auto_band", &sdfcontour::auto_band, py::arg("samples_per_axis"));
   m.def("option_ranges", [] {
     py::dict ranges;  // Python keyword -> (lo, hi)

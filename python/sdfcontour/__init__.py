@@ -27,7 +27,7 @@ import numpy as _np
 from . import _checks, _sdfcontour
 from ._checks import ArgumentTypeError
 
-__all__ = ["contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh",
+__all__ = ["Mesh", "contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh",
            "ArgumentTypeError", "DroppedSamplesWarning", "FallbackWarning", "RescaleWarning"]
 
 METHODS = ("gcp", "gtcp", "mc", "mt-rt", "mt-dt")
@@ -239,6 +239,95 @@ def _switch(name, value):
     raise ValueError(f"{name} must be True, False or 'auto', got {value!r}")
 
 
+class Mesh(tuple):
+    """A triangle mesh that unpacks as a tuple (``V, F = mesh``; with normals or stats asked for,
+    those follow) and names its parts:
+
+    - ``V``: ndarray (n, 3) float64, the vertices;
+    - ``F``: ndarray (m, 3) int32, triangles counter-clockwise seen from outside;
+    - ``normals``: ndarray (n, 3) unit vertex normals, or None unless asked for;
+    - ``stats``: dict, what the run did (always there).
+    """
+
+    def __new__(cls, V, F, normals=None, stats=None, unpack=("V", "F")):
+        parts = {"V": V, "F": F, "normals": normals, "stats": stats}
+        self = super().__new__(cls, tuple(parts[name] for name in unpack))
+        self.V, self.F, self.normals, self.stats = V, F, normals, stats if stats is not None else {}
+        return self
+
+    def __repr__(self):
+        return f"sdfcontour.Mesh({len(self.V)} vertices, {len(self.F)} triangles)"
+
+
+def _at_level(sdf, level):
+    """The samples less `level`, so that the level set f = level is their zero set."""
+    level = float(_checks.number("level", level))
+    if not _np.isfinite(level) or abs(level) > _checks.LARGEST_COORDINATE:
+        raise ValueError(f"level must be a finite number, got {level!r}")
+    if level == 0.0:
+        return sdf
+    if callable(sdf):
+        f = sdf
+        return lambda points: _np.asarray(f(points), dtype=float) - level
+    if isinstance(sdf, tuple) and len(sdf) == 2:
+        return sdf[0], _checks.numbers_array("values", sdf[1]).astype(float) - level
+    array = _checks.numbers_array("the samples", sdf)
+    if array.ndim == 2 and array.shape[1:] == (4,):
+        array = array.astype(float)  # a copy
+        array[:, 3] -= level
+        return array
+    return array - _np.asarray(level, dtype=array.dtype if array.dtype.kind == "f" else float)
+
+
+def _placement(sdf, bounds, spacing, origin, resolution):
+    """`bounds`, or (origin, origin + spacing (n - 1)) from scikit-image's keywords."""
+    if spacing is None and origin is None:
+        return bounds
+    if bounds is not None:
+        raise ValueError("give bounds, or spacing and origin, not both")
+    if callable(sdf):
+        if resolution is None:
+            raise ValueError("a callable SDF needs a resolution (samples per axis)")
+        shape = (_checks.whole_in("resolution", resolution, 2, 2048),) * 3
+    else:
+        array = _checks.numbers_array("the samples", sdf[1] if isinstance(sdf, tuple) else sdf)
+        if array.ndim != 3:
+            raise ValueError("spacing and origin place a grid (nx, ny, nz); scattered samples "
+                             "carry their own positions")
+        shape = array.shape
+
+    def three(name, value, default):
+        value = default if value is None else value
+        try:
+            v = _np.broadcast_to(_checks.numbers_array(name, value).astype(float), (3,)).copy()
+        except ValueError:
+            raise ValueError(f"{name} must be a number or 3 numbers") from None
+        return v
+
+    step, first = three("spacing", spacing, 1.0), three("origin", origin, 0.0)
+    if not (_np.all(_np.isfinite(step)) and _np.all(step > 0) and _np.all(_np.isfinite(first))):
+        raise ValueError("spacing must be positive and finite, origin finite")
+    return first, first + step * (_np.array(shape) - 1)
+
+
+def _normals_of(sdf, bounds, resolution, out, batch_size):
+    """Unit vertex normals of out["V"] from the field (see contour's Returns)."""
+    from . import _normals
+    V = out["V"]
+    if callable(sdf):
+        lo, hi = _bounds(bounds)
+        h = float(((hi - lo) / (int(resolution) - 1)).max())
+        normals, evaluations = _normals.callable_normals(sdf, V, h, batch_size)
+        out["stats"]["normal_evaluations"] = evaluations
+        return normals
+    array = _input_array(sdf)
+    if array.ndim == 3:
+        lo, hi = _bounds(bounds)
+        return _normals.grid_normals(array, lo, (hi - lo) / (_np.array(array.shape) - 1), V)
+    from ._callable import vertex_normals
+    return vertex_normals(V, out["F"])
+
+
 def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", margin=1.0,
             truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
             tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
@@ -246,7 +335,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
-            refine="auto", strict=False, progress=False, return_stats=False):
+            refine="auto", strict=False, progress=False, return_stats=False, level=0.0,
+            spacing=None, origin=None, return_normals=False):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -336,6 +426,15 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         own are ``stats["evaluations"]``).
     progress : bool
         Show the stages on stderr.
+    level : float
+        Contour the level set ``f = level`` instead of the zero set (scikit-image's ``level``):
+        the values less ``level`` are contoured.
+    spacing, origin : 3 numbers (or one), optional
+        scikit-image's placement, instead of ``bounds``: sample ``[i, j, k]`` at
+        ``origin + (i, j, k) * spacing`` (defaults: origin 0, spacing 1 when either is given).
+        For grids and callables.
+    return_normals : bool
+        Also return vertex normals (see Returns).
     return_stats : bool
         Also return a dict of counts (samples, band samples, for a callable the evaluations) and
         ``stats["seconds"]``, the seconds spent in each stage (as the CLI's ``--stats``).
@@ -346,8 +445,16 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Vertices.
     F : ndarray (m, 3) int32
         Triangles, counter-clockwise seen from outside.
+    normals : ndarray (n, 3) float64
+        Only with ``return_normals=True``: unit vertex normals along the field's gradient
+        (outward): central differences of the grid interpolated trilinearly (as scikit-image), of
+        a callable at the vertex, or the mesh's area-weighted normals for scattered samples.
     stats : dict
-        Only with ``return_stats=True``.
+        Only with ``return_stats=True``; among its counts ``closed``, ``manifold`` and
+        ``components`` describe the mesh.
+
+    The result is a :class:`Mesh`: it unpacks as above (``V, F = ...``) and also names its
+    parts, ``mesh.V``, ``mesh.F``, ``mesh.normals`` (None unless asked for) and ``mesh.stats``.
 
     Raises
     ------
@@ -368,6 +475,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     >>> V, F = sdfcontour.contour(grid, bounds=(-1, 1), method="mc")
     >>> V, F = sdfcontour.contour(samples)                  # (n, 4) scattered samples
     """
+    sdf = _at_level(sdf, level)
+    bounds = _placement(sdf, bounds, spacing, origin, resolution)
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
                  solver_tolerance, progress, finest_solver_tolerance)
@@ -403,9 +512,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
                                                           int(batch_size))
         out["stats"]["refined_vertices"] = moved
         out["stats"]["refine_evaluations"] = evaluations
-    if return_stats:
-        return out["V"], out["F"], out["stats"]
-    return out["V"], out["F"]
+    normals = None
+    if _checks.flag("return_normals", return_normals):
+        normals = _normals_of(sdf, bounds, resolution, out, int(batch_size))
+    unpack = ("V", "F") + (("normals",) if normals is not None else ()) + \
+        (("stats",) if _checks.flag("return_stats", return_stats) else ())
+    return Mesh(out["V"], out["F"], normals, out["stats"], unpack)
 
 
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
@@ -507,8 +619,9 @@ def poisson(P, N, *, weights=None, depth=8, alpha=10.0, full_depth=5, samples_pe
     return _sdfcontour.poisson(P, N, W, o)
 
 
-def sample(V, F, resolution=64, bounds=None):
-    """Signed distances of a closed mesh on a resolution^3 grid (negative inside).
+def sample(V, F, resolution=64, bounds=None, scale=0.9, return_mesh=False):
+    """Signed distances of a closed mesh on a resolution^3 grid (negative inside), placed as the
+    CLI's ``sample`` places it.
 
     Parameters
     ----------
@@ -520,19 +633,35 @@ def sample(V, F, resolution=64, bounds=None):
         Samples per axis (2 to 1024).
     bounds : (lo, hi), optional
         The grid's box, default (-1, 1).
+    scale : float or None
+        The mesh is first moved and scaled uniformly so that its bounding box is centred at the
+        origin and its longest side spans [-scale, scale] (default 0.9, as the CLI). None samples
+        the mesh where it lies (parts outside the bounds are then cut off by the box).
+    return_mesh : bool
+        Also return the vertices as sampled (V moved and scaled), to compare meshes with.
 
     Returns
     -------
     grid : ndarray (resolution, resolution, resolution) float64
+    V_sampled : ndarray (n, 3), with ``return_mesh``
 
     Examples
     --------
-    >>> grid = sdfcontour.sample(V, F, resolution=64)
+    >>> grid, V_unit = sdfcontour.sample(V, F, resolution=64, return_mesh=True)
+    >>> grid = sdfcontour.sample(V, F, resolution=64, bounds=(0, 1), scale=None)
     """
     lo, hi = _bounds(bounds)
     V = _checks.points("V", V)
     F = _checks.faces("F", F, len(V))
-    return _sdfcontour.sample(V, F, _checks.in_range("resolution", resolution, whole=True), lo, hi)
+    if scale is None:
+        half_extent = 0.0
+    else:
+        half_extent = float(_checks.number("scale", scale))
+        if not 1e-6 <= half_extent <= 1e6:
+            raise ValueError(f"scale must be from 1e-06 to 1e+06 (or None), got {scale!r}")
+    grid, V_sampled = _sdfcontour.sample(
+        V, F, _checks.in_range("resolution", resolution, whole=True), lo, hi, half_extent)
+    return (grid, V_sampled) if _checks.flag("return_mesh", return_mesh) else grid
 
 
 def distances(V, F, V_gt, F_gt, samples=200000, seed=1):

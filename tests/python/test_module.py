@@ -262,7 +262,7 @@ def test_scattered_samples_contact_points_and_poisson():
 
 def test_sample_and_distances():
     V, F = sdfcontour.contour(full_grid(sphere, 32), method="mc")
-    grid = sdfcontour.sample(V, F, resolution=20)
+    grid = sdfcontour.sample(V, F, resolution=20, scale=None)
     assert grid.shape == (20, 20, 20)
     exact = full_grid(sphere, 20)
     assert np.max(np.abs(grid - exact)) < 0.01  # the MC mesh is within 0.01 of the sphere
@@ -377,3 +377,21 @@ def test_pip_installs_the_command_beside_the_interpreter(tmp_path):
     V, F = sdfcontour.read_mesh(str(tmp_path / "m.ply"))
     V2, F2 = sdfcontour.contour(g, method="mc")
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
+
+
+def test_sample_places_the_mesh_as_the_cli_does(tmp_path):
+    # Default scale 0.9: the CLI's normalisation, bit for bit; a mesh reaching past the box is
+    # brought inside it instead of being cut off.
+    V, F = sdfcontour.read_mesh(os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared",
+                                             "data", "meshes", "spot.obj"))
+    V = V * 1.7 + 0.3  # past [-1, 1]
+    sdfcontour.write_mesh(tmp_path / "spot.obj", V, F)
+    grid, V_unit = sdfcontour.sample(V, F, resolution=24, return_mesh=True)
+    subprocess.run([CLI, "sample", str(tmp_path / "spot.obj"), "--res", "24", "-o",
+                    str(tmp_path / "s"), "--quiet"], check=True, capture_output=True)
+    assert np.array_equal(grid, np.load(tmp_path / "s.npy"))
+    V_cli, _ = sdfcontour.read_mesh(tmp_path / "s_mesh.ply")
+    assert np.array_equal(V_unit, V_cli)
+    assert np.isclose(np.abs(V_unit).max(), 0.9)
+    with pytest.raises(ValueError, match="scale"):
+        sdfcontour.sample(V, F, 8, scale=0)

@@ -118,7 +118,8 @@ def test_overlapping_parts_are_sampled_as_their_union():
                       [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
         return V, F
     (V1, F1), (V2, F2) = cube(-0.6, 0.2), cube(-0.2, 0.6)
-    grid = sdfcontour.sample(np.vstack([V1, V2]), np.vstack([F1, F2 + 8]), 31, bounds=(-0.6, 0.6))
+    grid = sdfcontour.sample(np.vstack([V1, V2]), np.vstack([F1, F2 + 8]), 31, bounds=(-0.6, 0.6),
+                             scale=None)
     # The origin (sample 15) lies in both cubes: inside, sqrt(0.08) from the union's boundary.
     assert grid[15, 15, 15] == pytest.approx(-np.sqrt(0.08), abs=1e-9)
 
