@@ -1,5 +1,6 @@
 """Pictures for docs/python.md, made with the Python module: marching cubes and GCP meshes of a
-shared mesh's 32^3 grid beside the ground truth, and L1 error against grid resolution.
+shared mesh's 32^3 grid beside the ground truth (rendered with VTK, bench/vtk_render.py), and L1
+error against grid resolution.
 
 Usage (with the module installed, e.g. scripts/test.sh's build/venv):
     build/venv/bin/python bench/python_figures.py [--mesh spot] [--out docs/img]
@@ -16,44 +17,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import sdfcontour
+from vtk_render import ensure_display, render
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
 CLI = os.path.join(ROOT, "build", "sdfcontour")
-
-
-def render(V, F, size=420, points=1500000, seed=0):
-    """A shaded image of the mesh: area-uniform surface points with their face normals, seen
-    along a fixed direction through a z-buffer (exact occlusion, unlike painter's sorting)."""
-    rng = np.random.default_rng(seed)
-    tris = V[F]
-    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    area = np.linalg.norm(n, axis=1)
-    n /= np.maximum(area, 1e-30)[:, None]
-    t = rng.choice(len(F), points, p=area / area.sum())
-    u = rng.random((points, 2))
-    flip = u.sum(1) > 1
-    u[flip] = 1 - u[flip]
-    P = tris[t, 0] + u[:, :1] * (tris[t, 1] - tris[t, 0]) + u[:, 1:] * (tris[t, 2] - tris[t, 0])
-    # Camera: y up, looking from the front-right and a little above.
-    yaw, pitch = np.radians(-35), np.radians(-20)
-    Ry = np.array([[np.cos(yaw), 0, np.sin(yaw)], [0, 1, 0], [-np.sin(yaw), 0, np.cos(yaw)]])
-    Rx = np.array([[1, 0, 0], [0, np.cos(pitch), -np.sin(pitch)], [0, np.sin(pitch), np.cos(pitch)]])
-    R = Rx @ Ry
-    Q, N = P @ R.T, n[t] @ R.T
-    lo, hi = Q[:, :2].min(0), Q[:, :2].max(0)
-    scale = (size - 10) / (hi - lo).max()
-    px = ((Q[:, 0] - lo[0]) * scale + 5).astype(int)
-    py = (size - 1 - ((Q[:, 1] - lo[1]) * scale + 5)).astype(int)
-    pixel = py * size + px
-    order = np.lexsort((-Q[:, 2], pixel))  # per pixel, the nearest (largest z) first
-    first = order[np.r_[True, pixel[order][1:] != pixel[order][:-1]]]
-    light = np.array([0.3, 0.5, 0.8]) / np.linalg.norm([0.3, 0.5, 0.8])
-    shade = 0.2 + 0.8 * np.clip(N[first] @ light, 0, 1)
-    image = np.ones((size * size, 3))
-    image[pixel[first]] = np.outer(shade, [0.62, 0.72, 0.86])
-    return image.reshape(size, size, 3)
 
 
 def draw(ax, V, F, title):
@@ -69,6 +38,7 @@ def main():
     ap.add_argument("--sweep", default="16,24,32,48,64,96")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "img"))
     args = ap.parse_args()
+    ensure_display()
     with tempfile.TemporaryDirectory() as d:
         # The normalised ground truth, from the CLI (sample scales it into [-0.9, 0.9]^3).
         subprocess.run([CLI, "sample", os.path.join(MESHES, args.mesh + ".obj"), "--res", "16", "-o",
