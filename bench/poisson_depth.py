@@ -50,10 +50,10 @@ def main():
             per = {depth: [] for depth in depths}
             for name in names:
                 prefix = os.path.join(d, f"{name}{grid}")
-                run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(grid), "-o",
-                     prefix, "-q"])
                 gt = prefix + "_mesh.ply"
-                try:
+                try:  # a mesh thinner than a spacing has no sample inside: skipped
+                    run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(grid),
+                         "-o", prefix, "-q"])
                     run([CLI, "contour", prefix + ".npy", "-o", prefix + "_mc.ply", "--method", "mc",
                          "-q"])
                 except subprocess.CalledProcessError:

@@ -1,6 +1,7 @@
 #include "sdfcontour/pipeline.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -55,7 +56,10 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
   if (points.rows() == 0 || !(spacing > 0)) return 8;
   const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
   const double samples_per_axis = extent / spacing + 1;
-  return samples_per_axis > 513 ? 11 : samples_per_axis > 257 ? 10 : samples_per_axis > 129 ? 9 : 8;
+  if (samples_per_axis > 513) return 11;
+  if (samples_per_axis > 257) return 10;
+  if (samples_per_axis > 129) return 9;
+  return samples_per_axis > 48 ? 8 : samples_per_axis > 24 ? 7 : 6;
 }
 
 int auto_subdivisions(double samples_per_axis) {
@@ -240,9 +244,12 @@ namespace {
 ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* shape,
                                     const ContourOptions& options,
                                     const GridMeasures* measured = nullptr) {
+  const auto started = std::chrono::steady_clock::now();
   try {
     return contour_or_throw(input, shape, options, measured);
   } catch (const NotDistances& e) {
+    const double discarded =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     const GridView* grid = grid_view_of(input);
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
         !options.fallback_to_mc)
@@ -250,6 +257,8 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
     ContourResult result;
     result.samples = int(grid->size());
     result.fallback = std::string(e.what()) + ": the values do not behave as distances";
+    // The work thrown away is part of the run's cost: said, not hidden.
+    result.stages.push_back({"gcp (discarded)", discarded});
     if (options.progress)
       options.progress("GCP: " + result.fallback + "; this is marching cubes' mesh instead");
     Stages stages(result, options);

@@ -166,11 +166,16 @@ TEST(Band, AutoBandFollowsTheResolution) {
 }
 
 // The automatic Poisson depth follows the samples per axis across the band's extent: the octree's
-// finest cells stay at most about half a spacing wide up to depth 11.
+// finest cells are about a quarter of a spacing wide below 129 samples per axis (finer only
+// multiplied the triangles: bench/poisson_depth.py) and at most about half a spacing up to
+// depth 11.
 TEST(Band, AutoPoissonDepthFollowsTheResolution) {
   PointMatrix corners(2, 3);
   corners << -0.9, -0.9, -0.9, 0.9, 0.9, 0.9;
   const double extent = 1.8;
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 15), 6);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 30), 7);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 60), 8);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 100), 8);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 200), 9);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 460), 10);

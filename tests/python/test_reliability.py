@@ -195,6 +195,8 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     with pytest.warns(sdfcontour.FallbackWarning, match="marching cubes"):
         V, F, stats = sdfcontour.contour(implicit, return_stats=True)
     assert stats["fallback"]
+    # The discarded GCP run's time is accounted for, beside marching cubes'.
+    assert stats["seconds"]["gcp (discarded)"] > 0 and "marching" in stats["seconds"]
     with pytest.raises(ValueError, match="distances"):
         sdfcontour.contour(implicit, strict=True)
     # A distance scaled by 3: rescaled, and said.
