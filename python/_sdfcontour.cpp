@@ -28,6 +28,7 @@
 #include "sdfcontour/option_ranges.h"
 #include "sdfcontour/pipeline.h"
 #include "sdfcontour/signed_distance.h"
+#include "sdfcontour/vdb.h"
 
 namespace py = pybind11;
 using namespace sdfcontour;
@@ -294,6 +295,16 @@ py::tuple run_marching_cubes_brick(const py::array& block, const std::array<int,
                         to_numpy(std::move(piece.triangles)));
 }
 
+// A .vdb float level set, read sparse as the CLI reads it: (points (n, 3), values (n,), voxel
+// size, background).
+py::tuple run_read_vdb(const std::string& path, const std::string& grid_name) {
+  VdbLevelSet level_set = run_interruptible(
+      [path, grid_name](std::atomic<bool>&) { return read_vdb_level_set(path, grid_name); });
+  return py::make_tuple(to_numpy(std::move(level_set.samples.points)),
+                        to_numpy(std::move(level_set.samples.values)),  // (n, 1)
+                        level_set.voxel_size, level_set.background);
+}
+
 py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
                      const std::array<double, 3>& hi, double spacing, const py::dict& options,
                      bool want_mesh, bool want_points) {
@@ -468,6 +479,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("options"), py::arg("want_mesh"), py::arg("want_points"));
   m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
+  m.def("read_vdb", &run_read_vdb, py::arg("path"), py::arg("grid_name"));
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
         py::arg("ascii"));

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iomanip>
@@ -66,12 +67,50 @@ void write_ply(std::ostream& out, const PointMatrix& vertices, const PointMatrix
   }
 }
 
+void write_off(std::ostream& out, const Mesh& mesh) {
+  out << "OFF\n# written by sdfcontour\n"
+      << mesh.vertices.rows() << ' ' << mesh.triangles.rows() << " 0\n"
+      << std::setprecision(17);
+  for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
+    out << mesh.vertices(i, 0) << ' ' << mesh.vertices(i, 1) << ' ' << mesh.vertices(i, 2) << '\n';
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f)
+    out << "3 " << mesh.triangles(f, 0) << ' ' << mesh.triangles(f, 1) << ' '
+        << mesh.triangles(f, 2) << '\n';
+}
+
+// Binary STL: an 80-byte header, the triangle count, then per triangle its unit normal and three
+// corners as float32 (STL has no shared vertices and no double precision) and 2 spare bytes.
+void write_binary_stl(std::ostream& out, const Mesh& mesh) {
+  if (mesh.triangles.rows() > 0xffffffffL) throw Error("an STL file holds at most 2^32-1 triangles");
+  std::string header = "binary STL written by sdfcontour";
+  header.resize(80, ' ');
+  out.write(header.data(), 80);
+  const std::uint32_t count = std::uint32_t(mesh.triangles.rows());
+  out.write(reinterpret_cast<const char*>(&count), 4);
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(f, 0)).transpose(),
+                          b = mesh.vertices.row(mesh.triangles(f, 1)).transpose(),
+                          c = mesh.vertices.row(mesh.triangles(f, 2)).transpose();
+    const Eigen::Vector3d n = (b - a).cross(c - a).stableNormalized();
+    float record[12];
+    for (int k = 0; k < 3; ++k) {
+      record[k] = float(n[k]);
+      record[3 + k] = float(a[k]);
+      record[6 + k] = float(b[k]);
+      record[9 + k] = float(c[k]);
+    }
+    out.write(reinterpret_cast<const char*>(record), sizeof(record));
+    const char spare[2] = {0, 0};
+    out.write(spare, 2);
+  }
+}
+
 }  // namespace
 
 void write_mesh(const std::string& path, const Mesh& mesh, PlyFormat ply_format) {
   const std::string ext = extension(path);
-  if (ext != "ply" && ext != "obj")
-    throw Error("cannot write a mesh to '" + path + "': use a .ply or .obj extension");
+  if (ext != "ply" && ext != "obj" && ext != "off" && ext != "stl")
+    throw Error("cannot write a mesh to '" + path + "': use a .ply, .obj, .off or .stl extension");
   if (mesh.triangles.rows() == 0) throw Error("cannot write '" + path + "': the mesh is empty");
   require_coordinates(mesh.vertices, "the mesh for '" + path + "'");
   if (mesh.triangles.minCoeff() < 0 || mesh.triangles.maxCoeff() >= mesh.vertices.rows())
@@ -79,6 +118,10 @@ void write_mesh(const std::string& path, const Mesh& mesh, PlyFormat ply_format)
   AtomicFile file(path);
   if (ext == "ply") {
     write_ply(file.stream(), mesh.vertices, nullptr, &mesh.triangles, ply_format);
+  } else if (ext == "off") {
+    write_off(file.stream(), mesh);
+  } else if (ext == "stl") {
+    write_binary_stl(file.stream(), mesh);
   } else {
     auto& out = file.stream();
     out << "# written by sdfcontour\n" << std::setprecision(17);

@@ -386,7 +386,7 @@ Command add_contour_command(CLI::App& app) {
                 "transform are used), or a built-in shape builtin:NAME@N (N^3 grid) / "
                 "builtin:NAME@random:COUNT; NAME is one of sphere, torus, box, plate, shell, csg")
       ->required();
-  c->add_option("-o,--output", a->output, "Mesh to write (.ply binary by default, or .obj)");
+  c->add_option("-o,--output", a->output, "Mesh to write (.ply binary by default, .obj, .off or binary .stl)");
   c->add_option(
       "--points", a->points,
       "Contact points to write as PLY (x y z nx ny nz): GCP's, or GTCP's for --method gtcp");

@@ -87,7 +87,7 @@ Command add_poisson_command(CLI::App& app) {
       "poisson", "Screened Poisson reconstruction of an oriented point cloud (PLY x y z nx ny nz)");
   c->add_option("input", a->input, "Oriented points: PLY (ASCII or binary) with x y z nx ny nz")
       ->required();
-  c->add_option("-o,--output", a->output, "Mesh to write (.ply or .obj)")->required();
+  c->add_option("-o,--output", a->output, "Mesh to write (.ply, .obj, .off or .stl)")->required();
   c->add_option("--densities", a->densities,
                 "Write each vertex's estimated sampling density (samples per unit area) as .npy");
   a->run.add_to(c, "Write a JSON summary (counts, per-stage seconds, per-depth solver figures)");

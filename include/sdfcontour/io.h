@@ -9,8 +9,9 @@ namespace sdfcontour {
 
 enum class PlyFormat { Binary, Ascii };
 
-/// Writes a mesh as PLY (binary little-endian by default) or OBJ, chosen by the extension
-/// (.ply or .obj; anything else is an Error).
+/// Writes a mesh as PLY (binary little-endian by default), OBJ, OFF or binary STL (float32
+/// corners, no shared vertices), chosen by the extension (.ply, .obj, .off or .stl; anything
+/// else is an Error).
 void write_mesh(const std::string& path, const Mesh& mesh,
                 PlyFormat ply_format = PlyFormat::Binary);
 

@@ -162,7 +162,33 @@ def _input_array(sdf):
     return array
 
 
-def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
+def _from_path(sdf, grid_name):
+    """A path as the samples: a .npy memory-mapped (a grid or (n, 4) samples), a .vdb level set
+    read sparse as the CLI reads it (its voxel size the spacing, its background the truncation
+    unless one is given). Returns (samples, spacing of scattered samples or 0, truncation or
+    None)."""
+    import os
+    if not isinstance(sdf, (str, os.PathLike)):
+        if grid_name is not None:
+            raise ValueError("grid_name is for a .vdb file")
+        return sdf, 0.0, None
+    path = os.fspath(sdf)
+    if path.lower().endswith(".npy"):
+        if grid_name is not None:
+            raise ValueError("grid_name is for a .vdb file")
+        if not os.path.isfile(path):
+            raise OSError(f"cannot read '{path}': no such file")
+        try:
+            return _np.load(path, mmap_mode="r", allow_pickle=False), 0.0, None
+        except ValueError as error:
+            raise ValueError(f"cannot read '{path}' as .npy: {error}") from None
+    if path.lower().endswith(".vdb"):
+        points, values, voxel, background = _sdfcontour.read_vdb(path, grid_name or "")
+        return _np.column_stack([points, values.reshape(-1)]), float(voxel), float(background)
+    raise ValueError(f"cannot read '{path}': give a .npy or .vdb path, an array or a callable")
+
+
+def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, spacing=0.0):
     lo, hi = _bounds(bounds)
     stats = {}
     if callable(sdf):
@@ -184,7 +210,7 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points):
         if resolution is not None:
             raise ValueError("resolution is for a callable SDF; a grid has its own shape")
         array = _input_array(sdf)
-    out = _sdfcontour.contour(array, lo, hi, 0.0, options, want_mesh, want_points)
+    out = _sdfcontour.contour(array, lo, hi, spacing, options, want_mesh, want_points)
     out["stats"].update(stats)
     if out["stats"].get("fallback"):
         _warnings.warn(f"GCP returned marching cubes' mesh: {out['stats']['fallback']}",
@@ -336,15 +362,18 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
             refine="auto", strict=False, progress=False, return_stats=False, level=0.0,
-            spacing=None, origin=None, return_normals=False):
+            spacing=None, origin=None, return_normals=False, grid_name=None):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
     ----------
-    sdf : ndarray (nx, ny, nz), ndarray (n, 4), tuple (points (n, 3), values (n,)), or callable
+    sdf : ndarray (nx, ny, nz), ndarray (n, 4), tuple (points (n, 3), values (n,)), callable, or path
         A grid of signed distances (float32 or float64; read in place when C-contiguous),
-        scattered samples (rows x, y, z, value), or a function ``f(points (k, 3)) -> (k,)``
-        that is sampled on a ``resolution``^3 grid only near the surface (see Notes).
+        scattered samples (rows x, y, z, value), a function ``f(points (k, 3)) -> (k,)``
+        that is sampled on a ``resolution``^3 grid only near the surface (see Notes), or a
+        path: a ``.npy`` (memory-mapped) or an OpenVDB ``.vdb`` float level set, read sparse as
+        the CLI reads it (its active voxels as samples, its voxel size the spacing, its
+        background the truncation).
     bounds : (lo, hi), optional
         The grid's box: positions of the first and last samples, each a number or 3 numbers.
         Default (-1, 1). Ignored for scattered samples.
@@ -435,6 +464,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         For grids and callables.
     return_normals : bool
         Also return vertex normals (see Returns).
+    grid_name : str, optional
+        The float grid to read from a ``.vdb`` (default: the first).
     return_stats : bool
         Also return a dict of counts (samples, band samples, for a callable the evaluations) and
         ``stats["seconds"]``, the seconds spent in each stage (as the CLI's ``--stats``).
@@ -475,6 +506,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     >>> V, F = sdfcontour.contour(grid, bounds=(-1, 1), method="mc")
     >>> V, F = sdfcontour.contour(samples)                  # (n, 4) scattered samples
     """
+    sdf, sample_spacing, truncation_found = _from_path(sdf, grid_name)
+    if truncation_found is not None and truncation == "auto":
+        truncation = repr(truncation_found)  # a level set's background is its truncation
     sdf = _at_level(sdf, level)
     bounds = _placement(sdf, bounds, spacing, origin, resolution)
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
@@ -503,7 +537,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         o["refine_dilation"] = _refine_dilation(refine_dilation)
     refine = _switch("refine", refine)
     o["fallback_to_mc"] = not _checks.flag("strict", strict)
-    out = _run(sdf, bounds, resolution, batch_size, o, True, False)
+    out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing)
     if callable(sdf) and method == "gcp" and refine != "off":
         from ._callable import refine_on_zero_set
         lo, hi = _bounds(bounds)
@@ -522,7 +556,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
 
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
                    gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
-                   brick_size="auto", brick_halo=0.0, batch_size=65536, progress=False):
+                   brick_size="auto", brick_halo=0.0, batch_size=65536, progress=False,
+                   grid_name=None):
     """GCP's contact points with their normals, without the surface reconstruction.
 
     Parameters are those of :func:`contour`.
@@ -538,9 +573,12 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
     --------
     >>> P, N = sdfcontour.contact_points(grid, weights="james")
     """
+    sdf, sample_spacing, truncation_found = _from_path(sdf, grid_name)
+    if truncation_found is not None and truncation == "auto":
+        truncation = repr(truncation_found)
     o = _options("gcp", band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, progress)
-    out = _run(sdf, bounds, resolution, batch_size, o, False, True)
+    out = _run(sdf, bounds, resolution, batch_size, o, False, True, sample_spacing)
     return out["P"], out["N"]
 
 
@@ -711,8 +749,8 @@ def read_mesh(path):
 
 
 def write_mesh(path, V, F, ascii=False):
-    """Writes a mesh as PLY (binary unless ``ascii``) or OBJ, by the extension; atomically (a
-    failed write leaves no file).
+    """Writes a mesh as PLY (binary unless ``ascii``), OBJ, OFF or binary STL (float32, no shared
+    vertices), by the extension; atomically (a failed write leaves no file).
 
     Examples
     --------

@@ -410,3 +410,46 @@ def test_gcp_output_follows_the_grid():
     l1 = {name: sdfcontour.distances(m.V, m.F, V_gt, F_gt, samples=50000)["L1"]
           for name, m in (("mc", mc), ("gcp", gcp))}
     assert l1["gcp"] < 0.5 * l1["mc"]
+
+
+def test_write_mesh_off_and_stl(tmp_path):
+    V, F = sdfcontour.contour(full_grid(torus, 20), method="mc")
+    sdfcontour.write_mesh(tmp_path / "m.off", V, F)
+    V2, F2 = sdfcontour.read_mesh(tmp_path / "m.off")  # 17 digits: exact round trip
+    assert np.array_equal(V, V2) and np.array_equal(F, F2)
+    sdfcontour.write_mesh(tmp_path / "m.stl", V, F)
+    raw = (tmp_path / "m.stl").read_bytes()
+    count = int(np.frombuffer(raw[80:84], "<u4")[0])
+    records = np.frombuffer(raw[84:], np.dtype([("n", "<f4", 3), ("p", "<f4", (3, 3)),
+                                                 ("spare", "<u2")]))
+    assert count == len(F) == len(records)
+    assert np.array_equal(records["p"], V[F].astype(np.float32))
+    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    assert np.allclose(records["n"], cross / np.linalg.norm(cross, axis=1, keepdims=True),
+                       atol=1e-6)
+    with pytest.raises(ValueError, match=".stl"):
+        sdfcontour.write_mesh(tmp_path / "m.xyz", V, F)
+
+
+def test_paths_as_input_npy_and_vdb(tmp_path):
+    # A .vdb is read sparse as the CLI reads it: the same mesh bit for bit; a .npy is mapped.
+    subprocess.run([CLI, "sample", os.path.join(os.path.dirname(__file__), "..", "..", "..",
+                                                 "shared", "data", "meshes", "spot.obj"),
+                    "--res", "32", "-o", str(tmp_path / "spot.vdb"), "--quiet"], check=True,
+                   capture_output=True)
+    subprocess.run([CLI, "contour", str(tmp_path / "spot.vdb"), "-o", str(tmp_path / "cli.ply"),
+                    "--quiet"], check=True, capture_output=True)
+    mesh = sdfcontour.contour(tmp_path / "spot.vdb")
+    V, F = sdfcontour.read_mesh(tmp_path / "cli.ply")
+    assert np.array_equal(mesh.V, V) and np.array_equal(mesh.F, F)
+    with pytest.raises(ValueError, match="no float grid named"):
+        sdfcontour.contour(tmp_path / "spot.vdb", grid_name="density")
+    g = full_grid(torus, 20)
+    np.save(tmp_path / "g.npy", g)
+    V1, F1 = sdfcontour.contour(str(tmp_path / "g.npy"), method="mc")
+    V2, F2 = sdfcontour.contour(g, method="mc")
+    assert np.array_equal(V1, V2) and np.array_equal(F1, F2)
+    with pytest.raises(OSError):
+        sdfcontour.contour(tmp_path / "missing.npy")
+    with pytest.raises(ValueError, match=".npy or .vdb"):
+        sdfcontour.contour(str(tmp_path / "cli.ply"))
