@@ -479,6 +479,19 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("options"), py::arg("want_mesh"), py::arg("want_points"));
   m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
+  m.def(
+      "mesh_topology",
+      [](const py::array& V, const py::array& F) {
+        const Mesh mesh = mesh_from(V, F);
+        const MeshTopology t = mesh_topology(mesh);
+        py::dict out;
+        out["closed"] = t.closed;
+        out["oriented"] = t.consistently_oriented;
+        out["manifold"] = t.nonmanifold_edges == 0;
+        out["components"] = connected_components(mesh);
+        return out;
+      },
+      py::arg("V"), py::arg("F"));
   m.def("read_vdb", &run_read_vdb, py::arg("path"), py::arg("grid_name"));
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),

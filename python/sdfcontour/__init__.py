@@ -28,7 +28,8 @@ from . import _checks, _sdfcontour
 from ._checks import ArgumentTypeError
 
 __all__ = ["Mesh", "contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh",
-           "ArgumentTypeError", "DroppedSamplesWarning", "FallbackWarning", "RescaleWarning"]
+           "ArgumentTypeError", "DroppedSamplesWarning", "FallbackWarning", "LipschitzWarning",
+           "RescaleWarning"]
 
 METHODS = ("gcp", "gtcp", "mc", "mt-rt", "mt-dt")
 
@@ -41,6 +42,11 @@ class FallbackWarning(UserWarning):
 class RescaleWarning(UserWarning):
     """The values changed by m per unit length near the surface, not 1, and were divided by m
     (``stats["value_scale"]``)."""
+
+
+class LipschitzWarning(UserWarning):
+    """A callable SDF changed faster than its ``lipschitz`` bound said: it was sampled again with
+    a larger bound (without it, small parts could be skipped)."""
 
 
 class DroppedSamplesWarning(UserWarning):
@@ -188,30 +194,67 @@ def _from_path(sdf, grid_name):
     raise ValueError(f"cannot read '{path}': give a .npy or .vdb path, an array or a callable")
 
 
-def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, spacing=0.0):
+def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_points, lipschitz):
+    """A callable sampled near the surface and contoured. Marching cubes goes brick by brick
+    (memory follows the surface); the other methods get the sampled grid. A field found steeper
+    than `lipschitz` is sampled again with a larger bound, and said (LipschitzWarning)."""
+    import time
+    from ._callable import SamplingReport, sample_callable
+    if resolution is None:
+        raise ValueError("a callable SDF needs a resolution (samples per axis)")
+    n = int(resolution)
+    bricked = options["method"] == "mc" and want_mesh and not want_points
+    _callable_budget(resolution, batch_size, dense=not bricked)
+    h = float(((hi - lo) / (n - 1)).max())
+    started = time.perf_counter()
+    for attempt in range(4):
+        if bricked:
+            from ._callable_bricks import contour_callable_mc
+            report = SamplingReport()
+            V, F, piece_stats = contour_callable_mc(f, lo, hi, n, int(batch_size), report,
+                                                    lipschitz, options["progress"])
+        else:
+            # The band the core will use (0: auto, from the samples per axis).
+            band = options["band"] or _sdfcontour.auto_band(n)
+            array, report = sample_callable(f, lo, hi, n, band + options["margin"],
+                                            int(batch_size), options["progress"], lipschitz)
+        if not report.breaks(lipschitz, h) or attempt == 3:
+            break
+        steeper = max(2.0 * lipschitz, 1.25 * report.steepest)
+        _warnings.warn(f"the SDF changes by up to {report.steepest:.3g} per unit length "
+                       f"(lipschitz={lipschitz:.3g} assumed): sampled again assuming "
+                       f"lipschitz={steeper:.3g}, so that no small part is skipped; pass "
+                       f"lipschitz= to say so up front", LipschitzWarning, stacklevel=4)
+        lipschitz = steeper
+    sampled = time.perf_counter() - started
+    if bricked:
+        if len(F) == 0:
+            raise ValueError("the SDF has no sign change on the grid: no surface to contour")
+        stats = dict(piece_stats, **_sdfcontour.mesh_topology(V, F))
+        stats["seconds"] = {"bricks": sampled}
+        stats["reconstruction"] = "none"
+        out = {"V": V, "F": F, "stats": stats}
+    else:
+        out = _sdfcontour.contour(array, lo, hi, 0.0, dict(options, truncation="none"),
+                                  want_mesh, want_points)
+        out["stats"]["seconds"]["sampling"] = sampled
+    out["stats"].update(evaluations=report.evaluations, lipschitz=lipschitz,
+                        evaluated_fraction=report.evaluations / float(n) ** 3,
+                        steepest_slope=report.steepest)
+    return out
+
+
+def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, spacing=0.0,
+         lipschitz=1.0):
     lo, hi = _bounds(bounds)
-    stats = {}
     if callable(sdf):
-        if resolution is None:
-            raise ValueError("a callable SDF needs a resolution (samples per axis)")
-        _callable_budget(resolution, batch_size)
-        from ._callable import sample_callable
-        # The band the core will use (0: auto, from the samples per axis).
-        band = options["band"] or _sdfcontour.auto_band(int(resolution))
-        threshold = band + options["margin"]
-        if options["method"] == "mc":
-            threshold = 1.0  # marching cubes needs the signs right and the values at crossings
-        array, evaluations = sample_callable(sdf, lo, hi, int(resolution), threshold,
-                                             int(batch_size), options["progress"])
-        options = dict(options, truncation="none")
-        stats["evaluations"] = evaluations
-        stats["evaluated_fraction"] = evaluations / float(int(resolution) ** 3)
+        out = _run_callable(sdf, lo, hi, resolution, batch_size, options, want_mesh, want_points,
+                            lipschitz)
     else:
         if resolution is not None:
             raise ValueError("resolution is for a callable SDF; a grid has its own shape")
         array = _input_array(sdf)
-    out = _sdfcontour.contour(array, lo, hi, spacing, options, want_mesh, want_points)
-    out["stats"].update(stats)
+        out = _sdfcontour.contour(array, lo, hi, spacing, options, want_mesh, want_points)
     if out["stats"].get("fallback"):
         _warnings.warn(f"GCP returned marching cubes' mesh: {out['stats']['fallback']}",
                        FallbackWarning, stacklevel=3)
@@ -226,8 +269,9 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, s
     return out
 
 
-def _callable_budget(resolution, batch_size):
-    """Refuses a callable's resolution or batch whose arrays cannot fit, before allocating."""
+def _callable_budget(resolution, batch_size, dense=True):
+    """Refuses a callable's resolution or batch whose arrays cannot fit, before allocating (a
+    dense grid only where the method needs one)."""
     if isinstance(resolution, bool) or not isinstance(resolution, (int, _np.integer)) \
             or not 2 <= resolution <= 2048:
         raise ValueError(f"resolution must be a whole number from 2 to 2048, got {resolution!r}")
@@ -235,6 +279,8 @@ def _callable_budget(resolution, batch_size):
             or not 1 <= batch_size <= 2**26:
         raise ValueError(f"batch_size must be a whole number from 1 to {2**26}, got "
                          f"{batch_size!r}")
+    if not dense:
+        return
     import os
     needed = 8.0 * float(resolution) ** 3  # the sampler's float64 grid
     try:
@@ -283,6 +329,13 @@ class Mesh(tuple):
 
     def __repr__(self):
         return f"sdfcontour.Mesh({len(self.V)} vertices, {len(self.F)} triangles)"
+
+
+def _lipschitz(value):
+    value = float(_checks.number("lipschitz", value))
+    if not 1e-6 <= value <= 1e6:
+        raise ValueError(f"lipschitz must be from 1e-06 to 1e+06, got {value!r}")
+    return value
 
 
 def _at_level(sdf, level):
@@ -362,7 +415,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
             refine="auto", strict=False, progress=False, return_stats=False, level=0.0,
-            spacing=None, origin=None, return_normals=False, grid_name=None):
+            spacing=None, origin=None, return_normals=False, grid_name=None, lipschitz=1.0):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -466,6 +519,14 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Also return vertex normals (see Returns).
     grid_name : str, optional
         The float grid to read from a ``.vdb`` (default: the first).
+    lipschitz : float
+        For a callable: how fast it may change, per unit length (1 for a distance). The sampler
+        skips the points whose coarser neighbours show them farther than the band from the
+        surface, which holds only for fields no steeper than this. It checks: where the
+        callable's coarse samples change faster (beyond 1.2x), or a value undercuts the bound
+        its neighbours gave, it warns (``LipschitzWarning``) and samples again with a larger
+        bound, so small parts are never skipped silently. Give the bound of a field that is not
+        a distance (for example 3 for 3x a distance) to skip the first pass.
     return_stats : bool
         Also return a dict of counts (samples, band samples, for a callable the evaluations) and
         ``stats["seconds"]``, the seconds spent in each stage (as the CLI's ``--stats``).
@@ -537,7 +598,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         o["refine_dilation"] = _refine_dilation(refine_dilation)
     refine = _switch("refine", refine)
     o["fallback_to_mc"] = not _checks.flag("strict", strict)
-    out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing)
+    out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing,
+               _lipschitz(lipschitz))
     if callable(sdf) and method == "gcp" and refine != "off":
         from ._callable import refine_on_zero_set
         lo, hi = _bounds(bounds)
@@ -557,7 +619,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
                    gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
                    brick_size="auto", brick_halo=0.0, batch_size=65536, progress=False,
-                   grid_name=None):
+                   grid_name=None, lipschitz=1.0):
     """GCP's contact points with their normals, without the surface reconstruction.
 
     Parameters are those of :func:`contour`.
@@ -578,7 +640,8 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
         truncation = repr(truncation_found)
     o = _options("gcp", band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, progress)
-    out = _run(sdf, bounds, resolution, batch_size, o, False, True, sample_spacing)
+    out = _run(sdf, bounds, resolution, batch_size, o, False, True, sample_spacing,
+               _lipschitz(lipschitz))
     return out["P"], out["N"]
 
 

@@ -41,31 +41,61 @@ def _evaluate(f, points, batch_size, counter):
     return out
 
 
-def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False):
+class SamplingReport:
+    """What sampling a callable found: its evaluations, the steepest slope between neighbouring
+    coarse samples (|f(p) - f(q)| / |p - q|), and the largest amount by which an evaluated value
+    undercut the bound that its coarser neighbours gave (both 0 for a field within its
+    Lipschitz bound)."""
+
+    def __init__(self):
+        self.evaluations = 0
+        self.steepest = 0.0
+        self.undercut = 0.0
+
+    def breaks(self, lipschitz, spacing):
+        """Whether the field broke the assumed bound: a slope past 1.2 lipschitz (a neural SDF's
+        gradient wanders a little past 1), or a value a quarter spacing under its bound."""
+        return self.steepest > 1.2 * lipschitz or self.undercut > 0.25 * spacing
+
+
+def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False, lipschitz=1.0):
     """The n^3 grid of f over [lo, hi], exact where |f| <= threshold spacings (and wherever the
-    bounds could not exclude it), signed lower bounds elsewhere; and the number of evaluations."""
+    bounds could not exclude it), signed lower bounds elsewhere; and its SamplingReport."""
     if not 2 <= n <= 2048:
         raise ValueError("resolution must be between 2 and 2048")
     if batch_size < 1:
         raise ValueError("batch_size must be at least 1")
     h = (hi - lo) / (n - 1)
-    counter = [0]
+    report = SamplingReport()
     grid = sample_block(f, lo, h, (0, 0, 0), (n, n, n), threshold * float(h.max()), batch_size,
-                        counter, progress)
-    return grid, counter[0]
+                        report, progress, lipschitz)
+    return grid, report
 
 
-def sample_block(f, lo, h, first, dims, threshold, batch_size, counter, progress=False):
+def steepest_slope(values, positions):
+    """The largest |difference| / distance between neighbours along the axes of a block of
+    samples at the coordinates `positions` (3 increasing 1D arrays)."""
+    slope = 0.0
+    for a in range(3):
+        if values.shape[a] > 1:
+            step = np.diff(positions[a]).reshape([-1 if b == a else 1 for b in range(3)])
+            slope = max(slope, float((np.abs(np.diff(values, axis=a)) / step).max()))
+    return slope
+
+
+def sample_block(f, lo, h, first, dims, threshold, batch_size, report, progress=False,
+                 lipschitz=1.0):
     """The samples [first, first + dims) of the grid lo + index * h (float64 arrays of 3) of f:
-    exact where |f| <= threshold (a length), signed lower bounds elsewhere, as sample_callable.
-    A point's position depends on its global index only, so blocks of one grid agree where they
-    overlap. Adds the evaluations to counter[0]."""
+    exact where |f| / lipschitz <= threshold (a length), signed lower bounds elsewhere, as
+    sample_callable. A point's position depends on its global index only, so blocks of one grid
+    agree where they overlap. Adds to `report` (a SamplingReport)."""
     first = np.asarray(first, dtype=np.int64)
     dims = tuple(int(d) for d in dims)
     levels = 0
     while levels < 6 and (min(dims) - 1) >> (levels + 1) >= 4:
         levels += 1
     grid = np.full(dims, np.nan)
+    counter = [0]
 
     def position(i, j, k):
         return np.column_stack([lo[0] + (first[0] + i) * h[0], lo[1] + (first[1] + j) * h[1],
@@ -75,6 +105,8 @@ def sample_block(f, lo, h, first, dims, threshold, batch_size, counter, progress
     coarse = [_axis_indices(d, 1 << levels) for d in dims]
     ci, cj, ck = (a.ravel() for a in np.meshgrid(*coarse, indexing="ij"))
     grid[ci, cj, ck] = _evaluate(f, position(ci, cj, ck), batch_size, counter)
+    report.steepest = max(report.steepest, steepest_slope(
+        grid[np.ix_(*coarse)], [coarse[a] * h[a] for a in range(3)]))
     for level in range(levels - 1, -1, -1):
         axes, is_parent, above, below = [], [], [], []
         for d in dims:
@@ -101,7 +133,7 @@ def sample_block(f, lo, h, first, dims, threshold, batch_size, counter, progress
             new = ~(is_parent[0][a] & is_parent[1][b] & is_parent[2][c])
             a, b, c = a[new], b[new], c[new]
             i, j, k = axes[0][a], axes[1][b], axes[2][c]
-            bound = np.full(len(i), -np.inf)
+            bound = np.full(len(i), -np.inf)  # a lower bound of the distance |f| / lipschitz
             sign = np.ones(len(i))
             for corner in range(8):
                 qi = np.where(corner & 1, above[0][a], below[0][a])
@@ -110,15 +142,21 @@ def sample_block(f, lo, h, first, dims, threshold, batch_size, counter, progress
                 value = grid[qi, qj, qk]
                 reach = np.sqrt(((i - qi) * h[0]) ** 2 + ((j - qj) * h[1]) ** 2 +
                                 ((k - qk) * h[2]) ** 2)
-                candidate = np.abs(value) - reach
+                candidate = np.abs(value) / lipschitz - reach
                 better = candidate > bound
                 bound[better] = candidate[better]
                 sign[better] = np.sign(value[better])
             evaluate = bound <= tau
-            grid[i[~evaluate], j[~evaluate], k[~evaluate]] = (sign * bound)[~evaluate]
+            grid[i[~evaluate], j[~evaluate], k[~evaluate]] = \
+                (sign * bound * lipschitz)[~evaluate]
             ie, je, ke = i[evaluate], j[evaluate], k[evaluate]
             if len(ie):
-                grid[ie, je, ke] = _evaluate(f, position(ie, je, ke), batch_size, counter)
+                values = _evaluate(f, position(ie, je, ke), batch_size, counter)
+                grid[ie, je, ke] = values
+                # A value under its bound: the field is steeper than assumed here.
+                under = bound[evaluate] - np.abs(values) / lipschitz
+                report.undercut = max(report.undercut, float(under.max()))
+    report.evaluations += counter[0]
     return grid
 
 

@@ -9,6 +9,7 @@ import signal
 import subprocess
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -453,3 +454,45 @@ def test_paths_as_input_npy_and_vdb(tmp_path):
         sdfcontour.contour(tmp_path / "missing.npy")
     with pytest.raises(ValueError, match=".npy or .vdb"):
         sdfcontour.contour(str(tmp_path / "cli.ply"))
+
+
+def small_parts(p):
+    """A ball of radius 0.5 and two of radius 0.04, far apart: parts a sampler could skip."""
+    d = np.linalg.norm(p - [0.3, 0, 0], axis=1) - 0.5
+    d = np.minimum(d, np.linalg.norm(p - [-0.7, 0.6, 0.5], axis=1) - 0.04)
+    return np.minimum(d, np.linalg.norm(p - [-0.6, -0.7, -0.4], axis=1) - 0.04)
+
+
+def test_callable_marching_cubes_by_bricks_is_the_full_grids_mesh():
+    # Sampled brick by brick near the surface only: the full grid's mesh, from a few percent of
+    # the evaluations and without an n^3 array.
+    n = 129
+    axis = -1 + np.arange(n) * (2 / (n - 1))  # the sampler's positions, lo + i h
+    P = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    V, F, stats = sdfcontour.contour(small_parts, resolution=n, method="mc", return_stats=True)
+    V2, F2 = sdfcontour.contour(small_parts(P).reshape(n, n, n), method="mc")
+    order, order2 = np.lexsort(V.T[::-1]), np.lexsort(V2.T[::-1])
+    assert np.array_equal(V[order], V2[order2])
+    rank, rank2 = np.empty(len(V), int), np.empty(len(V2), int)
+    rank[order], rank2[order2] = np.arange(len(V)), np.arange(len(V2))
+    canon = [np.sort(np.sort(r[T], axis=1).view("i8,i8,i8").ravel()) for r, T in ((rank, F), (rank2, F2))]
+    assert np.array_equal(canon[0], canon[1])
+    assert stats["evaluated_fraction"] < 0.06 and stats["components"] == 3 and stats["closed"]
+
+
+@pytest.mark.parametrize("steepness", [3, 10])
+def test_a_field_steeper_than_a_distance_keeps_its_small_parts(steepness):
+    def steep(p):
+        return steepness * small_parts(p)
+    for method in ("mc", "gcp"):
+        with pytest.warns(sdfcontour.LipschitzWarning, match="sampled again"):
+            mesh = sdfcontour.contour(steep, resolution=128, method=method)
+        assert mesh.stats["components"] == 3, method
+        assert mesh.stats["lipschitz"] >= steepness
+    # Said up front: one pass, no warning.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sdfcontour.LipschitzWarning)
+        mesh = sdfcontour.contour(steep, resolution=128, method="mc", lipschitz=steepness)
+    assert mesh.stats["components"] == 3
+    with pytest.raises(ValueError, match="lipschitz"):
+        sdfcontour.contour(steep, resolution=16, lipschitz=0)

@@ -1,0 +1,56 @@
+"""Bricks of a grid and the mesh piece each owns (marching cubes), for any scheduler: the
+Dask module, the bricked callable path, or a user's own (a Slurm array)."""
+import numpy as np
+
+from . import _sdfcontour
+
+
+class BrickError(ValueError):
+    """A brick's data could not be contoured (NaN, wrong dtype or shape): names the brick."""
+
+
+def bricks(shape, brick):
+    """The bricks of a grid of `shape` samples, `brick` cells a side (the last ones shorter):
+    a list of (index (3 ints), first sample (3 ints), samples (3 ints)), in C order. A brick holds
+    the samples of the cells it owns: its cells and one more sample on each high side."""
+    ranges = []
+    for n in shape:
+        starts = range(0, n - 1, brick)
+        ranges.append([(s, min(brick, n - 1 - s) + 1) for s in starts])
+    out = []
+    for a, (fa, da) in enumerate(ranges[0]):
+        for b, (fb, db) in enumerate(ranges[1]):
+            for c, (fc, dc) in enumerate(ranges[2]):
+                out.append(((a, b, c), (fa, fb, fc), (da, db, dc)))
+    return out
+
+
+def brick_piece(block, index, first, shape, lo, hi):
+    """The piece of the marching cubes mesh that one brick owns, from its block of samples (the
+    samples [first, first + block.shape) of a grid of `shape` samples over [lo, hi]).
+
+    Returns (keys (v,) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V). A grid edge's
+    vertex has the same key and bit for bit the same position in every brick that meets it, so
+    pieces from any scheduler join into the single-process mesh (`join_pieces`)."""
+    try:
+        block = np.asarray(block)
+        if block.dtype.kind not in "fiu":
+            raise ValueError(f"the grid must hold real numbers, not {block.dtype}")
+        if block.dtype not in (np.float32, np.float64):
+            block = block.astype(np.float64)
+        block = np.ascontiguousarray(block)
+        finite = np.isfinite(block)
+        if not finite.all():
+            i, j, k = (int(f + w) for f, w in zip(first, np.argwhere(~finite)[0]))
+            raise ValueError(f"the grid has a non-finite value at [{i}, {j}, {k}]")
+        if block.size == 0 or not (block.min() < 0 <= block.max()):  # no sign change: no piece
+            return (np.zeros(0, np.uint64), np.zeros((0, 3)), np.zeros((0, 3), np.int32))
+        return _sdfcontour.marching_cubes_brick(block, tuple(int(f) for f in first),
+                                                tuple(int(n) for n in shape),
+                                                tuple(float(x) for x in lo),
+                                                tuple(float(x) for x in hi))
+    except ValueError as e:
+        end = [int(f) + int(d) for f, d in zip(first, np.shape(block))]
+        raise BrickError(f"brick {tuple(int(x) for x in index)} (samples "
+                         f"[{first[0]}:{end[0]}, {first[1]}:{end[1]}, {first[2]}:{end[2]}]): "
+                         f"{e}") from None
