@@ -59,7 +59,7 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
   if (samples_per_axis > 513) return 11;
   if (samples_per_axis > 257) return 10;
   if (samples_per_axis > 129) return 9;
-  return samples_per_axis > 48 ? 8 : samples_per_axis > 24 ? 7 : 6;
+  return samples_per_axis > 48 ? 8 : 7;
 }
 
 int auto_subdivisions(double samples_per_axis) {

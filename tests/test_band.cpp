@@ -173,7 +173,7 @@ TEST(Band, AutoPoissonDepthFollowsTheResolution) {
   PointMatrix corners(2, 3);
   corners << -0.9, -0.9, -0.9, 0.9, 0.9, 0.9;
   const double extent = 1.8;
-  EXPECT_EQ(auto_poisson_depth(corners, extent / 15), 6);
+  EXPECT_EQ(auto_poisson_depth(corners, extent / 15), 7);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 30), 7);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 60), 8);
   EXPECT_EQ(auto_poisson_depth(corners, extent / 100), 8);

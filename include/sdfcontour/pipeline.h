@@ -201,12 +201,14 @@ struct ContourResult {
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
 };
 
-/// The Poisson depth for samples `spacing` apart spanning `points`' extent: 6 up to 24 samples
-/// per axis, 7 up to 48, 8 up to 129, 9 up to 257, 10 up to 513, 11 above, so that the mesh
-/// follows the grid. Measured on the 17 shared meshes (bench/poisson_depth.py,
-/// docs/results/poisson_depth.md): at 16^3 depth 6 gives GCP/MC L1 0.305 with 22x MC's
-/// triangles, depth 8 0.317 with 100x; at 32^3 depth 7 0.349 with 17x, depth 8 0.376 with 61x;
-/// at 64^3 depth 8 0.341, depth 7 0.390. Measured (bench/scale.py, docs/scale.md): at
+/// The Poisson depth for samples `spacing` apart spanning `points`' extent: 7 up to 48 samples
+/// per axis, 8 up to 129, 9 up to 257, 10 up to 513, 11 above, so that the mesh follows the
+/// grid. Measured on the 17 shared meshes (bench/poisson_depth.py,
+/// docs/results/poisson_depth.md): at 32^3 depth 7 gives GCP/MC L1 0.349 with 17x MC's
+/// triangles, depth 8 0.376 with 61x; at 16^3 depth 7 0.306 with 78x, depth 8 0.317 with 100x;
+/// at 64^3 depth 8 0.341, depth 7 0.390. Depth 6 (0.305 with 22x at 16^3 on grids) left a
+/// spurious far sheet on 3000 random samples of a sphere: not used. Measured (bench/scale.py,
+/// docs/scale.md): at
 /// 256^3 depth 8 is coarser than the grid (GCP's L1 1.27x MC's) and depth 9 gives 0.59x; at 512^3
 /// depth 9 gives 1.3-1.9x MC's L1 (bunny, spot, armadillo) and depth 10 0.57-0.95x; at 1024^3
 /// depth 10 gives 1.43x MC's L1 (bunny, 6.9 GB) and depth 11 0.61-0.74x (bunny, spot, armadillo;
