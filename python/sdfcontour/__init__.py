@@ -523,7 +523,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         For a callable: how fast it may change, per unit length (1 for a distance). The sampler
         skips the points whose coarser neighbours show them farther than the band from the
         surface, which holds only for fields no steeper than this. It checks: where the
-        callable's coarse samples change faster (beyond 1.2x), or a value undercuts the bound
+        callable's coarse samples change faster (beyond 1.5x), or a value undercuts the bound
         its neighbours gave, it warns (``LipschitzWarning``) and samples again with a larger
         bound, so small parts are never skipped silently. Give the bound of a field that is not
         a distance (for example 3 for 3x a distance) to skip the first pass.
