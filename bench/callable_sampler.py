@@ -38,7 +38,7 @@ def one(n):
     import warnings
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sdfcontour.LipschitzWarning)  # reported in the table
-        mesh = sdfcontour.contour(timed_net, resolution=n, method="mc", batch_size=1 << 18)
+        mesh = sdfcontour.contour(timed_net, resolution=n, method="mc")
     wall = time.perf_counter() - start
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     mesh_mb = (mesh.V.nbytes + mesh.F.nbytes) / 2**20

@@ -16,7 +16,7 @@ from ._callable import _axis_indices, _evaluate, sample_blocks, steepest_slope
 from ._io_join import join_pieces
 
 BRICK = 32  # cells a side: small bricks walk few points far from the surface
-GROUP = 128  # bricks sampled together (33^3 float64 each: 37 MB), so f gets large batches
+GROUP = 32  # bricks sampled together (their temporaries ~3 MB each), so f gets large batches
 
 
 def active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz):
