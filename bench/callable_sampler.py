@@ -17,6 +17,8 @@ import time
 
 import numpy as np
 
+from common import report
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -84,10 +86,7 @@ def main():
             "2-core machine: bricks of 32 cells that may hold the surface (found on a coarse grid "
             "every 8 samples) sampled coarse to fine and contoured one by one, no N³ array.\n\n"
             + "\n".join(rows) + "\n")
-    print(text)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text)
+    report(text, a.out)
 
 
 if __name__ == "__main__":

@@ -33,3 +33,11 @@ def l1(cli, mesh, gt):
 def geomean(values):
     v = [x for x in values if x]
     return math.exp(sum(math.log(x) for x in v) / len(v)) if v else float("nan")
+
+
+def report(text, out):
+    """Prints a benchmark's markdown and writes it to `out` (if given)."""
+    print(text)
+    if out:
+        with open(out, "w") as f:
+            f.write(text)

@@ -135,19 +135,10 @@ def run_phase(*args):
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-def canonical(V, F):
-    order = np.lexsort(V.T[::-1])
-    rank = np.empty(len(V), np.int64)
-    rank[order] = np.arange(len(V))
-    T = rank[F]
-    shift = np.argmin(T, axis=1)
-    T = np.stack([T[np.arange(len(T)), (shift + s) % 3] for s in range(3)], axis=1)
-    return V[order], T[np.lexsort(T.T[::-1])]
-
-
 def same_mesh(a, b):
+    from sdfcontour.dask import canonical_mesh
     A, B = np.load(a), np.load(b)
-    ca, cb = canonical(A["V"], A["F"]), canonical(B["V"], B["F"])
+    ca, cb = canonical_mesh(A["V"], A["F"]), canonical_mesh(B["V"], B["F"])
     return bool(np.array_equal(ca[0], cb[0]) and np.array_equal(ca[1], cb[1]))
 
 

@@ -14,7 +14,7 @@ import sys
 import tempfile
 import time
 
-from common import CLI, MESHES, geomean
+from common import CLI, MESHES, geomean, report
 
 
 def run(cmd):
@@ -79,10 +79,7 @@ def main():
             "meshes; L1 to the ground truth and triangles relative to marching cubes on the same "
             "grid. Made by `/usr/bin/python3 bench/poisson_depth.py "
             f"{' '.join(sys.argv[1:])}`.\n\n" + "\n".join(rows) + "\n")
-    print(text)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text)
+    report(text, a.out)
 
 
 if __name__ == "__main__":

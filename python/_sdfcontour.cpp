@@ -9,11 +9,13 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <tuple>
 
 #include "progress_bar.h"
 #include "sdfcontour/brick_marching.h"
@@ -48,6 +50,31 @@ struct Job {
   }
 };
 
+// Progress events from the library's threads, handed to a Python callable on the calling thread
+// (which holds the GIL) each time run_interruptible polls: (stage, done, total); total 0 for a
+// stage's start message. Only the latest fraction of each stage is kept between polls.
+struct ProgressQueue {
+  std::mutex mutex;
+  std::vector<std::tuple<std::string, long, long>> events;
+  void push(const std::string& stage, long done, long total) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (total > 0 && !events.empty() && std::get<0>(events.back()) == stage &&
+        std::get<2>(events.back()) > 0)
+      events.back() = {stage, done, total};
+    else
+      events.emplace_back(stage, done, total);
+  }
+  // Calls `callback` for each event since the last call (GIL held by the caller).
+  void deliver(const py::object& callback) {
+    std::vector<std::tuple<std::string, long, long>> now;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      now.swap(events);
+    }
+    for (const auto& [stage, done, total] : now) callback(stage, done, total);
+  }
+};
+
 // Jobs left running after a Ctrl-C, with the Python objects whose memory they still read. Those
 // are released (GIL held) once the job has finished; never destroyed at exit without the GIL.
 std::vector<std::pair<std::shared_ptr<Job>, py::object>>& abandoned_jobs() {
@@ -78,7 +105,8 @@ void stop_abandoned_jobs() {
 // stage, brick or solver iteration) and KeyboardInterrupt is raised at once: a worker that has
 // not stopped within 0.2 s finishes in the background, its objects kept until then.
 template <class Work>
-auto run_interruptible(Work work, py::object keep_alive = py::none()) {
+auto run_interruptible(Work work, py::object keep_alive = py::none(),
+                       const std::function<void()>& on_poll = {}) {
   using Result = decltype(work(std::declval<std::atomic<bool>&>()));
   release_finished_jobs();
   auto job = std::make_shared<Job>();
@@ -95,10 +123,13 @@ auto run_interruptible(Work work, py::object keep_alive = py::none()) {
     job->finished.notify_all();
   }).detach();
   for (;;) {
+    bool finished = false;
     {
       py::gil_scoped_release release;
-      if (job->wait(std::chrono::milliseconds(50))) break;
+      finished = job->wait(std::chrono::milliseconds(50));
     }
+    if (on_poll) on_poll();  // with the GIL: the caller's Python progress callback
+    if (finished) break;
     if (PyErr_CheckSignals() != 0) {
       py::error_already_set interrupt;  // the KeyboardInterrupt (or the handler's error)
       job->cancel = true;
@@ -307,7 +338,7 @@ py::tuple run_read_vdb(const std::string& path, const std::string& grid_name) {
 
 py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
                      const std::array<double, 3>& hi, double spacing, const py::dict& options,
-                     bool want_mesh, bool want_points) {
+                     bool want_mesh, bool want_points, const py::object& progress_callback) {
   Bounds bounds;
   bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
   bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
@@ -317,12 +348,22 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   ContourOptions opt = contour_options(options);
   opt.want_mesh = want_mesh;
   opt.want_points = want_points;
+  std::function<void()> deliver;
+  if (!progress_callback.is_none()) {
+    auto queue = std::make_shared<ProgressQueue>();
+    opt.progress = [queue](const std::string& m) { queue->push(m, 0, 0); };
+    opt.progress_fraction = [queue](const std::string& stage, long done, long total) {
+      queue->push(stage, done, total);
+    };
+    opt.poisson.progress = opt.progress;
+    deliver = [queue, progress_callback] { queue->deliver(progress_callback); };
+  }
   ContourResult r = run_interruptible(
       [input, opt](std::atomic<bool>& cancel) mutable {
         opt.cancel = &cancel;
         return contour(input, nullptr, opt);
       },
-      py::make_tuple(array, keep ? keep : py::object(py::none())));
+      py::make_tuple(array, keep ? keep : py::object(py::none())), deliver);
   py::dict out;
   py::dict stats;
   if (r.mesh) {
@@ -476,7 +517,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
     }
   });
   m.def("contour", &run_contour, py::arg("array"), py::arg("lo"), py::arg("hi"), py::arg("spacing"),
-        py::arg("options"), py::arg("want_mesh"), py::arg("want_points"));
+        py::arg("options"), py::arg("want_mesh"), py::arg("want_points"),
+        py::arg("progress_callback") = py::none());
   m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
   m.def(

@@ -12,7 +12,9 @@ ProgressBar::ProgressBar() : tty_(::isatty(2)) {}
 
 void ProgressBar::operator()(const std::string& stage, long done, long total) {
   const auto now = std::chrono::steady_clock::now();
-  if (stage != stage_) stage_ = stage, start_ = now, last_tenth_ = -1;
+  // A new stage, or the same one started again (one Poisson solve per far-apart object).
+  if (stage != stage_ || done < last_done_) stage_ = stage, start_ = now, last_tenth_ = -1;
+  last_done_ = done;
   const double fraction = total > 0 ? double(done) / double(total) : 1.0;
   const int tenth = int(fraction * 10);
   if (!tty_ && tenth == last_tenth_ && done != total) return;

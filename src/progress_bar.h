@@ -18,6 +18,7 @@ class ProgressBar {
   std::string stage_;
   std::chrono::steady_clock::time_point start_;
   int last_tenth_ = -1;
+  long last_done_ = 0;
 };
 
 }  // namespace sdfcontour::detail

@@ -243,6 +243,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   PoissonOptions& popt = in.poisson;
   popt = options.poisson;
   popt.progress = options.progress;
+  popt.progress_fraction = options.progress_fraction;
   popt.cancel = options.cancel;
   in.auto_depth = popt.depth == 0;
   if (popt.depth == 0) popt.depth = auto_poisson_depth(band.samples.points, band.spacing);

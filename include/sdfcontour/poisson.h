@@ -57,6 +57,9 @@ struct PoissonOptions {
   int refine_dilation = 2;
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
+  /// Called as the solve advances: ("poisson", cells of the depths solved, cells of all depths);
+  /// cells weigh the depths as their cost does (the finest holds most). Empty for silence.
+  std::function<void(const std::string&, long, long)> progress_fraction;
   /// When set and it becomes true, the reconstruction stops soon (at the next stage or solver
   /// iteration) by throwing Cancelled.
   const std::atomic<bool>* cancel = nullptr;

@@ -103,6 +103,14 @@ def _poisson_options(full_depth, alpha, samples_per_node, scale, boundary, solve
                                                          finest_solver_tolerance))
 
 
+def _progress(value):
+    """True, False, or a callable progress(stage, done, total)."""
+    if callable(value) or isinstance(value, (bool, _np.bool_)):
+        return bool(value) if not callable(value) else value
+    raise _checks.ArgumentTypeError(f"progress must be True, False or a callable "
+                                    f"progress(stage, done, total), got {value!r}")
+
+
 def _full_depth_within(options):
     if options["full_depth"] > options["depth"]:
         raise ValueError("full_depth must be at most depth")
@@ -140,9 +148,11 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
              tie_tolerance=_checks.in_range("tie_tolerance", tie_tolerance),
              brick_size=_brick_size(brick_size),
              brick_halo=_checks.in_range("brick_halo", brick_halo),
-             progress=_checks.flag("progress", progress),
+             progress=progress is not False and _progress(progress) is True,
              **_poisson_options(full_depth, alpha, samples_per_node, scale, boundary,
                                 solver_tolerance, finest_solver_tolerance))
+    if callable(progress):
+        o["progress_callback"] = progress  # taken out before the options reach the core
     if isinstance(depth, str) and depth == "auto":
         o["depth_text"] = "auto"
     else:
@@ -200,6 +210,8 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
     than `lipschitz` is sampled again with a larger bound, and said (LipschitzWarning)."""
     import time
     from ._callable import SamplingReport, sample_callable
+    options = dict(options)
+    callback = options.pop("progress_callback", None)
     if resolution is None:
         raise ValueError("a callable SDF needs a resolution (samples per axis)")
     n = int(resolution)
@@ -212,7 +224,7 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
             from ._callable_bricks import contour_callable_mc
             report = SamplingReport()
             V, F, piece_stats = contour_callable_mc(f, lo, hi, n, int(batch_size), report,
-                                                    lipschitz, options["progress"])
+                                                    lipschitz, callback or options["progress"])
         else:
             # The band the core will use (0: auto, from the samples per axis).
             band = options["band"] or _sdfcontour.auto_band(n)
@@ -236,7 +248,7 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
         out = {"V": V, "F": F, "stats": stats}
     else:
         out = _sdfcontour.contour(array, lo, hi, 0.0, dict(options, truncation="none"),
-                                  want_mesh, want_points)
+                                  want_mesh, want_points, callback)
         out["stats"]["seconds"]["sampling"] = sampled
     out["stats"].update(evaluations=report.evaluations, lipschitz=lipschitz,
                         evaluated_fraction=report.evaluations / float(n) ** 3,
@@ -254,7 +266,10 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, s
         if resolution is not None:
             raise ValueError("resolution is for a callable SDF; a grid has its own shape")
         array = _input_array(sdf)
-        out = _sdfcontour.contour(array, lo, hi, spacing, options, want_mesh, want_points)
+        options = dict(options)
+        callback = options.pop("progress_callback", None)
+        out = _sdfcontour.contour(array, lo, hi, spacing, options, want_mesh, want_points,
+                                  callback)
     if out["stats"].get("fallback"):
         _warnings.warn(f"GCP returned marching cubes' mesh: {out['stats']['fallback']}",
                        FallbackWarning, stacklevel=3)
@@ -506,8 +521,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         increase outward stays). "auto": on for a callable with GCP. Costs 5 evaluations per
         vertex (``stats["refined_vertices"]``, ``stats["refine_evaluations"]``; the sampler's
         own are ``stats["evaluations"]``).
-    progress : bool
-        Show the stages on stderr.
+    progress : bool or callable
+        True: stage messages and a bar with a fraction and ETA for the long stages on stderr. A
+        callable ``progress(stage, done, total)`` receives the same instead, on the calling
+        thread (for example a tqdm bar's update): a stage's start as ``(message, 0, 0)``, then
+        its fractions (bricks of contact points or of a callable's marching cubes, the Poisson
+        solve's cells).
     level : float
         Contour the level set ``f = level`` instead of the zero set (scikit-image's ``level``):
         the values less ``level`` are contoured.

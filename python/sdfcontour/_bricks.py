@@ -54,3 +54,18 @@ def brick_piece(block, index, first, shape, lo, hi):
         raise BrickError(f"brick {tuple(int(x) for x in index)} (samples "
                          f"[{first[0]}:{end[0]}, {first[1]}:{end[1]}, {first[2]}:{end[2]}]): "
                          f"{e}") from None
+
+
+def canonical_mesh(V, F):
+    """The mesh (V (n, 3), F (m, 3)) in a canonical order: vertices sorted by position, each
+    triangle renumbered and rotated to start at its smallest index, triangles sorted. Two meshes
+    have equal canonical forms iff they hold the same vertex positions (bit for bit) and the same
+    oriented triangles, in whatever order: how to check that bricked runs agree."""
+    V, F = np.asarray(V), np.asarray(F)
+    order = np.lexsort(V.T[::-1])
+    rank = np.empty(len(V), np.int64)
+    rank[order] = np.arange(len(V))
+    T = rank[F]
+    shift = np.argmin(T, axis=1)
+    T = np.stack([T[np.arange(len(T)), (shift + s) % 3] for s in range(3)], axis=1)
+    return V[order], T[np.lexsort(T.T[::-1])]

@@ -61,10 +61,12 @@ def contour_callable_mc(f, lo, hi, n, batch_size, report, lipschitz=1.0, progres
                                batch_size, report, lipschitz=lipschitz)
         for number, ((index, first, _), block) in enumerate(zip(group, blocks), start):
             pieces.append((number, brick_piece(block, index, first, (n, n, n), lo, hi)))
-        if progress:
+        if callable(progress):
+            progress("bricks", start + len(group), len(bricks))
+        elif progress:
             print(f"[sdfcontour] bricks {start + len(group)}/{len(bricks)}, "
                   f"{report.evaluations} evaluations", file=sys.stderr, end="\r", flush=True)
-    if progress:
+    if progress is True:
         print(file=sys.stderr, flush=True)
     if pieces:
         V, F, stats = join_pieces(pieces, len(pieces))

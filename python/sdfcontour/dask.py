@@ -18,10 +18,10 @@ import time
 import numpy as np
 
 from . import _bounds, _checks
-from ._bricks import BrickError, brick_piece, bricks
+from ._bricks import BrickError, brick_piece, bricks, canonical_mesh
 from ._io_join import join_pieces, write_pieces_as_ply
 
-__all__ = ["contour", "bricks", "brick_piece", "BrickError"]
+__all__ = ["contour", "bricks", "brick_piece", "canonical_mesh", "BrickError"]
 
 
 # ---------------------------------------------------------------------------------------------

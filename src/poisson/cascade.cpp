@@ -78,6 +78,10 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
   // is solved, so that the coarser splats are freed by then.
   std::vector<char> finest_solved;
   std::vector<double> finest_b;
+  long cells_total = 0, cells_done = 0;
+  for (int d = tree.min_depth; d <= tree.finest; ++d)
+    cells_total += long(tree.level(d).cells.size());
+  if (o.progress_fraction) o.progress_fraction("poisson", 0, cells_total);
   for (int d = tree.min_depth; d <= tree.finest; ++d) {
     const auto level_start = Clock::now();
     OctreeLevel& L = tree.level(d);
@@ -166,6 +170,8 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
     }
     report_unconverged(stats, d == tree.finest, o);
     result.levels.push_back(stats);
+    cells_done += long(L.cells.size());
+    if (o.progress_fraction) o.progress_fraction("poisson", cells_done, cells_total);
   }
   return result;
 }

@@ -65,20 +65,8 @@ def single(grid):
     return sdfcontour.contour(grid, method="mc")
 
 
-def canonical(V, F):
-    """Vertices sorted by position, triangles by sorted ranks rotated to start at the smallest:
-    equal iff the meshes have the same positions bit for bit and the same triangles."""
-    order = np.lexsort(V.T[::-1])
-    rank = np.empty(len(V), np.int64)
-    rank[order] = np.arange(len(V))
-    T = rank[F]
-    shift = np.argmin(T, axis=1)
-    T = np.stack([T[np.arange(len(T)), (shift + s) % 3] for s in range(3)], axis=1)
-    return V[order], T[np.lexsort(T.T[::-1])]
-
-
 def assert_same_mesh(a, b):
-    ca, cb = canonical(*a), canonical(*b)
+    ca, cb = sdfcontour.dask.canonical_mesh(*a), sdfcontour.dask.canonical_mesh(*b)
     assert np.array_equal(ca[0], cb[0])
     assert np.array_equal(ca[1], cb[1])
 

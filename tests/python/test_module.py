@@ -497,3 +497,19 @@ def test_a_field_steeper_than_a_distance_keeps_its_small_parts(steepness):
     assert mesh.stats["components"] == 3
     with pytest.raises(ValueError, match="lipschitz"):
         sdfcontour.contour(steep, resolution=16, lipschitz=0)
+
+
+def test_progress_callback_gets_fractions():
+    # One callback for every stage: start messages (total 0) and fractions that end complete.
+    events = []
+    sdfcontour.contour(full_grid(torus, 40), progress=lambda *e: events.append(e))
+    assert any(total == 0 for _, _, total in events)
+    poisson = [(done, total) for stage, done, total in events if stage == "poisson"]
+    assert poisson and poisson[-1][0] == poisson[-1][1] > 0
+    assert [d for d, _ in poisson] == sorted(d for d, _ in poisson)
+    events.clear()
+    sdfcontour.contour(torus, resolution=65, method="mc", progress=lambda *e: events.append(e))
+    bricks = [(done, total) for stage, done, total in events if stage == "bricks"]
+    assert bricks and bricks[-1][0] == bricks[-1][1]
+    with pytest.raises(TypeError, match="progress"):
+        sdfcontour.contour(full_grid(torus, 20), progress="yes")
