@@ -534,6 +534,39 @@ PYBIND11_MODULE(_sdfcontour, m) {
         return out;
       },
       py::arg("V"), py::arg("F"));
+  m.def(
+      "vdb_layout",
+      [](const std::string& path, const std::string& grid_name) {
+        const VdbLayout l = run_interruptible(
+            [path, grid_name](std::atomic<bool>&) { return read_vdb_layout(path, grid_name); });
+        py::dict out;
+        out["grid_name"] = l.grid_name;
+        out["min"] = l.min;
+        out["max"] = l.max;
+        out["voxel_size"] = l.voxel_size;
+        out["origin"] = std::array<double, 3>{l.origin[0], l.origin[1], l.origin[2]};
+        out["background"] = l.background;
+        py::array_t<int> leaves({py::ssize_t(l.leaf_origins.size()), py::ssize_t(3)});
+        for (std::size_t i = 0; i < l.leaf_origins.size(); ++i)
+          for (int a = 0; a < 3; ++a) leaves.mutable_at(py::ssize_t(i), a) = l.leaf_origins[i][a];
+        out["leaf_origins"] = leaves;
+        return out;
+      },
+      py::arg("path"), py::arg("grid_name"));
+  m.def(
+      "read_vdb_box",
+      [](const std::string& path, const std::string& grid_name, const std::array<int, 3>& first,
+         const std::array<int, 3>& dims) {
+        std::vector<float> values;
+        {
+          py::gil_scoped_release release;
+          values = read_vdb_box(path, grid_name, first, dims);
+        }
+        py::array_t<float> out({py::ssize_t(dims[0]), py::ssize_t(dims[1]), py::ssize_t(dims[2])});
+        std::copy(values.begin(), values.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("path"), py::arg("grid_name"), py::arg("first"), py::arg("dims"));
   m.def("read_vdb", &run_read_vdb, py::arg("path"), py::arg("grid_name"));
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),

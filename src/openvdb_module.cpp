@@ -89,6 +89,90 @@ void read_level_set(const std::string& path, const std::string& grid_name, VdbLe
   }
 }
 
+// The float level set `grid_name` (empty: the first float grid) of an open file: its metadata
+// only, or (with `box`) its part within the box of voxels.
+openvdb::FloatGrid::Ptr find_level_set(openvdb::io::File& file, const std::string& path,
+                                       const std::string& grid_name,
+                                       const openvdb::CoordBBox* box) {
+  std::string chosen, names;
+  const openvdb::GridPtrVecPtr metadata = file.readAllGridMetadata();  // kept alive for the loop
+  for (const auto& g : *metadata) {
+    names += (names.empty() ? "" : ", ") + g->getName();
+    if (!g->isType<openvdb::FloatGrid>()) continue;
+    if (grid_name.empty() ? chosen.empty() : g->getName() == grid_name) chosen = g->getName();
+  }
+  const std::string listed = " (grids: " + (names.empty() ? "none" : names) + ")";
+  if (chosen.empty() && !grid_name.empty())
+    throw Failure{OpenVdbStatus::BadInput,
+                  "'" + path + "' has no float grid named '" + grid_name + "'" + listed};
+  if (chosen.empty())
+    throw Failure{OpenVdbStatus::BadInput, "'" + path + "' has no float grid" + listed};
+  auto meta = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGridMetadata(chosen));
+  if (!box) {
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen));
+    if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
+      throw Failure{OpenVdbStatus::BadInput,
+                    "grid '" + chosen + "' in '" + path + "' is not a level set"};
+    return grid;
+  }
+  // The box in world space, grown by half a voxel so that its voxels are all read.
+  const openvdb::math::Transform& xform = meta->transform();
+  const openvdb::Vec3d lo = xform.indexToWorld(box->min().asVec3d() - openvdb::Vec3d(0.5));
+  const openvdb::Vec3d hi = xform.indexToWorld(box->max().asVec3d() + openvdb::Vec3d(0.5));
+  const openvdb::BBoxd world(openvdb::math::minComponent(lo, hi),
+                             openvdb::math::maxComponent(lo, hi));
+  return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen, world));
+}
+
+void read_layout(const std::string& path, const std::string& grid_name, OpenVdbLayout& out) {
+  openvdb::io::File file(path);
+  try {
+    file.open(/*delayLoad=*/true);
+  } catch (const std::exception& e) {
+    throw Failure{OpenVdbStatus::Io, "cannot read '" + path + "' as OpenVDB: " + e.what()};
+  }
+  auto grid = find_level_set(file, path, grid_name, nullptr);
+  const openvdb::math::Transform& xform = grid->transform();
+  const openvdb::Vec3d voxel = xform.voxelSize();
+  if (!xform.isLinear() || std::abs(voxel[0] - voxel[1]) > 1e-9 * voxel[0] ||
+      std::abs(voxel[0] - voxel[2]) > 1e-9 * voxel[0])
+    throw Failure{OpenVdbStatus::BadInput,
+                  "grid '" + grid->getName() + "' does not have uniform voxels"};
+  const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+  if (box.empty())
+    throw Failure{OpenVdbStatus::BadInput, "grid '" + grid->getName() + "' has no active voxels"};
+  out.grid_name = grid->getName();
+  for (int a = 0; a < 3; ++a) out.min[a] = box.min()[a], out.max[a] = box.max()[a];
+  out.voxel = voxel[0];
+  const openvdb::Vec3d origin = xform.indexToWorld(openvdb::Vec3d(0, 0, 0));
+  for (int a = 0; a < 3; ++a) out.origin[a] = origin[a];
+  out.background = std::abs(double(grid->background()));
+  for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf)
+    if (leaf->onVoxelCount() > 0)
+      for (int a = 0; a < 3; ++a) out.leaf_origins.push_back(leaf->origin()[a]);
+}
+
+void read_box_values(const std::string& path, const std::string& grid_name, const int first[3],
+                     const int dims[3], std::vector<float>& out) {
+  openvdb::io::File file(path);
+  try {
+    file.open(/*delayLoad=*/true);
+  } catch (const std::exception& e) {
+    throw Failure{OpenVdbStatus::Io, "cannot read '" + path + "' as OpenVDB: " + e.what()};
+  }
+  const openvdb::CoordBBox box(
+      openvdb::Coord(first[0], first[1], first[2]),
+      openvdb::Coord(first[0] + dims[0] - 1, first[1] + dims[1] - 1, first[2] + dims[2] - 1));
+  auto grid = find_level_set(file, path, grid_name, &box);
+  auto accessor = grid->getConstAccessor();
+  out.resize(std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]));
+  std::size_t at = 0;
+  for (int i = 0; i < dims[0]; ++i)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int k = 0; k < dims[2]; ++k)
+        out[at++] = accessor.getValue(openvdb::Coord(first[0] + i, first[1] + j, first[2] + k));
+}
+
 void write_level_set(const OpenVdbGridToWrite& in, std::ostream& stream) {
   auto out = openvdb::FloatGrid::create(in.background);
   out->setName(in.name);
@@ -136,7 +220,16 @@ OpenVdbStatus write(const OpenVdbGridToWrite& grid, std::ostream& out) {
   return guarded([&] { write_level_set(grid, out); });
 }
 
-const OpenVdbFunctions kFunctions{&read, &write};
+OpenVdbStatus layout(const std::string& path, const std::string& grid_name, OpenVdbLayout& out) {
+  return guarded([&] { read_layout(path, grid_name, out); });
+}
+
+OpenVdbStatus read_box(const std::string& path, const std::string& grid_name, const int first[3],
+                       const int dims[3], std::vector<float>& out) {
+  return guarded([&] { read_box_values(path, grid_name, first, dims, out); });
+}
+
+const OpenVdbFunctions kFunctions{&read, &write, &layout, &read_box};
 
 }  // namespace
 

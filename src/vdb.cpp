@@ -129,6 +129,109 @@ VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_
   return out;
 }
 
+namespace {
+
+// The child's limits for reading part of `path`: as for a whole read.
+detail::IsolationLimits read_limits(const std::string& path, std::size_t extra_bytes) {
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError("cannot read '" + path + "': " + ec.message());
+  detail::IsolationLimits limits;
+  limits.memory_bytes =
+      (std::size_t(1) << 30) + extra_bytes +
+      std::size_t(std::min<std::uintmax_t>(file_size, std::uintmax_t(1) << 36)) * 64;
+  limits.seconds = 5 + double(file_size) / 5e6;
+  return limits;
+}
+
+template <class T>
+void put(std::string& out, const T* data, std::size_t count) {
+  out.append(reinterpret_cast<const char*>(data), sizeof(T) * count);
+}
+
+template <class T>
+void take(const std::string& bytes, std::size_t& at, T* data, std::size_t count) {
+  if (count > (bytes.size() - at) / sizeof(T))
+    throw InternalError("the .vdb reader's reply is cut short");
+  std::memcpy(data, bytes.data() + at, sizeof(T) * count);
+  at += sizeof(T) * count;
+}
+
+}  // namespace
+
+VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name) {
+  check_magic(path);
+  detail::openvdb_functions();
+  const std::string bytes = detail::run_isolated(
+      [&] {
+        detail::OpenVdbLayout l;
+        raise(detail::openvdb_functions().layout(path, grid_name, l));
+        std::string out;
+        const std::uint64_t name_size = l.grid_name.size(), leaves = l.leaf_origins.size();
+        put(out, &name_size, 1);
+        put(out, l.grid_name.data(), name_size);
+        put(out, l.min, 3);
+        put(out, l.max, 3);
+        put(out, &l.voxel, 1);
+        put(out, l.origin, 3);
+        put(out, &l.background, 1);
+        put(out, &leaves, 1);
+        put(out, l.leaf_origins.data(), leaves);
+        return out;
+      },
+      "cannot read '" + path + "' as OpenVDB", read_limits(path, 0));
+  VdbLayout l;
+  std::size_t at = 0;
+  std::uint64_t name_size = 0, leaves = 0;
+  take(bytes, at, &name_size, 1);
+  if (name_size > bytes.size()) throw InternalError("the .vdb reader's reply is cut short");
+  l.grid_name.resize(name_size);
+  take(bytes, at, l.grid_name.data(), name_size);
+  take(bytes, at, l.min.data(), 3);
+  take(bytes, at, l.max.data(), 3);
+  take(bytes, at, &l.voxel_size, 1);
+  take(bytes, at, l.origin.data(), 3);
+  take(bytes, at, &l.background, 1);
+  take(bytes, at, &leaves, 1);
+  if (leaves % 3 != 0 || leaves > bytes.size()) throw InternalError("the .vdb reply is malformed");
+  std::vector<int> origins(leaves);
+  take(bytes, at, origins.data(), leaves);
+  for (std::size_t i = 0; i < leaves; i += 3)
+    l.leaf_origins.push_back({origins[i], origins[i + 1], origins[i + 2]});
+  if (!(l.voxel_size > 0) || !std::isfinite(l.voxel_size) || !l.origin.allFinite())
+    throw Error("grid '" + l.grid_name + "' in '" + path + "' has a degenerate transform");
+  return l;
+}
+
+std::vector<float> read_vdb_box(const std::string& path, const std::string& grid_name,
+                                const std::array<int, 3>& first, const std::array<int, 3>& dims) {
+  check_magic(path);
+  long double count = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (dims[a] < 1) throw Error("a box to read needs at least one voxel per axis");
+    count *= dims[a];
+  }
+  if (count > (1u << 30)) throw Error("a box to read from a .vdb holds at most 2^30 voxels");
+  detail::openvdb_functions();
+  const std::string bytes = detail::run_isolated(
+      [&] {
+        std::vector<float> values;
+        raise(detail::openvdb_functions().read_box(path, grid_name, first.data(), dims.data(),
+                                                   values));
+        std::string out;
+        put(out, values.data(), values.size());
+        return out;
+      },
+      "cannot read '" + path + "' as OpenVDB", read_limits(path, std::size_t(count) * 4));
+  if (bytes.size() != std::size_t(count) * sizeof(float))
+    throw InternalError("the .vdb reader's reply has the wrong size");
+  std::vector<float> values(static_cast<std::size_t>(count));
+  std::memcpy(values.data(), bytes.data(), bytes.size());
+  for (float v : values)
+    if (!std::isfinite(v)) throw Error("'" + path + "' holds a non-finite value in the box read");
+  return values;
+}
+
 void write_vdb_level_set(const std::string& path, const Grid& grid, double half_width,
                          const std::string& name) {
   const Eigen::Vector3d h = grid.spacing();

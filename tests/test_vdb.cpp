@@ -3,6 +3,7 @@
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/LevelSetSphere.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "sdfcontour/builtin_shapes.h"
@@ -70,6 +71,43 @@ TEST(Vdb, RoundTripKeepsTheBandSparse) {
   for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i)
     worst = std::max(worst, std::abs(torus->distance(r.mesh->vertices.row(i).transpose())));
   EXPECT_LT(worst, 0.5 * h);
+}
+
+// Box by box: the layout names the active voxels' box and leaves, and a box read gives each
+// voxel's value (active: the grid's float32 value; inactive: the background with the sign of
+// the side it is on), read from the part of the file it needs.
+TEST(Vdb, BoxReadsGiveEveryVoxelsValue) {
+  const auto dir = test::temp_dir("vdb_box");
+  const std::string path = (dir / "torus.vdb").string();
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(-1.0, -0.9, -0.8);
+  bounds.max = bounds.min + Eigen::Vector3d::Constant(2.0);
+  const Grid grid = sample_grid(*make_builtin_shape("torus"), 33, bounds);
+  const double h = grid.spacing()[0];
+  write_vdb_level_set(path, grid, 3.0);
+  const VdbLayout layout = read_vdb_layout(path);
+  EXPECT_EQ(layout.grid_name, "surface");
+  EXPECT_NEAR(layout.voxel_size, h, 1e-12);
+  EXPECT_NEAR((layout.origin - bounds.min).norm(), 0, 1e-12);
+  EXPECT_FALSE(layout.leaf_origins.empty());
+  const float background = float(3 * h);
+  // A box across the band's edge: all of it, and a corner of it.
+  for (const std::array<int, 3>& first :
+       {std::array<int, 3>{0, 0, 0}, std::array<int, 3>{9, 4, 20}}) {
+    const std::array<int, 3> dims = {33 - first[0], 29 - first[1], 13};
+    const std::vector<float> box = read_vdb_box(path, "", first, dims);
+    std::size_t at = 0;
+    for (int i = 0; i < dims[0]; ++i)
+      for (int j = 0; j < dims[1]; ++j)
+        for (int k = 0; k < dims[2]; ++k, ++at) {
+          const float v = float(
+              grid.values[Eigen::Index(grid.index(first[0] + i, first[1] + j, first[2] + k))]);
+          const float expected = std::abs(v) < background ? v : std::copysign(background, v);
+          ASSERT_EQ(box[at], expected) << i << " " << j << " " << k;
+        }
+  }
+  EXPECT_THROW(read_vdb_box(path, "", {0, 0, 0}, {0, 4, 4}), Error);
+  EXPECT_THROW(read_vdb_layout(path, "density"), Error);
 }
 
 TEST(Vdb, RejectsWhatIsNotAFloatLevelSet) {

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from . import _bounds, _checks
+from . import _bounds, _checks, _sdfcontour
 from ._bricks import BrickError, brick_piece, bricks, canonical_mesh
 from ._io_join import join_pieces, write_pieces_as_ply
 
@@ -57,6 +57,40 @@ class _Hdf5Reader:
             return f[self.name][tuple(slice(f0, f0 + d) for f0, d in zip(first, dims))]
 
 
+class _VdbReader:
+    """An OpenVDB level set read box by box (never densified whole): the grid is its active
+    voxels' bounding box grown by one voxel, in float32; a brick reads its box from the file (only
+    the part of the file that the box needs), and bricks that meet no leaf with active voxels are
+    not read at all (they hold no surface)."""
+
+    def __init__(self, path, grid_name):
+        self.path, self.grid_name = path, grid_name or ""
+        layout = _sdfcontour.vdb_layout(self.path, self.grid_name)
+        self.grid_name = layout["grid_name"]
+        self.first = np.array(layout["min"]) - 1  # the vdb index of grid sample (0, 0, 0)
+        self.shape = tuple(int(n) for n in np.array(layout["max"]) - self.first + 2)
+        self.dtype = np.dtype(np.float32)
+        voxel, origin = layout["voxel_size"], np.array(layout["origin"])
+        self.bounds = (origin + voxel * self.first,
+                       origin + voxel * (self.first + np.array(self.shape) - 1))
+        self.leaves = np.asarray(layout["leaf_origins"]) - self.first  # in grid indices
+
+    def read(self, first, dims):
+        return _sdfcontour.read_vdb_box(self.path, self.grid_name,
+                                        tuple(int(f) for f in self.first + np.array(first)),
+                                        tuple(int(d) for d in dims))
+
+    def active(self, brick):
+        """The indices of the bricks whose samples meet a leaf with active voxels."""
+        found = set()
+        for lo in self.leaves:
+            hi = lo + 7
+            ranges = [range(max(0, -(-(int(lo[a]) - brick) // brick)), int(hi[a]) // brick + 1)
+                      for a in range(3)]
+            found.update((a, b, c) for a in ranges[0] for b in ranges[1] for c in ranges[2])
+        return found
+
+
 class _CallableReader:
     """A callable SDF sampled block by block, near the surface only (marching cubes needs the
     signs everywhere and the values at crossings: |f| <= one spacing)."""
@@ -79,6 +113,8 @@ def _open_path(path, dataset):
     lower = text.rstrip("/").lower()
     if lower.endswith(".npy"):
         return _NpyReader(text)
+    if lower.endswith(".vdb"):
+        return _VdbReader(text, dataset)
     if lower.endswith((".h5", ".hdf5", ".hdf")):
         import h5py
         with h5py.File(text, "r") as f:
@@ -104,7 +140,7 @@ def _open_path(path, dataset):
         if not isinstance(array, zarr.Array):
             raise ValueError(f"'{text}' is a zarr group: name its array with dataset=")
         return _ZarrReader(array)
-    raise ValueError(f"cannot read '{text}': use a .npy, .zarr, .h5 or .hdf5 path")
+    raise ValueError(f"cannot read '{text}': use a .npy, .zarr, .h5, .hdf5 or .vdb path")
 
 
 def _reader(source, bounds, resolution, batch_size, dataset):
@@ -219,8 +255,9 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         The grid (nx, ny, nz) of signed distances: a ``.npy`` file (memory-mapped on each
         worker), a ``.zarr`` folder or zarr array, an ``.h5``/``.hdf5`` file (with ``dataset``)
         or h5py dataset, a dask array, or a callable ``f(points (k, 3)) -> (k,)`` sampled on a
-        ``resolution``^3 grid, block by block on the workers and near the surface only.
-        Each task reads only its brick.
+        ``resolution``^3 grid, block by block on the workers and near the surface only; or an
+        OpenVDB ``.vdb`` level set (``dataset``: its grid name), read box by box, never
+        densified, bricks without active voxels skipped. Each task reads only its brick.
     bounds : (lo, hi), optional
         Positions of the first and last samples, each a number or 3 numbers. Default (-1, 1).
     method : {"mc"}
@@ -237,7 +274,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     resolution : int
         Samples per axis for a callable source.
     dataset : str, optional
-        The dataset inside an HDF5 file or zarr group.
+        The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
     progress : bool
         Print the bricks done on stderr.
 
@@ -266,7 +303,12 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     reader = _reader(source, bounds, resolution, batch_size, dataset)
     shape = tuple(int(n) for n in reader.shape)
     _check_shape_and_dtype(shape, reader.dtype)
-    lo, hi = _bounds(bounds)
+    if isinstance(reader, _VdbReader):
+        if bounds is not None:
+            raise ValueError("a .vdb level set places itself (its transform): give no bounds")
+        lo, hi = reader.bounds
+    else:
+        lo, hi = _bounds(bounds)
     if out is not None:
         out = os.fspath(out)
         if os.path.isdir(out):
@@ -288,7 +330,10 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
     dask_client, owned = _start_client(client)
     try:
         tasks = []
+        active = reader.active(brick) if isinstance(reader, _VdbReader) else None
         for index, first, dims in bricks(shape, brick):
+            if active is not None and tuple(index) not in active:
+                continue  # no active voxel: no surface, not read
             if isinstance(reader, np.ndarray) or type(reader).__module__.startswith("dask"):
                 sl = tuple(slice(f, f + d) for f, d in zip(first, dims))
                 block = reader[sl]
@@ -297,6 +342,8 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
                 task = dask.delayed(_read_and_contour, pure=True)(reader, index, first, dims,
                                                                   shape, lo, hi)
             tasks.append(task)
+        if not tasks:
+            raise ValueError("the level set has no active voxels: no surface to contour")
         futures = dask_client.compute(tasks)
         order = {f.key: b for b, f in enumerate(futures)}
         done = _Progress(len(futures), progress)

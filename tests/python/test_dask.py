@@ -173,3 +173,27 @@ def test_a_bad_brick_stops_the_run_with_its_index(grid, client, tmp_path):
 def test_bad_input_is_one_clear_error(client, call, kind, words):
     with pytest.raises(kind, match=words):
         call(client)
+
+
+def test_openvdb_level_set_read_box_by_box(client, tmp_path):
+    # Split by its active leaves, never densified whole: the same mesh as marching cubes on the
+    # level set's box read in one piece, and next to GCP's mesh of the same file.
+    import subprocess
+    root = os.path.join(os.path.dirname(__file__), "..", "..")
+    cli = os.environ.get("SDFCONTOUR_CLI", os.path.join(root, "build", "sdfcontour"))
+    vdb = str(tmp_path / "spot.vdb")
+    subprocess.run([cli, "sample", os.path.join(root, "..", "shared", "data", "meshes", "spot.obj"),
+                    "--res", "64", "-o", vdb, "--quiet"], check=True, capture_output=True)
+    V, F, stats = sdfcontour.dask.contour(vdb, brick=16, client=client, return_stats=True)
+    reader = sdfcontour.dask._VdbReader(vdb, None)
+    whole = sdfcontour._sdfcontour.read_vdb_box(vdb, "", tuple(int(x) for x in reader.first),
+                                                reader.shape)
+    assert_same_mesh((V, F), sdfcontour.contour(whole, bounds=reader.bounds, method="mc"))
+    assert stats["bricks"] < len(sdfcontour.dask.bricks(reader.shape, 16))  # empty ones unread
+    assert_closed_manifold(F)
+    V_gcp, F_gcp = sdfcontour.contour(vdb)
+    assert sdfcontour.distances(V, F, V_gcp, F_gcp, samples=20000)["L1"] < 0.5 * (2 / 63)
+    with pytest.raises(ValueError, match="places itself"):
+        sdfcontour.dask.contour(vdb, bounds=(-1, 1), client=client)
+    with pytest.raises(ValueError, match="no float grid named"):
+        sdfcontour.dask.contour(vdb, dataset="density", client=client)
