@@ -164,7 +164,7 @@ void read_box_values(const std::string& path, const std::string& grid_name, cons
       openvdb::Coord(first[0], first[1], first[2]),
       openvdb::Coord(first[0] + dims[0] - 1, first[1] + dims[1] - 1, first[2] + dims[2] - 1));
   auto grid = find_level_set(file, path, grid_name, &box);
-  auto accessor = grid->getConstAccessor();
+  auto accessor = grid->getConstUnsafeAccessor();  // unregistered: no shared registry
   out.resize(std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]));
   std::size_t at = 0;
   for (int i = 0; i < dims[0]; ++i)
