@@ -31,14 +31,13 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
   const Method method = options.method;
   const Samples& s = band.samples;
   const std::string n = std::to_string(s.values.size());
-  // Only the band proper gives contact points; its margin closes their stars. The local
-  // reconstruction takes the margin's too: on a flat face the samples' spheres nest along each
-  // normal and only the outermost survives, often a margin sample (cube 128^3: 42% of the surface
-  // cells had no contact point, L1 8.6e-5; with the margin's, none and 2.5e-6; bunny 128^3
-  // 1.34e-4 -> 1.27e-4; 32^3-64^3 within 2% either way).
-  const bool local =
-      options.reconstruction == Reconstruction::Local && options.want_mesh && method == Method::Gcp;
-  const std::vector<char>* core = local ? nullptr : &band.core;
+  // Only the band proper gives contact points; its margin closes their stars. (The local
+  // reconstruction took the margin's too for a while: cube 128^3 L1 8.6e-5 -> 2.5e-6, bunny
+  // 1.34e-4 -> 1.27e-4. But a margin sample's star reaches across the empty space beyond the
+  // band, so bricks cannot certify it without triangulating most of the band again: contact
+  // points took 621 s instead of ~10 s on cube 128^3, 212 s on bunny. Reverted until margin
+  // stars can be bounded locally.)
+  const std::vector<char>* core = &band.core;
   const std::string n_core = std::to_string(std::count(band.core.begin(), band.core.end(), 1));
   if (method == Method::Gtcp && (options.want_points || options.want_mesh))
     result.contact_points =
