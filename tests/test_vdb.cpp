@@ -29,19 +29,33 @@ void expect_error(const std::string& path, const std::string& grid, const std::s
   }
 }
 
+// The built-in torus sampled on 33^3 over a box off the origin, written as a level set of half
+// width 3 voxels into a fresh folder named `name`.
+struct TorusLevelSet {
+  std::string path;
+  Grid grid;
+};
+TorusLevelSet torus_level_set(const std::string& name) {
+  TorusLevelSet t;
+  t.path = (test::temp_dir(name) / "torus.vdb").string();
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(-1.0, -0.9, -0.8);
+  bounds.max = bounds.min + Eigen::Vector3d::Constant(2.0);
+  t.grid = sample_grid(*make_builtin_shape("torus"), 33, bounds);
+  write_vdb_level_set(t.path, t.grid, 3.0);
+  return t;
+}
+
 }  // namespace
 
 // sample -> .vdb -> samples: the active voxels are the grid samples inside the band, at their
 // world positions, with their values (as float32).
 TEST(Vdb, RoundTripKeepsTheBandSparse) {
-  const auto dir = test::temp_dir("vdb_roundtrip");
-  const std::string path = (dir / "torus.vdb").string();
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(-1.0, -0.9, -0.8);
-  bounds.max = bounds.min + Eigen::Vector3d::Constant(2.0);
-  const Grid grid = sample_grid(*make_builtin_shape("torus"), 33, bounds);
+  const TorusLevelSet t = torus_level_set("vdb_roundtrip");
+  const std::string& path = t.path;
+  const Grid& grid = t.grid;
+  const Bounds& bounds = grid.bounds;
   const double h = grid.spacing()[0];
-  write_vdb_level_set(path, grid, 3.0);
   const VdbLevelSet ls = read_vdb_level_set(path);
   EXPECT_EQ(ls.grid_name, "surface");
   EXPECT_NEAR(ls.voxel_size, h, 1e-12);
@@ -77,14 +91,11 @@ TEST(Vdb, RoundTripKeepsTheBandSparse) {
 // voxel's value (active: the grid's float32 value; inactive: the background with the sign of
 // the side it is on), read from the part of the file it needs.
 TEST(Vdb, BoxReadsGiveEveryVoxelsValue) {
-  const auto dir = test::temp_dir("vdb_box");
-  const std::string path = (dir / "torus.vdb").string();
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(-1.0, -0.9, -0.8);
-  bounds.max = bounds.min + Eigen::Vector3d::Constant(2.0);
-  const Grid grid = sample_grid(*make_builtin_shape("torus"), 33, bounds);
+  const TorusLevelSet t = torus_level_set("vdb_box");
+  const std::string& path = t.path;
+  const Grid& grid = t.grid;
+  const Bounds& bounds = grid.bounds;
   const double h = grid.spacing()[0];
-  write_vdb_level_set(path, grid, 3.0);
   const VdbLayout layout = read_vdb_layout(path);
   EXPECT_EQ(layout.grid_name, "surface");
   EXPECT_NEAR(layout.voxel_size, h, 1e-12);
