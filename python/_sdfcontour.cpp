@@ -336,6 +336,17 @@ py::tuple run_read_vdb(const std::string& path, const std::string& grid_name) {
                         level_set.voxel_size, level_set.background);
 }
 
+// What the module's stats say of a mesh's topology.
+py::dict topology_stats(const Mesh& mesh) {
+  const MeshTopology t = mesh_topology(mesh);
+  py::dict out;
+  out["closed"] = t.closed;
+  out["oriented"] = t.consistently_oriented;
+  out["manifold"] = t.nonmanifold_edges == 0;  // no edge with more than 2 triangles
+  out["components"] = connected_components(mesh);
+  return out;
+}
+
 py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
                      const std::array<double, 3>& hi, double spacing, const py::dict& options,
                      bool want_mesh, bool want_points, const py::object& progress_callback) {
@@ -369,11 +380,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   if (r.mesh) {
     if (r.mesh->triangles.rows() == 0)
       throw Error("the " + method_name(opt.method) + " mesh is empty: no surface was found");
-    const MeshTopology topology = mesh_topology(*r.mesh);
-    stats["closed"] = topology.closed;
-    stats["oriented"] = topology.consistently_oriented;
-    stats["manifold"] = topology.nonmanifold_edges == 0;  // no edge with more than 2 triangles
-    stats["components"] = connected_components(*r.mesh);
+    stats.attr("update")(topology_stats(*r.mesh));
     out["V"] = to_numpy(std::move(r.mesh->vertices));
     out["F"] = to_numpy(std::move(r.mesh->triangles));
   }
@@ -523,16 +530,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
   m.def(
       "mesh_topology",
-      [](const py::array& V, const py::array& F) {
-        const Mesh mesh = mesh_from(V, F);
-        const MeshTopology t = mesh_topology(mesh);
-        py::dict out;
-        out["closed"] = t.closed;
-        out["oriented"] = t.consistently_oriented;
-        out["manifold"] = t.nonmanifold_edges == 0;
-        out["components"] = connected_components(mesh);
-        return out;
-      },
+      [](const py::array& V, const py::array& F) { return topology_stats(mesh_from(V, F)); },
       py::arg("V"), py::arg("F"));
   m.def(
       "vdb_layout",

@@ -17,7 +17,8 @@ std::string triple(const std::array<int, 3>& a) {
          ")";
 }
 
-void check_brick(const GridView& block, const GridGeometry& grid, const std::array<int, 3>& first) {
+// Throws Error for a bad brick; returns whether its values change sign (else it has no piece).
+bool check_brick(const GridView& block, const GridGeometry& grid, const std::array<int, 3>& first) {
   for (int a = 0; a < 3; ++a) {
     if (grid.dims[a] < 2) throw Error("the grid needs at least 2 samples on every axis");
     if (block.dims[a] < 2) throw Error("a brick needs at least 2 samples on every axis");
@@ -32,8 +33,10 @@ void check_brick(const GridView& block, const GridGeometry& grid, const std::arr
   if (n >= static_cast<long double>(std::uint64_t(1) << 61))
     throw Error("the grid has too many samples for 64-bit vertex keys");
   const std::size_t count = block.size();
-  block.visit([&](const auto* f) {
-    for (std::size_t p = 0; p < count; ++p)
+  return block.visit([&](const auto* f) {
+    bool inside = false, outside = false;
+    for (std::size_t p = 0; p < count; ++p) {
+      (f[p] < 0 ? inside : outside) = true;
       if (!std::isfinite(double(f[p]))) {
         const std::size_t k = p % std::size_t(block.dims[2]),
                           j = p / std::size_t(block.dims[2]) % std::size_t(block.dims[1]),
@@ -41,6 +44,8 @@ void check_brick(const GridView& block, const GridGeometry& grid, const std::arr
         throw Error("the grid has a non-finite value at [" + std::to_string(first[0] + i) + ", " +
                     std::to_string(first[1] + j) + ", " + std::to_string(first[2] + k) + "]");
       }
+    }
+    return inside && outside;
   });
 }
 
@@ -135,7 +140,7 @@ MeshPiece march_brick(const Value* f, const GridView& block, const GridGeometry&
 
 MeshPiece marching_cubes_brick(const GridView& block, const GridGeometry& grid,
                                const std::array<int, 3>& first) {
-  check_brick(block, grid, first);
+  if (!check_brick(block, grid, first)) return {};  // one sign: no surface
   return block.visit([&](const auto* f) { return march_brick(f, block, grid, first); });
 }
 

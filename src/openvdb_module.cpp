@@ -27,36 +27,63 @@ void initialise() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-void read_level_set(const std::string& path, const std::string& grid_name, VdbLevelSet& out) {
-  openvdb::GridPtrVecPtr grids;
+// Runs `read` (OpenVDB reading `path`): what OpenVDB throws becomes an I/O failure; our own
+// failures and running out of memory pass as they are.
+template <class Read>
+auto reading(const std::string& path, Read&& read) {
   try {
-    openvdb::io::File file(path);
-    file.open(/*delayLoad=*/false);
-    grids = file.getGrids();
-    file.close();
+    return read();
+  } catch (const Failure&) {
+    throw;
   } catch (const std::bad_alloc&) {
     throw;  // reported as too much memory for the file
   } catch (const std::exception& e) {
     throw Failure{OpenVdbStatus::Io, "cannot read '" + path + "' as OpenVDB: " + e.what()};
   }
-  openvdb::FloatGrid::Ptr grid;
-  std::string names;
-  for (const auto& g : *grids) {
-    names += (names.empty() ? "" : ", ") + g->getName();
-    auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
-    if (!f) continue;
-    if (grid_name.empty() ? !grid : g->getName() == grid_name) grid = f;
-  }
-  const std::string listed = " (grids: " + (names.empty() ? "none" : names) + ")";
-  if (!grid && !grid_name.empty())
-    throw Failure{OpenVdbStatus::BadInput,
-                  "'" + path + "' has no float grid named '" + grid_name + "'" + listed};
-  if (!grid) throw Failure{OpenVdbStatus::BadInput, "'" + path + "' has no float grid" + listed};
-  if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
-    throw Failure{OpenVdbStatus::BadInput,
-                  "grid '" + grid->getName() + "' in '" + path +
-                      "' is not a level set (its class is " +
-                      openvdb::GridBase::gridClassToString(grid->getGridClass()) + ")"};
+}
+
+// The float level set `grid_name` (empty: the first float grid) of `file` (at `path`): all of
+// it, or (with `box`) the part within that box of voxels. Only the chosen grid is read. With
+// delayed loading its voxels are read from `file` when asked for: keep it until then.
+openvdb::FloatGrid::Ptr read_float_level_set(openvdb::io::File& file, const std::string& path,
+                                             const std::string& grid_name, bool delay_load,
+                                             const openvdb::CoordBBox* box) {
+  return reading(path, [&] {
+    file.open(delay_load);
+    openvdb::GridBase::Ptr chosen;
+    std::string names;
+    const openvdb::GridPtrVecPtr metadata = file.readAllGridMetadata();  // alive for the loop
+    for (const auto& g : *metadata) {
+      names += (names.empty() ? "" : ", ") + g->getName();
+      if (!g->isType<openvdb::FloatGrid>()) continue;
+      if (grid_name.empty() ? !chosen : g->getName() == grid_name) chosen = g;
+    }
+    const std::string listed = " (grids: " + (names.empty() ? "none" : names) + ")";
+    if (!chosen && !grid_name.empty())
+      throw Failure{OpenVdbStatus::BadInput,
+                    "'" + path + "' has no float grid named '" + grid_name + "'" + listed};
+    if (!chosen)
+      throw Failure{OpenVdbStatus::BadInput, "'" + path + "' has no float grid" + listed};
+    if (chosen->getGridClass() != openvdb::GRID_LEVEL_SET)
+      throw Failure{OpenVdbStatus::BadInput,
+                    "grid '" + chosen->getName() + "' in '" + path +
+                        "' is not a level set (its class is " +
+                        openvdb::GridBase::gridClassToString(chosen->getGridClass()) + ")"};
+    if (!box) return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen->getName()));
+    // The box in world space, grown by half a voxel so that its voxels are all read.
+    const openvdb::math::Transform& xform = chosen->transform();
+    const openvdb::Vec3d lo = xform.indexToWorld(box->min().asVec3d() - openvdb::Vec3d(0.5));
+    const openvdb::Vec3d hi = xform.indexToWorld(box->max().asVec3d() + openvdb::Vec3d(0.5));
+    const openvdb::BBoxd world(openvdb::math::minComponent(lo, hi),
+                               openvdb::math::maxComponent(lo, hi));
+    return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen->getName(), world));
+  });
+}
+
+void read_level_set(const std::string& path, const std::string& grid_name, VdbLevelSet& out) {
+  openvdb::io::File file(path);
+  const openvdb::FloatGrid::Ptr grid =
+      read_float_level_set(file, path, grid_name, /*delay_load=*/false, nullptr);
   const openvdb::math::Transform& xform = grid->transform();
   const openvdb::Vec3d voxel = xform.voxelSize();
   out.grid_name = grid->getName();
@@ -89,49 +116,10 @@ void read_level_set(const std::string& path, const std::string& grid_name, VdbLe
   }
 }
 
-// The float level set `grid_name` (empty: the first float grid) of an open file: its metadata
-// only, or (with `box`) its part within the box of voxels.
-openvdb::FloatGrid::Ptr find_level_set(openvdb::io::File& file, const std::string& path,
-                                       const std::string& grid_name,
-                                       const openvdb::CoordBBox* box) {
-  std::string chosen, names;
-  const openvdb::GridPtrVecPtr metadata = file.readAllGridMetadata();  // kept alive for the loop
-  for (const auto& g : *metadata) {
-    names += (names.empty() ? "" : ", ") + g->getName();
-    if (!g->isType<openvdb::FloatGrid>()) continue;
-    if (grid_name.empty() ? chosen.empty() : g->getName() == grid_name) chosen = g->getName();
-  }
-  const std::string listed = " (grids: " + (names.empty() ? "none" : names) + ")";
-  if (chosen.empty() && !grid_name.empty())
-    throw Failure{OpenVdbStatus::BadInput,
-                  "'" + path + "' has no float grid named '" + grid_name + "'" + listed};
-  if (chosen.empty())
-    throw Failure{OpenVdbStatus::BadInput, "'" + path + "' has no float grid" + listed};
-  auto meta = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGridMetadata(chosen));
-  if (!box) {
-    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen));
-    if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
-      throw Failure{OpenVdbStatus::BadInput,
-                    "grid '" + chosen + "' in '" + path + "' is not a level set"};
-    return grid;
-  }
-  // The box in world space, grown by half a voxel so that its voxels are all read.
-  const openvdb::math::Transform& xform = meta->transform();
-  const openvdb::Vec3d lo = xform.indexToWorld(box->min().asVec3d() - openvdb::Vec3d(0.5));
-  const openvdb::Vec3d hi = xform.indexToWorld(box->max().asVec3d() + openvdb::Vec3d(0.5));
-  const openvdb::BBoxd world(openvdb::math::minComponent(lo, hi),
-                             openvdb::math::maxComponent(lo, hi));
-  return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen, world));
-}
-
 void read_layout(const std::string& path, const std::string& grid_name, OpenVdbLayout& out) {
-  openvdb::io::File file(path);
-  try {
-    file.open(/*delayLoad=*/true);
-  } catch (const std::exception& e) {
-    throw Failure{OpenVdbStatus::Io, "cannot read '" + path + "' as OpenVDB: " + e.what()};
-  }
-  auto grid = find_level_set(file, path, grid_name, nullptr);
+  openvdb::io::File file(path);  // kept while the topology is read
+  const openvdb::FloatGrid::Ptr grid =
+      read_float_level_set(file, path, grid_name, /*delay_load=*/true, nullptr);
   const openvdb::math::Transform& xform = grid->transform();
   const openvdb::Vec3d voxel = xform.voxelSize();
   if (!xform.isLinear() || std::abs(voxel[0] - voxel[1]) > 1e-9 * voxel[0] ||
@@ -154,16 +142,12 @@ void read_layout(const std::string& path, const std::string& grid_name, OpenVdbL
 
 void read_box_values(const std::string& path, const std::string& grid_name, const int first[3],
                      const int dims[3], std::vector<float>& out) {
-  openvdb::io::File file(path);
-  try {
-    file.open(/*delayLoad=*/true);
-  } catch (const std::exception& e) {
-    throw Failure{OpenVdbStatus::Io, "cannot read '" + path + "' as OpenVDB: " + e.what()};
-  }
   const openvdb::CoordBBox box(
       openvdb::Coord(first[0], first[1], first[2]),
       openvdb::Coord(first[0] + dims[0] - 1, first[1] + dims[1] - 1, first[2] + dims[2] - 1));
-  auto grid = find_level_set(file, path, grid_name, &box);
+  openvdb::io::File file(path);  // kept while the values are read
+  const openvdb::FloatGrid::Ptr grid =
+      read_float_level_set(file, path, grid_name, /*delay_load=*/true, &box);
   auto accessor = grid->getConstUnsafeAccessor();  // unregistered: no shared registry
   out.resize(std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]));
   std::size_t at = 0;

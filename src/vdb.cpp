@@ -55,83 +55,11 @@ void raise(const detail::OpenVdbStatus& status) {
   throw InternalError("OpenVDB: " + status.message);
 }
 
-// Reads the level set with OpenVDB (in the isolated child: see read_vdb_level_set).
-VdbLevelSet read_with_openvdb(const std::string& path, const std::string& grid_name) {
-  VdbLevelSet out;
-  raise(detail::openvdb_functions().read(path, grid_name, out));
-  return out;
-}
-
-// The level set as bytes for the trip from the child: name length, name, voxel size, background,
-// count, then the points (row-major) and the values.
-std::string serialise(const VdbLevelSet& s) {
-  const std::uint64_t name_size = s.grid_name.size(), n = std::uint64_t(s.samples.values.size());
-  std::string out;
-  auto put = [&](const void* data, std::size_t size) {
-    out.append(static_cast<const char*>(data), size);
-  };
-  put(&name_size, 8);
-  put(s.grid_name.data(), name_size);
-  put(&s.voxel_size, 8);
-  put(&s.background, 8);
-  put(&n, 8);
-  put(s.samples.points.data(), 24 * n);
-  put(s.samples.values.data(), 8 * n);
-  return out;
-}
-
-VdbLevelSet deserialise(const std::string& bytes) {
-  std::size_t at = 0;
-  auto take = [&](void* data, std::size_t size) {
-    if (size > bytes.size() - at) throw InternalError("the .vdb reader's reply is cut short");
-    std::memcpy(data, bytes.data() + at, size);
-    at += size;
-  };
-  VdbLevelSet s;
-  std::uint64_t name_size = 0, n = 0;
-  take(&name_size, 8);
-  if (name_size > bytes.size()) throw InternalError("the .vdb reader's reply is cut short");
-  s.grid_name.resize(name_size);
-  take(s.grid_name.data(), name_size);
-  take(&s.voxel_size, 8);
-  take(&s.background, 8);
-  take(&n, 8);
-  if (n > (bytes.size() - at) / 32 || (bytes.size() - at) != 32 * n)
-    throw InternalError("the .vdb reader's reply has the wrong size");
-  s.samples.points.resize(Eigen::Index(n), 3);
-  s.samples.values.resize(Eigen::Index(n));
-  take(s.samples.points.data(), 24 * n);
-  take(s.samples.values.data(), 8 * n);
-  return s;
-}
-
-}  // namespace
-
-VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_name) {
-  check_magic(path);
-  detail::openvdb_functions();  // loaded here, so that the child only calls into it
-  // OpenVDB trusts its input (a 10 KB file can make it allocate gigabytes or read past its
-  // buffers), so it reads in a child process with bounded memory and time: a hostile file ends
-  // as an error. The allowance is generous for real files: their voxels are stored at >= 2
-  // bytes each, and a voxel costs ~100 bytes while read.
-  std::error_code ec;
-  const auto file_size = std::filesystem::file_size(path, ec);
-  if (ec) throw IoError("cannot read '" + path + "': " + ec.message());
-  detail::IsolationLimits limits;
-  limits.memory_bytes = std::size_t(1) << 30;
-  limits.memory_bytes +=
-      std::size_t(std::min<std::uintmax_t>(file_size, std::uintmax_t(1) << 36)) * 64;
-  limits.seconds = 5 + double(file_size) / 5e6;
-  VdbLevelSet out = deserialise(
-      detail::run_isolated([&] { return serialise(read_with_openvdb(path, grid_name)); },
-                           "cannot read '" + path + "' as OpenVDB", limits));
-  validate_samples(out.samples);
-  return out;
-}
-
-namespace {
-
-// The child's limits for reading part of `path`: as for a whole read.
+// The reading child's limits: OpenVDB trusts its input (a 10 KB file can make it allocate
+// gigabytes or read past its buffers), so it reads in a child process with bounded memory and
+// time, and a hostile file ends as an error. The allowance is generous for real files: their
+// voxels are stored at >= 2 bytes each, and a voxel costs ~100 bytes while read; `extra_bytes`
+// is what the reply needs beyond that.
 detail::IsolationLimits read_limits(const std::string& path, std::size_t extra_bytes) {
   std::error_code ec;
   const auto file_size = std::filesystem::file_size(path, ec);
@@ -157,7 +85,59 @@ void take(const std::string& bytes, std::size_t& at, T* data, std::size_t count)
   at += sizeof(T) * count;
 }
 
+// Reads the level set with OpenVDB (in the isolated child: see read_vdb_level_set).
+VdbLevelSet read_with_openvdb(const std::string& path, const std::string& grid_name) {
+  VdbLevelSet out;
+  raise(detail::openvdb_functions().read(path, grid_name, out));
+  return out;
+}
+
+// The level set as bytes for the trip from the child: name length, name, voxel size, background,
+// count, then the points (row-major) and the values.
+std::string serialise(const VdbLevelSet& s) {
+  const std::uint64_t name_size = s.grid_name.size(), n = std::uint64_t(s.samples.values.size());
+  std::string out;
+  put(out, &name_size, 1);
+  put(out, s.grid_name.data(), name_size);
+  put(out, &s.voxel_size, 1);
+  put(out, &s.background, 1);
+  put(out, &n, 1);
+  put(out, s.samples.points.data(), 3 * n);
+  put(out, s.samples.values.data(), n);
+  return out;
+}
+
+VdbLevelSet deserialise(const std::string& bytes) {
+  std::size_t at = 0;
+  VdbLevelSet s;
+  std::uint64_t name_size = 0, n = 0;
+  take(bytes, at, &name_size, 1);
+  if (name_size > bytes.size()) throw InternalError("the .vdb reader's reply is cut short");
+  s.grid_name.resize(name_size);
+  take(bytes, at, s.grid_name.data(), name_size);
+  take(bytes, at, &s.voxel_size, 1);
+  take(bytes, at, &s.background, 1);
+  take(bytes, at, &n, 1);
+  if (n > (bytes.size() - at) / 32 || (bytes.size() - at) != 32 * n)
+    throw InternalError("the .vdb reader's reply has the wrong size");
+  s.samples.points.resize(Eigen::Index(n), 3);
+  s.samples.values.resize(Eigen::Index(n));
+  take(bytes, at, s.samples.points.data(), 3 * n);
+  take(bytes, at, s.samples.values.data(), n);
+  return s;
+}
+
 }  // namespace
+
+VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_name) {
+  check_magic(path);
+  detail::openvdb_functions();  // loaded here, so that the child only calls into it
+  VdbLevelSet out = deserialise(
+      detail::run_isolated([&] { return serialise(read_with_openvdb(path, grid_name)); },
+                           "cannot read '" + path + "' as OpenVDB", read_limits(path, 0)));
+  validate_samples(out.samples);
+  return out;
+}
 
 VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name) {
   check_magic(path);

@@ -32,7 +32,8 @@ struct MeshPiece {
 /// [first, first + block.dims) on each axis (C order, float32 or float64; its bounds are not
 /// used: positions come from `grid`, the whole grid's dims and bounds, and global indices).
 /// Throws Error unless block.dims >= 2, 0 <= first, first + block.dims <= grid.dims, the values
-/// are finite, and the grid's keys fit in 64 bits. The triangles are those that
+/// are finite, and the grid's keys fit in 64 bits. A block of one sign gives an empty piece
+/// (checked in the same pass over the values). The triangles are those that
 /// marching_cubes(whole grid) makes in the block's cells, the vertex positions bit for bit the
 /// same.
 MeshPiece marching_cubes_brick(const GridView& block, const GridGeometry& grid,

@@ -105,8 +105,10 @@ def _poisson_options(full_depth, alpha, samples_per_node, scale, boundary, solve
 
 def _progress(value):
     """True, False, or a callable progress(stage, done, total)."""
-    if callable(value) or isinstance(value, (bool, _np.bool_)):
-        return bool(value) if not callable(value) else value
+    if callable(value):
+        return value
+    if isinstance(value, (bool, _np.bool_)):
+        return bool(value)
     raise _checks.ArgumentTypeError(f"progress must be True, False or a callable "
                                     f"progress(stage, done, total), got {value!r}")
 
@@ -148,7 +150,7 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
              tie_tolerance=_checks.in_range("tie_tolerance", tie_tolerance),
              brick_size=_brick_size(brick_size),
              brick_halo=_checks.in_range("brick_halo", brick_halo),
-             progress=progress is not False and _progress(progress) is True,
+             progress=_progress(progress) is True,  # a callable is passed on apart
              **_poisson_options(full_depth, alpha, samples_per_node, scale, boundary,
                                 solver_tolerance, finest_solver_tolerance))
     if callable(progress):
