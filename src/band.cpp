@@ -142,6 +142,8 @@ Truncation resolve(const Values& values, const BandOptions& options) {
       t.inside = t.outside = options.truncation;
       return t;
     }
+    case TruncationMode::Resolved:
+      return options.resolved;
     case TruncationMode::None:
       break;
   }
@@ -196,7 +198,8 @@ void validate_band_options(const BandOptions& options) {
 BandSamples select_band(const GridView& grid, const BandOptions& given) {
   BandOptions options = given;
   BandSamples out;
-  out.samples_per_axis = double(*std::max_element(grid.dims.begin(), grid.dims.end()));
+  const std::array<int, 3> whole = grid.whole_dims();  // a block's band is its whole grid's
+  out.samples_per_axis = double(*std::max_element(whole.begin(), whole.end()));
   if (options.band == 0) options.band = auto_band(out.samples_per_axis);
   const BandTest keep = begin_band(out, grid, options, grid.spacing().maxCoeff());
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];

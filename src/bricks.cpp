@@ -141,7 +141,8 @@ class BrickRunner {
         options_(o),
         only_(only),
         grid_(bucket(s.points, o.size * h)) {
-    max_weight_ = s.values.array().square().maxCoeff();
+    max_weight_ =
+        o.within ? o.largest_value * o.largest_value : s.values.array().square().maxCoeff();
     // Twice the largest |value|: a sphere about a point of the box's edge region, grown by the
     // largest weight, stays inside.
     shell_width_ = 2 * std::sqrt(max_weight_);
@@ -164,7 +165,13 @@ class BrickRunner {
       const int s = g.members[std::size_t(m)];
       if (!only_ || (*only_)[std::size_t(s)]) targets.push_back(s);
     }
-    const Box own = grid_.box(brick);
+    Box own = grid_.box(brick);
+    if (options_.within && !targets.empty()) {
+      // A block: the box its targets need, not the brick's (whose halo could leave the block).
+      own = {point(targets[0]), point(targets[0])};
+      for (int t : targets)
+        own.min = own.min.cwiseMin(point(t)), own.max = own.max.cwiseMax(point(t));
+    }
     const Vector3d halo = Vector3d::Constant(options_.halo * h_);
     solve({own.min - halo, own.max + halo}, targets, out);
     return out;
@@ -177,7 +184,14 @@ class BrickRunner {
   void solve(const Box& box, const std::vector<int>& targets, BrickOutput& out,
              int depth = 0) const {
     if (targets.empty()) return;
-    const bool everything = box.contains(all_);
+    // (A block is never everything: samples beyond it exist.)
+    const bool everything = !options_.within && box.contains(all_);
+    if (options_.within) {
+      const Box block{options_.within->min, options_.within->max};
+      const Vector3d shell(Vector3d::Constant(shell_width_));
+      if (!block.contains(Box{box.min - shell, box.max + shell}))
+        throw HaloTooSmall("the block's halo is too small for its samples' stars");
+    }
     // The samples in the box are triangulated; those in a shell around it are only tested
     // against the orthospheres that reach out of the box.
     const Vector3d shell_width = Vector3d::Constant(everything ? 0.0 : shell_width_);
@@ -366,6 +380,8 @@ ContactPoints brick_contact_points(const Samples& samples, double spacing,
   if (!(options.halo > 0) || !std::isfinite(options.halo))
     throw Error("the brick halo must be a positive number of spacings (resolve 0 first)");
   if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
+  if (options.within && !(options.largest_value > 0 && std::isfinite(options.largest_value)))
+    throw Error("a block's samples need a positive largest |value| of the whole set");
   BrickOptions resolved = options;
   if (resolved.size == BrickOptions::kAutoSize)
     resolved.size =

@@ -132,10 +132,16 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
     Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
     int count = 0;
     double weight_sum = 0, weighted_z2 = 0;
+    // Summed in row order: the same bits whatever the cubes (a brick's points start elsewhere).
+    thread_local std::vector<int> near;
+    near.clear();
     cubes.for_each_near(p, [&](int i) {
+      if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
+    });
+    std::sort(near.begin(), near.end());
+    for (const int i : near) {
       const Eigen::Vector3d d = points.row(i).transpose() - p;
-      if (d.squaredNorm() > r * r || normals.row(i).dot(n.transpose()) <= o.normal_agreement)
-        return;
+      if (normals.row(i).dot(n.transpose()) <= o.normal_agreement) continue;
       const double x = d.dot(a), y = d.dot(b), z = d.dot(n);
       double w = std::exp(-(x * x + y * y) * inv_two_sigma2);
       if (inv_depth_scale2 > 0) w /= 1 + depths[i] * depths[i] * inv_depth_scale2;
@@ -147,7 +153,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       rhs += w * (z / spacing) * row;
       weighted_z2 += w * (z / spacing) * (z / spacing);
       ++count;
-    });
+    }
     if (count < o.min_points) return;
     M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
     // A rank-deficient neighbourhood (the points on a line) gives no height: skip it.

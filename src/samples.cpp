@@ -13,12 +13,14 @@ namespace sdfcontour {
 
 Eigen::Vector3d GridGeometry::spacing() const {
   Eigen::Vector3d h;
-  for (int a = 0; a < 3; ++a) h[a] = (bounds.max[a] - bounds.min[a]) / (dims[a] - 1);
+  const std::array<int, 3> n = whole_dims();
+  for (int a = 0; a < 3; ++a) h[a] = (bounds.max[a] - bounds.min[a]) / (n[std::size_t(a)] - 1);
   return h;
 }
 
 Eigen::Vector3d GridGeometry::point(int i, int j, int k) const {
   const Eigen::Vector3d h = spacing();
+  i += first[0], j += first[1], k += first[2];
   return bounds.min + Eigen::Vector3d(i * h[0], j * h[1], k * h[2]);
 }
 

@@ -12,11 +12,25 @@
 
 namespace sdfcontour {
 
+/// Truncation distances found in (or given for) a field: values at or beyond them carry no
+/// distance. Infinity where a sign is not truncated.
+struct Truncation {
+  double inside = std::numeric_limits<double>::infinity();   ///< of negative values
+  double outside = std::numeric_limits<double>::infinity();  ///< of non-negative values
+  bool detected() const {
+    return inside < std::numeric_limits<double>::infinity() ||
+           outside < std::numeric_limits<double>::infinity();
+  }
+  /// True if `value` is at a truncation distance of its sign.
+  bool truncated(double value) const;
+};
+
 /// How values clamped at a truncation distance are recognised.
 enum class TruncationMode {
-  Auto,   ///< detect it (see detect_truncation)
-  Given,  ///< BandOptions::truncation is the truncation distance
-  None,   ///< every value is a distance
+  Auto,      ///< detect it (see detect_truncation)
+  Given,     ///< BandOptions::truncation is the truncation distance
+  None,      ///< every value is a distance
+  Resolved,  ///< BandOptions::resolved (the whole grid's, for its blocks)
 };
 
 struct BandOptions {
@@ -31,22 +45,12 @@ struct BandOptions {
   /// With TruncationMode::Given: values with |value| >= truncation (to 1e-6 relative) are
   /// truncated and carry no distance.
   double truncation = 0;
+  /// With TruncationMode::Resolved: the truncation found in the whole grid (a block's own values
+  /// could show another).
+  Truncation resolved;
   /// The factor that turns the values into distances (1 for a signed distance; 1/m for a field
   /// whose gradient norm is m). The band is measured, and the selected values returned, scaled.
   double value_scale = 1.0;
-};
-
-/// Truncation distances found in (or given for) a field: values at or beyond them carry no
-/// distance. Infinity where a sign is not truncated.
-struct Truncation {
-  double inside = std::numeric_limits<double>::infinity();   ///< of negative values
-  double outside = std::numeric_limits<double>::infinity();  ///< of non-negative values
-  bool detected() const {
-    return inside < std::numeric_limits<double>::infinity() ||
-           outside < std::numeric_limits<double>::infinity();
-  }
-  /// True if `value` is at a truncation distance of its sign.
-  bool truncated(double value) const;
 };
 
 /// The rule for TruncationMode::Auto: per sign, let T be the largest |value| of that sign; the

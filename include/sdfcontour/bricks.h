@@ -31,6 +31,19 @@ struct BrickOptions {
   double halo = 0;
   /// When set and it becomes true, the bricks stop soon (throws Cancelled).
   const std::atomic<bool>* cancel = nullptr;
+  /// A block of a larger sample set: `samples` are that set's samples inside this box (a grid
+  /// brick with its halo). A star is certified only by a triangulation whose box and shell lie
+  /// in it (else throws HaloTooSmall), each brick's box is then its targets' bounding box plus
+  /// the halo, and `largest_value` (> 0) bounds the |value| of every sample of the larger set.
+  const Bounds* within = nullptr;
+  double largest_value = 0;
+};
+
+/// The block given to brick_contact_points (BrickOptions::within) is too small to certify the
+/// flagged samples' stars: read a wider halo.
+class HaloTooSmall : public Error {
+ public:
+  using Error::Error;
 };
 
 /// What the bricks did.

@@ -36,14 +36,23 @@ struct Bounds {
 
 /// Where a regular grid's samples lie: sample (i,j,k) at min + (i*hx, j*hy, k*hz), with samples
 /// at both ends of each axis (h = (max - min) / (n - 1)); C order, index (i*ny + j)*nz + k.
+///
+/// A block of a larger grid (a brick with its halo) keeps the larger grid's `bounds` and names it
+/// by `whole` (its dims) and `first` (the global index of the block's sample (0, 0, 0)): its
+/// samples then lie at bounds.min + (first + (i, j, k)) * h, computed by the same formula as the
+/// whole grid's, bit for bit.
 struct GridGeometry {
-  std::array<int, 3> dims{0, 0, 0};  ///< (nx, ny, nz), each >= 2
-  Bounds bounds;                     ///< positions of the first and last samples
+  std::array<int, 3> dims{0, 0, 0};   ///< (nx, ny, nz), each >= 2
+  Bounds bounds;                      ///< positions of the first and last samples (of `whole`)
+  std::array<int, 3> first{0, 0, 0};  ///< a block's offset in the whole grid (0: no block)
+  std::array<int, 3> whole{0, 0, 0};  ///< the whole grid's dims (0: this grid is whole)
 
   std::size_t size() const { return std::size_t(dims[0]) * dims[1] * dims[2]; }
   std::size_t index(int i, int j, int k) const {
     return (std::size_t(i) * dims[1] + j) * dims[2] + k;
   }
+  /// The whole grid's dims (`dims` unless this is a block).
+  std::array<int, 3> whole_dims() const { return whole[0] > 0 ? whole : dims; }
   Eigen::Vector3d spacing() const;
   Eigen::Vector3d point(int i, int j, int k) const;
 };

@@ -24,6 +24,7 @@ struct PolygonSlot {
   std::array<std::int64_t, 8> segment_key{};  // for a segment vertex; vertices[] holds -1 there
   std::array<Eigen::Vector3d, 8> segment_position;
   int size = 0;
+  std::uint64_t edge = 0;  // the grid edge's global key
 };
 
 Eigen::Vector3d crossing(const SurfaceCells& cells, const std::array<int, 3>& p, int axis) {
@@ -74,7 +75,7 @@ bool shared_twice(const SurfaceCells& cells, const ActiveCell& x, const ActiveCe
   // Numbered by the face's own axes (not the edge's), so that all four polygons agree.
   const std::size_t b1 = std::size_t((b + 1) % 3), b2 = std::size_t((b + 2) % 3);
   const int corner_in_face = (cut[b1] - low[b1]) + 2 * (cut[b2] - low[b2]);
-  const std::int64_t face_low = std::int64_t(cells.grid.index(low[0], low[1], low[2]));
+  const std::int64_t face_low = std::int64_t(cells.global_point(low));
   out.key = (face_low * 3 + b) * 4 + corner_in_face;
   std::array<int, 3> a_start = cut, w_start = cut;
   a_start[std::size_t(a)] = low[std::size_t(a)];
@@ -98,6 +99,7 @@ PolygonSlot edge_polygon(const SurfaceCells& cells, const ActiveCell& cell,
     around[q] = &cells.active[std::size_t(cells.find(cells.key(n)))];
   }
   PolygonSlot slot;
+  slot.edge = 3 * cells.global_point(at) + std::uint64_t(a);
   for (int q = 0; q < 4; ++q) {
     const int low = offsets[q][0] << u | offsets[q][1] << v;
     slot.vertices[std::size_t(slot.size++)] =
@@ -151,7 +153,10 @@ DualPolygons SurfaceCells::dual_polygons() const {
                              [](const auto& x, const auto& y) { return x.first == y.first; }),
                  segments.end());
   DualPolygons out;
-  for (const auto& s : segments) out.extra_positions.push_back(s.second);
+  for (const auto& s : segments) {
+    out.extra_keys.push_back(std::uint64_t(s.first));
+    out.extra_positions.push_back(s.second);
+  }
   const int first_extra = vertex_count();
   for (const auto& s3 : slots)
     for (const PolygonSlot& s : s3) {
@@ -166,6 +171,7 @@ DualPolygons SurfaceCells::dual_polygons() const {
       }
       out.vertices.push_back(ids);
       out.size.push_back(std::int8_t(s.size));
+      out.edge.push_back(s.edge);
     }
   return out;
 }

@@ -13,6 +13,7 @@
 
 #include "../../cube_polygons.h"
 #include "cell_quadric.h"
+#include "keyed_local_mesh.h"
 #include "surface_cells.h"
 
 namespace sdfcontour {
@@ -233,12 +234,20 @@ void fan_from_segment_vertex(const std::array<int, 8>& p, int size, int first_ex
   }
 }
 
-void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra, Mesh& mesh) {
+void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra,
+                          detail::KeyedLocalMesh& keyed) {
+  Mesh& mesh = keyed.mesh;
   std::vector<Eigen::Index> first(polygons.size.size() + 1, 0);
   for (std::size_t i = 0; i < polygons.size.size(); ++i)
     first[i + 1] = first[i] + polygons.size[i] - 2;
   mesh.triangles.resize(first.back(), 3);
+  keyed.triangle_edge.resize(std::size_t(first.back()));
+  keyed.triangle_rank.resize(std::size_t(first.back()));
   tbb::parallel_for(std::size_t(0), polygons.size.size(), [&](std::size_t i) {
+    for (Eigen::Index t = first[i]; t < first[i + 1]; ++t) {
+      keyed.triangle_edge[std::size_t(t)] = polygons.edge[i];
+      keyed.triangle_rank[std::size_t(t)] = std::uint8_t(t - first[i]);
+    }
     int* out = mesh.triangles.data() + 3 * first[i];
     const auto& p = polygons.vertices[i];
     if (polygons.size[i] == 4)
@@ -253,6 +262,16 @@ void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra,
 Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
                           const PointMatrix& normals, const LocalReconstructionOptions& options,
                           LocalReconstructionStats* stats_out, const Eigen::VectorXd& depths) {
+  return detail::keyed_local_reconstruction(grid, points, normals, options, stats_out, depths).mesh;
+}
+
+namespace detail {
+
+KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatrix& points,
+                                          const PointMatrix& normals,
+                                          const LocalReconstructionOptions& options,
+                                          LocalReconstructionStats* stats_out,
+                                          const Eigen::VectorXd& depths) {
   if (points.rows() != normals.rows())
     throw Error("local reconstruction: " + std::to_string(points.rows()) + " contact points but " +
                 std::to_string(normals.rows()) + " normals");
@@ -266,7 +285,8 @@ Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
     throw Error("local reconstruction: depth_scale must be a non-negative number of spacings");
   LocalReconstructionStats stats;
   const SurfaceCells cells = detail::find_surface_cells(grid);
-  Mesh mesh;
+  KeyedLocalMesh keyed;
+  Mesh& mesh = keyed.mesh;
   Eigen::VectorXd weights;
   if (depths.size() && options.depth_scale > 0) {
     const double scale = options.depth_scale * grid.spacing().maxCoeff();
@@ -280,12 +300,26 @@ Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
   for (std::size_t e = 0; e < polygons.extra_positions.size(); ++e)
     mesh.vertices.row(cell_vertex_count + Eigen::Index(e)) =
         polygons.extra_positions[e].transpose();
-  triangulate_polygons(polygons, int(cell_vertex_count), mesh);
+  triangulate_polygons(polygons, int(cell_vertex_count), keyed);
+  // Global names: 4 * cell + polygon (a cell has at most 4), then the segment vertices.
+  keyed.vertex_key.resize(std::size_t(mesh.vertices.rows()));
+  for (const ActiveCell& cell : cells.active) {
+    const std::uint64_t base = 4 * cells.global_cell(cells.cell_of_key(cell.key));
+    for (int q = 0; q < cell.polygon_count; ++q)
+      keyed.vertex_key[std::size_t(cell.first_vertex + q)] = base + std::uint64_t(q);
+  }
+  const std::array<int, 3> n = grid.whole_dims();
+  const std::uint64_t segments_base =
+      4 * std::uint64_t(n[0] - 1) * std::uint64_t(n[1] - 1) * std::uint64_t(n[2] - 1);
+  for (std::size_t e = 0; e < polygons.extra_keys.size(); ++e)
+    keyed.vertex_key[std::size_t(cell_vertex_count) + e] = segments_base + polygons.extra_keys[e];
   stats.cells = long(cells.active.size());
   stats.vertices = long(mesh.vertices.rows());
   for (const ActiveCell& cell : cells.active) stats.split_cells += cell.polygon_count > 1;
   if (stats_out) *stats_out = stats;
-  return mesh;
+  return keyed;
 }
+
+}  // namespace detail
 
 }  // namespace sdfcontour

@@ -66,10 +66,26 @@ std::array<int, 3> SurfaceCells::cell_of_key(std::int64_t key) const {
   return {int(key / cell_dims[1]), int(key % cell_dims[1]), k};
 }
 
+std::uint64_t SurfaceCells::global_cell(const std::array<int, 3>& c) const {
+  const std::array<int, 3> n = grid.whole_dims();
+  return (std::uint64_t(c[0] + first[0]) * std::uint64_t(n[1] - 1) +
+          std::uint64_t(c[1] + first[1])) *
+             std::uint64_t(n[2] - 1) +
+         std::uint64_t(c[2] + first[2]);
+}
+
+std::uint64_t SurfaceCells::global_point(const std::array<int, 3>& p) const {
+  const std::array<int, 3> n = grid.whole_dims();
+  return (std::uint64_t(p[0] + first[0]) * std::uint64_t(n[1]) + std::uint64_t(p[1] + first[1])) *
+             std::uint64_t(n[2]) +
+         std::uint64_t(p[2] + first[2]);
+}
+
 std::int64_t SurfaceCells::key_of_point(const Eigen::Vector3d& p) const {
   std::array<int, 3> c;
   for (int d = 0; d < 3; ++d) {
-    const double t = std::floor((p[d] - min[d]) / spacing[d]);
+    // The whole grid's cell, then the block's: the same bin for a point in block and whole.
+    const double t = std::floor((p[d] - min[d]) / spacing[d]) - first[std::size_t(d)];
     c[std::size_t(d)] = int(std::clamp(t, 0.0, double(cell_dims[std::size_t(d)] - 1)));
   }
   return key(c);
@@ -117,6 +133,7 @@ SurfaceCells find_surface_cells(const GridView& grid) {
   for (int d = 0; d < 3; ++d) cells.cell_dims[std::size_t(d)] = grid.dims[std::size_t(d)] - 1;
   cells.min = grid.bounds.min;
   cells.spacing = grid.spacing();
+  cells.first = grid.first;
   std::vector<std::vector<ActiveCell>> slabs(std::size_t(cells.cell_dims[0]));
   tbb::parallel_for(0, cells.cell_dims[0], [&](int i) {
     grid.visit([&](const auto* values) { slab_cells(grid, values, i, slabs[std::size_t(i)]); });

@@ -37,14 +37,18 @@ struct CellPolygons {
 struct DualPolygons {
   std::vector<std::array<int, 8>> vertices;
   std::vector<std::int8_t> size;
-  /// The segment vertices' positions, numbered after the cells' vertices.
+  std::vector<std::uint64_t> edge;  ///< each polygon's grid edge: 3 * global low point + axis
+  /// The segment vertices' positions, numbered after the cells' vertices, and their global keys
+  /// ((3 * global face point + axis) * 4 + corner), ascending.
   std::vector<Eigen::Vector3d> extra_positions;
+  std::vector<std::uint64_t> extra_keys;
 };
 
 struct SurfaceCells {
   GridView grid;
   std::array<int, 3> cell_dims{};  ///< grid dims minus one
-  Eigen::Vector3d min, spacing;
+  Eigen::Vector3d min, spacing;    ///< the whole grid's first sample and spacing
+  std::array<int, 3> first{};      ///< a block's offset in its whole grid (GridGeometry::first)
   std::vector<ActiveCell> active;  ///< ascending keys
 
   std::int64_t key(const std::array<int, 3>& c) const {
@@ -58,8 +62,13 @@ struct SurfaceCells {
   }
   /// The position of cell c's lowest corner.
   Eigen::Vector3d corner(const std::array<int, 3>& c) const {
-    return min + Eigen::Vector3d(c[0], c[1], c[2]).cwiseProduct(spacing);
+    return min +
+           Eigen::Vector3d(c[0] + first[0], c[1] + first[1], c[2] + first[2]).cwiseProduct(spacing);
   }
+  /// Cell c's index in the whole grid ((i * (nx - 1) + j) * (nz - 1) + k, global i, j, k).
+  std::uint64_t global_cell(const std::array<int, 3>& c) const;
+  /// Grid point p's index in the whole grid (C order).
+  std::uint64_t global_point(const std::array<int, 3>& p) const;
   /// The key of the cell holding p (clamped to the grid).
   std::int64_t key_of_point(const Eigen::Vector3d& p) const;
   /// Index into `active` of the cell with this key, or -1.

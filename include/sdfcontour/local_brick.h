@@ -1,0 +1,82 @@
+// GCP's local reconstruction one brick at a time, from end to end: each brick of a grid, read
+// with a halo, gives the piece of the mesh that it owns (contact points, vertices, subdivision and
+// projection all computed from the brick's block), with global vertex keys, so that pieces made
+// anywhere (threads, processes, machines) join into one mesh, bit for bit the same whatever the
+// bricks.
+//
+// Ownership: a brick owns the grid edges whose low sample lies in its range [own_first,
+// own_end) on each axis, and the triangles of those edges' dual polygons (local_reconstruction.h),
+// each subdivided. Every value a piece's vertex depends on (the cells' contact points and their
+// samples' certified stars, the gradients at the cells' corners, the contact points within the
+// projection's radius, the triangles around the vertex for its normal) lies in the block, and is
+// combined in an order fixed by global names: the result equals the whole grid's run (one brick).
+// Carving and untangling (whole-mesh stages) are not part of it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "sdfcontour/band.h"
+#include "sdfcontour/contact_points.h"
+#include "sdfcontour/contact_projection.h"
+#include "sdfcontour/gradients.h"
+#include "sdfcontour/local_reconstruction.h"
+#include "sdfcontour/samples.h"
+
+namespace sdfcontour {
+
+struct LocalBrickOptions {
+  /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the
+  /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
+  BandOptions band;
+  GradientOptions gradient;
+  ContactPointOptions contact;
+  LocalReconstructionOptions local;
+  /// Lattice subdivisions of each triangle (2^s segments per edge), 0..4; -1: auto_subdivisions
+  /// of the whole grid (pipeline.h).
+  int subdivisions = -1;
+  bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
+  /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit.
+  ContactProjectionOptions projection = [] {
+    ContactProjectionOptions p;
+    p.radius = 1.25;
+    p.max_residual = 0;
+    return p;
+  }();
+};
+
+/// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,
+/// (ky + 1) * 64 + j) for the subdivision vertex j / 2^s of the way along edge (kx, ky), kx < ky;
+/// (2^63 + triangle, slot) for a vertex inside one of the reconstruction's triangles.
+using VertexKey = std::array<std::uint64_t, 2>;
+
+/// The part of the mesh that one brick owns.
+struct LocalPiece {
+  PointMatrix vertices;         ///< v x 3, in ascending key order
+  std::vector<VertexKey> keys;  ///< v, ascending and distinct
+  TriangleMatrix triangles;     ///< outward oriented, indices into `vertices`
+  long contact_points = 0;      ///< contact points of the block's flagged samples
+};
+
+/// The halo, in samples, that a brick's block needs first with these options on a grid of
+/// whole-grid `dims` (the contact points' stars may ask for more: HaloTooSmall).
+int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims);
+
+/// The piece owned by the edges with global low sample in [own_first, own_end) of the grid that
+/// `block` is a block of (GridGeometry::first and ::whole set; the block should reach
+/// local_brick_halo samples beyond the owned range where the grid goes on). Throws HaloTooSmall
+/// if the block is too small for a star it needs, Error for bad options or values.
+LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
+                             const std::array<int, 3>& own_end, const LocalBrickOptions& options);
+
+/// Joins pieces: vertices with equal keys become one (ascending keys), triangles follow in piece
+/// order. Throws InternalError if two pieces give one key two positions.
+Mesh join_local_pieces(const std::vector<LocalPiece>& pieces);
+
+/// The whole grid's mesh from bricks of `brick` samples per side (0: one brick), computed in
+/// parallel and joined; each brick's halo doubles until its stars fit. The mesh does not depend
+/// on `brick` or the thread count.
+Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& options, int brick = 0);
+
+}  // namespace sdfcontour

@@ -1,0 +1,28 @@
+// Internal: the local reconstruction's mesh with global names, for bricks (local_brick.cpp).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "sdfcontour/local_reconstruction.h"
+
+namespace sdfcontour::detail {
+
+/// local_reconstruction()'s mesh, each vertex and triangle named as in the whole grid, so that a
+/// block of a grid (GridGeometry::first) names them as the whole grid's run does.
+struct KeyedLocalMesh {
+  Mesh mesh;
+  /// Per vertex: 4 * global cell + polygon for a cell's vertex; for a segment vertex,
+  /// 4 * (the whole grid's cell count) + its segment key (DualPolygons::extra_keys).
+  std::vector<std::uint64_t> vertex_key;
+  std::vector<std::uint64_t> triangle_edge;  ///< per triangle: its polygon's grid edge key
+  std::vector<std::uint8_t> triangle_rank;   ///< per triangle: its rank in the polygon
+};
+
+KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatrix& points,
+                                          const PointMatrix& normals,
+                                          const LocalReconstructionOptions& options,
+                                          LocalReconstructionStats* stats_out,
+                                          const Eigen::VectorXd& depths);
+
+}  // namespace sdfcontour::detail

@@ -1,0 +1,224 @@
+// One brick of the local reconstruction (local_brick.h): the block's band and contact points
+// (certified stars only), the keyed dual mesh around the owned edges, lattice subdivision and
+// projection, then the owned triangles.
+#include "sdfcontour/local_brick.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "keyed_local_mesh.h"
+#include "lattice_subdivision.h"
+#include "sdfcontour/bricks.h"
+#include "sdfcontour/pipeline.h"
+
+namespace sdfcontour {
+
+namespace {
+
+using Index3 = std::array<int, 3>;
+
+// The largest |value| a band sample can have, in spacings.
+double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& dims) {
+  const double b =
+      band.band > 0 ? band.band : auto_band(*std::max_element(dims.begin(), dims.end()));
+  return b + band.margin;
+}
+
+// How far beyond the owned samples a contact point can matter, in samples: the reach of the
+// ring of cells around the owned edges' cells (2), of a vertex's gathering or projection, and
+// of a sample to its contact point (its |value|).
+int flag_reach(const LocalBrickOptions& o, double largest) {
+  const double gather = std::max(o.local.reach, o.project ? o.projection.radius : 0.0);
+  return int(std::ceil(gather + largest)) + 3;
+}
+
+Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
+  std::uint64_t p = edge / 3;
+  const int k = int(p % std::uint64_t(n[2]));
+  p /= std::uint64_t(n[2]);
+  return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
+}
+
+bool in_range(const Index3& p, const Index3& lo, const Index3& hi) {
+  for (int a = 0; a < 3; ++a)
+    if (p[std::size_t(a)] < lo[std::size_t(a)] || p[std::size_t(a)] >= hi[std::size_t(a)])
+      return false;
+  return true;
+}
+
+Index3 shifted(const Index3& p, int by) {
+  return {p[0] + by, p[1] + by, p[2] + by};
+}
+
+// True if the block's samples in the global range [lo, hi) (clipped to the block) have both
+// signs.
+bool has_sign_change(const GridView& block, const Index3& lo, const Index3& hi) {
+  Index3 a, b;
+  for (std::size_t d = 0; d < 3; ++d) {
+    a[d] = std::max(lo[d] - block.first[d], 0);
+    b[d] = std::min(hi[d] - block.first[d], block.dims[d]);
+    if (a[d] >= b[d]) return false;
+  }
+  bool inside = false, outside = false;
+  for (int i = a[0]; i < b[0]; ++i)
+    for (int j = a[1]; j < b[1]; ++j)
+      for (int k = a[2]; k < b[2]; ++k) {
+        (block.value(block.index(i, j, k)) < 0 ? inside : outside) = true;
+        if (inside && outside) return true;
+      }
+  return false;
+}
+
+// The box in which the block's samples are all the whole grid's: unbounded where the block
+// reaches the grid's side.
+Bounds certain_box(const GridView& block) {
+  const Index3 n = block.whole_dims();
+  const Eigen::Vector3d lo = block.point(0, 0, 0),
+                        hi = block.point(block.dims[0] - 1, block.dims[1] - 1, block.dims[2] - 1);
+  Bounds b;
+  for (std::size_t a = 0; a < 3; ++a) {
+    b.min[Eigen::Index(a)] =
+        block.first[a] == 0 ? -std::numeric_limits<double>::infinity() : lo[Eigen::Index(a)];
+    b.max[Eigen::Index(a)] = block.first[a] + block.dims[a] == n[a]
+                                 ? std::numeric_limits<double>::infinity()
+                                 : hi[Eigen::Index(a)];
+  }
+  return b;
+}
+
+// The triangles of the edges in [lo, hi), in the order of their names, with their vertices.
+detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, const Index3& n,
+                                          const Index3& lo, const Index3& hi) {
+  std::vector<std::pair<std::uint64_t, Eigen::Index>> kept;
+  for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t) {
+    const std::uint64_t edge = keyed.triangle_edge[std::size_t(t)];
+    if (in_range(edge_low_point(edge, n), lo, hi))
+      kept.push_back({edge * 8 + keyed.triangle_rank[std::size_t(t)], t});
+  }
+  std::sort(kept.begin(), kept.end());
+  std::vector<int> id(std::size_t(keyed.mesh.vertices.rows()), -1);
+  detail::KeyedTriangles out;
+  out.triangles.resize(Eigen::Index(kept.size()), 3);
+  std::vector<int> used;
+  for (std::size_t r = 0; r < kept.size(); ++r) {
+    out.triangle_name.push_back(kept[r].first);
+    for (int c = 0; c < 3; ++c) {
+      const int v = keyed.mesh.triangles(kept[r].second, c);
+      if (id[std::size_t(v)] < 0) {
+        id[std::size_t(v)] = int(used.size());
+        used.push_back(v);
+      }
+      out.triangles(Eigen::Index(r), c) = id[std::size_t(v)];
+    }
+  }
+  out.vertices.resize(Eigen::Index(used.size()), 3);
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(used[v]);
+    out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
+  }
+  return out;
+}
+
+void validate(const GridView& block, const Index3& own_first, const Index3& own_end,
+              const LocalBrickOptions& o) {
+  const Index3 n = block.whole_dims();
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (block.dims[a] < 2 || block.first[a] < 0 || block.first[a] + block.dims[a] > n[a])
+      throw Error("a brick's block must hold at least 2 samples per axis inside its grid");
+    if (!(own_first[a] >= 0 && own_first[a] < own_end[a] && own_end[a] <= n[a]))
+      throw Error("a brick's owned samples must be a non-empty range inside its grid");
+  }
+  if (o.band.truncation_mode == TruncationMode::Auto)
+    throw Error("a brick needs its grid's truncation resolved on the whole grid");
+  if (o.subdivisions < -1 || o.subdivisions > 4)
+    throw Error("the local reconstruction's subdivisions must lie in 0..4 (-1: auto)");
+}
+
+}  // namespace
+
+int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
+  const double largest = largest_in_spacings(options.band, dims);
+  return flag_reach(options, largest) + int(auto_brick_halo(largest, 1.0)) +
+         int(std::ceil(2 * largest)) + 1;
+}
+
+LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
+                             const std::array<int, 3>& own_end, const LocalBrickOptions& options) {
+  validate(block, own_first, own_end, options);
+  LocalPiece piece;
+  piece.vertices.resize(0, 3);
+  piece.triangles.resize(0, 3);
+  // The owned edges' polygons join the cells around them: no sign change there, no surface.
+  if (!has_sign_change(block, shifted(own_first, -1), shifted(own_end, 1))) return piece;
+  validate_grid(block);
+  const Index3 n = block.whole_dims();
+  const double h = block.spacing().maxCoeff();
+  const BandSamples band = select_band(block, options.band);
+  const double largest = (band.band + options.band.margin) * h;
+  // Samples whose contact points the owned part can use.
+  const int reach = flag_reach(options, largest / h);
+  const Eigen::Vector3d flag_lo =
+      block.point(own_first[0] - reach - block.first[0], own_first[1] - reach - block.first[1],
+                  own_first[2] - reach - block.first[2]);
+  const Eigen::Vector3d flag_hi =
+      block.point(own_end[0] + reach - block.first[0], own_end[1] + reach - block.first[1],
+                  own_end[2] + reach - block.first[2]);
+  const Eigen::Index count = band.samples.points.rows();
+  std::vector<char> flagged(std::size_t(count), 0);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const Eigen::Vector3d p = band.samples.points.row(i).transpose();
+    flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
+                              (p.array() <= flag_hi.array()).all();
+  }
+  const Bounds within = certain_box(block);
+  BrickOptions bricks;
+  bricks.halo = auto_brick_halo(largest, h);
+  bricks.within = &within;
+  bricks.largest_value = largest;
+  const ContactPoints cp = brick_contact_points(band.samples, h, options.gradient, options.contact,
+                                                bricks, nullptr, {}, &flagged);
+  piece.contact_points = cp.size();
+  Eigen::VectorXd depths(cp.size());
+  for (int q = 0; q < cp.size(); ++q)
+    depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
+  const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
+      block, cp.points, cp.normals, options.local, nullptr, depths);
+  // The owned edges and the ring around them (their vertices' normals need every triangle).
+  const detail::KeyedTriangles near =
+      triangles_of_edges(keyed, n, shifted(own_first, -1), shifted(own_end, 1));
+  const int levels = options.subdivisions >= 0
+                         ? options.subdivisions
+                         : auto_subdivisions(*std::max_element(n.begin(), n.end()));
+  detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
+  if (options.project && cp.size() > 0)
+    project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection);
+  // The owned triangles and their vertices (keys stay ascending).
+  std::vector<Eigen::Index> owned;
+  for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
+    if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
+      owned.push_back(t);
+  std::vector<int> id(std::size_t(sub.mesh.vertices.rows()), -1);
+  for (Eigen::Index t : owned)
+    for (int c = 0; c < 3; ++c) id[std::size_t(sub.mesh.triangles(t, c))] = 0;
+  int next = 0;
+  for (int& v : id)
+    if (v == 0) v = next++;
+  piece.vertices.resize(next, 3);
+  piece.keys.resize(std::size_t(next));
+  for (std::size_t v = 0; v < id.size(); ++v)
+    if (id[v] >= 0) {
+      piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
+      piece.keys[std::size_t(id[v])] = sub.keys[v];
+    }
+  piece.triangles.resize(Eigen::Index(owned.size()), 3);
+  for (std::size_t r = 0; r < owned.size(); ++r)
+    for (int c = 0; c < 3; ++c)
+      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
+  return piece;
+}
+
+}  // namespace sdfcontour

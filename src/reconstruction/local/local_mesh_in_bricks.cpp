@@ -1,0 +1,130 @@
+// A whole grid's local reconstruction from its bricks (local_brick.h): each brick's block copied
+// out with a halo, its piece computed in parallel, the pieces joined by their vertices' keys.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <string>
+
+#include "sdfcontour/bricks.h"
+#include "sdfcontour/local_brick.h"
+
+namespace sdfcontour {
+
+namespace {
+
+using Index3 = std::array<int, 3>;
+
+// The block of `grid` with global samples [lo, hi), copied out as doubles (`values` keeps them).
+GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
+                    std::vector<double>& values) {
+  GridView block;
+  block.bounds = grid.bounds;
+  block.first = lo;
+  block.whole = grid.dims;
+  for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+  values.resize(block.size());
+  std::size_t at = 0;
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int k = lo[2]; k < hi[2]; ++k) values[at++] = grid.value(grid.index(i, j, k));
+  block.data = values.data();
+  block.type = ScalarType::Float64;
+  return block;
+}
+
+LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Index3& own_end,
+                       const LocalBrickOptions& options) {
+  int halo = local_brick_halo(options, grid.dims);
+  std::vector<double> values;
+  for (;;) {
+    Index3 lo, hi;
+    bool whole = true;
+    for (std::size_t a = 0; a < 3; ++a) {
+      lo[a] = std::max(own_first[a] - halo, 0);
+      hi[a] = std::min(own_end[a] + halo, grid.dims[a]);
+      whole = whole && lo[a] == 0 && hi[a] == grid.dims[a];
+    }
+    try {
+      return local_brick_piece(copy_block(grid, lo, hi, values), own_first, own_end, options);
+    } catch (const HaloTooSmall&) {
+      if (whole) throw InternalError("a block holding the whole grid reported too small a halo");
+      halo *= 2;
+    }
+  }
+}
+
+}  // namespace
+
+Mesh join_local_pieces(const std::vector<LocalPiece>& pieces) {
+  struct Entry {
+    VertexKey key;
+    std::size_t piece;
+    Eigen::Index row;
+  };
+  std::vector<Entry> entries;
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    for (std::size_t r = 0; r < pieces[p].keys.size(); ++r)
+      entries.push_back({pieces[p].keys[r], p, Eigen::Index(r)});
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    return a.key != b.key ? a.key < b.key : a.piece < b.piece;
+  });
+  std::vector<std::vector<int>> id(pieces.size());
+  for (std::size_t p = 0; p < pieces.size(); ++p) id[p].resize(pieces[p].keys.size());
+  Mesh mesh;
+  std::vector<Eigen::Index> source_piece, source_row;
+  int next = -1;
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    const Entry& x = entries[e];
+    if (e == 0 || x.key != entries[e - 1].key) {
+      ++next;
+      source_piece.push_back(Eigen::Index(x.piece));
+      source_row.push_back(x.row);
+    } else if (pieces[x.piece].vertices.row(x.row) !=
+               pieces[std::size_t(source_piece.back())].vertices.row(source_row.back())) {
+      throw InternalError("two bricks placed one vertex differently");
+    }
+    id[x.piece][std::size_t(x.row)] = next;
+  }
+  mesh.vertices.resize(next + 1, 3);
+  for (int v = 0; v <= next; ++v)
+    mesh.vertices.row(v) =
+        pieces[std::size_t(source_piece[std::size_t(v)])].vertices.row(source_row[std::size_t(v)]);
+  Eigen::Index faces = 0;
+  for (const LocalPiece& p : pieces) faces += p.triangles.rows();
+  mesh.triangles.resize(faces, 3);
+  Eigen::Index at = 0;
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    for (Eigen::Index t = 0; t < pieces[p].triangles.rows(); ++t, ++at)
+      for (int c = 0; c < 3; ++c)
+        mesh.triangles(at, c) = id[p][std::size_t(pieces[p].triangles(t, c))];
+  return mesh;
+}
+
+Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, int brick) {
+  validate_grid(grid);
+  if (grid.whole[0] > 0 || grid.first != Index3{0, 0, 0})
+    throw Error("local_mesh_in_bricks needs a whole grid, not a block");
+  if (brick < 0) throw Error("the brick size must be positive (0: one brick)");
+  LocalBrickOptions options = given;
+  if (options.band.truncation_mode == TruncationMode::Auto) {
+    options.band.resolved = resolve_truncation(grid, options.band);
+    options.band.truncation_mode = TruncationMode::Resolved;
+  }
+  const int side = brick > 0 ? brick : *std::max_element(grid.dims.begin(), grid.dims.end());
+  Index3 count;
+  for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] + side - 1) / side;
+  const int total = count[0] * count[1] * count[2];
+  std::vector<LocalPiece> pieces(static_cast<std::size_t>(total));
+  tbb::parallel_for(0, total, [&](int b) {
+    const Index3 at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
+    Index3 first, end;
+    for (std::size_t a = 0; a < 3; ++a) {
+      first[a] = at[a] * side;
+      end[a] = std::min(first[a] + side, grid.dims[a]);
+    }
+    pieces[std::size_t(b)] = brick_piece(grid, first, end, options);
+  });
+  return join_local_pieces(pieces);
+}
+
+}  // namespace sdfcontour

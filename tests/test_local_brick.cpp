@@ -1,0 +1,125 @@
+// The local reconstruction brick by brick: any bricks give the one-brick mesh bit for bit, for
+// any thread count; the mesh is closed and manifold and lies near the surface.
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "sdfcontour/builtin_shapes.h"
+#include "sdfcontour/local_brick.h"
+#include "sdfcontour/marching.h"
+#include "sdfcontour/mesh_properties.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+using test::shared_mesh_grid;
+
+namespace {
+
+using Canonical = std::pair<std::vector<std::array<double, 3>>, std::vector<std::array<int, 3>>>;
+
+// Vertices by position, triangles by the ranks of theirs, rotated and sorted: equal iff two
+// meshes have the same triangles at bit for bit the same positions.
+Canonical canonical(const Mesh& m) {
+  const int n = int(m.vertices.rows());
+  std::vector<int> order(std::size_t(n), 0), rank(std::size_t(n), 0);
+  for (int v = 0; v < n; ++v) order[std::size_t(v)] = v;
+  auto at = [&](int v) {
+    return std::array<double, 3>{m.vertices(v, 0), m.vertices(v, 1), m.vertices(v, 2)};
+  };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return at(a) < at(b); });
+  Canonical c;
+  for (int r = 0; r < n; ++r) {
+    rank[std::size_t(order[std::size_t(r)])] = r;
+    c.first.push_back(at(order[std::size_t(r)]));
+  }
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+    std::array<int, 3> tri{rank[std::size_t(m.triangles(t, 0))],
+                           rank[std::size_t(m.triangles(t, 1))],
+                           rank[std::size_t(m.triangles(t, 2))]};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    c.second.push_back(tri);
+  }
+  std::sort(c.second.begin(), c.second.end());
+  return c;
+}
+
+void expect_closed_manifold(const Mesh& m) {
+  const MeshTopology t = mesh_topology(m);
+  EXPECT_TRUE(t.closed) << t.boundary_edges << " boundary, " << t.nonmanifold_edges
+                        << " non-manifold edges";
+  EXPECT_TRUE(t.consistently_oriented);
+  EXPECT_GT(signed_volume(m), 0) << "not outward oriented";
+}
+
+Mesh bricked(const Grid& g, const LocalBrickOptions& o, int brick, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  return local_mesh_in_bricks(view_of(g), o, brick);
+}
+
+}  // namespace
+
+TEST(LocalBrick, BricksEqualOneBrickBitForBit) {
+  // A CSG shape (edges, corners, a hole) at 40^3, subdivided twice: bricks of 9 and 16 samples
+  // cut through its features and corners.
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 40, Bounds{});
+  LocalBrickOptions o;
+  o.subdivisions = 2;
+  const Mesh whole = bricked(g, o, 0, 1);
+  ASSERT_GT(whole.triangles.rows(), 1000);
+  expect_closed_manifold(whole);
+  const Canonical reference = canonical(whole);
+  EXPECT_TRUE(canonical(bricked(g, o, 9, 2)) == reference);
+  EXPECT_TRUE(canonical(bricked(g, o, 16, 1)) == reference);
+  EXPECT_TRUE(canonical(bricked(g, o, 0, 2)) == reference);
+}
+
+TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
+  const Grid g = shared_mesh_grid("wingnut", 48);
+  LocalBrickOptions o;
+  const Mesh whole = bricked(g, o, 0, 2), pieces = bricked(g, o, 20, 2);
+  EXPECT_TRUE(canonical(whole) == canonical(pieces));
+  expect_closed_manifold(pieces);
+  const MeshSdf sdf(
+      normalize_mesh(read_mesh(SDFCONTOUR_SHARED_DIR "/data/meshes/wingnut.obj"), 0.9));
+  // Mean |distance| at the triangles' centroids (a chord's worst point, not its ends).
+  auto mean_error = [&](const Mesh& m) {
+    double sum = 0;
+    for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) c += m.vertices.row(m.triangles(t, k)).transpose() / 3;
+      sum += std::abs(sdf.distance(c));
+    }
+    return sum / double(m.triangles.rows());
+  };
+  // (Measured: 7.1e-4 against marching cubes' 1.31e-3.)
+  EXPECT_LT(mean_error(pieces), 0.6 * mean_error(marching_cubes(g)));
+}
+
+TEST(LocalBrick, SmoothShapeInBricksIsCloseToTheSurface) {
+  // A smooth shape: the bricked mesh's vertices lie within 0.02 spacings of the torus on average.
+  const auto torus = make_builtin_shape("torus");
+  const Grid g = sample_grid(*torus, 36, Bounds{});
+  const double h = g.spacing().maxCoeff();
+  const Mesh m = bricked(g, LocalBrickOptions{}, 11, 2);
+  expect_closed_manifold(m);
+  double sum = 0;
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    sum += std::abs(torus->distance(m.vertices.row(v).transpose()));
+  EXPECT_LT(sum / double(m.vertices.rows()) / h, 0.02);
+}
+
+TEST(LocalBrick, RejectsBadBlocks) {
+  const Grid g = sample_grid(*make_builtin_shape("sphere"), 12, Bounds{});
+  GridView block = view_of(g);
+  LocalBrickOptions o;
+  o.band.truncation_mode = TruncationMode::None;
+  EXPECT_THROW(local_brick_piece(block, {0, 0, 0}, {13, 4, 4}, o), Error);
+  EXPECT_THROW(local_brick_piece(block, {4, 4, 4}, {4, 5, 5}, o), Error);
+  LocalBrickOptions automatic;
+  EXPECT_THROW(local_brick_piece(block, {0, 0, 0}, {12, 12, 12}, automatic), Error);
+  o.subdivisions = 7;
+  EXPECT_THROW(local_brick_piece(block, {0, 0, 0}, {12, 12, 12}, o), Error);
+}
