@@ -326,6 +326,52 @@ py::tuple run_marching_cubes_brick(const py::array& block, const std::array<int,
                         to_numpy(std::move(piece.triangles)));
 }
 
+// One brick of GCP's local reconstruction (local_brick.h): `block` holds the samples [first,
+// first + block.shape) of a grid of `dims` over [lo, hi]; the brick owns the edges from samples
+// [own_first, own_end). `options` as contour()'s; `truncation` (inside, outside; inf: none) as
+// found on the whole grid. Returns (keys (v, 2) uint64, vertices, triangles, stats), or None
+// when the block's halo is too small (read a wider one). The GIL is released meanwhile.
+py::object run_local_brick(const py::array& block, const std::array<int, 3>& first,
+                           const std::array<int, 3>& dims, const std::array<double, 3>& lo,
+                           const std::array<double, 3>& hi, const std::array<int, 3>& own_first,
+                           const std::array<int, 3>& own_end, const py::dict& options,
+                           const std::array<double, 2>& truncation) {
+  if (block.ndim() != 3) throw Error("a brick must be a 3D array");
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  py::object keep;
+  const SdfInput input = sdf_input(block, bounds, 0.0, keep);
+  GridView view = *grid_view_of(input);
+  view.first = first;
+  view.whole = dims;
+  LocalBrickOptions lb = local_brick_options(contour_options(options));
+  lb.band.truncation_mode = TruncationMode::Resolved;
+  lb.band.resolved.inside = truncation[0];
+  lb.band.resolved.outside = truncation[1];
+  LocalPiece piece;
+  {
+    py::gil_scoped_release release;
+    try {
+      piece = local_brick_piece(view, own_first, own_end, lb);
+    } catch (const HaloTooSmall&) {
+      py::gil_scoped_acquire acquire;
+      return py::none();
+    }
+  }
+  py::array_t<std::uint64_t> keys({py::ssize_t(piece.keys.size()), py::ssize_t(2)});
+  for (std::size_t v = 0; v < piece.keys.size(); ++v)
+    for (int c = 0; c < 2; ++c) keys.mutable_at(py::ssize_t(v), c) = piece.keys[v][std::size_t(c)];
+  py::dict stats;
+  stats["contact_points"] = piece.contact_points;
+  stats["local_cells"] = piece.stats.cells;
+  stats["local_feature_vertices"] = piece.stats.feature_vertices;
+  stats["local_field_misses"] = piece.stats.field_misses;
+  stats["local_crossing_cells"] = piece.stats.crossing_cells;
+  return py::make_tuple(keys, to_numpy(std::move(piece.vertices)),
+                        to_numpy(std::move(piece.triangles)), stats);
+}
+
 // A .vdb float level set, read sparse as the CLI reads it: (points (n, 3), values (n,), voxel
 // size, background).
 py::tuple run_read_vdb(const std::string& path, const std::string& grid_name) {
@@ -406,6 +452,10 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   stats["carved_vertices"] = r.carving ? r.carving->vertices_moved : 0L;
   stats["projected_vertices"] = r.projection ? r.projection->vertices_moved : 0L;
   if (r.mesh) stats["reconstruction"] = reconstruction_name(r.reconstruction);
+  if (r.local_bricks) {
+    stats["local_bricks"] = r.local_bricks->bricks;
+    stats["contact_points"] = r.local_bricks->contact_points;
+  }
   if (r.local) {
     stats["local_cells"] = r.local->cells;
     stats["local_feature_vertices"] = r.local->feature_vertices;
@@ -528,6 +578,15 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("progress_callback") = py::none());
   m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
+  m.def("local_brick", &run_local_brick, py::arg("block"), py::arg("first"), py::arg("dims"),
+        py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"), py::arg("options"),
+        py::arg("truncation"));
+  m.def(
+      "local_brick_halo",
+      [](const py::dict& options, const std::array<int, 3>& dims) {
+        return local_brick_halo(local_brick_options(contour_options(options)), dims);
+      },
+      py::arg("options"), py::arg("dims"));
   m.def(
       "mesh_topology",
       [](const py::array& V, const py::array& F) { return topology_stats(mesh_from(V, F)); },

@@ -187,6 +187,11 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   BandOptions band_options = options.band;
   if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp)
     rescale_to_distances(*grid, options, measured, band_options, result);
+  const bool bricked = detail::bricked_local(grid, options);
+  if (bricked) {
+    detail::reconstruct_in_bricks(*grid, band_options, options, result, stages);
+    if (!options.want_points) return result;
+  }
   BandSamples band = band_stage(grid, scattered, band_options, stages);
   result.band_samples = int(band.samples.values.size());
   result.isolated_samples = band.isolated;
@@ -199,7 +204,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 
   detail::SampleTriangulations triangulations =
       detail::contact_point_stage(band, shape, options, result, stages);
-  const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
+  const bool contact_mesh =
+      (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh && !bricked;
   const bool local = contact_mesh && grid && options.reconstruction == Reconstruction::Local;
   if (local) {
     detail::check_contact_point_count(grid, options, *result.contact_points);

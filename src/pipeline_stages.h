@@ -100,6 +100,18 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
 // GCP's or GTCP's mesh into result.mesh by the local reconstruction of result.contact_points on
 // `grid`'s cells (result.local, result.reconstruction set), subdivided, then projected and carved
 // as `inputs` (prepare_reconstruction's) say.
+/// True where GCP's local reconstruction runs brick by brick (reconstruct_in_bricks): a grid,
+/// regular-triangulation gradients.
+bool bricked_local(const GridView* grid, const ContourOptions& options);
+
+/// The bricks' side for the local reconstruction with BrickOptions::kAutoSize.
+constexpr int kLocalBrick = 256;
+
+/// GCP's local reconstruction from `grid` brick by brick (local_mesh_in_bricks), values scaled
+/// by `band`'s value_scale: result.mesh, .local, .local_bricks.
+void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
+                           const ContourOptions& options, ContourResult& result, Stages& stages);
+
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
                          const ContourOptions& options, ContourResult& result, Stages& stages);
 

@@ -232,6 +232,10 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["sign_violations_left"] = r.sign_violations_left;
     j["sign_constraints_dropped"] = r.sign_constraints_dropped;
   }
+  if (r.local_bricks)
+    j["local_bricks"] = {{"bricks", r.local_bricks->bricks},
+                         {"wider_halos", r.local_bricks->wider_halos},
+                         {"contact_points", r.local_bricks->contact_points}};
   if (r.local)
     j["local"] = {{"cells", r.local->cells},
                   {"vertices", r.local->vertices},
@@ -310,6 +314,9 @@ void print_summary(const ContourResult& r, double total) {
   if (r.band_samples > 0) std::cout << ", in band " << r.band_samples;
   if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
   if (r.contact_points) std::cout << ", contact points kept " << r.contact_points->size();
+  if (r.local_bricks && !r.contact_points)
+    std::cout << ", contact points " << r.local_bricks->contact_points << " (over "
+              << r.local_bricks->bricks << " bricks)";
   if (r.mesh)
     std::cout << ", mesh " << r.mesh->vertices.rows() << " vertices / " << r.mesh->triangles.rows()
               << " triangles";
@@ -386,7 +393,8 @@ Command add_contour_command(CLI::App& app) {
                 "transform are used), or a built-in shape builtin:NAME@N (N^3 grid) / "
                 "builtin:NAME@random:COUNT; NAME is one of sphere, torus, box, plate, shell, csg")
       ->required();
-  c->add_option("-o,--output", a->output, "Mesh to write (.ply binary by default, .obj, .off or binary .stl)");
+  c->add_option("-o,--output", a->output,
+                "Mesh to write (.ply binary by default, .obj, .off or binary .stl)");
   c->add_option(
       "--points", a->points,
       "Contact points to write as PLY (x y z nx ny nz): GCP's, or GTCP's for --method gtcp");

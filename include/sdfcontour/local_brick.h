@@ -14,7 +14,9 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "sdfcontour/band.h"
@@ -44,6 +46,10 @@ struct LocalBrickOptions {
     p.max_residual = 0;
     return p;
   }();
+  /// When set and it becomes true, the bricks stop soon (throws Cancelled).
+  const std::atomic<bool>* cancel = nullptr;
+  /// local_mesh_in_bricks: called as bricks finish (done, total), serialised; empty for silence.
+  std::function<void(int, int)> progress;
 };
 
 /// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,
@@ -56,7 +62,11 @@ struct LocalPiece {
   PointMatrix vertices;         ///< v x 3, in ascending key order
   std::vector<VertexKey> keys;  ///< v, ascending and distinct
   TriangleMatrix triangles;     ///< outward oriented, indices into `vertices`
-  long contact_points = 0;      ///< contact points of the block's flagged samples
+  /// Per triangle, ascending: 256 * (8 * its grid edge + rank in the edge's polygon) + its rank
+  /// among that triangle's subdivisions (the whole grid's order).
+  std::vector<std::uint64_t> triangle_names;
+  long contact_points = 0;         ///< contact points of the block's flagged samples
+  LocalReconstructionStats stats;  ///< of the owned cells (those with their low corner owned)
 };
 
 /// The halo, in samples, that a brick's block needs first with these options on a grid of
@@ -70,13 +80,22 @@ int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>&
 LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
                              const std::array<int, 3>& own_end, const LocalBrickOptions& options);
 
-/// Joins pieces: vertices with equal keys become one (ascending keys), triangles follow in piece
-/// order. Throws InternalError if two pieces give one key two positions.
+/// Joins pieces: vertices with equal keys become one (ascending keys), triangles in the order of
+/// their names: the same arrays whatever the bricks. Throws InternalError if two pieces give one
+/// key two positions.
 Mesh join_local_pieces(const std::vector<LocalPiece>& pieces);
 
 /// The whole grid's mesh from bricks of `brick` samples per side (0: one brick), computed in
 /// parallel and joined; each brick's halo doubles until its stars fit. The mesh does not depend
 /// on `brick` or the thread count.
-Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& options, int brick = 0);
+struct LocalBricksStats {
+  int bricks = 0;                  ///< bricks with a piece of the surface
+  int wider_halos = 0;             ///< bricks read again with a wider halo
+  long contact_points = 0;         ///< over all bricks (a halo's samples counted again)
+  LocalReconstructionStats local;  ///< summed over the bricks' owned cells
+};
+
+Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& options, int brick = 0,
+                          LocalBricksStats* stats = nullptr);
 
 }  // namespace sdfcontour

@@ -12,6 +12,7 @@
 #include "sdfcontour/contact_points.h"
 #include "sdfcontour/contact_projection.h"
 #include "sdfcontour/gradients.h"
+#include "sdfcontour/local_brick.h"
 #include "sdfcontour/local_reconstruction.h"
 #include "sdfcontour/noise.h"
 #include "sdfcontour/npy.h"
@@ -168,6 +169,7 @@ struct ContourResult {
   /// gcp, gtcp: the reconstruction that made the mesh (Poisson or Local, never Auto)
   Reconstruction reconstruction = Reconstruction::Poisson;
   std::optional<LocalReconstructionStats> local;  ///< when the local reconstruction ran
+  std::optional<LocalBricksStats> local_bricks;   ///< when it ran brick by brick
   int poisson_depth = 0;                          ///< the depth the mesh was reconstructed at
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
@@ -214,6 +216,11 @@ struct ContourResult {
 /// depth 10 gives 1.43x MC's L1 (bunny, 6.9 GB) and depth 11 0.61-0.74x (bunny, spot, armadillo;
 /// 6.1-8.4 GB). Deeper than 11 is left to the user (--depth): each depth needs ~4x the memory.
 int auto_poisson_depth(const PointMatrix& points, double spacing);
+
+/// The options of GCP's local reconstruction in bricks (local_brick.h) that `options` asks for:
+/// its band (truncation as given), gradients, contact points, local options, subdivisions and
+/// projection (ContourOptions::local_projection), and cancel flag.
+LocalBrickOptions local_brick_options(const ContourOptions& options);
 
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
 /// it may be null for other methods. Throws Error for an input the method cannot use (no sign

@@ -1,5 +1,5 @@
-"""Bricks of a grid and the mesh piece each owns (marching cubes), for any scheduler: the
-Dask module, the bricked callable path, or a user's own (a Slurm array)."""
+"""Bricks of a grid and the mesh piece each owns (marching cubes, or GCP's local reconstruction),
+for any scheduler: the Dask module, the bricked callable path, or a user's own (a Slurm array)."""
 import numpy as np
 
 from . import _sdfcontour
@@ -44,9 +44,47 @@ def brick_piece(block, index, first, shape, lo, hi):
                                                 tuple(float(x) for x in hi))
     except ValueError as e:
         end = [int(f) + int(d) for f, d in zip(first, np.shape(block))]
-        raise BrickError(f"brick {tuple(int(x) for x in index)} (samples "
-                         f"[{first[0]}:{end[0]}, {first[1]}:{end[1]}, {first[2]}:{end[2]}]): "
-                         f"{e}") from None
+        raise _brick_error(index, first, end, e) from None
+
+
+def _brick_error(index, first, end, error):
+    return BrickError(f"brick {tuple(int(x) for x in index)} (samples "
+                      f"[{first[0]}:{end[0]}, {first[1]}:{end[1]}, {first[2]}:{end[2]}]): "
+                      f"{error}")
+
+
+def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation):
+    """The piece of GCP's local reconstruction (its mesh in bricks, local_brick.h) that one brick
+    owns: the grid edges from the brick's samples [first, first + dims - 1) (its cells' low
+    corners), read with a halo around them by ``read(first, dims)`` (a block of the grid; the
+    halo widens until the contact points' stars fit in it). ``options``: contour()'s options dict;
+    ``truncation``: (inside, outside) found on the whole grid (inf: none).
+
+    Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V): joined with
+    the other bricks' pieces (`join_pieces`), the whole grid's local mesh, bit for bit."""
+    own_first = [int(f) for f in first]
+    own_end = [min(int(f) + int(d) - 1, int(n)) for f, d, n in zip(first, dims, shape)]
+    halo = int(_sdfcontour.local_brick_halo(options, tuple(int(n) for n in shape)))
+    while True:
+        lo_read = [max(0, f - halo) for f in own_first]
+        hi_read = [min(int(n), e + halo) for e, n in zip(own_end, shape)]
+        try:
+            block = np.asarray(read(lo_read, [b - a for a, b in zip(lo_read, hi_read)]))
+            if block.dtype.kind not in "fiu":
+                raise ValueError(f"the grid must hold real numbers, not {block.dtype}")
+            piece = _sdfcontour.local_brick(block, tuple(lo_read), tuple(int(n) for n in shape),
+                                            tuple(float(x) for x in lo),
+                                            tuple(float(x) for x in hi), tuple(own_first),
+                                            tuple(own_end), options,
+                                            tuple(float(t) for t in truncation))
+        except ValueError as e:
+            raise _brick_error(index, lo_read, hi_read, e) from None
+        if piece is not None:
+            return piece[:3]
+        whole = all(a == 0 for a in lo_read) and all(b == n for b, n in zip(hi_read, shape))
+        if whole:
+            raise RuntimeError("internal error: the whole grid's block reported too small a halo")
+        halo *= 2
 
 
 def canonical_mesh(V, F):

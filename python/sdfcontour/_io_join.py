@@ -1,7 +1,8 @@
 """Joining bricks' mesh pieces (keys, V, F) into one mesh: vertices with equal keys become one, in
 ascending key order; triangles follow in brick order. Either in memory, or streamed into a binary
 PLY whose join holds only the keys in memory (8 bytes per vertex of a piece, 8 per vertex kept),
-the pieces' vertices and triangles staying on disk."""
+the pieces' vertices and triangles staying on disk. Keys are uint64 (marching cubes) or pairs of
+uint64 (the local reconstruction's), compared as pairs."""
 import os
 import shutil
 import tempfile
@@ -33,12 +34,24 @@ def _check_same_positions(V, kept, inverse):
             raise RuntimeError("internal error: two bricks place one vertex differently")
 
 
+_PAIR = np.dtype([("hi", "<u8"), ("lo", "<u8")])
+
+
+def _comparable(keys):
+    """Keys as one sortable column: uint64 (marching cubes' edge keys) as they are, (v, 2) uint64
+    pairs (the local reconstruction's) as records compared pair-wise."""
+    keys = np.asarray(keys, np.uint64)
+    if keys.ndim == 2:
+        return np.ascontiguousarray(keys.astype("<u8", copy=False)).view(_PAIR).reshape(-1)
+    return keys
+
+
 def join_pieces(arrivals, count):
     """(V, F, stats) from `arrivals`, pairs (brick number < count, (keys, V, F))."""
     pieces = [None] * count
     for b, piece in arrivals:
         pieces[b] = piece
-    keys = np.concatenate([np.asarray(p[0], np.uint64) for p in pieces])
+    keys = np.concatenate([_comparable(p[0]) for p in pieces])
     V = np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in pieces])
     offsets = np.cumsum([0] + [len(p[0]) for p in pieces])
     F = np.concatenate([np.asarray(p[2], np.int64).reshape(-1, 3) + offsets[b]
@@ -60,17 +73,21 @@ def write_pieces_as_ply(arrivals, count, out):
         names = {n: os.path.join(folder, n) for n in ("keys", "vertices", "faces", "mesh.ply")}
         rows = [None] * count  # brick number -> (first face row, face rows)
         occurrences = face_rows = empty = 0
+        key_type = None
         with open(names["keys"], "wb") as kf, open(names["vertices"], "wb") as vf, \
                 open(names["faces"], "wb") as ff:
             for b, (keys, V, F) in arrivals:
-                np.asarray(keys, np.uint64).tofile(kf)
+                keys = _comparable(keys)
+                if len(keys):
+                    key_type = keys.dtype
+                keys.tofile(kf)
                 np.asarray(V, np.float64).tofile(vf)
                 (np.asarray(F, np.int64) + occurrences).tofile(ff)
                 rows[b] = (face_rows, len(F))
                 occurrences += len(keys)
                 face_rows += len(F)
                 empty += len(F) == 0
-        keys = np.fromfile(names["keys"], np.uint64)
+        keys = np.fromfile(names["keys"], key_type or np.uint64)
         _, kept, inverse = np.unique(keys, return_index=True, return_inverse=True)
         del keys
         _require_int32(len(kept))

@@ -1,13 +1,15 @@
 """sdfcontour.dask: contour a grid larger than one machine, brick by brick, on Dask.
 
 The grid's cells are cut into bricks of ``brick`` cells a side. Each brick is one Dask task: it
-reads its samples plus one more on each high side (the samples of the cells it owns) and returns
-the piece of the mesh that it owns, its vertices named by the grid edge they lie on. Pieces are
+reads its samples (marching cubes: plus one more on each high side, the samples of the cells it
+owns; GCP: plus a halo wide enough for its contact points' stars) and returns the piece of the
+mesh that it owns, its vertices named globally (the grid edge or cell they come from). Pieces are
 joined by those names, so the mesh is the single-process mesh bit for bit, whatever ran where.
 Dask's scheduler does the rest: placement, retries on a lost worker, a remote cluster.
 
 >>> import sdfcontour.dask
 >>> V, F = sdfcontour.dask.contour("big.zarr", method="mc", brick=256)
+>>> V, F = sdfcontour.dask.contour("big.zarr", method="gcp")   # the local reconstruction
 >>> stats = sdfcontour.dask.contour("big.zarr", out="big.ply", client="tcp://10.0.0.5:8786")
 """
 import contextlib
@@ -18,10 +20,10 @@ import time
 import numpy as np
 
 from . import _bounds, _checks, _sdfcontour
-from ._bricks import BrickError, brick_piece, bricks, canonical_mesh
+from ._bricks import BrickError, brick_piece, bricks, canonical_mesh, gcp_brick_piece
 from ._io_join import join_pieces, write_pieces_as_ply
 
-__all__ = ["contour", "bricks", "brick_piece", "canonical_mesh", "BrickError"]
+__all__ = ["contour", "bricks", "brick_piece", "gcp_brick_piece", "canonical_mesh", "BrickError"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -70,6 +72,7 @@ class _VdbReader:
         self.first = np.array(layout["min"]) - 1  # the vdb index of grid sample (0, 0, 0)
         self.shape = tuple(int(n) for n in np.array(layout["max"]) - self.first + 2)
         self.dtype = np.dtype(np.float32)
+        self.background = float(layout["background"])
         voxel, origin = layout["voxel_size"], np.array(layout["origin"])
         self.bounds = (origin + voxel * self.first,
                        origin + voxel * (self.first + np.array(self.shape) - 1))
@@ -178,6 +181,56 @@ def _check_shape_and_dtype(shape, dtype):
         raise _checks.ArgumentTypeError(f"the grid must hold real numbers, not {np.dtype(dtype)}")
 
 
+def _read(source, first, dims):
+    """Samples [first, first + dims) of a reader, a numpy array or a dask array (computed here,
+    in the task, by the synchronous scheduler)."""
+    if hasattr(source, "read"):
+        return source.read(first, dims)
+    part = source[tuple(slice(f, f + d) for f, d in zip(first, dims))]
+    if type(part).__module__.startswith("dask"):
+        part = part.compute(scheduler="sync")
+    return np.asarray(part)
+
+
+def _gcp_task(source, index, first, dims, shape, lo, hi, options, truncation):
+    return gcp_brick_piece(lambda f, d: _read(source, f, d), index, first, dims, shape, lo, hi,
+                           options, truncation)
+
+
+# The truncation rule of the single process (band.h, detect_truncation), on per-brick counts.
+_TOLERANCE, _MIN_TRUNCATED, _MIN_FRACTION = 1e-6, 64, 0.01
+
+
+def _extremes_task(source, index, first, dims):
+    """(min, max, values at the min, values at the max, negatives, count) of one brick's own
+    samples."""
+    try:
+        v = np.asarray(_read(source, first, dims), np.float64)
+    except ValueError as e:
+        raise BrickError(f"brick {tuple(index)}: {e}") from None
+    if not np.isfinite(v).all():
+        at = np.unravel_index(int(np.argmin(np.isfinite(v))), v.shape)
+        raise BrickError(f"brick {tuple(index)}: the grid has a non-finite value at "
+                         f"{[int(f) + int(a) for f, a in zip(first, at)]}")
+    lo, hi = float(v.min()), float(v.max())
+    return (lo, hi, int(((v < 0) & (-v >= -lo * (1 - _TOLERANCE))).sum()),
+            int(((v > 0) & (v >= hi * (1 - _TOLERANCE))).sum()), int((v < 0).sum()), v.size)
+
+
+def _truncation_of(parts):
+    lo = min(p[0] for p in parts)
+    hi = max(p[1] for p in parts)
+    at_inside = sum(p[2] for p in parts if -p[0] >= -lo * (1 - _TOLERANCE))
+    at_outside = sum(p[3] for p in parts if p[1] >= hi * (1 - _TOLERANCE))
+    negatives = sum(p[4] for p in parts)
+    count = sum(p[5] for p in parts)
+
+    def clamped(at, of_sign):
+        return at >= _MIN_TRUNCATED and at >= _MIN_FRACTION * of_sign
+    return (-lo if lo < 0 and clamped(at_inside, negatives) else float("inf"),
+            hi if hi > 0 and clamped(at_outside, count - negatives) else float("inf"))
+
+
 def _read_and_contour(reader, index, first, dims, shape, lo, hi):
     try:
         block = reader.read(first, dims)
@@ -246,7 +299,8 @@ def _one_line(error):
 
 
 def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
-            resolution=None, dataset=None, batch_size=65536, progress=False, return_stats=False):
+            resolution=None, dataset=None, batch_size=65536, band="auto", truncation="auto",
+            subdivisions="auto", projection="auto", progress=False, return_stats=False):
     """Contour a grid too large for one process, brick by brick on Dask.
 
     Parameters
@@ -260,9 +314,11 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         densified, bricks without active voxels skipped. Each task reads only its brick.
     bounds : (lo, hi), optional
         Positions of the first and last samples, each a number or 3 numbers. Default (-1, 1).
-    method : {"mc"}
-        Marching cubes. GCP's reconstruction is not brick-local yet, and its screened Poisson
-        solve is global: both are refused here with a ValueError.
+    method : {"mc", "gcp"}
+        Marching cubes, or GCP with its local reconstruction (``reconstruction="local"`` of
+        :func:`sdfcontour.contour`, brick-local from end to end: the joined mesh equals the
+        single process's bit for bit). GCP's screened Poisson solve is global and is not offered
+        here; neither are the whole-mesh stages after it (carving).
     brick : int
         Cells per brick side (default 256: a float32 brick of 257^3 samples is 68 MB).
     client : dask.distributed.Client, str or None
@@ -275,6 +331,12 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         Samples per axis for a callable source.
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
+    band, subdivisions, projection
+        GCP: as in :func:`sdfcontour.contour`.
+    truncation : "auto", "none" or a number as text
+        GCP: values clamped at +-T carry no distance. "auto" finds T as the single process does,
+        in a first pass over the bricks (one more read of the grid; a ``.vdb``'s background is
+        its truncation, a callable has none); "none" skips that pass.
     progress : bool
         Print the bricks done on stderr.
 
@@ -291,12 +353,19 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     OSError
         A file that cannot be read or written.
     """
-    if method in ("gcp", "gtcp", "mt-rt", "mt-dt"):
-        why = ("its screened Poisson solve is global and its local reconstruction is not "
-               "brick-local yet" if method == "gcp" else "it needs a triangulation of all samples")
-        raise ValueError(f"method '{method}' cannot run brick by brick on Dask: {why}; use "
-                         f"method='mc' here, or sdfcontour.contour() in one process")
-    _checks.choice("method", method, ("mc",))
+    if method in ("gtcp", "mt-rt", "mt-dt"):
+        raise ValueError(f"method '{method}' cannot run brick by brick on Dask: it needs a "
+                         f"triangulation of all samples; use method='mc' or 'gcp' here, or "
+                         f"sdfcontour.contour() in one process")
+    _checks.choice("method", method, ("mc", "gcp"))
+    options = None
+    if method == "gcp":
+        from . import _count_or_auto, _options, _switch
+        options = _options("gcp", band, 1.0, truncation, "regular", "james", 18, False, 1e-6,
+                           "auto", 0.0, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, False)
+        options["reconstruction"] = "local"
+        options["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
+        options["projection"] = _switch("projection", projection)
     brick = _checks.whole_in("brick", brick, 1, 2**20)
     batch_size = _checks.whole_in("batch_size", batch_size, 1, 2**26)
     progress = _checks.flag("progress", progress)
@@ -321,20 +390,51 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
 
     with _main_script_hidden():
         return _contour_on(reader, shape, lo, hi, int(brick), client, out, progress,
-                           return_stats)
+                           return_stats, options)
 
 
-def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stats):
+def _gcp_truncation(dask_client, reader, source, shape, brick, options):
+    """(inside, outside): the whole grid's truncation, as the single process finds it."""
+    given = options["truncation"]
+    if given == "none" or isinstance(reader, _CallableReader):
+        return (float("inf"), float("inf"))
+    if given != "auto":
+        return (float(given), float(given))
+    if isinstance(reader, _VdbReader):
+        return (reader.background, reader.background)
+    import dask
+    tasks = []
+    for index, first, dims in bricks(shape, brick):
+        # Each sample once: a brick's own samples, its high side's only at the grid's end.
+        own = [d - 1 if f + d < n else d for f, d, n in zip(first, dims, shape)]
+        tasks.append(dask.delayed(_extremes_task, pure=True)(source, index, first, own))
+    try:
+        parts = dask_client.gather(dask_client.compute(tasks))
+    except Exception as error:
+        raise _one_line(error) from None
+    return _truncation_of(parts)
+
+
+def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stats, options):
     import dask
     started = time.perf_counter()
     dask_client, owned = _start_client(client)
     try:
         tasks = []
         active = reader.active(brick) if isinstance(reader, _VdbReader) else None
+        source = reader
+        if options is not None and isinstance(reader, np.ndarray):
+            source = dask_client.scatter(reader)  # sent to each worker once, not per task
+        truncation = None
+        if options is not None:
+            truncation = _gcp_truncation(dask_client, reader, source, shape, brick, options)
         for index, first, dims in bricks(shape, brick):
             if active is not None and tuple(index) not in active:
                 continue  # no active voxel: no surface, not read
-            if isinstance(reader, np.ndarray) or type(reader).__module__.startswith("dask"):
+            if options is not None:
+                task = dask.delayed(_gcp_task, pure=True)(source, index, first, dims, shape, lo,
+                                                          hi, options, truncation)
+            elif isinstance(reader, np.ndarray) or type(reader).__module__.startswith("dask"):
                 sl = tuple(slice(f, f + d) for f, d in zip(first, dims))
                 block = reader[sl]
                 task = dask.delayed(brick_piece, pure=True)(block, index, first, shape, lo, hi)

@@ -1,6 +1,7 @@
 // Internal: the local reconstruction's mesh with global names, for bricks (local_brick.cpp).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -17,6 +18,8 @@ struct KeyedLocalMesh {
   std::vector<std::uint64_t> vertex_key;
   std::vector<std::uint64_t> triangle_edge;  ///< per triangle: its polygon's grid edge key
   std::vector<std::uint8_t> triangle_rank;   ///< per triangle: its rank in the polygon
+  /// Per cell vertex (the first rows): placed from crossings, at a feature, clamped, field miss.
+  std::vector<std::array<char, 4>> flags;
 };
 
 KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatrix& points,

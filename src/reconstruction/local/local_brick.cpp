@@ -123,6 +123,39 @@ detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, c
   return out;
 }
 
+// The reconstruction's counts over the cells whose low corner is owned.
+LocalReconstructionStats owned_cell_stats(const detail::KeyedLocalMesh& keyed, const Index3& n,
+                                          const Index3& own_first, const Index3& own_end) {
+  LocalReconstructionStats s;
+  const std::uint64_t ny = std::uint64_t(n[1] - 1), nz = std::uint64_t(n[2] - 1);
+  for (std::size_t v = 0; v < keyed.flags.size(); ++v) {
+    const std::uint64_t cell = keyed.vertex_key[v] / 4;
+    const Index3 at{int(cell / (ny * nz)), int(cell / nz % ny), int(cell % nz)};
+    if (!in_range(at, own_first, own_end)) continue;
+    ++s.vertices;
+    // A cell's vertices are keyed 4 * cell + polygon: the first makes a cell, the second a split.
+    s.cells += keyed.vertex_key[v] % 4 == 0;
+    s.split_cells += keyed.vertex_key[v] % 4 == 1;
+    const auto& f = keyed.flags[v];
+    s.crossing_cells += f[0], s.feature_vertices += f[1], s.clamped += f[2], s.field_misses += f[3];
+  }
+  return s;
+}
+
+// Throws Error naming the first non-finite value by its global [i, j, k].
+void require_finite(const GridView& block) {
+  block.visit([&](const auto* f) {
+    for (std::size_t p = 0; p < block.size(); ++p) {
+      if (std::isfinite(double(f[p])) && std::abs(double(f[p])) <= 1e100) continue;
+      const std::size_t nz = std::size_t(block.dims[2]), nyz = std::size_t(block.dims[1]) * nz;
+      throw Error("the grid has a non-finite value at [" +
+                  std::to_string(block.first[0] + int(p / nyz)) + ", " +
+                  std::to_string(block.first[1] + int(p % nyz / nz)) + ", " +
+                  std::to_string(block.first[2] + int(p % nz)) + "]");
+    }
+  });
+}
+
 void validate(const GridView& block, const Index3& own_first, const Index3& own_end,
               const LocalBrickOptions& o) {
   const Index3 n = block.whole_dims();
@@ -132,6 +165,10 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
     if (!(own_first[a] >= 0 && own_first[a] < own_end[a] && own_end[a] <= n[a]))
       throw Error("a brick's owned samples must be a non-empty range inside its grid");
   }
+  for (int a = 0; a < 3; ++a)
+    if (!(block.bounds.min[a] < block.bounds.max[a]) || !std::isfinite(block.bounds.min[a]) ||
+        !std::isfinite(block.bounds.max[a]))
+      throw Error("bounds must be finite with min < max on every axis");
   if (o.band.truncation_mode == TruncationMode::Auto)
     throw Error("a brick needs its grid's truncation resolved on the whole grid");
   if (o.subdivisions < -1 || o.subdivisions > 4)
@@ -153,12 +190,22 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   piece.vertices.resize(0, 3);
   piece.triangles.resize(0, 3);
   // The owned edges' polygons join the cells around them: no sign change there, no surface.
+  require_finite(block);
   if (!has_sign_change(block, shifted(own_first, -1), shifted(own_end, 1))) return piece;
-  validate_grid(block);
   const Index3 n = block.whole_dims();
   const double h = block.spacing().maxCoeff();
-  const BandSamples band = select_band(block, options.band);
-  const double largest = (band.band + options.band.margin) * h;
+  BandSamples band;
+  try {
+    band = select_band(block, options.band);
+  } catch (const InternalError&) {
+    throw;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const Error&) {
+    band = BandSamples();  // no usable band here: the cells use their edge crossings
+    band.band = options.band.band;
+  }
+  const double largest = largest_in_spacings(options.band, n) * h;
   // Samples whose contact points the owned part can use.
   const int reach = flag_reach(options, largest / h);
   const Eigen::Vector3d flag_lo =
@@ -179,14 +226,20 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   bricks.halo = auto_brick_halo(largest, h);
   bricks.within = &within;
   bricks.largest_value = largest;
-  const ContactPoints cp = brick_contact_points(band.samples, h, options.gradient, options.contact,
-                                                bricks, nullptr, {}, &flagged);
+  bricks.cancel = options.cancel;
+  ContactPoints cp;
+  cp.points.resize(0, 3);
+  cp.normals.resize(0, 3);
+  if (count > 0)
+    cp = brick_contact_points(band.samples, h, options.gradient, options.contact, bricks, nullptr,
+                              {}, &flagged);
   piece.contact_points = cp.size();
   Eigen::VectorXd depths(cp.size());
   for (int q = 0; q < cp.size(); ++q)
     depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
   const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
       block, cp.points, cp.normals, options.local, nullptr, depths);
+  piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
   // The owned edges and the ring around them (their vertices' normals need every triangle).
   const detail::KeyedTriangles near =
       triangles_of_edges(keyed, n, shifted(own_first, -1), shifted(own_end, 1));
@@ -215,6 +268,9 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       piece.keys[std::size_t(id[v])] = sub.keys[v];
     }
   piece.triangles.resize(Eigen::Index(owned.size()), 3);
+  const Eigen::Index children = Eigen::Index(1) << (2 * levels);
+  for (const Eigen::Index t : owned)
+    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 + std::uint64_t(t % children));
   for (std::size_t r = 0; r < owned.size(); ++r)
     for (int c = 0; c < 3; ++c)
       piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];

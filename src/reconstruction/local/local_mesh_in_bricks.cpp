@@ -3,7 +3,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <mutex>
 #include <string>
+#include <tuple>
 
 #include "sdfcontour/bricks.h"
 #include "sdfcontour/local_brick.h"
@@ -33,7 +35,7 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
 }
 
 LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Index3& own_end,
-                       const LocalBrickOptions& options) {
+                       const LocalBrickOptions& options, int& wider) {
   int halo = local_brick_halo(options, grid.dims);
   std::vector<double> values;
   for (;;) {
@@ -49,6 +51,7 @@ LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Inde
     } catch (const HaloTooSmall&) {
       if (whole) throw InternalError("a block holding the whole grid reported too small a halo");
       halo *= 2;
+      ++wider;
     }
   }
 }
@@ -89,18 +92,22 @@ Mesh join_local_pieces(const std::vector<LocalPiece>& pieces) {
   for (int v = 0; v <= next; ++v)
     mesh.vertices.row(v) =
         pieces[std::size_t(source_piece[std::size_t(v)])].vertices.row(source_row[std::size_t(v)]);
-  Eigen::Index faces = 0;
-  for (const LocalPiece& p : pieces) faces += p.triangles.rows();
-  mesh.triangles.resize(faces, 3);
-  Eigen::Index at = 0;
+  std::vector<std::tuple<std::uint64_t, std::size_t, Eigen::Index>> faces;
   for (std::size_t p = 0; p < pieces.size(); ++p)
-    for (Eigen::Index t = 0; t < pieces[p].triangles.rows(); ++t, ++at)
-      for (int c = 0; c < 3; ++c)
-        mesh.triangles(at, c) = id[p][std::size_t(pieces[p].triangles(t, c))];
+    for (Eigen::Index t = 0; t < pieces[p].triangles.rows(); ++t)
+      faces.emplace_back(pieces[p].triangle_names[std::size_t(t)], p, t);
+  std::sort(faces.begin(), faces.end());
+  mesh.triangles.resize(Eigen::Index(faces.size()), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const auto& [name, p, t] = faces[f];
+    for (int c = 0; c < 3; ++c)
+      mesh.triangles(Eigen::Index(f), c) = id[p][std::size_t(pieces[p].triangles(t, c))];
+  }
   return mesh;
 }
 
-Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, int brick) {
+Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, int brick,
+                          LocalBricksStats* stats) {
   validate_grid(grid);
   if (grid.whole[0] > 0 || grid.first != Index3{0, 0, 0})
     throw Error("local_mesh_in_bricks needs a whole grid, not a block");
@@ -115,6 +122,9 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
   for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] + side - 1) / side;
   const int total = count[0] * count[1] * count[2];
   std::vector<LocalPiece> pieces(static_cast<std::size_t>(total));
+  std::vector<int> wider(std::size_t(total), 0);
+  std::mutex progress_mutex;
+  int done = 0;
   tbb::parallel_for(0, total, [&](int b) {
     const Index3 at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
     Index3 first, end;
@@ -122,8 +132,27 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
       first[a] = at[a] * side;
       end[a] = std::min(first[a] + side, grid.dims[a]);
     }
-    pieces[std::size_t(b)] = brick_piece(grid, first, end, options);
+    check_cancel(options.cancel);
+    pieces[std::size_t(b)] = brick_piece(grid, first, end, options, wider[std::size_t(b)]);
+    if (options.progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      options.progress(++done, total);
+    }
   });
+  if (stats) {
+    *stats = {};
+    for (std::size_t b = 0; b < pieces.size(); ++b) {
+      const LocalPiece& p = pieces[b];
+      stats->bricks += p.triangles.rows() > 0;
+      stats->wider_halos += wider[b];
+      stats->contact_points += p.contact_points;
+      LocalReconstructionStats& s = stats->local;
+      s.cells += p.stats.cells, s.vertices += p.stats.vertices;
+      s.split_cells += p.stats.split_cells, s.crossing_cells += p.stats.crossing_cells;
+      s.feature_vertices += p.stats.feature_vertices, s.clamped += p.stats.clamped;
+      s.field_misses += p.stats.field_misses;
+    }
+  }
   return join_local_pieces(pieces);
 }
 

@@ -142,12 +142,13 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
 PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
                           const PointMatrix& normals, const Eigen::VectorXd& weights,
                           const LocalReconstructionOptions& options,
-                          LocalReconstructionStats& stats) {
+                          LocalReconstructionStats& stats,
+                          std::vector<std::array<char, 4>>& flags) {
   const BinnedPoints bins = bin_points(cells, points);
   const Eigen::Vector3d reach = options.reach * cells.spacing;
   const double h = cells.spacing.maxCoeff();
   PointMatrix vertices(cells.vertex_count(), 3);
-  std::vector<std::array<char, 4>> flags(std::size_t(vertices.rows()), {0, 0, 0, 0});
+  flags.assign(std::size_t(vertices.rows()), {0, 0, 0, 0});
   tbb::parallel_for(std::size_t(0), cells.active.size(), [&](std::size_t c) {
     const ActiveCell& cell = cells.active[c];
     const std::array<int, 3> at = cells.cell_of_key(cell.key);
@@ -292,7 +293,7 @@ KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatri
     const double scale = options.depth_scale * grid.spacing().maxCoeff();
     weights = 1 / (1 + (depths.array() / scale).square());
   }
-  mesh.vertices = cell_vertices(cells, points, normals, weights, options, stats);
+  mesh.vertices = cell_vertices(cells, points, normals, weights, options, stats, keyed.flags);
   const detail::DualPolygons polygons = cells.dual_polygons();
   const Eigen::Index cell_vertex_count = mesh.vertices.rows();
   mesh.vertices.conservativeResize(

@@ -1,9 +1,61 @@
-// contour()'s local reconstruction stage: GCP's or GTCP's contact points to a mesh on the grid's
-// cells, subdivided and projected onto the contact points where they fit a smooth surface.
+// contour()'s local reconstruction stage: GCP's mesh brick by brick from the grid (local_brick.h),
+// or, for GTCP's exact contact points, a mesh on the grid's cells, subdivided and projected onto
+// the contact points where they fit a smooth surface, then carved.
 #include "../../pipeline_stages.h"
+#include "sdfcontour/local_brick.h"
 #include "sdfcontour/subdivision.h"
 
+namespace sdfcontour::detail {}  // namespace sdfcontour::detail
+
+namespace sdfcontour {
+
+LocalBrickOptions local_brick_options(const ContourOptions& options) {
+  LocalBrickOptions lb;
+  lb.band = options.band;
+  lb.gradient = options.gradient;
+  lb.contact = options.contact;
+  lb.local = options.local;
+  lb.subdivisions = options.subdivisions;
+  lb.project = options.project != Switch::Off;
+  lb.projection = options.local_projection;
+  lb.cancel = options.cancel;
+  return lb;
+}
+
+}  // namespace sdfcontour
+
 namespace sdfcontour::detail {
+
+bool bricked_local(const GridView* grid, const ContourOptions& options) {
+  return grid && options.method == Method::Gcp && options.want_mesh &&
+         options.reconstruction == Reconstruction::Local &&
+         options.gradient_source == GradientSource::Regular;
+}
+
+void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
+                           const ContourOptions& options, ContourResult& result, Stages& stages) {
+  if (options.carve == Switch::On || options.side_repair == Switch::On)
+    throw Error(
+        "carving is a whole-mesh stage: the local reconstruction runs brick by brick without it "
+        "(--carve auto or off, or --reconstruction poisson)");
+  LocalBrickOptions lb = local_brick_options(options);
+  lb.band = band;
+  if (options.progress_fraction)
+    lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
+  // One brick up to 256 samples per axis (its stages run in parallel inside it); beyond, bricks
+  // of 256 bound the memory by a brick.
+  const int size =
+      options.bricks.size == BrickOptions::kAutoSize ? kLocalBrick : options.bricks.size;
+  LocalBricksStats stats;
+  result.mesh = stages.run("local", "local reconstruction in bricks",
+                           [&] { return local_mesh_in_bricks(grid, lb, size, &stats); });
+  result.local = stats.local;
+  result.local_bricks = stats;
+  result.reconstruction = Reconstruction::Local;
+  result.band_spacing = grid.spacing().maxCoeff();
+  if (result.mesh->triangles.rows() == 0)
+    throw Error("the local reconstruction found no surface inside the grid");
+}
 
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
                          const ContourOptions& options, ContourResult& result, Stages& stages) {
