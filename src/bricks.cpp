@@ -143,6 +143,8 @@ class BrickRunner {
         grid_(bucket(s.points, o.size * h)) {
     max_weight_ =
         o.within ? o.largest_value * o.largest_value : s.values.array().square().maxCoeff();
+    whole_block_ = o.within && (o.within->min.array() == -INFINITY).all() &&
+                   (o.within->max.array() == INFINITY).all();
     // Twice the largest |value|: a sphere about a point of the box's edge region, grown by the
     // largest weight, stays inside.
     shell_width_ = 2 * std::sqrt(max_weight_);
@@ -184,8 +186,8 @@ class BrickRunner {
   void solve(const Box& box, const std::vector<int>& targets, BrickOutput& out,
              int depth = 0) const {
     if (targets.empty()) return;
-    // (A block is never everything: samples beyond it exist.)
-    const bool everything = !options_.within && box.contains(all_);
+    // (A block is everything only where it is the whole set: unbounded on every side.)
+    const bool everything = (!options_.within || whole_block_) && box.contains(all_);
     if (options_.within) {
       const Box block{options_.within->min, options_.within->max};
       const Vector3d shell(Vector3d::Constant(shell_width_));
@@ -342,6 +344,7 @@ class BrickRunner {
   const std::vector<char>* only_;
   BrickGrid grid_;
   double max_weight_ = 0, margin_ = 0, shell_width_ = 0;
+  bool whole_block_ = false;  // `within` is unbounded: the samples are the whole set
   Box all_;
   std::vector<Vector3d> hull_;  // the vertices of every sample's convex hull
 };

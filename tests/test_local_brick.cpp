@@ -101,6 +101,19 @@ TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
   EXPECT_LT(mean_error(pieces), 0.6 * mean_error(marching_cubes(g)));
 }
 
+TEST(LocalBrick, BandThatReachesTheGridSides) {
+  // At 32^3 the band (8 spacings) reaches the grid's sides, where stars lie on the hull: one
+  // brick certifies them as the whole set (no endless widening), bricks of 12 alike.
+  const Grid g = shared_mesh_grid("armadillo", 32);
+  LocalBricksStats one, twelve;
+  const Mesh whole = local_mesh_in_bricks(view_of(g), LocalBrickOptions{}, 0, &one);
+  const Mesh pieces = local_mesh_in_bricks(view_of(g), LocalBrickOptions{}, 12, &twelve);
+  EXPECT_EQ(one.wider_halos, 0);
+  EXPECT_EQ(whole.vertices, pieces.vertices);
+  EXPECT_EQ(whole.triangles, pieces.triangles);
+  expect_closed_manifold(whole);
+}
+
 TEST(LocalBrick, SmoothShapeInBricksIsCloseToTheSurface) {
   // A smooth shape: the bricked mesh's vertices lie within 0.02 spacings of the torus on average.
   const auto torus = make_builtin_shape("torus");
