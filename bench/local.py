@@ -133,7 +133,8 @@ def main():
                                                   text=True).stdout)
                     topo = e["recon_mesh"]
                     row.update(L1=e["L1"], Linf=e["L_inf"], triangles=topo["triangles"],
-                               closed=topo["closed"], manifold=topo["manifold"])
+                               closed=topo["closed"], manifold=topo["manifold"],
+                               self_intersections=topo["self_intersections"])
                     if len(edge_points):
                         d = mean_distance(edge_points, out)
                         row["edge_distance_h"] = d / h if d is not None else None
@@ -167,6 +168,8 @@ def write_markdown(rows, methods, path):
                 if ratio:
                     ratios[m].append(ratio)
                 flag = "" if r.get("closed", True) and r.get("manifold", True) else " (open)"
+                if r.get("self_intersections"):
+                    flag += f" ({r['self_intersections']} crossing)"
                 cells.append(f"{ratio:.3f}{flag}" if ratio else "–")
                 e = r.get("edge_distance_h")
                 edges.append(f"{e:.3f}" if e is not None else "–")

@@ -387,4 +387,11 @@ GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation
   return summary;
 }
 
+Samples core_samples(const BandSamples& band) {
+  std::vector<Eigen::Index> core;
+  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
+    if (band.core[std::size_t(i)]) core.push_back(i);
+  return samples_at(band.samples, core);
+}
+
 }  // namespace sdfcontour

@@ -75,4 +75,20 @@ std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& 
 std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& around,
                                   const std::vector<int>& seeds, int rings);
 
+/// For each vertex of `which` inside at least one ball (centre points.row(i), radius
+/// |values[i]|), the displacement onto the sphere of the ball it enters deepest (ties: the lower
+/// sample); zero elsewhere. Each vertex's move depends on its position and the balls alone.
+PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
+                           const PointMatrix& points, const Eigen::VectorXd& values,
+                           double spacing);
+
+/// Up to `passes` rounds of each vertex of V pushed onto the sphere of the ball it enters
+/// deepest, every vertex on its own (no triangle checks): the result of a vertex depends on its
+/// position and the balls near it alone, as bricks need. A push that would take a vertex more
+/// than `max_move` spacings from where it started is not made (a long one meets a part the mesh
+/// lacks, or the other side of a thin part), which also bounds how far apart two triangles that
+/// come to cross can have started.
+void carve_vertices_alone(PointMatrix& V, const PointMatrix& points, const Eigen::VectorXd& values,
+                          double spacing, int passes, double max_move);
+
 }  // namespace sdfcontour::detail

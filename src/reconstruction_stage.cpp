@@ -68,14 +68,6 @@ bool grid_sides_inside(const GridView& grid) {
   return false;
 }
 
-// The band's samples proper, without the margin that only closes their stars.
-Samples core_samples(const BandSamples& band) {
-  std::vector<Eigen::Index> core;
-  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
-    if (band.core[std::size_t(i)]) core.push_back(i);
-  return samples_at(band.samples, core);
-}
-
 // The band's own samples within `reach` of the surface, whose sides the indicator keeps.
 SignedSamples samples_near_surface(const BandSamples& band, double reach) {
   const Samples& s = band.samples;

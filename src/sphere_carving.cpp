@@ -110,48 +110,6 @@ constexpr double kInside = 1e-9;
 // Vertices are indexed in cubes of this many spacings (1 and 3 were slower on bunny 256^3).
 constexpr double kIndexCell = 2;
 
-// For each vertex of `which` inside at least one ball, the ball it enters deepest (ties: the
-// lower sample), as the displacement onto that ball's sphere; zero elsewhere.
-PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                           const PointMatrix& points, const Eigen::VectorXd& values,
-                           double spacing) {
-  const VertexColumns columns(V, which, kIndexCell * spacing);
-  const double inside = kInside * spacing;
-  constexpr Eigen::Index kBlock = 4096;
-  const Eigen::Index n = points.rows(), blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::vector<Push>> found(static_cast<std::size_t>(blocks));
-  tbb::parallel_for(Eigen::Index(0), blocks, [&](Eigen::Index b) {
-    auto& out = found[std::size_t(b)];
-    for (Eigen::Index s = b * kBlock; s < std::min(n, (b + 1) * kBlock); ++s) {
-      const double r = std::abs(values[s]);
-      if (!(r > 0)) continue;
-      const Eigen::Vector3d p = points.row(s).transpose();
-      columns.for_each_near_ball(p, r, [&](int v) {
-        const double d2 = (V.row(v).transpose() - p).squaredNorm();
-        if (!(d2 < r * r && d2 > 0)) return;
-        const double depth = r - std::sqrt(d2);
-        if (depth > inside) out.push_back({v, int(s), depth});
-      });
-    }
-  });
-  std::vector<Push> best(std::size_t(V.rows()), Push{-1, -1, 0.0});
-  for (const auto& block : found)
-    for (const Push& q : block) {
-      Push& b = best[std::size_t(q.vertex)];
-      if (b.vertex < 0 || q.depth > b.depth || (q.depth == b.depth && q.sample < b.sample)) b = q;
-    }
-  PointMatrix moves = PointMatrix::Zero(V.rows(), 3);
-  tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) {
-    const Push& b = best[std::size_t(v)];
-    if (b.vertex < 0) return;
-    const Eigen::Vector3d p = points.row(b.sample).transpose();
-    const Eigen::Vector3d from = V.row(v).transpose() - p;
-    const double r = std::abs(values[b.sample]);
-    moves.row(v) = (p + from * (r / from.norm()) - V.row(v).transpose()).transpose();
-  });
-  return moves;
-}
-
 // Applies `moves` (per vertex; zero: stay), each scaled back where it would turn a triangle too
 // far; returns which vertices moved.
 std::vector<char> apply_moves(Mesh& mesh, const PointMatrix& moves, const CarvingOptions& options,
@@ -186,7 +144,8 @@ void carve_vertices(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd
                     CarvingStats& stats) {
   for (int round = 0; round < options.passes && !candidates.empty(); ++round) {
     ++stats.passes;
-    const PointMatrix moves = deepest_pushes(mesh.vertices, candidates, points, values, spacing);
+    const PointMatrix moves =
+        detail::deepest_pushes(mesh.vertices, candidates, points, values, spacing);
     candidates = set_indices(apply_moves(mesh, moves, options, stats));
   }
 }
@@ -243,6 +202,68 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
 }
 
 }  // namespace
+
+// For each vertex of `which` inside at least one ball, the ball it enters deepest (ties: the
+// lower sample), as the displacement onto that ball's sphere; zero elsewhere.
+PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
+                                   const PointMatrix& points, const Eigen::VectorXd& values,
+                                   double spacing) {
+  const VertexColumns columns(V, which, kIndexCell * spacing);
+  const double inside = kInside * spacing;
+  constexpr Eigen::Index kBlock = 4096;
+  const Eigen::Index n = points.rows(), blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<Push>> found(static_cast<std::size_t>(blocks));
+  tbb::parallel_for(Eigen::Index(0), blocks, [&](Eigen::Index b) {
+    auto& out = found[std::size_t(b)];
+    for (Eigen::Index s = b * kBlock; s < std::min(n, (b + 1) * kBlock); ++s) {
+      const double r = std::abs(values[s]);
+      if (!(r > 0)) continue;
+      const Eigen::Vector3d p = points.row(s).transpose();
+      columns.for_each_near_ball(p, r, [&](int v) {
+        const double d2 = (V.row(v).transpose() - p).squaredNorm();
+        if (!(d2 < r * r && d2 > 0)) return;
+        const double depth = r - std::sqrt(d2);
+        if (depth > inside) out.push_back({v, int(s), depth});
+      });
+    }
+  });
+  std::vector<Push> best(std::size_t(V.rows()), Push{-1, -1, 0.0});
+  for (const auto& block : found)
+    for (const Push& q : block) {
+      Push& b = best[std::size_t(q.vertex)];
+      if (b.vertex < 0 || q.depth > b.depth || (q.depth == b.depth && q.sample < b.sample)) b = q;
+    }
+  PointMatrix moves = PointMatrix::Zero(V.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) {
+    const Push& b = best[std::size_t(v)];
+    if (b.vertex < 0) return;
+    const Eigen::Vector3d p = points.row(b.sample).transpose();
+    const Eigen::Vector3d from = V.row(v).transpose() - p;
+    const double r = std::abs(values[b.sample]);
+    moves.row(v) = (p + from * (r / from.norm()) - V.row(v).transpose()).transpose();
+  });
+  return moves;
+}
+
+void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
+                                  const Eigen::VectorXd& values, double spacing, int passes,
+                                  double max_move) {
+  const PointMatrix start = V;
+  std::vector<int> candidates(std::size_t(V.rows()));
+  std::iota(candidates.begin(), candidates.end(), 0);
+  const double limit2 = max_move * max_move * spacing * spacing;
+  for (int round = 0; round < passes && !candidates.empty(); ++round) {
+    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing);
+    candidates.clear();
+    for (Eigen::Index v = 0; v < V.rows(); ++v) {
+      if (!(moves.row(v).squaredNorm() > 0)) continue;
+      const Eigen::RowVector3d to = V.row(v) + moves.row(v);
+      if ((to - start.row(v)).squaredNorm() > limit2) continue;  // stays: see the header
+      V.row(v) = to;
+      candidates.push_back(int(v));
+    }
+  }
+}
 
 CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
                         double spacing, const CarvingOptions& options) {

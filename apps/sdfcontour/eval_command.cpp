@@ -7,6 +7,7 @@
 #include "sdfcontour/io.h"
 #include "sdfcontour/mesh_properties.h"
 #include "sdfcontour/metrics.h"
+#include "sdfcontour/self_intersections.h"
 
 namespace sdfcontour::cli {
 
@@ -41,7 +42,8 @@ int run_eval(const EvalArgs& a) {
                      {"manifold", t.nonmanifold_edges == 0},
                      {"consistently_oriented", t.consistently_oriented},
                      {"components", components},
-                     {"euler_characteristic", t.euler_characteristic}};
+                     {"euler_characteristic", t.euler_characteristic},
+                     {"self_intersections", long(self_intersecting_triangles(recon).size())}};
   if (t.closed) j["recon_mesh"]["genus"] = (2 * long(components) - t.euler_characteristic) / 2;
   write_json(j, a.output);
   return 0;

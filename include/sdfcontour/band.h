@@ -125,4 +125,7 @@ struct GradientNormSummary {
 };
 GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation = {});
 
+/// The band's samples proper, without the margin that only closes their stars.
+Samples core_samples(const BandSamples& band);
+
 }  // namespace sdfcontour

@@ -10,7 +10,8 @@
 // samples' certified stars, the gradients at the cells' corners, the contact points within the
 // projection's radius, the triangles around the vertex for its normal) lies in the block, and is
 // combined in an order fixed by global names: the result equals the whole grid's run (one brick).
-// Carving and untangling (whole-mesh stages) are not part of it.
+// Carving runs vertex by vertex; its triangle rounds and the untangling (whole-mesh stages) are
+// not part of it.
 #pragma once
 
 #include <array>
@@ -46,11 +47,28 @@ struct LocalBrickOptions {
     p.max_residual = 0;
     return p;
   }();
+  /// Carving, vertex by vertex: up to `carve_passes` rounds of each vertex pushed onto the sphere
+  /// of the band sample's ball it enters deepest (sphere_carving.h without its triangle checks
+  /// and rounds, which are whole-mesh stages).
+  bool carve = true;
+  int carve_passes = 3;
+  /// Undo the projection's and carving's moves of the vertices of triangles that then cross
+  /// another, in kUntangleRounds rounds (each over the triangles the last one changed).
+  bool untangle = true;
   /// When set and it becomes true, the bricks stop soon (throws Cancelled).
   const std::atomic<bool>* cancel = nullptr;
   /// local_mesh_in_bricks: called as bricks finish (done, total), serialised; empty for silence.
   std::function<void(int, int)> progress;
 };
+
+/// Rounds of undoing crossing moves. A piece's triangles depend on the triangles within
+/// kCrossingReach grid edges of them per round (carving moves a vertex at most kMaxCarveMove
+/// spacings, projection at most its max_move: triangles that start farther apart cannot meet),
+/// so a brick computes the mesh of its edges and kUntangleRing more on each side.
+constexpr int kUntangleRounds = 2;
+constexpr int kCrossingReach = 4;
+constexpr double kMaxCarveMove = 0.5;
+constexpr int kUntangleRing = 1 + kCrossingReach * (kUntangleRounds + 1);
 
 /// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,
 /// (ky + 1) * 64 + j) for the subdivision vertex j / 2^s of the way along edge (kx, ky), kx < ky;

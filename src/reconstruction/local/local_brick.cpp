@@ -10,16 +10,48 @@
 #include <limits>
 #include <string>
 
+#include "../../carving_internal.h"
 #include "keyed_local_mesh.h"
 #include "lattice_subdivision.h"
 #include "sdfcontour/bricks.h"
 #include "sdfcontour/pipeline.h"
+#include "sdfcontour/self_intersections.h"
 
 namespace sdfcontour {
 
 namespace {
 
 using Index3 = std::array<int, 3>;
+
+// Carving's balls reach this many spacings on a coarse grid with the automatic band (as
+// ContourOptions' carving: the wider band lowers L1, the grid being coarse); 0: the band's.
+constexpr double kCarvingBand = 16;
+double carving_band(const LocalBrickOptions& o, const std::array<int, 3>& dims) {
+  return o.carve && o.band.band == 0 && *std::max_element(dims.begin(), dims.end()) < 128
+             ? kCarvingBand
+             : 0.0;
+}
+
+// The samples whose balls carve the mesh: the band's own (not its margin), or the wider
+// carving band's.
+Samples carving_samples(const GridView& block, const BandSamples& band,
+                        const LocalBrickOptions& o) {
+  if (carving_band(o, block.whole_dims()) > 0) {
+    BandOptions wide = o.band;
+    wide.band = carving_band(o, block.whole_dims());
+    wide.margin = 0;
+    try {
+      return core_samples(select_band(block, wide));
+    } catch (const InternalError&) {
+      throw;
+    } catch (const Cancelled&) {
+      throw;
+    } catch (const Error&) {
+      return Samples();
+    }
+  }
+  return core_samples(band);
+}
 
 // The largest |value| a band sample can have, in spacings.
 double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& dims) {
@@ -28,12 +60,18 @@ double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& di
   return b + band.margin;
 }
 
+// Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
+// need one ring; undoing crossings needs kUntangleRing.
+int ring(const LocalBrickOptions& o) {
+  return o.untangle && (o.project || o.carve) ? kUntangleRing : 1;
+}
+
 // How far beyond the owned samples a contact point can matter, in samples: the reach of the
 // ring of cells around the owned edges' cells (2), of a vertex's gathering or projection, and
 // of a sample to its contact point (its |value|).
 int flag_reach(const LocalBrickOptions& o, double largest) {
   const double gather = std::max(o.local.reach, o.project ? o.projection.radius : 0.0);
-  return int(std::ceil(gather + largest)) + 3;
+  return int(std::ceil(gather + largest)) + 2 + ring(o);
 }
 
 Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
@@ -156,6 +194,31 @@ void require_finite(const GridView& block) {
   });
 }
 
+// Rounds (kUntangleRounds) of moving back to `before` (the positions before projection and
+// carving) every moved vertex of a triangle that crosses another; each round after the first
+// tests the triangles the last one changed. Every decision of a round is taken from the
+// positions the round started with. (Crossings the reconstruction itself makes stay.)
+void undo_crossing_moves(Mesh& mesh, const PointMatrix& before) {
+  std::vector<char> watch;
+  for (int round = 0; round < kUntangleRounds; ++round) {
+    const auto pairs = self_intersecting_triangles(mesh, round == 0 ? nullptr : &watch);
+    std::vector<char> back(std::size_t(mesh.vertices.rows()), 0);
+    bool any = false;
+    for (const auto& [s, t] : pairs)
+      for (const int tri : {s, t})
+        for (int c = 0; c < 3; ++c) {
+          const int v = mesh.triangles(tri, c);
+          if (mesh.vertices.row(v) != before.row(v)) back[std::size_t(v)] = 1, any = true;
+        }
+    if (!any) return;
+    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+      if (back[std::size_t(v)]) mesh.vertices.row(v) = before.row(v);
+    watch.assign(std::size_t(mesh.triangles.rows()), 0);
+    for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+      for (int c = 0; c < 3; ++c) watch[std::size_t(t)] |= back[std::size_t(mesh.triangles(t, c))];
+  }
+}
+
 void validate(const GridView& block, const Index3& own_first, const Index3& own_end,
               const LocalBrickOptions& o) {
   const Index3 n = block.whole_dims();
@@ -179,8 +242,10 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
 
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
   const double largest = largest_in_spacings(options.band, dims);
-  return flag_reach(options, largest) + int(auto_brick_halo(largest, 1.0)) +
-         int(std::ceil(2 * largest)) + 1;
+  const int stars = flag_reach(options, largest) + int(auto_brick_halo(largest, 1.0)) +
+                    int(std::ceil(2 * largest)) + 1;
+  // Carving: the balls around the owned edges' vertices (within 2 cells of the owned samples).
+  return std::max(stars, int(std::ceil(carving_band(options, dims))) + 2 + ring(options));
 }
 
 LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
@@ -241,14 +306,22 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       block, cp.points, cp.normals, options.local, nullptr, depths);
   piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
   // The owned edges and the ring around them (their vertices' normals need every triangle).
-  const detail::KeyedTriangles near =
-      triangles_of_edges(keyed, n, shifted(own_first, -1), shifted(own_end, 1));
+  const detail::KeyedTriangles near = triangles_of_edges(
+      keyed, n, shifted(own_first, -ring(options)), shifted(own_end, ring(options)));
   const int levels = options.subdivisions >= 0
                          ? options.subdivisions
                          : auto_subdivisions(*std::max_element(n.begin(), n.end()));
   detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
+  const PointMatrix reconstructed = sub.mesh.vertices;
   if (options.project && cp.size() > 0)
     project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection);
+  if (options.carve && options.carve_passes > 0) {
+    const Samples balls = carving_samples(block, band, options);
+    if (balls.points.rows() > 0)
+      detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
+                                   options.carve_passes, kMaxCarveMove);
+  }
+  if (options.untangle) undo_crossing_moves(sub.mesh, reconstructed);
   // The owned triangles and their vertices (keys stay ascending).
   std::vector<Eigen::Index> owned;
   for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)

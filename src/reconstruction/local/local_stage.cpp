@@ -18,6 +18,8 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.subdivisions = options.subdivisions;
   lb.project = options.project != Switch::Off;
   lb.projection = options.local_projection;
+  lb.carve = options.carve != Switch::Off;
+  lb.carve_passes = options.carving.passes;
   lb.cancel = options.cancel;
   return lb;
 }
@@ -34,10 +36,11 @@ bool bricked_local(const GridView* grid, const ContourOptions& options) {
 
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
                            const ContourOptions& options, ContourResult& result, Stages& stages) {
-  if (options.carve == Switch::On || options.side_repair == Switch::On)
+  if (options.carve_sides == Switch::On || options.side_repair == Switch::On)
     throw Error(
-        "carving is a whole-mesh stage: the local reconstruction runs brick by brick without it "
-        "(--carve auto or off, or --reconstruction poisson)");
+        "carving's triangle rounds and side repair are whole-mesh stages: the local "
+        "reconstruction runs brick by brick and carves vertex by vertex (--side-passes 0, or "
+        "--reconstruction poisson)");
   LocalBrickOptions lb = local_brick_options(options);
   lb.band = band;
   if (options.progress_fraction)
