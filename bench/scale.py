@@ -9,6 +9,9 @@ exact at <= 128^3, truncated at 8 spacings above (sampled block by block; marchi
 unaffected, GCP detects the truncation), all float32. L1 against the normalised mesh from
 `sdfcontour eval`.
 
+Methods: gcp (the default reconstruction: Poisson for grids), gcp-local (--reconstruction local,
+brick by brick), mt-rt, mc, and the peers skimage, openvdb, vtk.
+
 Usage: /usr/bin/python3 bench/scale.py [--res 64,128,256,512] [--meshes bunny,spot,armadillo]
        [--repeats 1] [--out docs/results/scale.md] [--work /tmp/sdfcontour_scale]
 (docs/scale.md reads these tables against the issue's targets and keeps every session's
@@ -136,9 +139,10 @@ def main():
                 out = os.path.join(args.work, f"out_{method}.ply")
                 times, rss, err = [], None, None
                 for _ in range(args.repeats):
-                    if method in ("gcp", "mt-rt", "mc"):
+                    if method in ("gcp", "mt-rt", "mc", "gcp-local"):
+                        extra = ["--reconstruction", "local"] if method == "gcp-local" else []
                         seconds, r, _, err = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--method",
-                                                    method, "-q"])
+                                                    method.split("-local")[0], "-q", *extra])
                     else:
                         wall, r, stdout, err = timed([*self_cmd, method, prefix + ".npy", out])
                         seconds = json.loads(stdout)["seconds"] if wall is not None else None

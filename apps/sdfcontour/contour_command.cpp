@@ -305,6 +305,11 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     for (const auto& s : r.poisson_stages) poisson_json[s.name] = s.seconds;
     j["poisson_seconds"] = poisson_json;
   }
+  if (!r.local_stages.empty()) {
+    nlohmann::json local_json = nlohmann::json::object();
+    for (const auto& s : r.local_stages) local_json[s.name] = s.seconds;
+    j["local_seconds"] = local_json;  // summed over the bricks: CPU seconds
+  }
   j["seconds_total"] = total;
   return j;
 }

@@ -85,7 +85,15 @@ struct LocalPiece {
   std::vector<std::uint64_t> triangle_names;
   long contact_points = 0;         ///< contact points of the block's flagged samples
   LocalReconstructionStats stats;  ///< of the owned cells (those with their low corner owned)
+  /// Seconds per step: band, contact points, reconstruction, subdivision and projection,
+  /// carving, untangling (kLocalSteps names them).
+  std::array<double, 6> seconds{};
 };
+
+/// The names of LocalPiece::seconds' steps.
+constexpr std::array<const char*, 6> kLocalSteps{"band",           "contact points",
+                                                 "reconstruction", "subdivision and projection",
+                                                 "carving",        "untangling"};
 
 /// The halo, in samples, that a brick's block needs first with these options on a grid of
 /// whole-grid `dims` (the contact points' stars may ask for more: HaloTooSmall).
@@ -107,10 +115,11 @@ Mesh join_local_pieces(const std::vector<LocalPiece>& pieces);
 /// parallel and joined; each brick's halo doubles until its stars fit. The mesh does not depend
 /// on `brick` or the thread count.
 struct LocalBricksStats {
-  int bricks = 0;                  ///< bricks with a piece of the surface
-  int wider_halos = 0;             ///< bricks read again with a wider halo
-  long contact_points = 0;         ///< over all bricks (a halo's samples counted again)
-  LocalReconstructionStats local;  ///< summed over the bricks' owned cells
+  int bricks = 0;                   ///< bricks with a piece of the surface
+  int wider_halos = 0;              ///< bricks read again with a wider halo
+  long contact_points = 0;          ///< over all bricks (a halo's samples counted again)
+  LocalReconstructionStats local;   ///< summed over the bricks' owned cells
+  std::array<double, 6> seconds{};  ///< LocalPiece::seconds summed over the bricks (CPU time)
 };
 
 Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& options, int brick = 0,

@@ -174,6 +174,8 @@ struct ContourResult {
   int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
+  /// Inside the "local" stage run brick by brick: each step's seconds summed over the bricks.
+  std::vector<StageTime> local_stages;
   double gradient_norm = 0;            ///< median |grad value| next to the surface, when measured
   GradientNormSummary gradient_norms;  ///< its 10th, 50th and 90th percentiles
   /// GCP on a grid: the fraction of the mesh's vertices more than a spacing off the field's zero

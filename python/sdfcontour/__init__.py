@@ -492,7 +492,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     reconstruction : "auto", "poisson" or "local"
         GCP's mesh from its contact points: "poisson" (the paper's screened Poisson solve, then
         projection and carving), "local" (a vertex per grid cell the surface crosses, from the
-        contact points in it; topology from the samples' signs; grids and callables only), or
+        contact points near it; topology from the samples' signs; then subdivision, projection
+        and carving vertex by vertex; brick by brick, as :func:`sdfcontour.dask.contour` runs it;
+        grids and callables only), or
         "auto": local for a callable (refined on it, 0.12x / 0.16x marching cubes' L1 on a neural
         SDF at 64^3 / 128^3, where Poisson falls back to marching cubes or reaches 0.80x), poisson
         for arrays (3% more accurate at 64^3 on the shared meshes; docs/local.md). CLI

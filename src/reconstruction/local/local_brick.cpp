@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -52,6 +53,21 @@ Samples carving_samples(const GridView& block, const BandSamples& band,
   }
   return core_samples(band);
 }
+
+// Adds the seconds since the last call to a step's entry.
+class StepClock {
+ public:
+  explicit StepClock(std::array<double, 6>& seconds) : seconds_(seconds) {}
+  void next(std::size_t step) {
+    const auto now = std::chrono::steady_clock::now();
+    seconds_[step] += std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+  }
+
+ private:
+  std::array<double, 6>& seconds_;
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 // The largest |value| a band sample can have, in spacings.
 double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& dims) {
@@ -259,6 +275,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (!has_sign_change(block, shifted(own_first, -1), shifted(own_end, 1))) return piece;
   const Index3 n = block.whole_dims();
   const double h = block.spacing().maxCoeff();
+  StepClock clock(piece.seconds);
   BandSamples band;
   try {
     band = select_band(block, options.band);
@@ -292,6 +309,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   bricks.within = &within;
   bricks.largest_value = largest;
   bricks.cancel = options.cancel;
+  clock.next(0);
   ContactPoints cp;
   cp.points.resize(0, 3);
   cp.normals.resize(0, 3);
@@ -302,12 +320,14 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   Eigen::VectorXd depths(cp.size());
   for (int q = 0; q < cp.size(); ++q)
     depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
+  clock.next(1);
   const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
       block, cp.points, cp.normals, options.local, nullptr, depths);
   piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
   // The owned edges and the ring around them (their vertices' normals need every triangle).
   const detail::KeyedTriangles near = triangles_of_edges(
       keyed, n, shifted(own_first, -ring(options)), shifted(own_end, ring(options)));
+  clock.next(2);
   const int levels = options.subdivisions >= 0
                          ? options.subdivisions
                          : auto_subdivisions(*std::max_element(n.begin(), n.end()));
@@ -315,13 +335,16 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   const PointMatrix reconstructed = sub.mesh.vertices;
   if (options.project && cp.size() > 0)
     project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection);
+  clock.next(3);
   if (options.carve && options.carve_passes > 0) {
     const Samples balls = carving_samples(block, band, options);
     if (balls.points.rows() > 0)
       detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
                                    options.carve_passes, kMaxCarveMove);
   }
+  clock.next(4);
   if (options.untangle) undo_crossing_moves(sub.mesh, reconstructed);
+  clock.next(5);
   // The owned triangles and their vertices (keys stay ascending).
   std::vector<Eigen::Index> owned;
   for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)

@@ -47,7 +47,9 @@ LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Inde
       whole = whole && lo[a] == 0 && hi[a] == grid.dims[a];
     }
     try {
-      return local_brick_piece(copy_block(grid, lo, hi, values), own_first, own_end, options);
+      // A block that is the whole grid is the grid itself (no copy).
+      return local_brick_piece(whole ? grid : copy_block(grid, lo, hi, values), own_first, own_end,
+                               options);
     } catch (const HaloTooSmall&) {
       if (whole) throw InternalError("a block holding the whole grid reported too small a halo");
       halo *= 2;
@@ -151,6 +153,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
       s.split_cells += p.stats.split_cells, s.crossing_cells += p.stats.crossing_cells;
       s.feature_vertices += p.stats.feature_vertices, s.clamped += p.stats.clamped;
       s.field_misses += p.stats.field_misses;
+      for (std::size_t k = 0; k < p.seconds.size(); ++k) stats->seconds[k] += p.seconds[k];
     }
   }
   return join_local_pieces(pieces);

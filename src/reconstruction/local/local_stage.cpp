@@ -53,6 +53,8 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   result.mesh = stages.run("local", "local reconstruction in bricks",
                            [&] { return local_mesh_in_bricks(grid, lb, size, &stats); });
   result.local = stats.local;
+  for (std::size_t k = 0; k < stats.seconds.size(); ++k)
+    result.local_stages.push_back({kLocalSteps[k], stats.seconds[k]});
   result.local_bricks = stats;
   result.reconstruction = Reconstruction::Local;
   result.band_spacing = grid.spacing().maxCoeff();

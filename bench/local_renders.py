@@ -1,0 +1,67 @@
+"""Renders for docs/local.md: one CAD mesh and one organic mesh from the shared meshes at a coarse
+grid, contoured by marching cubes, GCP with its Poisson reconstruction and GCP with its local
+reconstruction (brick by brick), side by side, each titled with its L1 to the ground truth
+(rendered with VTK, bench/vtk_render.py; runs itself under xvfb-run where there is no display).
+
+    /usr/bin/python3 bench/local_renders.py [--meshes cube,bunny] [--res 32]
+        [--out docs/img/local_renders.png]
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from vtk_render import ensure_display, render  # noqa: E402
+
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, os.path.join(ROOT, "build", "python"))
+import sdfcontour  # noqa: E402
+
+MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
+CLI = os.path.join(ROOT, "build", "sdfcontour")
+METHODS = [("MC", dict(method="mc")),
+           ("GCP-Poisson", dict(method="gcp", reconstruction="poisson")),
+           ("GCP-local", dict(method="gcp", reconstruction="local"))]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--meshes", default="cube,bunny")
+    ap.add_argument("--res", type=int, default=32)
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "img", "local_renders.png"))
+    args = ap.parse_args()
+    ensure_display()
+    names = args.meshes.split(",")
+    fig = plt.figure(figsize=(12, 4.1 * len(names)), dpi=100)
+    for row, name in enumerate(names):
+        with tempfile.TemporaryDirectory() as d:
+            prefix = os.path.join(d, name)
+            subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
+                            str(args.res), "-o", prefix, "-q"], check=True,
+                           stdout=subprocess.DEVNULL)
+            V_gt, F_gt = sdfcontour.read_mesh(prefix + "_mesh.ply")
+            import numpy as np
+            grid = np.load(prefix + ".npy")
+        for col, (label, options) in enumerate(METHODS):
+            V, F = sdfcontour.contour(grid, **options)
+            l1 = sdfcontour.distances(V, F, V_gt, F_gt, samples=100000)["L1"]
+            ax = fig.add_subplot(len(names), len(METHODS), row * len(METHODS) + col + 1)
+            azimuth = -35.0 if name != "cube" else -30.0
+            ax.imshow(render(V, F, azimuth=azimuth, elevation=25.0))
+            ax.set_axis_off()
+            ax.set_title(f"{name} {args.res}³, {label}: L1 {l1:.1e}", fontsize=10)
+            print(name, label, l1, flush=True)
+    fig.tight_layout()
+    fig.savefig(args.out)
+
+
+if __name__ == "__main__":
+    main()
