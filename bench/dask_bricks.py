@@ -12,6 +12,7 @@ docs/results/distributed.md.
 Each measurement runs in its own process so that its peak RSS is its own.
 
     /usr/bin/python3 bench/dask_bricks.py [--n 1024] [--big 2048] [--work /tmp/sdfcontour-dask]
+    /usr/bin/python3 bench/dask_bricks.py --gcp 512   # GCP's rows: docs/results/distributed_gcp.md
 """
 import argparse
 import concurrent.futures
@@ -92,19 +93,20 @@ def peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def phase_single(path, mesh_out):
+def phase_single(path, mesh_out, method="mc"):
     import zarr
     import sdfcontour
     started = time.perf_counter()
     grid = zarr.open(path, mode="r")[...]
     read = time.perf_counter() - started
-    V, F = sdfcontour.contour(grid, method="mc")
+    V, F = sdfcontour.contour(grid, method=method,
+                              **({"reconstruction": "local"} if method == "gcp" else {}))
     wall = time.perf_counter() - started
     np.savez(mesh_out, V=V, F=F)
     return {"wall": wall, "read": read, "peak_mb": peak_mb(), "triangles": len(F)}
 
 
-def phase_dask(path, memory_limit, brick, mesh_out, ply_out):
+def phase_dask(path, memory_limit, brick, mesh_out, ply_out, method="mc"):
     import distributed
     import sdfcontour.dask
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -113,10 +115,11 @@ def phase_dask(path, memory_limit, brick, mesh_out, ply_out):
     with distributed.Client(cluster) as client:
         started = time.perf_counter()
         if ply_out:
-            stats = sdfcontour.dask.contour(path, brick=brick, client=client, out=ply_out)
+            stats = sdfcontour.dask.contour(path, method=method, brick=brick, client=client,
+                                            out=ply_out)
         else:
-            V, F, stats = sdfcontour.dask.contour(path, brick=brick, client=client,
-                                                  return_stats=True)
+            V, F, stats = sdfcontour.dask.contour(path, method=method, brick=brick,
+                                                  client=client, return_stats=True)
         wall = time.perf_counter() - started
         workers = client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
     cluster.close()
@@ -182,6 +185,35 @@ def figure(path, n=97, brick=32):
     fig.savefig(path)
 
 
+def gcp_rows(a):
+    """GCP's local reconstruction on an N^3 zarr scene: one process against 2 workers."""
+    os.makedirs(a.work, exist_ok=True)
+    grid = os.path.join(a.work, f"scene{a.gcp}.zarr")
+    made = make_zarr(grid, a.gcp, "scene")
+    single = run_phase("single", grid, os.path.join(a.work, "gcp_single.npz"), "gcp")
+    dask_run = run_phase("dask", grid, "3GB", a.brick, os.path.join(a.work, "gcp_dask.npz"), None,
+                         "gcp")
+    equal = same_mesh(os.path.join(a.work, "gcp_single.npz"), os.path.join(a.work, "gcp_dask.npz"))
+    text = "\n".join([
+        "# GCP (local reconstruction) on Dask: bricks on 2 workers against one process", "",
+        f"`/usr/bin/python3 bench/dask_bricks.py --gcp {a.gcp}` on this 2-core machine: a {a.gcp}³ "
+        f"zarr scene (float32, {CHUNK}³ chunks, truncated at 4 spacings, {made['stored']} of "
+        f"{made['chunks']} chunks stored), GCP with `reconstruction=\"local\"` in one process "
+        f"against `sdfcontour.dask.contour(method=\"gcp\", brick={a.brick})` on 2 single-threaded "
+        f"workers of 3 GB (a first pass over the bricks finds the truncation).", "",
+        "| run | wall (s) | client / single process peak (MB) | worker peaks (MB) | triangles | mesh |",
+        "|---|---|---|---|---|---|",
+        f"| one process (of which {single['read']:.1f} s reading the grid) | {single['wall']:.1f} | "
+        f"{single['peak_mb']:.0f} | – | {single['triangles']:,} | reference |",
+        f"| 2 workers × 3 GB, bricks {a.brick} | {dask_run['wall']:.1f} | "
+        f"{dask_run['client_peak_mb']:.0f} | "
+        + " / ".join(f"{m:.0f}" for m in dask_run["worker_peak_mb"]) +
+        f" | {dask_run['triangles']:,} | {'bit for bit' if equal else 'DIFFERENT'} |", ""])
+    with open(os.path.join(os.path.dirname(a.out), "distributed_gcp.md"), "w") as f:
+        f.write(text)
+    print(text)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, default=1024)
@@ -191,6 +223,9 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "..", "docs", "results", "distributed.md"))
     ap.add_argument("--phase")
     ap.add_argument("--figure", help="only draw the bricks' figure into this PNG")
+    ap.add_argument("--gcp", type=int, default=0,
+                    help="only GCP (local reconstruction) on an N^3 scene: one process against 2 "
+                         "workers x 3 GB, into docs/results/distributed_gcp.md")
     a = ap.parse_args()
     if a.phase:
         args = json.loads(a.phase)
@@ -200,6 +235,8 @@ def main():
     if a.figure:
         figure(a.figure)
         return
+    if a.gcp:
+        return gcp_rows(a)
     os.makedirs(a.work, exist_ok=True)
     rows = []
     grid = os.path.join(a.work, f"scene{a.n}.zarr")

@@ -5,6 +5,8 @@ reconstruction (brick by brick), side by side, each titled with its L1 to the gr
 
     /usr/bin/python3 bench/local_renders.py [--meshes cube,bunny] [--res 32]
         [--out docs/img/local_renders.png]
+
+(with the sdfcontour package importable: installed, or on PYTHONPATH)
 """
 import argparse
 import os
@@ -22,7 +24,7 @@ sys.path.insert(0, HERE)
 from vtk_render import ensure_display, render  # noqa: E402
 
 ROOT = os.path.dirname(HERE)
-sys.path.insert(0, os.path.join(ROOT, "build", "python"))
+import numpy as np  # noqa: E402
 import sdfcontour  # noqa: E402
 
 MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
@@ -48,14 +50,13 @@ def main():
                             str(args.res), "-o", prefix, "-q"], check=True,
                            stdout=subprocess.DEVNULL)
             V_gt, F_gt = sdfcontour.read_mesh(prefix + "_mesh.ply")
-            import numpy as np
             grid = np.load(prefix + ".npy")
         for col, (label, options) in enumerate(METHODS):
             V, F = sdfcontour.contour(grid, **options)
             l1 = sdfcontour.distances(V, F, V_gt, F_gt, samples=100000)["L1"]
             ax = fig.add_subplot(len(names), len(METHODS), row * len(METHODS) + col + 1)
             azimuth = -35.0 if name != "cube" else -30.0
-            ax.imshow(render(V, F, azimuth=azimuth, elevation=25.0))
+            ax.imshow(render(V, F, azimuth=azimuth, elevation=25.0, zoom=1.0 if name == "cube" else 1.25))
             ax.set_axis_off()
             ax.set_title(f"{name} {args.res}³, {label}: L1 {l1:.1e}", fontsize=10)
             print(name, label, l1, flush=True)

@@ -15,7 +15,7 @@ def ensure_display():
         os.execvp("xvfb-run", ["xvfb-run", "-a", sys.executable] + sys.argv)
 
 
-def render(V, F, size=420, color=(0.62, 0.72, 0.86), azimuth=-35.0, elevation=20.0):
+def render(V, F, size=420, color=(0.62, 0.72, 0.86), azimuth=-35.0, elevation=20.0, zoom=1.25):
     """An RGB image (size, size, 3) in [0, 1] of the mesh (V (n, 3), F (m, 3)), y up, seen from
     the front right and a little above, lit by a headlight and one key light."""
     import vtk
@@ -48,7 +48,7 @@ def render(V, F, size=420, color=(0.62, 0.72, 0.86), azimuth=-35.0, elevation=20
     camera.Elevation(elevation)
     camera.OrthogonalizeViewUp()
     renderer.ResetCamera()
-    camera.Zoom(1.25)
+    camera.Zoom(zoom)
     window = vtk.vtkRenderWindow()
     window.SetOffScreenRendering(1)
     window.AddRenderer(renderer)

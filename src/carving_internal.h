@@ -89,6 +89,7 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
 /// lacks, or the other side of a thin part), which also bounds how far apart two triangles that
 /// come to cross can have started.
 void carve_vertices_alone(PointMatrix& V, const PointMatrix& points, const Eigen::VectorXd& values,
-                          double spacing, int passes, double max_move);
+                          double spacing, int passes, double max_move,
+                          const std::vector<char>* fixed = nullptr);
 
 }  // namespace sdfcontour::detail

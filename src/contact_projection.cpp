@@ -103,11 +103,14 @@ void validate(const Mesh& mesh, const PointMatrix& points, const PointMatrix& no
 ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& points,
                                                  const PointMatrix& normals,
                                                  const Eigen::VectorXd& depths, double spacing,
-                                                 const ContactProjectionOptions& o) {
+                                                 const ContactProjectionOptions& o,
+                                                 const std::vector<char>* fixed) {
   validate(mesh, points, normals, spacing, o);
   if (depths.size() != 0 && depths.size() != points.rows())
     throw Error("projection: " + std::to_string(points.rows()) + " points but " +
                 std::to_string(depths.size()) + " depths");
+  if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
+    throw Error("projection: one fixed flag per vertex is needed");
   const double inv_depth_scale2 = depths.size() && o.depth_scale > 0
                                       ? 1 / (o.depth_scale * o.depth_scale * spacing * spacing)
                                       : 0;
@@ -121,7 +124,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     const Eigen::Vector3d n = N.row(v).transpose();
-    if (n.squaredNorm() == 0) return;
+    if (n.squaredNorm() == 0 || (fixed && (*fixed)[std::size_t(v)])) return;
     const Eigen::Vector3d p = mesh.vertices.row(v).transpose();
     // A tangent frame (a, b, n); heights and offsets in spacings keep the system well scaled.
     const Eigen::Vector3d a =

@@ -247,10 +247,11 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
 
 void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
                                   const Eigen::VectorXd& values, double spacing, int passes,
-                                  double max_move) {
+                                  double max_move, const std::vector<char>* fixed) {
   const PointMatrix start = V;
-  std::vector<int> candidates(std::size_t(V.rows()));
-  std::iota(candidates.begin(), candidates.end(), 0);
+  std::vector<int> candidates;
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (!fixed || !(*fixed)[std::size_t(v)]) candidates.push_back(int(v));
   const double limit2 = max_move * max_move * spacing * spacing;
   for (int round = 0; round < passes && !candidates.empty(); ++round) {
     const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing);

@@ -11,6 +11,8 @@
 // 0.0004 h; docs/projection.md).
 #pragma once
 
+#include <vector>
+
 #include "sdfcontour/types.h"
 
 namespace sdfcontour {
@@ -50,9 +52,12 @@ struct ContactProjectionStats {
 /// Every vertex is fitted from the input positions, so the result does not depend on the order
 /// or the thread count. `spacing` (> 0) is the samples' spacing, the unit of the options' lengths.
 /// Throws Error for mismatched sizes, non-finite input or options out of range.
+/// With `fixed` (one flag per vertex), the flagged vertices stay where they are (a sharp edge's
+/// vertices, which the smooth fit would round).
 ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& points,
                                                  const PointMatrix& normals,
                                                  const Eigen::VectorXd& depths, double spacing,
-                                                 const ContactProjectionOptions& options = {});
+                                                 const ContactProjectionOptions& options = {},
+                                                 const std::vector<char>* fixed = nullptr);
 
 }  // namespace sdfcontour

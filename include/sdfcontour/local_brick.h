@@ -29,6 +29,24 @@
 
 namespace sdfcontour {
 
+/// Rounds of undoing crossing moves. A piece's triangles depend on the triangles within
+/// kCrossingReach grid edges of them per round (carving moves a vertex at most kMaxCarveMove
+/// spacings, projection at most its max_move: triangles that start farther apart cannot meet),
+/// so a brick computes the mesh of its edges and kUntangleRing more on each side.
+constexpr int kUntangleRounds = 2;
+constexpr int kSideRounds = 1;
+constexpr double kMaxCarveMove = 0.5;
+constexpr double kLongestSideMove = 0.5;
+/// Vertices move at most 0.25 (projection) + kMaxCarveMove + kSideRounds * kLongestSideMove
+/// spacings: triangles of grid edges this far apart cannot meet.
+constexpr int kCrossingReach = 5;
+/// A side round's move depends on the samples within a spacing of a triangle near the vertex.
+constexpr int kSideReach = 3;
+/// (The rounds: the side rounds and the undoing rounds, then one side round and one undoing
+/// round for the samples whose sides the undoing lost.)
+constexpr int kUntangleRing =
+    1 + kSideReach * (kSideRounds + 1) + kCrossingReach * (kUntangleRounds + 2);
+
 struct LocalBrickOptions {
   /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the
   /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
@@ -52,6 +70,12 @@ struct LocalBrickOptions {
   /// and rounds, which are whole-mesh stages).
   bool carve = true;
   int carve_passes = 3;
+  /// Rounds that move the mesh's nearest feature off each band sample within a spacing of the
+  /// surface that lies on the wrong side of it (carving's triangle rounds, for the sides alone).
+  int side_rounds = kSideRounds;
+  /// Vertices on the reconstruction's sharp features (feature vertices, and the subdivision's
+  /// vertices between two of them) are neither projected nor carved.
+  bool keep_features = true;
   /// Undo the projection's and carving's moves of the vertices of triangles that then cross
   /// another, in kUntangleRounds rounds (each over the triangles the last one changed).
   bool untangle = true;
@@ -60,15 +84,6 @@ struct LocalBrickOptions {
   /// local_mesh_in_bricks: called as bricks finish (done, total), serialised; empty for silence.
   std::function<void(int, int)> progress;
 };
-
-/// Rounds of undoing crossing moves. A piece's triangles depend on the triangles within
-/// kCrossingReach grid edges of them per round (carving moves a vertex at most kMaxCarveMove
-/// spacings, projection at most its max_move: triangles that start farther apart cannot meet),
-/// so a brick computes the mesh of its edges and kUntangleRing more on each side.
-constexpr int kUntangleRounds = 2;
-constexpr int kCrossingReach = 4;
-constexpr double kMaxCarveMove = 0.5;
-constexpr int kUntangleRing = 1 + kCrossingReach * (kUntangleRounds + 1);
 
 /// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,
 /// (ky + 1) * 64 + j) for the subdivision vertex j / 2^s of the way along edge (kx, ky), kx < ky;

@@ -14,18 +14,21 @@ constexpr std::uint64_t kInside = std::uint64_t(1) << 63;
 struct KeyedPosition {
   VertexKey key;
   Eigen::Vector3d position;
+  char on_feature = 0;
 };
 
 // The vertex at j / n of the way from level-0 vertex x to y, named and placed from the end with
 // the smaller key.
 KeyedPosition on_edge(const KeyedTriangles& in, int x, int y, int j, int n) {
   std::uint64_t kx = in.vertex_key[std::size_t(x)], ky = in.vertex_key[std::size_t(y)];
-  if (j == 0) return {{kx, 0}, in.vertices.row(x).transpose()};
-  if (j == n) return {{ky, 0}, in.vertices.row(y).transpose()};
+  const char fx = in.on_feature[std::size_t(x)], fy = in.on_feature[std::size_t(y)];
+  if (j == 0) return {{kx, 0}, in.vertices.row(x).transpose(), fx};
+  if (j == n) return {{ky, 0}, in.vertices.row(y).transpose(), fy};
   if (kx > ky) std::swap(kx, ky), std::swap(x, y), j = n - j;
   const double t = double(j) / n;
   return {{kx, (ky + 1) * 64 + std::uint64_t(j)},
-          (1 - t) * in.vertices.row(x).transpose() + t * in.vertices.row(y).transpose()};
+          (1 - t) * in.vertices.row(x).transpose() + t * in.vertices.row(y).transpose(),
+          char(fx && fy)};
 }
 
 }  // namespace
@@ -69,8 +72,11 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
     id[order[i].second] = int(out.keys.size()) - 1;
   }
   out.mesh.vertices.resize(Eigen::Index(first_of.size()), 3);
-  for (std::size_t v = 0; v < first_of.size(); ++v)
+  out.on_feature.resize(first_of.size());
+  for (std::size_t v = 0; v < first_of.size(); ++v) {
     out.mesh.vertices.row(Eigen::Index(v)) = all[first_of[v]].position.transpose();
+    out.on_feature[v] = all[first_of[v]].on_feature;
+  }
   const int children = n * n;
   out.mesh.triangles.resize(f * children, 3);
   out.parent.resize(std::size_t(f * children));

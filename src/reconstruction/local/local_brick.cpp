@@ -173,6 +173,8 @@ detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, c
   for (std::size_t v = 0; v < used.size(); ++v) {
     out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(used[v]);
     out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
+    const std::size_t u = std::size_t(used[v]);
+    out.on_feature.push_back(u < keyed.flags.size() && keyed.flags[u][1] ? 1 : 0);
   }
   return out;
 }
@@ -210,13 +212,32 @@ void require_finite(const GridView& block) {
   });
 }
 
+// Rounds of moving the nearest feature (triangle, edge or vertex) of each band sample within a
+// spacing of the surface that lies on the wrong side of the mesh, along its normal, so that the
+// sample lies on its own side, |value| away (sphere_carving.h's triangle rounds, for the samples'
+// sides alone; moves of more than kLongestSideMove spacings are not made).
+void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds) {
+  std::vector<int> near;
+  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
+    if (band.core[std::size_t(i)] && std::abs(band.samples.values[i]) <= h) near.push_back(int(i));
+  if (near.empty() || mesh.triangles.rows() == 0) return;
+  const detail::VertexTriangles around(mesh);
+  for (int round = 0; round < rounds; ++round) {
+    const detail::SideCheck found =
+        detail::check_sample_sides(mesh, around, band.samples.points, band.samples.values, near,
+                                   INFINITY, kLongestSideMove * h);
+    if (found.wrong_side == 0) return;
+    mesh.vertices += found.moves;
+  }
+}
+
 // Rounds (kUntangleRounds) of moving back to `before` (the positions before projection and
 // carving) every moved vertex of a triangle that crosses another; each round after the first
 // tests the triangles the last one changed. Every decision of a round is taken from the
 // positions the round started with. (Crossings the reconstruction itself makes stay.)
-void undo_crossing_moves(Mesh& mesh, const PointMatrix& before) {
+void undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds) {
   std::vector<char> watch;
-  for (int round = 0; round < kUntangleRounds; ++round) {
+  for (int round = 0; round < rounds; ++round) {
     const auto pairs = self_intersecting_triangles(mesh, round == 0 ? nullptr : &watch);
     std::vector<char> back(std::size_t(mesh.vertices.rows()), 0);
     bool any = false;
@@ -333,17 +354,27 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                          : auto_subdivisions(*std::max_element(n.begin(), n.end()));
   detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
   const PointMatrix reconstructed = sub.mesh.vertices;
+  // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
+  const std::vector<char>* fixed = options.keep_features ? &sub.on_feature : nullptr;
   if (options.project && cp.size() > 0)
-    project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection);
+    project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection,
+                              fixed);
   clock.next(3);
   if (options.carve && options.carve_passes > 0) {
     const Samples balls = carving_samples(block, band, options);
     if (balls.points.rows() > 0)
       detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
-                                   options.carve_passes, kMaxCarveMove);
+                                   options.carve_passes, kMaxCarveMove, fixed);
   }
+  if (options.side_rounds > 0) put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
   clock.next(4);
-  if (options.untangle) undo_crossing_moves(sub.mesh, reconstructed);
+  if (options.untangle) undo_crossing_moves(sub.mesh, reconstructed, kUntangleRounds);
+  if (options.untangle && options.side_rounds > 0) {
+    // The samples whose sides the undoing lost, once more, without a crossing.
+    const PointMatrix settled = sub.mesh.vertices;
+    put_samples_on_their_sides(sub.mesh, band, h, 1);
+    undo_crossing_moves(sub.mesh, settled, 1);
+  }
   clock.next(5);
   // The owned triangles and their vertices (keys stay ascending).
   std::vector<Eigen::Index> owned;
