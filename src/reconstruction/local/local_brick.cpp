@@ -214,18 +214,22 @@ void require_finite(const GridView& block) {
 
 // Rounds of moving the nearest feature (triangle, edge or vertex) of each band sample within a
 // spacing of the surface that lies on the wrong side of the mesh, along its normal, so that the
-// sample lies on its own side, |value| away (sphere_carving.h's triangle rounds, for the samples'
-// sides alone; moves of more than kLongestSideMove spacings are not made).
+// sample lies on its own side, kSideMargin |value| beyond it (sphere_carving.h's triangle rounds,
+// for the samples' sides alone; moves of more than kLongestSideMove spacings are not made).
+constexpr double kSideMargin = 0.1;
+
 void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds) {
   std::vector<int> near;
   for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
     if (band.core[std::size_t(i)] && std::abs(band.samples.values[i]) <= h) near.push_back(int(i));
   if (near.empty() || mesh.triangles.rows() == 0) return;
   const detail::VertexTriangles around(mesh);
+  // The feature moves until the sample is just on its side (kSideMargin of its |value| beyond),
+  // not its whole ball away: a smooth surface moved further would leave the samples next to it.
+  const Eigen::VectorXd margins = kSideMargin * band.samples.values;
   for (int round = 0; round < rounds; ++round) {
-    const detail::SideCheck found =
-        detail::check_sample_sides(mesh, around, band.samples.points, band.samples.values, near,
-                                   INFINITY, kLongestSideMove * h);
+    const detail::SideCheck found = detail::check_sample_sides(
+        mesh, around, band.samples.points, margins, near, INFINITY, kLongestSideMove * h);
     if (found.wrong_side == 0) return;
     mesh.vertices += found.moves;
   }
