@@ -13,36 +13,9 @@
 #include "test_support.h"
 
 using namespace sdfcontour;
+using test::canonical;
 
 namespace {
-
-// The mesh with vertices sorted by position and triangles named by sorted ranks, each rotated to
-// start at its smallest rank, sorted: equal for two meshes iff they have the same vertex
-// positions (bit for bit) and the same triangles, whatever the order.
-using Canonical = std::pair<std::vector<std::array<double, 3>>, std::vector<std::array<int, 3>>>;
-Canonical canonical(const Mesh& m) {
-  const int n = int(m.vertices.rows());
-  std::vector<int> order(static_cast<std::size_t>(n)), rank(static_cast<std::size_t>(n));
-  for (int v = 0; v < n; ++v) order[std::size_t(v)] = v;
-  auto at = [&](int v) {
-    return std::array<double, 3>{m.vertices(v, 0), m.vertices(v, 1), m.vertices(v, 2)};
-  };
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return at(a) < at(b); });
-  Canonical c;
-  for (int r = 0; r < n; ++r) {
-    rank[std::size_t(order[std::size_t(r)])] = r;
-    c.first.push_back(at(order[std::size_t(r)]));
-  }
-  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
-    std::array<int, 3> tri{rank[std::size_t(m.triangles(t, 0))],
-                           rank[std::size_t(m.triangles(t, 1))],
-                           rank[std::size_t(m.triangles(t, 2))]};
-    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
-    c.second.push_back(tri);
-  }
-  std::sort(c.second.begin(), c.second.end());
-  return c;
-}
 
 // The samples [first, first + dims) of `grid`, as a grid of their own (float32 if asked).
 struct Block {

@@ -14,45 +14,10 @@
 #include "test_support.h"
 
 using namespace sdfcontour;
+using test::canonical;
 using test::shared_mesh_grid;
 
 namespace {
-
-using Canonical = std::pair<std::vector<std::array<double, 3>>, std::vector<std::array<int, 3>>>;
-
-// Vertices by position, triangles by the ranks of theirs, rotated and sorted: equal iff two
-// meshes have the same triangles at bit for bit the same positions.
-Canonical canonical(const Mesh& m) {
-  const int n = int(m.vertices.rows());
-  std::vector<int> order(std::size_t(n), 0), rank(std::size_t(n), 0);
-  for (int v = 0; v < n; ++v) order[std::size_t(v)] = v;
-  auto at = [&](int v) {
-    return std::array<double, 3>{m.vertices(v, 0), m.vertices(v, 1), m.vertices(v, 2)};
-  };
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return at(a) < at(b); });
-  Canonical c;
-  for (int r = 0; r < n; ++r) {
-    rank[std::size_t(order[std::size_t(r)])] = r;
-    c.first.push_back(at(order[std::size_t(r)]));
-  }
-  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
-    std::array<int, 3> tri{rank[std::size_t(m.triangles(t, 0))],
-                           rank[std::size_t(m.triangles(t, 1))],
-                           rank[std::size_t(m.triangles(t, 2))]};
-    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
-    c.second.push_back(tri);
-  }
-  std::sort(c.second.begin(), c.second.end());
-  return c;
-}
-
-void expect_closed_manifold(const Mesh& m) {
-  const MeshTopology t = mesh_topology(m);
-  EXPECT_TRUE(t.closed) << t.boundary_edges << " boundary, " << t.nonmanifold_edges
-                        << " non-manifold edges";
-  EXPECT_TRUE(t.consistently_oriented);
-  EXPECT_GT(signed_volume(m), 0) << "not outward oriented";
-}
 
 Mesh bricked(const Grid& g, const LocalBrickOptions& o, int brick, int threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
@@ -69,7 +34,7 @@ TEST(LocalBrick, BricksEqualOneBrickBitForBit) {
   o.subdivisions = 2;
   const Mesh whole = bricked(g, o, 0, 1);
   ASSERT_GT(whole.triangles.rows(), 1000);
-  expect_closed_manifold(whole);
+  test::expect_closed_and_outward(whole);
   // The join orders vertices by key and triangles by name: the same arrays, not just the same
   // mesh.
   for (const auto& [brick, threads] : {std::pair{13, 2}, std::pair{20, 1}, std::pair{0, 2}}) {
@@ -84,7 +49,7 @@ TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
   LocalBrickOptions o;
   const Mesh whole = bricked(g, o, 0, 2), pieces = bricked(g, o, 20, 2);
   EXPECT_TRUE(canonical(whole) == canonical(pieces));
-  expect_closed_manifold(pieces);
+  test::expect_closed_and_outward(pieces);
   const MeshSdf sdf(
       normalize_mesh(read_mesh(SDFCONTOUR_SHARED_DIR "/data/meshes/wingnut.obj"), 0.9));
   // Mean |distance| at the triangles' centroids (a chord's worst point, not its ends).
@@ -111,7 +76,7 @@ TEST(LocalBrick, BandThatReachesTheGridSides) {
   EXPECT_EQ(one.wider_halos, 0);
   EXPECT_EQ(whole.vertices, pieces.vertices);
   EXPECT_EQ(whole.triangles, pieces.triangles);
-  expect_closed_manifold(whole);
+  test::expect_closed_and_outward(whole);
 }
 
 TEST(LocalBrick, SmoothShapeInBricksIsCloseToTheSurface) {
@@ -120,7 +85,7 @@ TEST(LocalBrick, SmoothShapeInBricksIsCloseToTheSurface) {
   const Grid g = sample_grid(*torus, 36, Bounds{});
   const double h = g.spacing().maxCoeff();
   const Mesh m = bricked(g, LocalBrickOptions{}, 11, 2);
-  expect_closed_manifold(m);
+  test::expect_closed_and_outward(m);
   double sum = 0;
   for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
     sum += std::abs(torus->distance(m.vertices.row(v).transpose()));

@@ -48,12 +48,8 @@ bool vertices_manifold(const Mesh& m) {
 }
 
 void expect_closed_manifold(const Mesh& m) {
-  const MeshTopology t = mesh_topology(m);
-  EXPECT_TRUE(t.closed) << t.boundary_edges << " boundary, " << t.nonmanifold_edges
-                        << " non-manifold edges";
-  EXPECT_TRUE(t.consistently_oriented);
+  test::expect_closed_and_outward(m);
   EXPECT_TRUE(vertices_manifold(m));
-  EXPECT_GT(signed_volume(m), 0) << "not outward oriented";
 }
 
 // With no contact points (edge crossings only): closed, manifold, and marching cubes' topology.
