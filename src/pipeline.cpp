@@ -62,6 +62,10 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
   return samples_per_axis > 48 ? 8 : 7;
 }
 
+bool auto_local_reconstruction(double samples_per_axis) {
+  return samples_per_axis >= 256;
+}
+
 int auto_subdivisions(double samples_per_axis) {
   return samples_per_axis < 96 ? 2 : 1;
 }

@@ -41,7 +41,7 @@ constexpr double kLongestSideMove = 0.5;
 /// spacings: triangles of grid edges this far apart cannot meet.
 constexpr int kCrossingReach = 5;
 /// A side round's move depends on the samples within a spacing of a triangle near the vertex.
-constexpr int kSideReach = 3;
+constexpr int kSideReach = 4;
 /// (The rounds: the side rounds and the undoing rounds, then one side round and one undoing
 /// round for the samples whose sides the undoing lost.)
 constexpr int kUntangleRing =

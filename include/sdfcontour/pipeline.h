@@ -46,6 +46,13 @@ enum class Reconstruction { Auto, Poisson, Local };
 Reconstruction parse_reconstruction(const std::string& name);
 std::string reconstruction_name(Reconstruction reconstruction);
 
+/// Whether Reconstruction::Auto takes the local reconstruction for a grid `samples_per_axis`
+/// across (its largest dimension): from 256. Measured (bench/scale.py, bunny and spot, 2 cores):
+/// at 256³ local's L1 is 0.505x MC's against Poisson's 0.590x, in 1.1x the time and 1.6x the
+/// memory; at 128³ they tie (0.469x against 0.460x), and at 32³ and 64³ Poisson leads by 4-8%
+/// (docs/local.md).
+bool auto_local_reconstruction(double samples_per_axis);
+
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
 /// dimension): 2 below 96, else 1 (64^3: bunny 4.00e-4 with 2 against 4.57e-4 with 1, spot
 /// 1.45e-4 against 1.91e-4; 256^3: bunny 3.56e-5 with 1 against 6.61e-5 with none, which is
@@ -82,9 +89,9 @@ struct ContourOptions {
   BandOptions band;
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
-  /// GCP's mesh. Auto: Poisson, measured more accurate so far (bench/local.py, docs/local.md:
-  /// at 32^3 on the shared meshes GCP-Poisson's L1 is below GCP-local's on every mesh). Local
-  /// needs a grid's cells: scattered samples and .vdb level sets always take Poisson.
+  /// GCP's mesh. Auto: local for grids from 256 samples per axis (auto_local_reconstruction),
+  /// else Poisson (more accurate below: docs/local.md). Local needs a grid's cells: scattered
+  /// samples and .vdb level sets always take Poisson.
   Reconstruction reconstruction = Reconstruction::Auto;
   LocalReconstructionOptions local;
   /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no

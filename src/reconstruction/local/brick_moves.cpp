@@ -46,10 +46,40 @@ Samples carving_samples(const GridView& block, const BandSamples& band,
 // for the samples' sides alone; moves of more than kLongestSideMove spacings are not made).
 constexpr double kSideMargin = 0.1;
 
-void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds) {
+// Flags, per sample, whether it lies within `reach` of a flagged vertex (cubes of side reach).
+std::vector<char> samples_near(const PointMatrix& samples, const PointMatrix& V,
+                               const std::vector<char>& flagged, double reach) {
+  std::vector<std::array<long, 3>> cubes;
+  auto cube = [&](const Eigen::Vector3d& p) {
+    return std::array<long, 3>{long(std::floor(p[0] / reach)), long(std::floor(p[1] / reach)),
+                               long(std::floor(p[2] / reach))};
+  };
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (flagged[std::size_t(v)]) cubes.push_back(cube(V.row(v).transpose()));
+  std::sort(cubes.begin(), cubes.end());
+  cubes.erase(std::unique(cubes.begin(), cubes.end()), cubes.end());
+  std::vector<char> out(std::size_t(samples.rows()), 0);
+  for (Eigen::Index i = 0; i < samples.rows(); ++i) {
+    const auto c = cube(samples.row(i).transpose());
+    for (long dx = -1; dx <= 1 && !out[std::size_t(i)]; ++dx)
+      for (long dy = -1; dy <= 1 && !out[std::size_t(i)]; ++dy)
+        for (long dz = -1; dz <= 1 && !out[std::size_t(i)]; ++dz)
+          out[std::size_t(i)] = std::binary_search(
+              cubes.begin(), cubes.end(), std::array<long, 3>{c[0] + dx, c[1] + dy, c[2] + dz});
+  }
+  return out;
+}
+
+void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds,
+                                const std::vector<char>* near_vertices) {
+  std::vector<char> nearby;
+  if (near_vertices)
+    nearby = samples_near(band.samples.points, mesh.vertices, *near_vertices, 2 * h);
   std::vector<int> near;
   for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
-    if (band.core[std::size_t(i)] && std::abs(band.samples.values[i]) <= h) near.push_back(int(i));
+    if (band.core[std::size_t(i)] && std::abs(band.samples.values[i]) <= h &&
+        (!near_vertices || nearby[std::size_t(i)]))
+      near.push_back(int(i));
   if (near.empty() || mesh.triangles.rows() == 0) return;
   const detail::VertexTriangles around(mesh);
   // The feature moves until the sample is just on its side (kSideMargin of its |value| beyond),
@@ -67,10 +97,17 @@ void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, i
 // carving) every moved vertex of a triangle that crosses another; each round after the first
 // tests the triangles the last one changed. Every decision of a round is taken from the
 // positions the round started with. (Crossings the reconstruction itself makes stay.)
-void undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds) {
-  std::vector<char> watch;
+std::vector<char> undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds) {
+  std::vector<char> reverted(std::size_t(mesh.vertices.rows()), 0);
+  // The first round tests the triangles with a moved vertex: a crossing of two unmoved ones is
+  // the reconstruction's own, and nothing moves back there.
+  std::vector<char> watch(std::size_t(mesh.triangles.rows()), 0);
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c)
+      watch[std::size_t(t)] |=
+          mesh.vertices.row(mesh.triangles(t, c)) != before.row(mesh.triangles(t, c));
   for (int round = 0; round < rounds; ++round) {
-    const auto pairs = self_intersecting_triangles(mesh, round == 0 ? nullptr : &watch);
+    const auto pairs = self_intersecting_triangles(mesh, &watch);
     std::vector<char> back(std::size_t(mesh.vertices.rows()), 0);
     bool any = false;
     for (const auto& [s, t] : pairs)
@@ -79,13 +116,14 @@ void undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds) {
           const int v = mesh.triangles(tri, c);
           if (mesh.vertices.row(v) != before.row(v)) back[std::size_t(v)] = 1, any = true;
         }
-    if (!any) return;
+    if (!any) break;
     for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
-      if (back[std::size_t(v)]) mesh.vertices.row(v) = before.row(v);
+      if (back[std::size_t(v)]) mesh.vertices.row(v) = before.row(v), reverted[std::size_t(v)] = 1;
     watch.assign(std::size_t(mesh.triangles.rows()), 0);
     for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
       for (int c = 0; c < 3; ++c) watch[std::size_t(t)] |= back[std::size_t(mesh.triangles(t, c))];
   }
+  return reverted;
 }
 
 }  // namespace sdfcontour::detail

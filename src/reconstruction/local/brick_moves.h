@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
 #include "sdfcontour/band.h"
 #include "sdfcontour/local_brick.h"
@@ -20,9 +21,12 @@ Samples carving_samples(const GridView& block, const BandSamples& band,
 
 /// `rounds` of moving the nearest feature of each band sample within a spacing `h` of the
 /// surface that lies on the wrong side of `mesh` until it lies just on its own side.
-void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds);
+/// With `near_vertices` (a flag per vertex), only the samples within 2 h of a flagged vertex.
+void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds,
+                                const std::vector<char>* near_vertices = nullptr);
 
-/// `rounds` of moving back to `before` every moved vertex of a triangle that crosses another.
-void undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds);
+/// `rounds` of moving back to `before` every moved vertex of a triangle that crosses another;
+/// returns which vertices moved back.
+std::vector<char> undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds);
 
 }  // namespace sdfcontour::detail

@@ -295,12 +295,17 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (options.side_rounds > 0)
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
   clock.next(4);
-  if (options.untangle) detail::undo_crossing_moves(sub.mesh, reconstructed, kUntangleRounds);
-  if (options.untangle && options.side_rounds > 0) {
-    // The samples whose sides the undoing lost, once more, without a crossing.
-    const PointMatrix settled = sub.mesh.vertices;
-    detail::put_samples_on_their_sides(sub.mesh, band, h, 1);
-    detail::undo_crossing_moves(sub.mesh, settled, 1);
+  if (options.untangle) {
+    const std::vector<char> reverted =
+        detail::undo_crossing_moves(sub.mesh, reconstructed, kUntangleRounds);
+    if (options.side_rounds > 0 &&
+        std::any_of(reverted.begin(), reverted.end(), [](char r) { return r != 0; })) {
+      // The samples near the vertices moved back, whose sides the undoing may have lost: once
+      // more, without a crossing.
+      const PointMatrix settled = sub.mesh.vertices;
+      detail::put_samples_on_their_sides(sub.mesh, band, h, 1, &reverted);
+      detail::undo_crossing_moves(sub.mesh, settled, 1);
+    }
   }
   clock.next(5);
   // The owned triangles and their vertices (keys stay ascending).

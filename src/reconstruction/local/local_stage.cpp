@@ -1,6 +1,8 @@
 // contour()'s local reconstruction stage: GCP's mesh brick by brick from the grid (local_brick.h),
 // or, for GTCP's exact contact points, a mesh on the grid's cells, subdivided and projected onto
 // the contact points where they fit a smooth surface, then carved.
+#include <algorithm>
+
 #include "../../pipeline_stages.h"
 #include "sdfcontour/local_brick.h"
 #include "sdfcontour/subdivision.h"
@@ -29,9 +31,12 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
 namespace sdfcontour::detail {
 
 bool bricked_local(const GridView* grid, const ContourOptions& options) {
-  return grid && options.method == Method::Gcp && options.want_mesh &&
-         options.reconstruction == Reconstruction::Local &&
-         options.gradient_source == GradientSource::Regular;
+  if (!grid || options.method != Method::Gcp || !options.want_mesh ||
+      options.gradient_source != GradientSource::Regular)
+    return false;
+  return options.reconstruction == Reconstruction::Local ||
+         (options.reconstruction == Reconstruction::Auto &&
+          auto_local_reconstruction(*std::max_element(grid->dims.begin(), grid->dims.end())));
 }
 
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
