@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <algorithm>
 #include <array>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -121,7 +121,6 @@ inline Canonical canonical(const Mesh& m) {
   std::sort(c.second.begin(), c.second.end());
   return c;
 }
-
 
 /// Closed (every edge has two triangles), consistently oriented, outward (positive volume).
 inline void expect_closed_and_outward(const Mesh& m) {
