@@ -21,11 +21,6 @@ namespace {
 // on a torus implicit (x^2+y^2+z^2+R^2-r^2)^2 - 4R^2(x^2+y^2) at 64^3, 28% are.
 constexpr double kMostOffZeroSet = 0.01;
 
-// Below 128 samples per axis a grid's mesh is carved by every sample within this many spacings,
-// not only the band's 8: the farther balls are large (64^3: wingnut and hammer 6-7% lower L1,
-// bunny 1%; every sample gains little more; docs/carving.md). Finer grids gain less for more.
-constexpr double kCarvingBand = 16;
-
 // Contact points this many spacings apart (and farther) belong to separate Poisson solves.
 constexpr double kClusterGap = 16;
 
@@ -264,10 +259,10 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   // Carving needs the band's own samples after the reconstruction (not its margin).
   in.carve = method == Method::Gcp && options.carve != Switch::Off;
   // (Only with the automatic band: a band the user chose bounds every sample used.)
-  if (in.carve && grid && options.band.band == 0 && band.band < kCarvingBand &&
-      band.samples_per_axis < 128) {
+  const double carving_band = auto_carving_band(options.band, band.samples_per_axis);
+  if (in.carve && grid && carving_band > band.band) {
     BandOptions wide = band_options;
-    wide.band = kCarvingBand;
+    wide.band = carving_band;
     wide.margin = 0;
     in.carving_samples = core_samples(select_band(*grid, wide));
   } else if (in.carve) {

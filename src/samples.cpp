@@ -72,7 +72,17 @@ std::size_t first_non_finite(const T* f, std::size_t n) {
 
 }  // namespace
 
-void validate_grid(const GridView& grid) {
+std::optional<std::array<int, 3>> first_non_finite(const GridView& grid) {
+  const std::size_t bad =
+      grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
+  if (bad == grid.size()) return std::nullopt;
+  // Named by its (i, j, k), as the user's array indexes it (C order), in its whole grid.
+  const std::size_t nz = std::size_t(grid.dims[2]), nyz = std::size_t(grid.dims[1]) * nz;
+  return std::array<int, 3>{grid.first[0] + int(bad / nyz), grid.first[1] + int(bad % nyz / nz),
+                            grid.first[2] + int(bad % nz)};
+}
+
+void validate_grid_geometry(const GridGeometry& grid) {
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2)
       throw Error("grid has " + std::to_string(grid.dims[a]) +
@@ -84,15 +94,14 @@ void validate_grid(const GridView& grid) {
     if (!(std::abs(grid.bounds.min[a]) <= kLargestCoordinate &&
           std::abs(grid.bounds.max[a]) <= kLargestCoordinate))
       throw Error("bounds must be finite and at most 1e30 in size on every axis");
-  const std::size_t bad =
-      grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
-  if (bad < grid.size()) {
-    // Named by its (i, j, k), as the user's array indexes it (C order).
-    const std::size_t nz = std::size_t(grid.dims[2]), nyz = std::size_t(grid.dims[1]) * nz;
+}
+
+void validate_grid(const GridView& grid) {
+  validate_grid_geometry(grid);
+  if (const auto at = first_non_finite(grid))
     throw Error("grid values contain a NaN, infinite or too large (over 1e100) value (at [" +
-                std::to_string(bad / nyz) + ", " + std::to_string(bad % nyz / nz) + ", " +
-                std::to_string(bad % nz) + "])");
-  }
+                std::to_string((*at)[0]) + ", " + std::to_string((*at)[1]) + ", " +
+                std::to_string((*at)[2]) + "])");
 }
 
 void validate_grid(const Grid& grid) {

@@ -209,20 +209,22 @@ std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
   return CrossingSearch(mesh, nullptr).find(mesh, watch);
 }
 
-UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
+UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, int max_rounds,
+                                        std::vector<char>* reverted) {
   if (before.rows() != mesh.vertices.rows())
     throw Error("self-intersections: " + std::to_string(before.rows()) + " earlier positions for " +
                 std::to_string(mesh.vertices.rows()) + " vertices");
   UntangleStats stats;
   const Eigen::Index n = mesh.vertices.rows(), m = mesh.triangles.rows();
   auto moved = [&](int v) { return mesh.vertices.row(v) != before.row(v); };
+  if (reverted) reverted->assign(std::size_t(n), 0);
   if (m < 2) return stats;
   // First the triangles around any moved vertex, then those around the vertices moved back.
   std::vector<char> moved_vertices(std::size_t(n), 0);
   for (Eigen::Index v = 0; v < n; ++v) moved_vertices[std::size_t(v)] = moved(int(v));
   std::vector<char> watch = triangles_with(mesh, moved_vertices);
   CrossingSearch search(mesh, &before);
-  for (;;) {
+  for (; max_rounds <= 0 || stats.rounds < max_rounds;) {
     const auto pairs = search.find(mesh, &watch);
     if (stats.rounds++ == 0) stats.intersections_found = long(pairs.size());
     std::vector<char> back(std::size_t(n), 0);
@@ -238,11 +240,16 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before) {
       return stats;
     }
     for (Eigen::Index v = 0; v < n; ++v)
-      if (back[std::size_t(v)]) mesh.vertices.row(v) = before.row(v), ++stats.vertices_reverted;
+      if (back[std::size_t(v)]) {
+        mesh.vertices.row(v) = before.row(v);
+        ++stats.vertices_reverted;
+        if (reverted) (*reverted)[std::size_t(v)] = 1;
+      }
     watch = triangles_with(mesh, back);
     for (Eigen::Index t = 0; t < m; ++t)
       if (watch[std::size_t(t)]) search.refresh(mesh, int(t));
   }
+  return stats;  // after max_rounds: the pairs left are not counted
 }
 
 }  // namespace sdfcontour

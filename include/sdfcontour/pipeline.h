@@ -70,6 +70,11 @@ Switch parse_switch(const std::string& what, const std::string& name);
 /// 3.5-8% at 256^3 and 512^3, where the solved surface is already within the samples' noise.
 bool auto_sign_constraints(double samples_per_axis);
 
+/// The band, in spacings, of the samples whose balls carve GCP's mesh on a grid
+/// `samples_per_axis` across with the band options `given`: 16 with the automatic band below 128
+/// samples per axis (a user's band bounds every sample used); 0: the band's own samples.
+double auto_carving_band(const BandOptions& given, double samples_per_axis);
+
 /// Whether GCP carving's triangle rounds (CarvingOptions::side_passes) run by default, for samples
 /// `samples_per_axis` across (a grid's largest dimension; for scattered samples and OpenVDB level
 /// sets the band's extent in spacings): below 128. Above, they lower L1 by ~11% for 2.3-2.8x the

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "sdfcontour/types.h"
@@ -92,6 +93,12 @@ GridView view_of(const Grid& grid);
 /// bounds min < max on every axis.
 void validate_grid(const GridView& grid);
 void validate_grid(const Grid& grid);
+/// The dims and bounds part of validate_grid.
+void validate_grid_geometry(const GridGeometry& grid);
+
+/// The (i, j, k) in its whole grid (GridGeometry::first added) of the first value in C order
+/// that is NaN, infinite or over 1e100 in size; nullopt if there is none. Parallel.
+std::optional<std::array<int, 3>> first_non_finite(const GridView& grid);
 
 /// Throws Error unless: points is n x 3 and values has n finite entries, n >= 4,
 /// and every coordinate is finite.

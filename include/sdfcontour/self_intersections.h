@@ -30,9 +30,13 @@ struct UntangleStats {
 
 /// Moves back to `before` (the mesh's vertices before some stage moved them: same rows, same
 /// triangles) every moved vertex of a triangle that intersects another, round after round over
-/// the triangles around the vertices moved back, until no such triangle is left. `before` is
-/// taken as free of self-intersections; pairs it had already are counted as left. Throws Error
-/// if `before` does not match the mesh.
-UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before);
+/// the triangles around the vertices moved back, until no such triangle is left, or for at most
+/// `max_rounds` rounds (0: no limit; a fixed number bounds how far a vertex's result reaches,
+/// as bricks need). Each round's decisions are taken from the positions it started with.
+/// `before` is taken as free of self-intersections; pairs it had already are counted as left.
+/// `reverted` (optional) receives a flag per vertex moved back. Throws Error if `before` does
+/// not match the mesh.
+UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, int max_rounds = 0,
+                                        std::vector<char>* reverted = nullptr);
 
 }  // namespace sdfcontour

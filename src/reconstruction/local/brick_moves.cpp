@@ -6,17 +6,12 @@
 #include <vector>
 
 #include "../../carving_internal.h"
-#include "sdfcontour/self_intersections.h"
+#include "sdfcontour/pipeline.h"
 
 namespace sdfcontour::detail {
 
-// Carving's balls reach this many spacings on a coarse grid with the automatic band (as
-// ContourOptions' carving: the wider band lowers L1, the grid being coarse); 0: the band's.
-constexpr double kCarvingBand = 16;
 double carving_band(const LocalBrickOptions& o, const std::array<int, 3>& dims) {
-  return o.carve && o.band.band == 0 && *std::max_element(dims.begin(), dims.end()) < 128
-             ? kCarvingBand
-             : 0.0;
+  return o.carve ? auto_carving_band(o.band, *std::max_element(dims.begin(), dims.end())) : 0.0;
 }
 
 // The samples whose balls carve the mesh: the band's own (not its margin), or the wider
@@ -91,39 +86,6 @@ void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, i
     if (found.wrong_side == 0) return;
     mesh.vertices += found.moves;
   }
-}
-
-// Rounds (kUntangleRounds) of moving back to `before` (the positions before projection and
-// carving) every moved vertex of a triangle that crosses another; each round after the first
-// tests the triangles the last one changed. Every decision of a round is taken from the
-// positions the round started with. (Crossings the reconstruction itself makes stay.)
-std::vector<char> undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds) {
-  std::vector<char> reverted(std::size_t(mesh.vertices.rows()), 0);
-  // The first round tests the triangles with a moved vertex: a crossing of two unmoved ones is
-  // the reconstruction's own, and nothing moves back there.
-  std::vector<char> watch(std::size_t(mesh.triangles.rows()), 0);
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
-    for (int c = 0; c < 3; ++c)
-      watch[std::size_t(t)] |=
-          mesh.vertices.row(mesh.triangles(t, c)) != before.row(mesh.triangles(t, c));
-  for (int round = 0; round < rounds; ++round) {
-    const auto pairs = self_intersecting_triangles(mesh, &watch);
-    std::vector<char> back(std::size_t(mesh.vertices.rows()), 0);
-    bool any = false;
-    for (const auto& [s, t] : pairs)
-      for (const int tri : {s, t})
-        for (int c = 0; c < 3; ++c) {
-          const int v = mesh.triangles(tri, c);
-          if (mesh.vertices.row(v) != before.row(v)) back[std::size_t(v)] = 1, any = true;
-        }
-    if (!any) break;
-    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
-      if (back[std::size_t(v)]) mesh.vertices.row(v) = before.row(v), reverted[std::size_t(v)] = 1;
-    watch.assign(std::size_t(mesh.triangles.rows()), 0);
-    for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
-      for (int c = 0; c < 3; ++c) watch[std::size_t(t)] |= back[std::size_t(mesh.triangles(t, c))];
-  }
-  return reverted;
 }
 
 }  // namespace sdfcontour::detail

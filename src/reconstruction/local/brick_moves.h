@@ -1,5 +1,6 @@
 // Internal: a brick's moves of its mesh after the projection (local_brick.cpp), each with bounded
-// reach: carving vertex by vertex, the samples' side rounds, and undoing moves that cross.
+// reach: carving vertex by vertex and the samples' side rounds (the undoing of crossing moves is
+// revert_self_intersections with a round limit).
 #pragma once
 
 #include <array>
@@ -10,8 +11,8 @@
 
 namespace sdfcontour::detail {
 
-/// The spacings that carving's balls reach (a coarse grid with the automatic band: 16); 0: the
-/// band's own.
+/// The band of the samples whose balls carve a brick's mesh (auto_carving_band; 0: the band's
+/// own, or no carving).
 double carving_band(const LocalBrickOptions& options, const std::array<int, 3>& dims);
 
 /// The samples whose balls carve a brick's mesh: the band's own (not its margin), or the wider
@@ -24,9 +25,5 @@ Samples carving_samples(const GridView& block, const BandSamples& band,
 /// With `near_vertices` (a flag per vertex), only the samples within 2 h of a flagged vertex.
 void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds,
                                 const std::vector<char>* near_vertices = nullptr);
-
-/// `rounds` of moving back to `before` every moved vertex of a triangle that crosses another;
-/// returns which vertices moved back.
-std::vector<char> undo_crossing_moves(Mesh& mesh, const PointMatrix& before, int rounds);
 
 }  // namespace sdfcontour::detail

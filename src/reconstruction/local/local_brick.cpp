@@ -17,6 +17,7 @@
 #include "lattice_subdivision.h"
 #include "sdfcontour/bricks.h"
 #include "sdfcontour/pipeline.h"
+#include "sdfcontour/self_intersections.h"
 
 namespace sdfcontour {
 
@@ -168,22 +169,13 @@ LocalReconstructionStats owned_cell_stats(const detail::KeyedLocalMesh& keyed, c
   return s;
 }
 
-// Throws Error naming the first non-finite value by its global [i, j, k].
-void require_finite(const GridView& block) {
-  block.visit([&](const auto* f) {
-    for (std::size_t p = 0; p < block.size(); ++p) {
-      if (std::isfinite(double(f[p])) && std::abs(double(f[p])) <= 1e100) continue;
-      const std::size_t nz = std::size_t(block.dims[2]), nyz = std::size_t(block.dims[1]) * nz;
-      throw Error("the grid has a non-finite value at [" +
-                  std::to_string(block.first[0] + int(p / nyz)) + ", " +
-                  std::to_string(block.first[1] + int(p % nyz / nz)) + ", " +
-                  std::to_string(block.first[2] + int(p % nz)) + "]");
-    }
-  });
-}
-
 void validate(const GridView& block, const Index3& own_first, const Index3& own_end,
               const LocalBrickOptions& o) {
+  validate_grid_geometry(block);
+  // Named by its global [i, j, k], in the words of the marching cubes bricks.
+  if (const auto at = first_non_finite(block))
+    throw Error("the grid has a non-finite value at [" + std::to_string((*at)[0]) + ", " +
+                std::to_string((*at)[1]) + ", " + std::to_string((*at)[2]) + "]");
   const Index3 n = block.whole_dims();
   for (std::size_t a = 0; a < 3; ++a) {
     if (block.dims[a] < 2 || block.first[a] < 0 || block.first[a] + block.dims[a] > n[a])
@@ -191,10 +183,6 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
     if (!(own_first[a] >= 0 && own_first[a] < own_end[a] && own_end[a] <= n[a]))
       throw Error("a brick's owned samples must be a non-empty range inside its grid");
   }
-  for (int a = 0; a < 3; ++a)
-    if (!(block.bounds.min[a] < block.bounds.max[a]) || !std::isfinite(block.bounds.min[a]) ||
-        !std::isfinite(block.bounds.max[a]))
-      throw Error("bounds must be finite with min < max on every axis");
   if (o.band.truncation_mode == TruncationMode::Auto)
     throw Error("a brick needs its grid's truncation resolved on the whole grid");
   if (o.subdivisions < -1 || o.subdivisions > 4)
@@ -218,7 +206,6 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   piece.vertices.resize(0, 3);
   piece.triangles.resize(0, 3);
   // The owned edges' polygons join the cells around them: no sign change there, no surface.
-  require_finite(block);
   if (!has_sign_change(block, shifted(own_first, -1), shifted(own_end, 1))) return piece;
   const Index3 n = block.whole_dims();
   const double h = block.spacing().maxCoeff();
@@ -296,15 +283,15 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
   clock.next(4);
   if (options.untangle) {
-    const std::vector<char> reverted =
-        detail::undo_crossing_moves(sub.mesh, reconstructed, kUntangleRounds);
+    std::vector<char> reverted;
+    revert_self_intersections(sub.mesh, reconstructed, kUntangleRounds, &reverted);
     if (options.side_rounds > 0 &&
         std::any_of(reverted.begin(), reverted.end(), [](char r) { return r != 0; })) {
       // The samples near the vertices moved back, whose sides the undoing may have lost: once
       // more, without a crossing.
       const PointMatrix settled = sub.mesh.vertices;
       detail::put_samples_on_their_sides(sub.mesh, band, h, 1, &reverted);
-      detail::undo_crossing_moves(sub.mesh, settled, 1);
+      revert_self_intersections(sub.mesh, settled, 1);
     }
   }
   clock.next(5);
