@@ -335,7 +335,7 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
                            const std::array<int, 3>& dims, const std::array<double, 3>& lo,
                            const std::array<double, 3>& hi, const std::array<int, 3>& own_first,
                            const std::array<int, 3>& own_end, const py::dict& options,
-                           const std::array<double, 2>& truncation) {
+                           const std::array<double, 2>& truncation, double value_scale) {
   if (block.ndim() != 3) throw Error("a brick must be a 3D array");
   Bounds bounds;
   bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
@@ -349,6 +349,9 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
   lb.band.truncation_mode = TruncationMode::Resolved;
   lb.band.resolved.inside = truncation[0];
   lb.band.resolved.outside = truncation[1];
+  if (!(value_scale > 0) || !std::isfinite(value_scale))
+    throw Error("value_scale must be positive and finite");
+  lb.band.value_scale = value_scale;
   LocalPiece piece;
   {
     py::gil_scoped_release release;
@@ -370,6 +373,32 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
   stats["local_crossing_cells"] = piece.stats.crossing_cells;
   return py::make_tuple(keys, to_numpy(std::move(piece.vertices)),
                         to_numpy(std::move(piece.triangles)), stats);
+}
+
+// The gradient norms next to sign changes (band.h's crossing_gradient_norms) at the samples
+// [own_first, own_end) of a grid of `dims` over [lo, hi], from `block`, its samples [first,
+// first + block.shape) (2 more on every side of the owned ones, where the grid has them).
+py::array_t<double> run_crossing_gradient_norms(
+    const py::array& block, const std::array<int, 3>& first, const std::array<int, 3>& dims,
+    const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+    const std::array<int, 3>& own_first, const std::array<int, 3>& own_end) {
+  if (block.ndim() != 3) throw Error("a block must be a 3D array");
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  py::object keep;
+  const SdfInput input = sdf_input(block, bounds, 0.0, keep);
+  GridView view = *grid_view_of(input);
+  view.first = first;
+  view.whole = dims;
+  std::vector<double> norms;
+  {
+    py::gil_scoped_release release;
+    norms = crossing_gradient_norms(view, {}, own_first, own_end);
+  }
+  py::array_t<double> out(py::ssize_t(norms.size()));
+  std::copy(norms.begin(), norms.end(), out.mutable_data());
+  return out;
 }
 
 // A .vdb float level set, read sparse as the CLI reads it: (points (n, 3), values (n,), voxel
@@ -580,7 +609,25 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
   m.def("local_brick", &run_local_brick, py::arg("block"), py::arg("first"), py::arg("dims"),
         py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"), py::arg("options"),
-        py::arg("truncation"));
+        py::arg("truncation"), py::arg("value_scale") = 1.0);
+  m.attr("LOCAL_BRICK") = kLocalBrick;
+  m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
+        py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
+  m.def(
+      "distance_value_scale",
+      [](py::array_t<double, py::array::c_style | py::array::forcecast> norms) {
+        const GradientNormSummary s = summarize_gradient_norms(
+            std::vector<double>(norms.data(), norms.data() + norms.size()));
+        return py::make_tuple(distance_value_scale(s.median), s.median);
+      },
+      py::arg("norms"),
+      "(value_scale, median) of gradient norms: the factor that makes the values distances.");
+  m.def(
+      "local_values_reach",
+      [](const py::dict& options, const std::array<int, 3>& dims) {
+        return local_values_reach(local_brick_options(contour_options(options)), dims);
+      },
+      py::arg("options"), py::arg("dims"));
   m.def(
       "local_brick_halo",
       [](const py::dict& options, const std::array<int, 3>& dims) {

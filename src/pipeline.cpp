@@ -150,8 +150,8 @@ void rescale_to_distances(const GridView& grid, const ContourOptions& options,
                               : gradient_norm_summary(grid, resolve_truncation(grid, band_options));
   result.gradient_norm = result.gradient_norms.median;
   const double m = result.gradient_norm;
-  if (std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1) {
-    result.value_scale = band_options.value_scale = 1 / m;
+  if (distance_value_scale(m) != 1.0) {
+    result.value_scale = band_options.value_scale = distance_value_scale(m);
     if (options.progress)
       options.progress("the values change by " + std::to_string(m) +
                        " per unit length near the surface, not 1: rescaled to distances");

@@ -104,9 +104,6 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
 /// regular-triangulation gradients.
 bool bricked_local(const GridView* grid, const ContourOptions& options);
 
-/// The bricks' side for the local reconstruction with BrickOptions::kAutoSize.
-constexpr int kLocalBrick = 256;
-
 /// GCP's local reconstruction from `grid` brick by brick (local_mesh_in_bricks), values scaled
 /// by `band`'s value_scale: result.mesh, .local, .local_bricks.
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,

@@ -125,6 +125,20 @@ struct GradientNormSummary {
 };
 GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation = {});
 
+/// The norms behind gradient_norm_summary, at the samples of `grid` (a block of its whole grid,
+/// GridGeometry::first and whole) whose whole-grid indices lie in [own_first, own_end): blocks
+/// that own disjoint parts give together the whole grid's norms. The block must hold 2 samples
+/// beyond the owned ones, where the whole grid has them (throws Error otherwise).
+std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                            std::array<int, 3> own_first,
+                                            std::array<int, 3> own_end);
+/// The percentiles of `norms` (any order).
+GradientNormSummary summarize_gradient_norms(std::vector<double> norms);
+
+/// The factor that turns values changing by `median_norm` per unit length near the surface into
+/// distances: 1 / median_norm where that is more than 10% from 1, else 1.
+double distance_value_scale(double median_norm);
+
 /// The band's samples proper, without the margin that only closes their stars.
 Samples core_samples(const BandSamples& band);
 

@@ -29,6 +29,10 @@
 
 namespace sdfcontour {
 
+/// The bricks' side (cells) with which contour() runs the local reconstruction when no brick
+/// size is given: one brick up to 256 samples per axis, memory bounded by a brick beyond.
+constexpr int kLocalBrick = 256;
+
 /// Rounds of undoing crossing moves. A piece's triangles depend on the triangles within
 /// kCrossingReach grid edges of them per round (carving moves a vertex at most kMaxCarveMove
 /// spacings, projection at most its max_move: triangles that start farther apart cannot meet),
@@ -116,6 +120,12 @@ constexpr std::array<const char*, 6> kLocalSteps{"band",           "contact poin
 /// The halo, in samples, that a brick's block needs first with these options on a grid of
 /// whole-grid `dims` (the contact points' stars may ask for more: HaloTooSmall).
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims);
+
+/// The distance from the surface, in spacings of distance (values times the band's value_scale),
+/// within which the bricks read the grid's values: the band with its margin, and the carving
+/// band. Beyond it they read only the values' signs and that they lie beyond, so a sampler may
+/// put any value of the right sign and larger size there (a callable's bound).
+double local_values_reach(const LocalBrickOptions& options, const std::array<int, 3>& dims);
 
 /// The piece owned by the edges with global low sample in [own_first, own_end) of the grid that
 /// `block` is a block of (GridGeometry::first and ::whole set; the block should reach

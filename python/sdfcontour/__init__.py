@@ -207,8 +207,9 @@ def _from_path(sdf, grid_name):
 
 
 def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_points, lipschitz):
-    """A callable sampled near the surface and contoured. Marching cubes goes brick by brick
-    (memory follows the surface); the other methods get the sampled grid. A field found steeper
+    """A callable sampled near the surface and contoured. Marching cubes and GCP's local
+    reconstruction go brick by brick (memory follows the surface); the other methods (and contact
+    points alone) get the sampled grid. A field found steeper
     than `lipschitz` is sampled again with a larger bound, and said (LipschitzWarning)."""
     import time
     from ._callable import SamplingReport, sample_callable
@@ -218,7 +219,10 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
         raise ValueError("a callable SDF needs a resolution (samples per axis)")
     n = int(resolution)
     bricked = options["method"] == "mc" and want_mesh and not want_points
-    _callable_budget(resolution, batch_size, dense=not bricked)
+    # GCP's local reconstruction goes brick by brick too (local_brick.h).
+    local = (options["method"] == "gcp" and options["reconstruction"] == "local" and
+             options["gradient"] == "regular" and want_mesh and not want_points)
+    _callable_budget(resolution, batch_size, dense=not (bricked or local))
     h = float(((hi - lo) / (n - 1)).max())
     started = time.perf_counter()
     for attempt in range(4):
@@ -227,8 +231,13 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
             report = SamplingReport()
             V, F, piece_stats = contour_callable_mc(f, lo, hi, n, int(batch_size), report,
                                                     lipschitz, callback or options["progress"])
+        elif local:
+            from ._callable_bricks import sample_near_surface
+            report = SamplingReport()
+            grid, scale = sample_near_surface(f, lo, hi, n, options, int(batch_size), report,
+                                              lipschitz, callback or options["progress"])
         else:
-            # The band the core will use (0: auto, from the samples per axis).
+            # The band the core will use (0: auto, from the samples per axis), sampled exactly.
             band = options["band"] or _sdfcontour.auto_band(n)
             array, report = sample_callable(f, lo, hi, n, band + options["margin"],
                                             int(batch_size), options["progress"], lipschitz)
@@ -247,6 +256,14 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
         stats = dict(piece_stats, **_sdfcontour.mesh_topology(V, F))
         stats["seconds"] = {"bricks": sampled}
         stats["reconstruction"] = "none"
+        out = {"V": V, "F": F, "stats": stats}
+    elif local:
+        from ._callable_bricks import contour_callable_gcp
+        V, F, piece_stats = contour_callable_gcp(grid, scale, options,
+                                                 callback or options["progress"])
+        stats = dict(piece_stats, **_sdfcontour.mesh_topology(V, F))
+        stats["seconds"] = {"sampling": sampled, "local": time.perf_counter() - started - sampled}
+        stats["reconstruction"] = "local"
         out = {"V": V, "F": F, "stats": stats}
     else:
         out = _sdfcontour.contour(array, lo, hi, 0.0, dict(options, truncation="none"),

@@ -53,15 +53,18 @@ def _brick_error(index, first, end, error):
                       f"{error}")
 
 
-def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation):
+def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation, value_scale=1.0,
+                    with_stats=False):
     """The piece of GCP's local reconstruction (its mesh in bricks, local_brick.h) that one brick
     owns: the grid edges from the brick's samples [first, first + dims - 1) (its cells' low
     corners), read with a halo around them by ``read(first, dims)`` (a block of the grid; the
     halo widens until the contact points' stars fit in it). ``options``: contour()'s options dict;
-    ``truncation``: (inside, outside) found on the whole grid (inf: none).
+    ``truncation``: (inside, outside) found on the whole grid (inf: none); ``value_scale``: the
+    factor that makes the values distances (found on the whole grid).
 
-    Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V): joined with
-    the other bricks' pieces (`join_pieces`), the whole grid's local mesh, bit for bit."""
+    Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V), and with
+    ``with_stats`` the piece's stats dict: joined with the other bricks' pieces (`join_pieces`),
+    the whole grid's local mesh, bit for bit."""
     own_first = [int(f) for f in first]
     own_end = [min(int(f) + int(d) - 1, int(n)) for f, d, n in zip(first, dims, shape)]
     halo = int(_sdfcontour.local_brick_halo(options, tuple(int(n) for n in shape)))
@@ -76,11 +79,12 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
                                             tuple(float(x) for x in lo),
                                             tuple(float(x) for x in hi), tuple(own_first),
                                             tuple(own_end), options,
-                                            tuple(float(t) for t in truncation))
+                                            tuple(float(t) for t in truncation),
+                                            float(value_scale))
         except ValueError as e:
             raise _brick_error(index, lo_read, hi_read, e) from None
         if piece is not None:
-            return piece[:3]
+            return piece if with_stats else piece[:3]
         whole = all(a == 0 for a in lo_read) and all(b == n for b, n in zip(hi_read, shape))
         if whole:
             raise RuntimeError("internal error: the whole grid's block reported too small a halo")

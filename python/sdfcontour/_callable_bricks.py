@@ -11,7 +11,8 @@ import sys
 
 import numpy as np
 
-from ._bricks import brick_piece
+from . import _sdfcontour
+from ._bricks import brick_piece, bricks, gcp_brick_piece
 from ._callable import _axis_indices, _evaluate, sample_blocks, steepest_slope
 from ._io_join import join_pieces
 
@@ -19,8 +20,10 @@ BRICK = 32  # cells a side: small bricks walk few points far from the surface
 GROUP = 32  # bricks sampled together (their temporaries ~3 MB each), so f gets large batches
 
 
-def active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz):
-    """The bricks (index, first sample, samples) that may hold the surface, in C order."""
+def active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz, fill=False):
+    """The bricks (index, first sample, samples) that may hold the surface, in C order. With
+    `fill`, also an array (one per brick a side) of a value for each brick left out: its sign, and
+    a size under the smallest |f| in it (its coarse cells' bound, over `threshold`)."""
     step = BRICK // 4
     axis = _axis_indices(n, step)
     P = np.stack(np.meshgrid(*[lo[a] + axis * h[a] for a in range(3)], indexing="ij"), axis=-1)
@@ -44,7 +47,15 @@ def active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz):
         first = tuple(int(x) * BRICK for x in b)
         dims = tuple(min(BRICK, n - 1 - f0) + 1 for f0 in first)
         out.append((tuple(int(x) for x in b), first, dims))
-    return out
+    if not fill:
+        return out
+    # Each brick's smallest bound over its coarse cells (BRICK // step of them a side), signed as
+    # its first coarse sample: a brick left out has no sign change.
+    starts = np.flatnonzero(np.diff(np.concatenate([[-1], axis[:-1] // BRICK])))
+    for a in range(3):
+        bound = np.minimum.reduceat(bound, starts, axis=a)
+    corner = C[np.ix_(starts, starts, starts)]
+    return out, np.where(corner < 0, -1.0, 1.0) * np.maximum(bound, threshold) * lipschitz
 
 
 def contour_callable_mc(f, lo, hi, n, batch_size, report, lipschitz=1.0, progress=False):
@@ -61,11 +72,7 @@ def contour_callable_mc(f, lo, hi, n, batch_size, report, lipschitz=1.0, progres
                                batch_size, report, lipschitz=lipschitz)
         for number, ((index, first, _), block) in enumerate(zip(group, blocks), start):
             pieces.append((number, brick_piece(block, index, first, (n, n, n), lo, hi)))
-        if callable(progress):
-            progress("bricks", start + len(group), len(bricks))
-        elif progress:
-            print(f"[sdfcontour] bricks {start + len(group)}/{len(bricks)}, "
-                  f"{report.evaluations} evaluations", file=sys.stderr, end="\r", flush=True)
+        _report_bricks(progress, "bricks", start + len(group), len(bricks), report)
     if progress is True:
         print(file=sys.stderr, flush=True)
     if pieces:
@@ -73,4 +80,124 @@ def contour_callable_mc(f, lo, hi, n, batch_size, report, lipschitz=1.0, progres
     else:  # the caller decides: a steeper field sampled again, or no surface
         V, F, stats = np.zeros((0, 3)), np.zeros((0, 3), np.int32), {}
     stats["bricks"] = len(bricks)
+    return V, F, stats
+
+
+class NearSurfaceGrid:
+    """The n^3 grid of a callable f over [lo, hi], held as its bricks that may hold the surface,
+    sampled once each (exact where |f| / lipschitz <= threshold, as sample_block) and a signed
+    bound for each other brick: memory follows the surface. `read(first, dims)` assembles any
+    block of it, for a reconstruction that goes brick by brick."""
+
+    def __init__(self, f, lo, hi, n, threshold, batch_size, report, lipschitz=1.0,
+                 progress=False):
+        self.lo, self.hi, self.shape = lo, hi, (n, n, n)
+        h = (hi - lo) / (n - 1)
+        bricks, self.fill = active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz,
+                                          fill=True)
+        self.arrays = {}
+        for start in range(0, len(bricks), GROUP):  # sampled together: large calls to f
+            group = bricks[start:start + GROUP]
+            blocks = sample_blocks(f, lo, h, [(first, dims) for _, first, dims in group],
+                                   threshold, batch_size, report, lipschitz=lipschitz)
+            for (index, _, _), block in zip(group, blocks):
+                self.arrays[index] = block
+            _report_bricks(progress, "sampling", start + len(group), len(bricks), report)
+
+    def owns_surface(self, first, end):
+        """Whether any sampled brick meets the cells [first, end) (the others have no sign
+        change)."""
+        ranges = [range(a // BRICK, (b - 1) // BRICK + 1) for a, b in zip(first, end)]
+        return any((i, j, k) in self.arrays for i in ranges[0] for j in ranges[1]
+                   for k in ranges[2])
+
+    def read(self, first, dims):
+        """The samples [first, first + dims) as a float64 array."""
+        count = self.fill.shape
+        index = [np.minimum((first[a] + np.arange(dims[a])) // BRICK, count[a] - 1)
+                 for a in range(3)]
+        block = self.fill[np.ix_(*index)]
+        ranges = [range(max(0, (first[a] - 1) // BRICK), (first[a] + dims[a] - 1) // BRICK + 1)
+                  for a in range(3)]
+        for b in ((i, j, k) for i in ranges[0] for j in ranges[1] for k in ranges[2]):
+            array = self.arrays.get(b)
+            if array is None:
+                continue
+            at = [x * BRICK for x in b]
+            lo = [max(at[a], first[a]) for a in range(3)]
+            hi = [min(at[a] + array.shape[a], first[a] + dims[a]) for a in range(3)]
+            if any(l >= u for l, u in zip(lo, hi)):
+                continue
+            block[tuple(slice(l - f0, u - f0) for l, u, f0 in zip(lo, hi, first))] = \
+                array[tuple(slice(l - a0, u - a0) for l, u, a0 in zip(lo, hi, at))]
+        return block
+
+    def value_scale(self):
+        """(value_scale, median gradient norm) as the core measures them on the whole grid
+        (band.h, gradient_norm_summary), from the sampled bricks alone: a sample next to a sign
+        change lies in one."""
+        n = self.shape[0]
+        norms = []
+        for b in self.arrays:
+            own_first = [x * BRICK for x in b]
+            own_end = [min(x + BRICK, n) for x in own_first]
+            first = [max(0, x - 2) for x in own_first]
+            end = [min(n, x + 2) for x in own_end]
+            block = self.read(first, [e - f0 for f0, e in zip(first, end)])
+            norms.append(_sdfcontour.crossing_gradient_norms(
+                block, tuple(first), self.shape, tuple(self.lo), tuple(self.hi),
+                tuple(own_first), tuple(own_end)))
+        return _sdfcontour.distance_value_scale(np.concatenate(norms) if norms else np.zeros(0))
+
+
+def _report_bricks(progress, stage, done, total, report):
+    if callable(progress):
+        progress(stage, done, total)
+    elif progress:
+        print(f"[sdfcontour] {stage} {done}/{total} bricks, {report.evaluations} evaluations",
+              file=sys.stderr, end="\r", flush=True)
+
+
+def sample_near_surface(f, lo, hi, n, options, batch_size, report, lipschitz=1.0,
+                        progress=False):
+    """(NearSurfaceGrid, (value_scale, median gradient norm)) for GCP's local reconstruction with
+    contour()'s `options`: exact wherever the bricks read a value (local_values_reach, and 4
+    spacings for the gradient norms), in the field's own units. A field steeper than a distance
+    (value_scale < 1) is sampled again over the wider reach that its values then need."""
+    h = float(((hi - lo) / (n - 1)).max())
+    reach = max(_sdfcontour.local_values_reach(options, (n, n, n)), 4.0) * h
+    grid = NearSurfaceGrid(f, lo, hi, n, reach, batch_size, report, lipschitz, progress)
+    scale = grid.value_scale()
+    if scale[0] < 1:
+        grid = NearSurfaceGrid(f, lo, hi, n, reach / scale[0], batch_size, report, lipschitz,
+                               progress)
+    return grid, scale
+
+
+def contour_callable_gcp(grid, scale, options, progress=False):
+    """(V, F, stats) of GCP's local reconstruction of a NearSurfaceGrid, brick by brick
+    (local_brick.h): bricks of LOCAL_BRICK cells, each read with its halo, the pieces joined by
+    their keys. Bricks whose cells hold no sampled brick are skipped. `scale`: (value_scale,
+    median gradient norm), as the core rescales a grid's values to distances."""
+    n = grid.shape[0]
+    value_scale, norm = scale
+    size = options["brick_size"] if options["brick_size"] > 0 else _sdfcontour.LOCAL_BRICK
+    todo = [(index, first, dims) for index, first, dims in bricks(grid.shape, size)
+            if grid.owns_surface(first, [f0 + d - 1 for f0, d in zip(first, dims)])]
+    pieces, contact_points = [], 0
+    for number, (index, first, dims) in enumerate(todo):
+        keys, V, F, stats = gcp_brick_piece(grid.read, index, first, dims, grid.shape, grid.lo,
+                                            grid.hi, options, (np.inf, np.inf), value_scale,
+                                            with_stats=True)
+        contact_points += stats["contact_points"]
+        pieces.append((number, (keys, V, F)))
+        if callable(progress):
+            progress("bricks", number + 1, len(todo))
+    if progress is True:
+        print(file=sys.stderr, flush=True)
+    V, F, stats = join_pieces(pieces, len(pieces))
+    if len(F) == 0:
+        raise ValueError("the local reconstruction found no surface inside the grid")
+    stats.update(local_bricks=len(todo), contact_points=contact_points, value_scale=value_scale,
+                 gradient_norm=norm, samples=n ** 3)
     return V, F, stats

@@ -95,18 +95,20 @@ class _VdbReader:
 
 
 class _CallableReader:
-    """A callable SDF sampled block by block, near the surface only (marching cubes needs the
-    signs everywhere and the values at crossings: |f| <= one spacing)."""
+    """A callable SDF sampled block by block, near the surface only: exact where |f| <= `reach`
+    (marching cubes needs the signs everywhere and the values at crossings, one spacing; GCP's
+    local reconstruction its local_values_reach)."""
 
     def __init__(self, f, lo, hi, n, batch_size):
         self.f, self.lo, self.batch_size = f, lo, batch_size
         self.h = (hi - lo) / (n - 1)
         self.shape, self.dtype = (n, n, n), np.dtype(np.float64)
+        self.reach = float(self.h.max())
 
     def read(self, first, dims):
         from ._callable import SamplingReport, sample_block
-        return sample_block(self.f, self.lo, self.h, first, dims, float(self.h.max()),
-                            self.batch_size, SamplingReport())
+        return sample_block(self.f, self.lo, self.h, first, dims, self.reach, self.batch_size,
+                            SamplingReport())
 
 
 def _open_path(path, dataset):
@@ -371,6 +373,9 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     progress = _checks.flag("progress", progress)
     reader = _reader(source, bounds, resolution, batch_size, dataset)
     shape = tuple(int(n) for n in reader.shape)
+    if options is not None and isinstance(reader, _CallableReader):
+        # Read as a distance: values are not rescaled here (sdfcontour.contour() does).
+        reader.reach = max(_sdfcontour.local_values_reach(options, shape), 4.0) * reader.reach
     _check_shape_and_dtype(shape, reader.dtype)
     if isinstance(reader, _VdbReader):
         if bounds is not None:

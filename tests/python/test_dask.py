@@ -183,6 +183,19 @@ def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_
         sdfcontour.dask.contour(bad, method="gcp", brick=64, client=client, truncation="none")
 
 
+def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
+    # Each brick samples the callable near the surface, exactly wherever the local
+    # reconstruction reads a value (not only at the crossings, as marching cubes needs).
+    def torus(p):
+        q = np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 0.5
+        return np.sqrt(q ** 2 + p[:, 2] ** 2) - 0.2
+    single = sdfcontour.contour(torus, resolution=48, refine=False)
+    V, F, stats = sdfcontour.dask.contour(torus, method="gcp", resolution=48, brick=24,
+                                          client=client, return_stats=True)
+    assert stats["bricks"] == 8
+    assert_same_mesh((V, F), single)
+
+
 @pytest.mark.parametrize("call, kind, words", [
     (lambda c: sdfcontour.dask.contour(np.zeros((8, 8, 8)) + 1j, client=c), TypeError,
      "real numbers"),

@@ -478,6 +478,30 @@ def test_callable_marching_cubes_by_bricks_is_the_full_grids_mesh():
     assert stats["evaluated_fraction"] < 0.06 and stats["components"] == 3 and stats["closed"]
 
 
+@pytest.mark.parametrize("scale,n,brick", [(1.0, 48, 24), (1.3, 64, "auto")])
+def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
+    # GCP's local reconstruction of a callable goes brick by brick too, from bricks sampled near
+    # the surface: bit for bit the full grid's mesh; a field steeper than a distance is rescaled
+    # by the same factor (and sampled over the wider band that its values then need).
+    def f(p):
+        return scale * torus(p)
+    axis = -1 + np.arange(n) * (2 / (n - 1))
+    P = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sdfcontour.RescaleWarning)
+        V, F, stats = sdfcontour.contour(f, resolution=n, refine=False, brick_size=brick,
+                                         lipschitz=scale, return_stats=True)
+        V2, F2, stats2 = sdfcontour.contour(f(P).reshape(n, n, n), reconstruction="local",
+                                            brick_size=brick, return_stats=True)
+    from sdfcontour.dask import canonical_mesh
+    (Vc, Fc), (Vc2, Fc2) = canonical_mesh(V, F), canonical_mesh(V2, F2)
+    assert np.array_equal(Vc, Vc2) and np.array_equal(Fc, Fc2)
+    assert stats["value_scale"] == stats2["value_scale"]
+    assert abs(stats["value_scale"] - 1 / scale) < 1e-3
+    assert stats["reconstruction"] == "local" and stats["closed"] and stats["manifold"]
+    assert stats["local_bricks"] == (8 if brick == 24 else 1)
+
+
 @pytest.mark.parametrize("steepness", [3, 10])
 def test_a_field_steeper_than_a_distance_keeps_its_small_parts(steepness):
     def steep(p):

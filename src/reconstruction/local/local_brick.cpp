@@ -199,6 +199,10 @@ int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>&
   return std::max(stars, int(std::ceil(detail::carving_band(options, dims))) + 2 + ring(options));
 }
 
+double local_values_reach(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
+  return std::max(largest_in_spacings(options.band, dims), detail::carving_band(options, dims));
+}
+
 LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
                              const std::array<int, 3>& own_end, const LocalBrickOptions& options) {
   validate(block, own_first, own_end, options);
