@@ -9,6 +9,8 @@
 
 namespace sdfcontour::detail {
 
+class WorkCounter;
+
 /// Throws Error ("`what`: ...") unless points (n x 3) and values (n) match and are finite and the
 /// spacing is positive and finite: the samples whose balls carving and side repair keep clear.
 void check_ball_samples(const char* what, const PointMatrix& points, const Eigen::VectorXd& values,
@@ -79,8 +81,8 @@ std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& aroun
 /// |values[i]|), the displacement onto the sphere of the ball it enters deepest (ties: the lower
 /// sample); zero elsewhere. Each vertex's move depends on its position and the balls alone.
 PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                           const PointMatrix& points, const Eigen::VectorXd& values,
-                           double spacing);
+                           const PointMatrix& points, const Eigen::VectorXd& values, double spacing,
+                           WorkCounter* samples_done = nullptr);
 
 /// Up to `passes` rounds of each vertex of V pushed onto the sphere of the ball it enters
 /// deepest, every vertex on its own (no triangle checks): the result of a vertex depends on its

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "work_counter.h"
+
 namespace sdfcontour {
 
 namespace {
@@ -122,7 +124,9 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
   // Gaussian weights exp(-d^2 / (2 sigma^2)), sigma = radius / sqrt(8), d in the tangent plane.
   const double inv_two_sigma2 = 4.0 / (r * r);
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
+  detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
+    fitted.add();
     const Eigen::Vector3d n = N.row(v).transpose();
     if (n.squaredNorm() == 0 || (fixed && (*fixed)[std::size_t(v)])) return;
     const Eigen::Vector3d p = mesh.vertices.row(v).transpose();

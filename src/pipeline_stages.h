@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -35,6 +36,12 @@ class Stages {
       finish();
       return value;
     }
+  }
+
+  /// A stage's (done, total) callback onto options.progress_fraction (empty if none).
+  std::function<void(long, long)> fraction(const std::string& name) const {
+    if (!options_.progress_fraction) return {};
+    return [this, name](long done, long total) { options_.progress_fraction(name, done, total); };
   }
 
  private:

@@ -157,7 +157,8 @@ void clip_to_grid(const GridView* grid, const ContourOptions& options, ContourRe
 // crossings.
 void untangle(const PointMatrix& before, ContourResult& result, Stages& stages) {
   const UntangleStats u = stages.run("untangling", "undoing moves that cross the mesh", [&] {
-    return revert_self_intersections(*result.mesh, before);
+    return revert_self_intersections(*result.mesh, before, 0, nullptr,
+                                     stages.fraction("untangling"));
   });
   UntangleStats& sum = result.untangling.emplace(result.untangling.value_or(UntangleStats{}));
   sum.rounds += u.rounds;
@@ -180,10 +181,12 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
   PointMatrix reconstructed;
   if (in.project) {
     PointMatrix before = result.mesh->vertices;
+    ContactProjectionOptions projection = in.projection;
+    projection.progress = stages.fraction("projection");
     result.projection =
         stages.run("projection", "projecting the mesh onto the contact points", [&] {
           return project_to_contact_points(*result.mesh, cp.points, cp.normals, in.contact_depths,
-                                           result.band_spacing, in.projection);
+                                           result.band_spacing, projection);
         });
     if (untangle_once)
       reconstructed = std::move(before);
@@ -193,9 +196,10 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
   if (!in.carve) return;
   const PointMatrix before = untangle_once ? std::move(reconstructed) : result.mesh->vertices;
   const Samples& samples = in.carving_samples;
+  CarvingOptions carving = in.carving;
+  carving.progress = stages.fraction("carving");
   result.carving = stages.run("carving", "carving the mesh out of the samples' spheres", [&] {
-    return carve_mesh(*result.mesh, samples.points, samples.values, result.band_spacing,
-                      in.carving);
+    return carve_mesh(*result.mesh, samples.points, samples.values, result.band_spacing, carving);
   });
   untangle(before, result, stages);
   // The untangling can undo the moves that put a sample next to a thin gap on its side.

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <string>
 
+#include "work_counter.h"
+
 namespace sdfcontour {
 
 namespace {
@@ -159,12 +161,16 @@ class CrossingSearch {
   }
 
   // The crossing pairs with a watched triangle (all if `watch` is null), ascending.
-  std::vector<std::pair<int, int>> find(const Mesh& mesh, const std::vector<char>* watch) const {
+  // `counter` (optional) counts the watched triangles tested.
+  std::vector<std::pair<int, int>> find(const Mesh& mesh, const std::vector<char>* watch,
+                                        detail::WorkCounter* counter = nullptr) const {
     auto watched = [&](int t) { return !watch || (*watch)[std::size_t(t)]; };
     tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>> found;
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index ti) {
       const int t = int(ti);
-      if (!watched(t) || flat_[std::size_t(t)]) return;
+      if (!watched(t)) return;
+      if (counter) counter->add();
+      if (flat_[std::size_t(t)]) return;
       cubes_.for_each_near(current_[std::size_t(t)], bucketed_, current_, [&](int u) {
         // Each pair once: from its lower triangle when both are watched.
         if (u == t || (watched(u) && u < t) || flat_[std::size_t(u)]) return;
@@ -210,7 +216,8 @@ std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
 }
 
 UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, int max_rounds,
-                                        std::vector<char>* reverted) {
+                                        std::vector<char>* reverted,
+                                        const std::function<void(long, long)>& progress) {
   if (before.rows() != mesh.vertices.rows())
     throw Error("self-intersections: " + std::to_string(before.rows()) + " earlier positions for " +
                 std::to_string(mesh.vertices.rows()) + " vertices");
@@ -224,8 +231,10 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, i
   for (Eigen::Index v = 0; v < n; ++v) moved_vertices[std::size_t(v)] = moved(int(v));
   std::vector<char> watch = triangles_with(mesh, moved_vertices);
   CrossingSearch search(mesh, &before);
+  detail::WorkCounter tested(
+      progress, long(watch.size() - std::size_t(std::count(watch.begin(), watch.end(), char(0)))));
   for (; max_rounds <= 0 || stats.rounds < max_rounds;) {
-    const auto pairs = search.find(mesh, &watch);
+    const auto pairs = search.find(mesh, &watch, stats.rounds == 0 ? &tested : nullptr);
     if (stats.rounds++ == 0) stats.intersections_found = long(pairs.size());
     std::vector<char> back(std::size_t(n), 0);
     bool any = false;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "carving_internal.h"
+#include "work_counter.h"
 
 namespace sdfcontour {
 
@@ -138,14 +139,15 @@ std::vector<int> set_indices(const std::vector<char>& flags) {
 }
 
 // Rounds (up to options.passes) pushing the vertices `candidates` out of the balls; only a vertex
-// that moved can have entered a ball, so later rounds look at those alone.
+// that moved can have entered a ball, so later rounds look at those alone. `first_round`
+// (optional) counts the first round's samples, the bulk of the work.
 void carve_vertices(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
                     double spacing, const CarvingOptions& options, std::vector<int> candidates,
-                    CarvingStats& stats) {
+                    CarvingStats& stats, detail::WorkCounter* first_round = nullptr) {
   for (int round = 0; round < options.passes && !candidates.empty(); ++round) {
     ++stats.passes;
-    const PointMatrix moves =
-        detail::deepest_pushes(mesh.vertices, candidates, points, values, spacing);
+    const PointMatrix moves = detail::deepest_pushes(mesh.vertices, candidates, points, values,
+                                                     spacing, round == 0 ? first_round : nullptr);
     candidates = set_indices(apply_moves(mesh, moves, options, stats));
   }
 }
@@ -207,7 +209,7 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
 // lower sample), as the displacement onto that ball's sphere; zero elsewhere.
 PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
                                    const PointMatrix& points, const Eigen::VectorXd& values,
-                                   double spacing) {
+                                   double spacing, WorkCounter* samples_done) {
   const VertexColumns columns(V, which, kIndexCell * spacing);
   const double inside = kInside * spacing;
   constexpr Eigen::Index kBlock = 4096;
@@ -215,6 +217,7 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
   std::vector<std::vector<Push>> found(static_cast<std::size_t>(blocks));
   tbb::parallel_for(Eigen::Index(0), blocks, [&](Eigen::Index b) {
     auto& out = found[std::size_t(b)];
+    if (samples_done) samples_done->add(std::min(n, (b + 1) * kBlock) - b * kBlock);
     for (Eigen::Index s = b * kBlock; s < std::min(n, (b + 1) * kBlock); ++s) {
       const double r = std::abs(values[s]);
       if (!(r > 0)) continue;
@@ -281,7 +284,8 @@ CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::Vect
   const PointMatrix start = V;
   std::vector<int> all(std::size_t(V.rows()));
   std::iota(all.begin(), all.end(), 0);
-  carve_vertices(mesh, points, values, spacing, options, std::move(all), stats);
+  detail::WorkCounter first_round(options.progress, long(points.rows()));
+  carve_vertices(mesh, points, values, spacing, options, std::move(all), stats, &first_round);
   if (options.side_passes > 0) {
     // Triangles off the small balls near the surface and samples onto their sides; then the
     // vertices that moved out of any ball they entered; then, as that can put a sample next to

@@ -11,6 +11,7 @@
 // 0.0004 h; docs/projection.md).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "sdfcontour/types.h"
@@ -39,6 +40,8 @@ struct ContactProjectionOptions {
   /// they are no smooth surface (an edge, facets finer than the radius, a thin part's two sides):
   /// the vertex stays. 0: no limit.
   double max_residual = 0.005;
+  /// Called with (vertices done, vertices) as the fit goes, from any thread, one call at a time.
+  std::function<void(long, long)> progress;
 };
 
 struct ContactProjectionStats {

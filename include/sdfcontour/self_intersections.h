@@ -4,6 +4,7 @@
 // breaks booleans, tetrahedral meshing and inside tests).
 #pragma once
 
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -34,9 +35,12 @@ struct UntangleStats {
 /// `max_rounds` rounds (0: no limit; a fixed number bounds how far a vertex's result reaches,
 /// as bricks need). Each round's decisions are taken from the positions it started with.
 /// `before` is taken as free of self-intersections; pairs it had already are counted as left.
-/// `reverted` (optional) receives a flag per vertex moved back. Throws Error if `before` does
-/// not match the mesh.
+/// `reverted` (optional) receives a flag per vertex moved back. `progress` (optional) is called
+/// with (triangles tested, triangles to test) in the first round, the search's bulk (later rounds
+/// test the few triangles around the vertices moved back). Throws Error if `before` does not
+/// match the mesh.
 UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, int max_rounds = 0,
-                                        std::vector<char>* reverted = nullptr);
+                                        std::vector<char>* reverted = nullptr,
+                                        const std::function<void(long, long)>& progress = {});
 
 }  // namespace sdfcontour

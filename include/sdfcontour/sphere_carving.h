@@ -13,6 +13,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 
 #include "sdfcontour/types.h"
 
@@ -36,6 +37,9 @@ struct CarvingOptions {
   /// moves back on their sides (their balls alone may stay cut, by a hair).
   int side_passes = 12;
   double side_reach = 1;
+  /// Called with (samples done, samples) over the first round of vertex pushes (of every vertex,
+  /// the bulk of the work), from any thread, one call at a time.
+  std::function<void(long, long)> progress;
 };
 
 struct CarvingStats {

@@ -525,9 +525,18 @@ def test_progress_callback_gets_fractions():
     events = []
     sdfcontour.contour(full_grid(torus, 40), progress=lambda *e: events.append(e))
     assert any(total == 0 for _, _, total in events)
-    poisson = [(done, total) for stage, done, total in events if stage == "poisson"]
-    assert poisson and poisson[-1][0] == poisson[-1][1] > 0
-    assert [d for d, _ in poisson] == sorted(d for d, _ in poisson)
+    # The stages after the solve report theirs too, each run rising to complete (untangling
+    # runs after projection and again after carving).
+    for name in ("poisson", "projection", "carving", "untangling"):
+        fractions = [(done, total) for stage, done, total in events if stage == name]
+        assert fractions, name
+        runs = [[fractions[0]]]
+        for (done, total), (before, _) in zip(fractions[1:], fractions):
+            if done < before:
+                runs.append([])
+            runs[-1].append((done, total))
+        assert all(run[-1][0] == run[-1][1] > 0 for run in runs), (name, runs)
+        assert len(runs) <= (2 if name == "untangling" else 1), name
     events.clear()
     sdfcontour.contour(torus, resolution=65, method="mc", progress=lambda *e: events.append(e))
     bricks = [(done, total) for stage, done, total in events if stage == "bricks"]
