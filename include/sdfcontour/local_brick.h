@@ -46,10 +46,13 @@ constexpr double kLongestSideMove = 0.5;
 constexpr int kCrossingReach = 5;
 /// A side round's move depends on the samples within a spacing of a triangle near the vertex.
 constexpr int kSideReach = 4;
-/// (The rounds: the side rounds and the undoing rounds, then one side round and one undoing
-/// round for the samples whose sides the undoing lost.)
-constexpr int kUntangleRing =
-    1 + kSideReach * (kSideRounds + 1) + kCrossingReach * (kUntangleRounds + 2);
+/// Rounds that move the quadrics' vertices of crossing triangles to their crossings' mean
+/// (inside their cells: triangles of grid edges kCrossingReach apart cannot meet).
+constexpr int kDualUntangleRounds = 2;
+/// (The rounds: the dual mesh's, the side rounds and the undoing rounds, then one side round and
+/// one undoing round for the samples whose sides the undoing lost.)
+constexpr int kUntangleRing = 1 + kSideReach * (kSideRounds + 1) +
+                              kCrossingReach * (kDualUntangleRounds + kUntangleRounds + 2);
 
 struct LocalBrickOptions {
   /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the

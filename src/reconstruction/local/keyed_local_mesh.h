@@ -20,6 +20,9 @@ struct KeyedLocalMesh {
   std::vector<std::uint8_t> triangle_rank;   ///< per triangle: its rank in the polygon
   /// Per cell vertex (the first rows): placed from crossings, at a feature, clamped, field miss.
   std::vector<std::array<char, 4>> flags;
+  /// Per cell vertex: the mean of its polygon's edge crossings, a place inside the cell that no
+  /// quadric moves (where the quadrics' vertices make the mesh cross itself).
+  PointMatrix crossing_means;
 };
 
 KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatrix& points,

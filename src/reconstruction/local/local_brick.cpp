@@ -48,9 +48,10 @@ double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& di
 }
 
 // Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
-// need one ring; undoing crossings needs kUntangleRing.
+// need one ring; undoing crossings needs kUntangleRing (the dual mesh's rounds alone, fewer).
 int ring(const LocalBrickOptions& o) {
-  return o.untangle && (o.project || o.carve) ? kUntangleRing : 1;
+  if (!o.untangle) return 1;
+  return o.project || o.carve ? kUntangleRing : 1 + kCrossingReach * kDualUntangleRounds;
 }
 
 // How far beyond the owned samples a contact point can matter, in samples: the reach of the
@@ -116,8 +117,11 @@ Bounds certain_box(const GridView& block) {
 }
 
 // The triangles of the edges in [lo, hi), in the order of their names, with their vertices.
+// The triangles of the grid edges with low sample in [lo, hi), and in `crossing_means` their
+// vertices' crossing means (KeyedLocalMesh; a segment vertex's own position).
 detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, const Index3& n,
-                                          const Index3& lo, const Index3& hi) {
+                                          const Index3& lo, const Index3& hi,
+                                          PointMatrix& crossing_means) {
   std::vector<std::pair<std::uint64_t, Eigen::Index>> kept;
   for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t) {
     const std::uint64_t edge = keyed.triangle_edge[std::size_t(t)];
@@ -141,8 +145,12 @@ detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, c
     }
   }
   out.vertices.resize(Eigen::Index(used.size()), 3);
+  crossing_means.resize(Eigen::Index(used.size()), 3);
   for (std::size_t v = 0; v < used.size(); ++v) {
     out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(used[v]);
+    crossing_means.row(Eigen::Index(v)) = used[v] < keyed.crossing_means.rows()
+                                              ? keyed.crossing_means.row(used[v])
+                                              : keyed.mesh.vertices.row(used[v]);
     out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
     const std::size_t u = std::size_t(used[v]);
     out.on_feature.push_back(u < keyed.flags.size() && keyed.flags[u][1] ? 1 : 0);
@@ -263,8 +271,16 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       block, cp.points, cp.normals, options.local, nullptr, depths);
   piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
   // The owned edges and the ring around them (their vertices' normals need every triangle).
-  const detail::KeyedTriangles near = triangles_of_edges(
-      keyed, n, shifted(own_first, -ring(options)), shifted(own_end, ring(options)));
+  PointMatrix crossing_means;
+  detail::KeyedTriangles near = triangles_of_edges(keyed, n, shifted(own_first, -ring(options)),
+                                                   shifted(own_end, ring(options)), crossing_means);
+  if (options.untangle) {
+    // The quadrics can place two nearby cells' vertices (at features) so that their triangles
+    // cross: those vertices go to their crossings' mean, as an untangling of the dual mesh.
+    Mesh dual{std::move(near.vertices), near.triangles};
+    revert_self_intersections(dual, crossing_means, kDualUntangleRounds);
+    near.vertices = std::move(dual.vertices);
+  }
   clock.next(2);
   const int levels = options.subdivisions >= 0
                          ? options.subdivisions

@@ -142,12 +142,13 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
 PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
                           const PointMatrix& normals, const Eigen::VectorXd& weights,
                           const LocalReconstructionOptions& options,
-                          LocalReconstructionStats& stats,
-                          std::vector<std::array<char, 4>>& flags) {
+                          LocalReconstructionStats& stats, std::vector<std::array<char, 4>>& flags,
+                          PointMatrix& crossing_means) {
   const BinnedPoints bins = bin_points(cells, points);
   const Eigen::Vector3d reach = options.reach * cells.spacing;
   const double h = cells.spacing.maxCoeff();
   PointMatrix vertices(cells.vertex_count(), 3);
+  crossing_means.resize(vertices.rows(), 3);
   flags.assign(std::size_t(vertices.rows()), {0, 0, 0, 0});
   tbb::parallel_for(std::size_t(0), cells.active.size(), [&](std::size_t c) {
     const ActiveCell& cell = cells.active[c];
@@ -169,8 +170,12 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
     const Eigen::Vector3d lo = cells.corner(at), hi = lo + cells.spacing;
     for (int q = 0; q < polys.count; ++q) {
       std::vector<TangentPlane> crossings;
-      for (int e = polys.first_crossing[q]; e < polys.first_crossing[q + 1]; ++e)
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (int e = polys.first_crossing[q]; e < polys.first_crossing[q + 1]; ++e) {
         crossings.push_back({polys.crossing[e], polys.crossing_normal[e]});
+        mean += polys.crossing[e];
+      }
+      crossing_means.row(cell.first_vertex + q) = (mean / double(crossings.size())).transpose();
       VertexResult v = place_vertex(planes[std::size_t(q)], crossings, lo, hi, h, options);
       // (Not at a feature: there the interpolant itself cuts the corner.)
       if (!v.from_crossings && !v.feature && options.max_field_miss > 0 &&
@@ -293,7 +298,8 @@ KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatri
     const double scale = options.depth_scale * grid.spacing().maxCoeff();
     weights = 1 / (1 + (depths.array() / scale).square());
   }
-  mesh.vertices = cell_vertices(cells, points, normals, weights, options, stats, keyed.flags);
+  mesh.vertices = cell_vertices(cells, points, normals, weights, options, stats, keyed.flags,
+                                keyed.crossing_means);
   const detail::DualPolygons polygons = cells.dual_polygons();
   const Eigen::Index cell_vertex_count = mesh.vertices.rows();
   mesh.vertices.conservativeResize(
