@@ -17,20 +17,20 @@
 #include <thread>
 #include <tuple>
 
-#include "progress_bar.h"
-#include "sdfcontour/brick_marching.h"
-#include "sdfcontour/contact_point_errors.h"
-#include "sdfcontour/coordinates.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/mesh_union.h"
-#include "sdfcontour/metrics.h"
-#include "sdfcontour/option_ranges.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/signed_distance.h"
-#include "sdfcontour/vdb.h"
+#include "pipeline/progress_bar.h"
+#include "sdfcontour/contact_points/contact_point_errors.h"
+#include "sdfcontour/extraction/brick_marching.h"
+#include "sdfcontour/input/coordinates.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/input/mesh_union.h"
+#include "sdfcontour/input/signed_distance.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/io/vdb.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/metrics.h"
+#include "sdfcontour/pipeline/option_ranges.h"
+#include "sdfcontour/pipeline/pipeline.h"
 
 namespace py = pybind11;
 using namespace sdfcontour;
@@ -238,6 +238,7 @@ ContourOptions contour_options(const py::dict& o) {
   c.reconstruction = parse_reconstruction(get<std::string>(o, "reconstruction", "auto"));
   c.fallback_to_mc = get<bool>(o, "fallback_to_mc", c.fallback_to_mc);
   c.subdivisions = get<int>(o, "subdivisions", -1);
+  c.adaptivity.tolerance = get<double>(o, "adaptivity", 0.0);
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
   if (get<std::string>(o, "depth_text", "") == "auto") c.poisson.depth = 0;
@@ -492,6 +493,13 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
     stats["local_crossing_cells"] = r.local->crossing_cells;
   }
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;
+  if (r.adaptivity) {
+    py::dict a;
+    a["triangles_before"] = r.adaptivity->triangles_before;
+    a["triangles_after"] = r.adaptivity->triangles_after;
+    a["merges"] = r.adaptivity->merges;
+    stats["adaptivity"] = a;
+  }
   stats["side_repaired_samples"] = r.side_repair ? r.side_repair->repaired : 0L;
   stats["wrong_side_left"] = r.side_repair ? r.side_repair->left : 0L;
   py::dict seconds;  // per stage, as the CLI's --stats "seconds" (repeated stages summed)

@@ -4,10 +4,10 @@
 
 #include <random>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/pipeline.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/pipeline/pipeline.h"
 
 using namespace sdfcontour;
 

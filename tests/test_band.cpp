@@ -1,9 +1,9 @@
 #include <cmath>
 
-#include "sdfcontour/band.h"
-#include "sdfcontour/bricks.h"
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/pipeline.h"
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

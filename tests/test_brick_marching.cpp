@@ -7,9 +7,9 @@
 #include <tuple>
 #include <vector>
 
-#include "sdfcontour/brick_marching.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
+#include "sdfcontour/extraction/brick_marching.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/metrics/mesh_properties.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -2,13 +2,13 @@
 #include <limits>
 #include <random>
 
-#include "brick_geometry.h"
-#include "brick_shell.h"
-#include "sdfcontour/band.h"
-#include "sdfcontour/bricks.h"
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/gradients.h"
-#include "sdfcontour/triangulation.h"
+#include "contact_points/brick_geometry.h"
+#include "contact_points/brick_shell.h"
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/contact_points/triangulation.h"
+#include "sdfcontour/input/builtin_shapes.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -3,13 +3,13 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/metrics.h"
-#include "sdfcontour/pipeline.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/metrics/metrics.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <map>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/pipeline.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/pipeline/pipeline.h"
 
 using namespace sdfcontour;
 

@@ -1,6 +1,6 @@
-#include "sdfcontour/contact_points.h"
-#include "sdfcontour/gradients.h"
-#include "statistics.h"
+#include "metrics/statistics.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/contact_points/gradients.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

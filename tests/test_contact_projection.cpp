@@ -5,9 +5,9 @@
 
 #include <random>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/contact_projection.h"
-#include "sdfcontour/marching.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/reconstruction/contact_projection.h"
 
 using namespace sdfcontour;
 

@@ -1,4 +1,4 @@
-#include "sdfcontour/gradients.h"
+#include "sdfcontour/contact_points/gradients.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

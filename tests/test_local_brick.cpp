@@ -7,11 +7,11 @@
 #include <cmath>
 #include <vector>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/local_brick.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/self_intersections.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -8,13 +8,13 @@
 #include <random>
 #include <set>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/contact_points.h"
-#include "sdfcontour/local_reconstruction.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/subdivision.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/pipeline/pipeline.h"
+#include "sdfcontour/reconstruction/local_reconstruction.h"
+#include "sdfcontour/reconstruction/subdivision.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

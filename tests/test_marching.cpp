@@ -1,12 +1,12 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/metrics.h"
-#include "sdfcontour/npy.h"
-#include "sdfcontour/triangulation.h"
+#include "sdfcontour/contact_points/triangulation.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/io/npy.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/metrics.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

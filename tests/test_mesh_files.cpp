@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include "mesh_files.h"
+#include "io/mesh_files.h"
 #include "sdfcontour/types.h"
 
 using sdfcontour::Error;

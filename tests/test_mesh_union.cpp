@@ -3,11 +3,11 @@
 // grouped into the objects of a scene.
 #include <cmath>
 
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_union.h"
-#include "sdfcontour/point_clusters.h"
-#include "sdfcontour/self_intersections.h"
+#include "sdfcontour/band/point_clusters.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_union.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/self_intersections.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -2,7 +2,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "sdfcontour/npy.h"
+#include "sdfcontour/io/npy.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

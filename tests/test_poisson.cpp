@@ -2,13 +2,13 @@
 
 #include <cmath>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/metrics.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/poisson.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/metrics.h"
+#include "sdfcontour/pipeline/pipeline.h"
+#include "sdfcontour/reconstruction/poisson.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

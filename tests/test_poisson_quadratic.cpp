@@ -7,17 +7,17 @@
 #include <cmath>
 #include <random>
 
-#include "poisson/bspline.h"
-#include "poisson/conjugate_gradients.h"
-#include "poisson/extraction.h"
-#include "poisson/indicator.h"
-#include "poisson/octree.h"
-#include "poisson/points.h"
-#include "poisson/quadratic_basis.h"
-#include "poisson/quadratic_system.h"
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/poisson.h"
+#include "reconstruction/poisson/bspline.h"
+#include "reconstruction/poisson/conjugate_gradients.h"
+#include "reconstruction/poisson/extraction.h"
+#include "reconstruction/poisson/indicator.h"
+#include "reconstruction/poisson/octree.h"
+#include "reconstruction/poisson/points.h"
+#include "reconstruction/poisson/quadratic_basis.h"
+#include "reconstruction/poisson/quadratic_system.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/reconstruction/poisson.h"
 
 using namespace sdfcontour;
 using namespace sdfcontour::poisson;

@@ -3,15 +3,15 @@
 
 #include <cmath>
 
-#include "poisson/conjugate_gradients.h"
-#include "poisson/density.h"
-#include "poisson/extraction.h"
-#include "poisson/indicator.h"
-#include "poisson/normal_field.h"
-#include "poisson/octree.h"
-#include "poisson/points.h"
-#include "poisson/system.h"
-#include "sdfcontour/mesh_properties.h"
+#include "reconstruction/poisson/conjugate_gradients.h"
+#include "reconstruction/poisson/density.h"
+#include "reconstruction/poisson/extraction.h"
+#include "reconstruction/poisson/indicator.h"
+#include "reconstruction/poisson/normal_field.h"
+#include "reconstruction/poisson/octree.h"
+#include "reconstruction/poisson/points.h"
+#include "reconstruction/poisson/system.h"
+#include "sdfcontour/metrics/mesh_properties.h"
 
 using namespace sdfcontour;
 using namespace sdfcontour::poisson;

@@ -1,10 +1,10 @@
 #include <fstream>
 
-#include "sdfcontour/io.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/metrics.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/metrics.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -7,13 +7,13 @@
 
 #include <random>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/marching.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/self_intersections.h"
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -1,7 +1,7 @@
 #include <cmath>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/metrics.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/metrics/metrics.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -6,10 +6,10 @@
 #include <cmath>
 #include <vector>
 
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/self_intersections.h"
-#include "sdfcontour/side_repair.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/reconstruction/side_repair.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -3,12 +3,12 @@
 // mesh at 64^3 end on the wrong side of the Poisson surface (bench/wrong_side.py).
 #include <gtest/gtest.h>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/self_intersections.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

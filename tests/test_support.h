@@ -13,12 +13,12 @@
 #include <utility>
 #include <vector>
 
-#include "sdfcontour/io.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/samples.h"
-#include "sdfcontour/signed_distance.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/input/samples.h"
+#include "sdfcontour/input/signed_distance.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/metrics/mesh_properties.h"
 
 namespace sdfcontour::test {
 

@@ -1,8 +1,8 @@
 #include <Eigen/Dense>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/gradients.h"
-#include "sdfcontour/triangulation.h"
+#include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/contact_points/triangulation.h"
+#include "sdfcontour/input/builtin_shapes.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <fstream>
 
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/vdb.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/io/vdb.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "test_support.h"
 
 using namespace sdfcontour;

@@ -5,8 +5,8 @@
 #include <limits>
 #include <sstream>
 
-#include "atomic_file.h"
-#include "sdfcontour/option_ranges.h"
+#include "io/atomic_file.h"
+#include "sdfcontour/pipeline/option_ranges.h"
 
 namespace sdfcontour::cli {
 

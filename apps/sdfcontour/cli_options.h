@@ -13,9 +13,9 @@
 #include <utility>
 #include <vector>
 
-#include "sdfcontour/band.h"
-#include "sdfcontour/poisson.h"
-#include "sdfcontour/samples.h"
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/input/samples.h"
+#include "sdfcontour/reconstruction/poisson.h"
 #include "sdfcontour/types.h"
 
 namespace sdfcontour::cli {

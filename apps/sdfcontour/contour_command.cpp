@@ -5,18 +5,18 @@
 #include <iostream>
 #include <limits>
 
-#include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
-#include "file_checks.h"
-#include "progress_bar.h"
-#include "sdfcontour/builtin_shapes.h"
-#include "sdfcontour/contact_point_errors.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/npy.h"
-#include "sdfcontour/option_ranges.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/vdb.h"
+#include "io/atomic_file.h"
+#include "io/file_checks.h"
+#include "pipeline/progress_bar.h"
+#include "sdfcontour/contact_points/contact_point_errors.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/io/npy.h"
+#include "sdfcontour/io/vdb.h"
+#include "sdfcontour/pipeline/option_ranges.h"
+#include "sdfcontour/pipeline/pipeline.h"
 
 namespace sdfcontour::cli {
 
@@ -29,6 +29,7 @@ struct ContourArgs {
                                      reconstruction = "auto", subdivisions = "auto";
   int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
+  double adaptivity = 0;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, serial_triangulation = false, no_sign_constraints = false,
@@ -154,6 +155,8 @@ ContourOptions contour_options(const ContourArgs& a) {
       parse_count_or_auto("--subdivisions", a.subdivisions, int(option_range("--subdivisions").hi),
                           "a whole number of levels")
           .value_or(-1);
+  require_in_range("--adaptivity", a.adaptivity, "--adaptivity");
+  opt.adaptivity.tolerance = a.adaptivity;
   require_range("--local-reach", a.local.reach, 0, 1);
   require_range("--local-feature-ratio", a.local.feature_ratio, 0, 1);
   require_range("--local-robust-rounds", a.local.robust_rounds, 0, 100);
@@ -258,6 +261,10 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
                     {"side_violations_left", r.carving->side_violations_left},
                     {"wrong_side_left", r.carving->wrong_side_left},
                     {"side_passes", r.carving->side_passes}};
+  if (r.adaptivity)
+    j["adaptivity"] = {{"triangles_before", r.adaptivity->triangles_before},
+                       {"triangles_after", r.adaptivity->triangles_after},
+                       {"merges", r.adaptivity->merges}};
   if (r.untangling)
     j["untangling"] = {{"rounds", r.untangling->rounds},
                        {"vertices_reverted", r.untangling->vertices_reverted},
@@ -458,6 +465,12 @@ Command add_contour_command(CLI::App& app) {
                 "accurate there; poisson below, 4-8% more accurate at 32^3-64^3, docs/local.md; "
                 "Python's callables get local). Scattered samples and "
                 ".vdb level sets always take poisson")
+      ->capture_default_str();
+  c->add_option("--adaptivity", a->adaptivity,
+                "Merge the mesh where the surface is flat enough: edges collapse while the merged "
+                "vertex stays within this many spacings (RMS) of the tangent planes it gathers "
+                "(GCP's contact points, or the mesh's own planes for the other methods); creases "
+                "and corners stay. 0 (default): the mesh as reconstructed")
       ->capture_default_str();
   c->add_option(
        "--subdivisions", a->subdivisions,

@@ -2,12 +2,12 @@
 // points against a ground-truth mesh. Both print JSON.
 #include "cli_options.h"
 #include "commands.h"
-#include "file_checks.h"
-#include "sdfcontour/contact_point_errors.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/mesh_properties.h"
-#include "sdfcontour/metrics.h"
-#include "sdfcontour/self_intersections.h"
+#include "io/file_checks.h"
+#include "sdfcontour/contact_points/contact_point_errors.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/metrics.h"
+#include "sdfcontour/metrics/self_intersections.h"
 
 namespace sdfcontour::cli {
 

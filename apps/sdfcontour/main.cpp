@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "atomic_file.h"
 #include "commands.h"
 #include "huge_pages.h"
+#include "io/atomic_file.h"
 #include "sdfcontour/types.h"
 
 using namespace sdfcontour;

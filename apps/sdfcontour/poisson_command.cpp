@@ -1,12 +1,12 @@
 // sdfcontour poisson: oriented points -> a watertight mesh by screened Poisson reconstruction.
 #include <iostream>
 
-#include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
-#include "file_checks.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/npy.h"
+#include "io/atomic_file.h"
+#include "io/file_checks.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/io/npy.h"
 
 namespace sdfcontour::cli {
 

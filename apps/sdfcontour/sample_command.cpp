@@ -4,18 +4,18 @@
 #include <iostream>
 #include <limits>
 
-#include "atomic_file.h"
 #include "cli_options.h"
 #include "commands.h"
-#include "file_checks.h"
-#include "sdfcontour/contact_points.h"
-#include "sdfcontour/io.h"
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_transform.h"
-#include "sdfcontour/mesh_union.h"
-#include "sdfcontour/npy.h"
-#include "sdfcontour/option_ranges.h"
-#include "sdfcontour/vdb.h"
+#include "io/atomic_file.h"
+#include "io/file_checks.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_transform.h"
+#include "sdfcontour/input/mesh_union.h"
+#include "sdfcontour/io/io.h"
+#include "sdfcontour/io/npy.h"
+#include "sdfcontour/io/vdb.h"
+#include "sdfcontour/pipeline/option_ranges.h"
 
 namespace sdfcontour::cli {
 

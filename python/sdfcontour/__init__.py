@@ -218,10 +218,12 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
     if resolution is None:
         raise ValueError("a callable SDF needs a resolution (samples per axis)")
     n = int(resolution)
-    bricked = options["method"] == "mc" and want_mesh and not want_points
+    # (Adaptivity merges the whole mesh in the core: it takes the sampled grid.)
+    whole = options.get("adaptivity", 0.0) > 0
+    bricked = options["method"] == "mc" and want_mesh and not want_points and not whole
     # GCP's local reconstruction goes brick by brick too (local_brick.h).
     local = (options["method"] == "gcp" and options["reconstruction"] == "local" and
-             options["gradient"] == "regular" and want_mesh and not want_points)
+             options["gradient"] == "regular" and want_mesh and not want_points and not whole)
     _callable_budget(resolution, batch_size, dense=not (bricked or local))
     h = float(((hi - lo) / (n - 1)).max())
     started = time.perf_counter()
@@ -449,7 +451,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
             refine="auto", strict=False, progress=False, return_stats=False, level=0.0,
-            spacing=None, origin=None, return_normals=False, grid_name=None, lipschitz=1.0):
+            spacing=None, origin=None, return_normals=False, grid_name=None, lipschitz=1.0,
+            adaptivity=0.0):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -520,6 +523,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
         (0 to 4; "auto": 2 below 96 samples per axis, else 1).
+    adaptivity : float
+        Merge the mesh where the surface is flat enough: edges collapse while the merged vertex
+        stays within this many spacings (RMS, 0 to 10) of the tangent planes it gathers (GCP's
+        contact points; the mesh's own planes for the other methods); creases and corners stay.
+        0 (default): the mesh as reconstructed. ``stats["adaptivity"]`` gives the triangles
+        before and after. A callable is then sampled on the full grid. CLI ``--adaptivity``.
     brick_size : int or "auto"
         GCP triangulates the band in bricks of this many spacings (0: one triangulation; "auto":
         the largest of 256 down to 96 that makes at least 4 bricks per thread, else 64).
@@ -633,6 +642,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         reconstruction = "local"
     o["reconstruction"] = reconstruction
     o["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
+    o["adaptivity"] = _checks.in_range("adaptivity", adaptivity)
     if isinstance(refine_dilation, str) and refine_dilation == "auto":
         o["refine_dilation_text"] = "auto"
     else:

@@ -162,15 +162,17 @@ def sample_near_surface(f, lo, hi, n, options, batch_size, report, lipschitz=1.0
                         progress=False):
     """(NearSurfaceGrid, (value_scale, median gradient norm)) for GCP's local reconstruction with
     contour()'s `options`: exact wherever the bricks read a value (local_values_reach, and 4
-    spacings for the gradient norms), in the field's own units. A field steeper than a distance
-    (value_scale < 1) is sampled again over the wider reach that its values then need."""
+    spacings for the gradient norms, of distance). The sampler is exact where |f| / lipschitz <=
+    its threshold; the values read are those with |f| * value_scale <= reach, so a field steeper
+    than `lipschitz` says (value_scale * lipschitz < 1) is sampled again over the reach it
+    needs."""
     h = float(((hi - lo) / (n - 1)).max())
     reach = max(_sdfcontour.local_values_reach(options, (n, n, n)), 4.0) * h
     grid = NearSurfaceGrid(f, lo, hi, n, reach, batch_size, report, lipschitz, progress)
     scale = grid.value_scale()
-    if scale[0] < 1:
-        grid = NearSurfaceGrid(f, lo, hi, n, reach / scale[0], batch_size, report, lipschitz,
-                               progress)
+    if scale[0] * lipschitz < 1:
+        grid = NearSurfaceGrid(f, lo, hi, n, reach / (scale[0] * lipschitz), batch_size, report,
+                               lipschitz, progress)
     return grid, scale
 
 

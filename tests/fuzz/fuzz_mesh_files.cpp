@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "mesh_files.h"
+#include "io/mesh_files.h"
 #include "sdfcontour/types.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -7,9 +7,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "sdfcontour/mesh_sdf.h"
-#include "sdfcontour/mesh_union.h"
-#include "sdfcontour/signed_distance.h"
+#include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/mesh_union.h"
+#include "sdfcontour/input/signed_distance.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace sdfcontour;

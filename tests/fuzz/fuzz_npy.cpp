@@ -2,7 +2,7 @@
 // Any outcome but sdfcontour::Error (a crash, a hang, a sanitizer report, another exception) is
 // a finding.
 #include "memory_file.h"
-#include "sdfcontour/npy.h"
+#include "sdfcontour/io/npy.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // The reader maps a file: give it one in memory.

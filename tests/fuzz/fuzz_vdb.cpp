@@ -1,10 +1,10 @@
 // libFuzzer target: arbitrary bytes as a .vdb file, read as sdfcontour contour reads a level set
 // and as sdfcontour.dask reads one box by box.
 // Any outcome but sdfcontour::Error (a crash, a hang, a sanitizer report, another exception) is
-// a finding. OpenVDB itself reads in a child process (src/isolated_call.h), whose failures the
+// a finding. OpenVDB itself reads in a child process (src/io/isolated_call.h), whose failures the
 // reader reports as IoError.
 #include "memory_file.h"
-#include "sdfcontour/vdb.h"
+#include "sdfcontour/io/vdb.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const MemoryFile file(data, size);

@@ -11,21 +11,21 @@ out=build-fuzz
 mkdir -p "$out/findings"
 flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
        -Iinclude -I/usr/include/eigen3)
-clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/npy.cpp src/samples.cpp src/atomic_file.cpp src/file_checks.cpp \
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/io/npy.cpp src/input/samples.cpp src/io/atomic_file.cpp src/io/file_checks.cpp \
   -ltbb -o "$out/fuzz_npy"
-clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/mesh_files.cpp -o "$out/fuzz_mesh_files"
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/io/mesh_files.cpp -o "$out/fuzz_mesh_files"
 # The OpenVDB module is linked in (openvdb_loader.cpp then uses it instead of loading it).
 clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
   -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' \
-  tests/fuzz/fuzz_vdb.cpp src/vdb.cpp src/openvdb_loader.cpp src/openvdb_module.cpp \
-  src/isolated_call.cpp src/samples.cpp src/atomic_file.cpp src/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb \
+  tests/fuzz/fuzz_vdb.cpp src/io/vdb.cpp src/io/openvdb_loader.cpp src/io/openvdb_module.cpp \
+  src/io/isolated_call.cpp src/input/samples.cpp src/io/atomic_file.cpp src/io/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb \
   -o "$out/fuzz_vdb"
 # Meshes through sample's checks, union and signed distance (CGAL, TBB).
 clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_mesh_sample.cpp \
-  src/mesh_sdf.cpp src/mesh_union.cpp src/mesh_properties.cpp src/self_intersections.cpp \
-  src/coordinates.cpp src/signed_distance.cpp src/samples.cpp src/mesh_transform.cpp \
+  src/input/mesh_sdf.cpp src/input/mesh_union.cpp src/metrics/mesh_properties.cpp src/metrics/self_intersections.cpp \
+  src/input/coordinates.cpp src/input/signed_distance.cpp src/input/samples.cpp src/input/mesh_transform.cpp \
   -ltbb -lgmp -lmpfr -o "$out/fuzz_mesh_sample"
-# OpenVDB reads in a child process (src/isolated_call.h; its sanitizer reports on hostile files are
+# OpenVDB reads in a child process (src/io/isolated_call.h; its sanitizer reports on hostile files are
 # printed but end only the child, which the parent reports as an error), which inherits libFuzzer's malloc limit:
 # a huge allocation there is the child's failure, which the parent turns into an error, so only
 # ASan's own size limit applies to it.

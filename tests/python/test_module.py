@@ -502,6 +502,20 @@ def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     assert stats["local_bricks"] == (8 if brick == 24 else 1)
 
 
+def test_adaptivity_merges_flat_parts_and_says_so():
+    grid = full_grid(torus, 40)
+    V, F, stats = sdfcontour.contour(grid, reconstruction="local", return_stats=True)
+    Va, Fa, sa = sdfcontour.contour(grid, reconstruction="local", adaptivity=0.1,
+                                    return_stats=True)
+    assert sa["adaptivity"] == {"triangles_before": len(F), "triangles_after": len(Fa),
+                                "merges": sa["adaptivity"]["merges"]}
+    assert 5 * len(Fa) < len(F) and sa["closed"] and sa["manifold"]
+    assert np.abs(torus(Va)).max() < 0.25 * 2 / 39
+    assert "adaptivity" not in stats
+    with pytest.raises(ValueError, match="adaptivity"):
+        sdfcontour.contour(grid, adaptivity=-1)
+
+
 @pytest.mark.parametrize("steepness", [3, 10])
 def test_a_field_steeper_than_a_distance_keeps_its_small_parts(steepness):
     def steep(p):

@@ -1,12 +1,12 @@
 // A brick's moves of its mesh after the projection (brick_moves.h).
-#include "brick_moves.h"
+#include "reconstruction/local/brick_moves.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "../../carving_internal.h"
-#include "sdfcontour/pipeline.h"
+#include "reconstruction/carving_internal.h"
+#include "sdfcontour/pipeline/pipeline.h"
 
 namespace sdfcontour::detail {
 

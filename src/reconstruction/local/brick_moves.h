@@ -6,8 +6,8 @@
 #include <array>
 #include <vector>
 
-#include "sdfcontour/band.h"
-#include "sdfcontour/local_brick.h"
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 
 namespace sdfcontour::detail {
 

@@ -1,4 +1,4 @@
-#include "cell_quadric.h"
+#include "reconstruction/local/cell_quadric.h"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 
-#include "../../cube_polygons.h"
-#include "surface_cells.h"
+#include "extraction/cube_polygons.h"
+#include "reconstruction/local/surface_cells.h"
 
 namespace sdfcontour::detail {
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "sdfcontour/local_reconstruction.h"
+#include "sdfcontour/reconstruction/local_reconstruction.h"
 
 namespace sdfcontour::detail {
 

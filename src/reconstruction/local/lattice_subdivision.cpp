@@ -1,4 +1,4 @@
-#include "lattice_subdivision.h"
+#include "reconstruction/local/lattice_subdivision.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "sdfcontour/local_brick.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 
 namespace sdfcontour::detail {
 

@@ -1,7 +1,7 @@
 // One brick of the local reconstruction (local_brick.h): the block's band and contact points
 // (certified stars only), the keyed dual mesh around the owned edges, lattice subdivision and
 // projection, then the owned triangles.
-#include "sdfcontour/local_brick.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 
 #include <tbb/parallel_for.h>
 
@@ -11,13 +11,13 @@
 #include <limits>
 #include <string>
 
-#include "../../carving_internal.h"
-#include "brick_moves.h"
-#include "keyed_local_mesh.h"
-#include "lattice_subdivision.h"
-#include "sdfcontour/bricks.h"
-#include "sdfcontour/pipeline.h"
-#include "sdfcontour/self_intersections.h"
+#include "reconstruction/carving_internal.h"
+#include "reconstruction/local/brick_moves.h"
+#include "reconstruction/local/keyed_local_mesh.h"
+#include "reconstruction/local/lattice_subdivision.h"
+#include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/pipeline/pipeline.h"
 
 namespace sdfcontour {
 
@@ -197,6 +197,34 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
     throw Error("the local reconstruction's subdivisions must lie in 0..4 (-1: auto)");
 }
 
+// The contact points of the samples whose global index lies in [own_first, own_end), with
+// those indices, ascending (the band keeps the grid's order).
+void keep_owned_contact_points(const GridView& block, const BandSamples& band,
+                               const ContactPoints& cp, const Index3& own_first,
+                               const Index3& own_end, LocalPiece& piece) {
+  const Index3 n = block.whole_dims();
+  const Eigen::Vector3d h = block.spacing();
+  std::vector<std::pair<std::uint64_t, int>> owned;
+  for (int q = 0; q < cp.size(); ++q) {
+    const Eigen::Vector3d p = band.samples.points.row(cp.samples[std::size_t(q)]).transpose();
+    Index3 at;
+    for (int a = 0; a < 3; ++a) at[a] = int(std::lround((p[a] - block.bounds.min[a]) / h[a]));
+    if (!in_range(at, own_first, own_end)) continue;
+    owned.push_back(
+        {(std::uint64_t(at[0]) * std::uint64_t(n[1]) + std::uint64_t(at[1])) * std::uint64_t(n[2]) +
+             std::uint64_t(at[2]),
+         q});
+  }
+  std::sort(owned.begin(), owned.end());
+  piece.owned_points.resize(Eigen::Index(owned.size()), 3);
+  piece.owned_normals.resize(Eigen::Index(owned.size()), 3);
+  for (std::size_t r = 0; r < owned.size(); ++r) {
+    piece.owned_samples.push_back(owned[r].first);
+    piece.owned_points.row(Eigen::Index(r)) = cp.points.row(owned[r].second);
+    piece.owned_normals.row(Eigen::Index(r)) = cp.normals.row(owned[r].second);
+  }
+}
+
 }  // namespace
 
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
@@ -263,6 +291,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     cp = brick_contact_points(band.samples, h, options.gradient, options.contact, bricks, nullptr,
                               {}, &flagged);
   piece.contact_points = cp.size();
+  if (options.keep_contact_points)
+    keep_owned_contact_points(block, band, cp, own_first, own_end, piece);
   Eigen::VectorXd depths(cp.size());
   for (int q = 0; q < cp.size(); ++q)
     depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);

@@ -7,8 +7,8 @@
 #include <string>
 #include <tuple>
 
-#include "sdfcontour/bricks.h"
-#include "sdfcontour/local_brick.h"
+#include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 
 namespace sdfcontour {
 
@@ -108,8 +108,25 @@ Mesh join_local_pieces(const std::vector<LocalPiece>& pieces) {
   return mesh;
 }
 
+OrientedPoints join_owned_contact_points(const std::vector<LocalPiece>& pieces) {
+  std::vector<std::tuple<std::uint64_t, std::size_t, Eigen::Index>> order;
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    for (std::size_t r = 0; r < pieces[p].owned_samples.size(); ++r)
+      order.emplace_back(pieces[p].owned_samples[r], p, Eigen::Index(r));
+  std::sort(order.begin(), order.end());
+  OrientedPoints out;
+  out.points.resize(Eigen::Index(order.size()), 3);
+  out.normals.resize(Eigen::Index(order.size()), 3);
+  for (std::size_t q = 0; q < order.size(); ++q) {
+    const auto& [sample, p, r] = order[q];
+    out.points.row(Eigen::Index(q)) = pieces[p].owned_points.row(r);
+    out.normals.row(Eigen::Index(q)) = pieces[p].owned_normals.row(r);
+  }
+  return out;
+}
+
 Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, int brick,
-                          LocalBricksStats* stats) {
+                          LocalBricksStats* stats, OrientedPoints* contact_points) {
   validate_grid(grid);
   if (grid.whole[0] > 0 || grid.first != Index3{0, 0, 0})
     throw Error("local_mesh_in_bricks needs a whole grid, not a block");
@@ -156,6 +173,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
       for (std::size_t k = 0; k < p.seconds.size(); ++k) stats->seconds[k] += p.seconds[k];
     }
   }
+  if (contact_points) *contact_points = join_owned_contact_points(pieces);
   return join_local_pieces(pieces);
 }
 

@@ -1,6 +1,6 @@
 // The local reconstruction (local_reconstruction.h): active cells and their polygons, a vertex per
 // polygon from the contact points near the cell, a quad per sign-changing grid edge.
-#include "sdfcontour/local_reconstruction.h"
+#include "sdfcontour/reconstruction/local_reconstruction.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -11,10 +11,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "../../cube_polygons.h"
-#include "cell_quadric.h"
-#include "keyed_local_mesh.h"
-#include "surface_cells.h"
+#include "extraction/cube_polygons.h"
+#include "reconstruction/local/cell_quadric.h"
+#include "reconstruction/local/keyed_local_mesh.h"
+#include "reconstruction/local/surface_cells.h"
 
 namespace sdfcontour {
 

@@ -3,9 +3,9 @@
 // the contact points where they fit a smooth surface, then carved.
 #include <algorithm>
 
-#include "../../pipeline_stages.h"
-#include "sdfcontour/local_brick.h"
-#include "sdfcontour/subdivision.h"
+#include "pipeline/pipeline_stages.h"
+#include "sdfcontour/reconstruction/local_brick.h"
+#include "sdfcontour/reconstruction/subdivision.h"
 
 namespace sdfcontour::detail {}  // namespace sdfcontour::detail
 
@@ -55,8 +55,18 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   const int size =
       options.bricks.size == BrickOptions::kAutoSize ? kLocalBrick : options.bricks.size;
   LocalBricksStats stats;
-  result.mesh = stages.run("local", "local reconstruction in bricks",
-                           [&] { return local_mesh_in_bricks(grid, lb, size, &stats); });
+  // Adaptivity merges over the contact points: the bricks hand theirs on.
+  lb.keep_contact_points = options.adaptivity.tolerance > 0;
+  OrientedPoints kept;
+  result.mesh = stages.run("local", "local reconstruction in bricks", [&] {
+    return local_mesh_in_bricks(grid, lb, size, &stats, lb.keep_contact_points ? &kept : nullptr);
+  });
+  if (lb.keep_contact_points) {
+    ContactPoints cp;
+    cp.points = std::move(kept.points);
+    cp.normals = std::move(kept.normals);
+    result.contact_points = std::move(cp);
+  }
   result.local = stats.local;
   for (std::size_t k = 0; k < stats.seconds.size(); ++k)
     result.local_stages.push_back({kLocalSteps[k], stats.seconds[k]});

@@ -1,4 +1,4 @@
-#include "sdfcontour/subdivision.h"
+#include "sdfcontour/reconstruction/subdivision.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>

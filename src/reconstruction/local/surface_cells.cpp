@@ -1,11 +1,11 @@
-#include "surface_cells.h"
+#include "reconstruction/local/surface_cells.h"
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "../../cube_polygons.h"
+#include "extraction/cube_polygons.h"
 
 namespace sdfcontour::detail {
 

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "sdfcontour/samples.h"
+#include "sdfcontour/input/samples.h"
 
 namespace sdfcontour::detail {
 

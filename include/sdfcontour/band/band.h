@@ -1,0 +1,145 @@
+// The narrow band: which samples carry surface information for the triangulation methods.
+// A sample far from the surface adds nothing to GCP but triangulation cost, and a sample at a
+// truncation value (a TSDF or an OpenVDB level set clamps far values) carries no distance at
+// all: both are left out before the triangulation.
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "sdfcontour/input/samples.h"
+
+namespace sdfcontour {
+
+/// Truncation distances found in (or given for) a field: values at or beyond them carry no
+/// distance. Infinity where a sign is not truncated.
+struct Truncation {
+  double inside = std::numeric_limits<double>::infinity();   ///< of negative values
+  double outside = std::numeric_limits<double>::infinity();  ///< of non-negative values
+  bool detected() const {
+    return inside < std::numeric_limits<double>::infinity() ||
+           outside < std::numeric_limits<double>::infinity();
+  }
+  /// True if `value` is at a truncation distance of its sign.
+  bool truncated(double value) const;
+};
+
+/// How values clamped at a truncation distance are recognised.
+enum class TruncationMode {
+  Auto,      ///< detect it (see detect_truncation)
+  Given,     ///< BandOptions::truncation is the truncation distance
+  None,      ///< every value is a distance
+  Resolved,  ///< BandOptions::resolved (the whole grid's, for its blocks)
+};
+
+struct BandOptions {
+  /// Keep samples with |value| <= band * spacing. Infinity keeps every sample (the paper's);
+  /// 0 (the default) is auto_band() of the samples per axis.
+  double band = 0;
+  /// Samples up to `margin` spacings beyond the band (or inside a truncation distance) are
+  /// triangulated too but give no contact point: they close the band's samples' stars, which
+  /// would otherwise reach across the empty space beyond the band (and not be local).
+  double margin = 1.0;
+  TruncationMode truncation_mode = TruncationMode::Auto;
+  /// With TruncationMode::Given: values with |value| >= truncation (to 1e-6 relative) are
+  /// truncated and carry no distance.
+  double truncation = 0;
+  /// With TruncationMode::Resolved: the truncation found in the whole grid (a block's own values
+  /// could show another).
+  Truncation resolved;
+  /// The factor that turns the values into distances (1 for a signed distance; 1/m for a field
+  /// whose gradient norm is m). The band is measured, and the selected values returned, scaled.
+  double value_scale = 1.0;
+};
+
+/// The rule for TruncationMode::Auto: per sign, let T be the largest |value| of that sign; the
+/// sign is truncated at T if at least 64 samples, and at least `min_fraction` of that sign's
+/// samples, have |value| >= T (1 - 1e-6). An exact SDF reaches its extreme at a few samples
+/// (the grid's corners, a centre), a clamped one at a whole region. A half-space sampled on a
+/// grid reaches it on a grid face, which is then dropped too: far from the surface, so the band
+/// hides it anyway (TruncationMode::None keeps it).
+Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction = 0.01);
+Truncation detect_truncation(const GridView& grid, double min_fraction = 0.01);
+
+/// The truncation that `options` asks for on `values`.
+Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options);
+Truncation resolve_truncation(const GridView& grid, const BandOptions& options);
+
+/// The samples in the band, and where they came from.
+struct BandSamples {
+  Samples samples;           ///< the kept samples (positions and values)
+  std::vector<long> source;  ///< for each kept sample, its index in the input (C order for grids)
+  std::vector<char> core;    ///< for each kept sample, 1 if in the band proper (not the margin)
+  double spacing = 0;        ///< the spacing h the band is measured in
+  double band = 0;           ///< the band used, in spacings (auto resolved)
+  /// Samples across the input's longest side (a grid's largest dimension): what the automatic
+  /// choices (auto_band, auto_sign_constraints) go by.
+  double samples_per_axis = 0;
+  Truncation truncation;
+  /// Scattered samples dropped as isolated (fewer than 3 others within kIsolationReach spacings).
+  long isolated = 0;
+};
+
+/// Scattered samples with fewer than 3 others this many spacings around are dropped as strays.
+constexpr double kIsolationReach = 4;
+
+/// The automatic band, in spacings, for samples `samples_per_axis` across: 8 below 128, 4 from
+/// 128, 3 from 256. Measured against every sample (`bench/band.py`, docs/band.md, 6 shared meshes,
+/// geometric mean of L1 / L1 with all samples): band 4 gives 1.068 at 32^3, 1.084 at 64^3, 1.120 at
+/// 96^3 and 0.875 at 128^3; band 8 gives 1.017, 1.045 and 1.021 at 32^3, 64^3 and 96^3 for 31-60%
+/// more time there. From 128 on, band 4 is as accurate as all samples and twice as fast as 8.
+/// From 256, with the projection (on by default), band 3 against 4 took 0.74x (bunny 256^3) and
+/// 0.79x (bunny 512^3) the time for 1.02x the L1 (docs/scale.md).
+double auto_band(double samples_per_axis);
+
+/// The grid's samples with |value| <= (band + margin) * h (h the largest grid spacing) that are
+/// not truncated, in C order; core flags those with |value| <= band * h and a margin inside the
+/// truncation distance. Never builds the full grid's positions.
+BandSamples select_band(const GridView& grid, const BandOptions& options);
+BandSamples select_band(const Grid& grid, const BandOptions& options);
+
+/// The same for scattered samples; h is `spacing` if positive, else the side of a cube holding
+/// one sample on average (measured in the box of the central 98% of the samples on each axis).
+/// Isolated samples (a clump of fewer than 4 with no other within kIsolationReach * h) are
+/// dropped and counted in BandSamples::isolated; throws Error if every sample is.
+BandSamples select_band(const Samples& samples, const BandOptions& options, double spacing = 0);
+
+/// Throws Error unless `band` is positive (infinity allowed), `margin` non-negative and finite,
+/// and a given truncation positive and finite.
+void validate_band_options(const BandOptions& options);
+
+/// The number of grid edges whose ends differ in sign: about the surface's area over h^2.
+long sign_change_edges(const GridView& grid);
+
+/// The norm of the field's gradient at the grid points next to a sign change: 1 for a signed
+/// distance, m for a distance scaled by m, and spread out for a field that is no distance (a
+/// smooth implicit: |grad| varies along the surface). Central differences with steps h and 2h,
+/// Richardson-extrapolated so that curvature does not bias them; stencils touching a truncated
+/// value (see `truncation`) are left out.
+struct GradientNormSummary {
+  double low = NAN;     ///< 10th percentile
+  double median = NAN;  ///< 50th percentile
+  double high = NAN;    ///< 90th percentile
+  long count = 0;       ///< points measured; the percentiles are NaN for fewer than 16
+};
+GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation = {});
+
+/// The norms behind gradient_norm_summary, at the samples of `grid` (a block of its whole grid,
+/// GridGeometry::first and whole) whose whole-grid indices lie in [own_first, own_end): blocks
+/// that own disjoint parts give together the whole grid's norms. The block must hold 2 samples
+/// beyond the owned ones, where the whole grid has them (throws Error otherwise).
+std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                            std::array<int, 3> own_first,
+                                            std::array<int, 3> own_end);
+/// The percentiles of `norms` (any order).
+GradientNormSummary summarize_gradient_norms(std::vector<double> norms);
+
+/// The factor that turns values changing by `median_norm` per unit length near the surface into
+/// distances: 1 / median_norm where that is more than 10% from 1, else 1.
+double distance_value_scale(double median_norm);
+
+/// The band's samples proper, without the margin that only closes their stars.
+Samples core_samples(const BandSamples& band);
+
+}  // namespace sdfcontour

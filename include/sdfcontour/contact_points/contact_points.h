@@ -1,0 +1,60 @@
+// Contact points: where each sample's sphere of radius |value| touches the surface,
+// c = p - value * n with n the unit gradient, kept only if c lies in no other sample's sphere.
+#pragma once
+
+#include <vector>
+
+#include "sdfcontour/contact_points/triangulation.h"
+#include "sdfcontour/input/builtin_shapes.h"
+
+namespace sdfcontour {
+
+struct ContactPointOptions {
+  /// Near-tie tolerance tau. A candidate c of sample i is discarded when it lies inside a
+  /// neighbour n's sphere by more than tau times their distance:
+  ///   |c - p_n| < |value_n| - tau * |p_n - p_i|.
+  /// Samples of a true SDF put many contact points exactly on a neighbour's sphere (samples on
+  /// one normal line share their contact point); round-off then decides them at random. tau = 0
+  /// is the strict test.
+  double tie_tolerance = 1e-6;
+  /// "+FN": when the averaged gradient's point is discarded, try each incident tet's own gradient
+  /// (in ascending tet order) until one gives a point that passes.
+  bool try_tet_gradients = false;
+};
+
+/// Oriented contact points and where they came from.
+struct ContactPoints {
+  PointMatrix points;        ///< k x 3 contact points
+  PointMatrix normals;       ///< k x 3 unit outward normals
+  std::vector<int> samples;  ///< k source sample indices, ascending
+  int hidden = 0;            ///< samples that are not triangulation vertices (no point)
+  int zero_gradient = 0;     ///< visible samples whose gradient vanished (no point)
+  int discarded = 0;         ///< candidates inside a neighbour's sphere and not rescued
+  int rescued = 0;           ///< points kept thanks to a tet gradient (+FN)
+
+  int size() const { return int(samples.size()); }
+};
+
+/// True if c lies inside the sphere of a triangulation neighbour of sample i (see
+/// ContactPointOptions::tie_tolerance). Because c lies on sample i's own sphere, testing the
+/// regular triangulation's neighbours is the exact power-cell test.
+bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& values,
+                             const Triangulation& triangulation, int i, const Eigen::Vector3d& c,
+                             double tie_tolerance);
+
+/// GCP contact points from per-sample `gradients` (n x 3), filtered on `triangulation` (the
+/// regular triangulation for the exact test). With `only` (n flags), just the flagged samples
+/// are considered and counted.
+ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::VectorXd& values,
+                                      const PointMatrix& gradients,
+                                      const Triangulation& triangulation,
+                                      const ContactPointOptions& options = {},
+                                      const std::vector<char>* only = nullptr);
+
+/// Ground-truth contact points (GTCP): the exact closest surface point of every sample, with the
+/// exact gradient as normal. No filter: they all lie on the surface.
+/// With `only` (n flags), just the flagged samples.
+ContactPoints exact_contact_points(const PointMatrix& points, const AnalyticShape& shape,
+                                   const std::vector<char>* only = nullptr);
+
+}  // namespace sdfcontour

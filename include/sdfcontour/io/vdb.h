@@ -1,0 +1,56 @@
+// OpenVDB level sets in and out. A level set is read sparse: its active voxels become scattered
+// samples at their world positions, never a dense grid. Its background (the narrow band's half
+// width) is the truncation distance: the outermost spacing inside it closes the stars of the
+// samples that give contact points.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "sdfcontour/input/samples.h"
+
+namespace sdfcontour {
+
+/// True if `path` ends in ".vdb".
+bool is_vdb_path(const std::string& path);
+
+/// A float level set's active voxels.
+struct VdbLevelSet {
+  Samples samples;        ///< active voxels: world positions and values
+  double voxel_size = 0;  ///< the largest voxel side, in world units
+  double background = 0;  ///< the outside background value (the band's half width)
+  std::string grid_name;  ///< the grid read
+};
+
+/// Reads the float level set named `grid_name` (empty: the first float grid) from a .vdb file.
+/// Throws Error for an unreadable file, a file without a float grid, a named grid that is not
+/// there, a grid that is not a level set, or one without active voxels.
+VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_name = "");
+
+/// A level set's index space, for reading it brick by brick (never densified whole).
+struct VdbLayout {
+  std::string grid_name;
+  std::array<int, 3> min{0, 0, 0}, max{0, 0, 0};     ///< active voxels' bounding box, inclusive
+  double voxel_size = 0;                             ///< uniform voxel side, in world units
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< world position of voxel (0, 0, 0)
+  double background = 0;                             ///< the band's half width (outside value)
+  std::vector<std::array<int, 3>> leaf_origins;      ///< leaves (8^3 voxels) with active voxels
+};
+
+/// The layout of the float level set `grid_name` (empty: the first) in a .vdb file, from its
+/// topology. Throws Error as read_vdb_level_set does, and for non-uniform voxels.
+VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name = "");
+
+/// The values of the voxels [first, first + dims) (index space, C order; inactive voxels hold
+/// the signed background), read from the part of the file that the box needs.
+std::vector<float> read_vdb_box(const std::string& path, const std::string& grid_name,
+                                const std::array<int, 3>& first, const std::array<int, 3>& dims);
+
+/// Writes `grid` as a float level set named `name`: voxels with |value| < half_width * h are
+/// active, the rest is background (+-half_width * h); the transform maps voxel (i,j,k) to the
+/// grid's sample (i,j,k). Needs equal spacings on the three axes. Written atomically.
+void write_vdb_level_set(const std::string& path, const Grid& grid, double half_width,
+                         const std::string& name = "surface");
+
+}  // namespace sdfcontour

@@ -1,0 +1,251 @@
+// The whole contouring pipeline, stage by stage, for the command line and the tests.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/noise.h"
+#include "sdfcontour/input/sdf_input.h"
+#include "sdfcontour/io/npy.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/reconstruction/adaptivity.h"
+#include "sdfcontour/reconstruction/contact_projection.h"
+#include "sdfcontour/reconstruction/local_brick.h"
+#include "sdfcontour/reconstruction/local_reconstruction.h"
+#include "sdfcontour/reconstruction/poisson.h"
+#include "sdfcontour/reconstruction/side_repair.h"
+#include "sdfcontour/reconstruction/sphere_carving.h"
+
+namespace sdfcontour {
+
+enum class Method { Gcp, Gtcp, Mc, MtRt, MtDt };
+
+/// "gcp", "gtcp", "mc", "mt-rt", "mt-dt" <-> Method; parse_method throws Error for other names.
+Method parse_method(const std::string& name);
+std::string method_name(Method method);
+
+/// Where GCP's per-sample gradients come from.
+enum class GradientSource { Regular, Delaunay, Knn };
+
+/// "regular", "delaunay", "knn" <-> GradientSource; parse throws Error for other names.
+GradientSource parse_gradient_source(const std::string& name);
+std::string gradient_source_name(GradientSource source);
+
+/// How GCP's mesh is made from its contact points: the paper's global screened Poisson solve
+/// (with projection, carving and their repairs), or the local reconstruction
+/// (local_reconstruction.h: a vertex per surface cell from the contact points near it).
+enum class Reconstruction { Auto, Poisson, Local };
+
+/// "auto", "poisson", "local" <-> Reconstruction; parse throws Error for other names.
+Reconstruction parse_reconstruction(const std::string& name);
+std::string reconstruction_name(Reconstruction reconstruction);
+
+/// Whether Reconstruction::Auto takes the local reconstruction for a grid `samples_per_axis`
+/// across (its largest dimension): from 256. Measured (bench/scale.py, bunny and spot, 2 cores):
+/// at 256³ local's L1 is 0.505x MC's against Poisson's 0.590x, in 1.1x the time and 1.6x the
+/// memory; at 128³ they tie (0.469x against 0.460x), and at 32³ and 64³ Poisson leads by 4-8%
+/// (docs/local.md).
+bool auto_local_reconstruction(double samples_per_axis);
+
+/// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
+/// dimension): 2 below 96, else 1 (64^3: bunny 4.00e-4 with 2 against 4.57e-4 with 1, spot
+/// 1.45e-4 against 1.91e-4; 256^3: bunny 3.56e-5 with 1 against 6.61e-5 with none, which is
+/// marching cubes' 6.42e-5; docs/local.md).
+int auto_subdivisions(double samples_per_axis);
+
+/// An option that is on, off, or chosen from the input.
+enum class Switch { Auto, On, Off };
+/// "auto", "on", "off" <-> Switch; throws Error "unknown WHAT 'NAME' (known: ...)" for others.
+Switch parse_switch(const std::string& what, const std::string& name);
+
+/// Whether GCP constrains the samples' sides by default, for samples `samples_per_axis` across:
+/// below 128. Measured (docs/sides.md): on the shared meshes they lower GCP's L1 to 0.958x at
+/// 32^3 and 0.974x at 64^3; on bunny, spot and armadillo they raise it by 1.5-9% at 128^3 and
+/// 3.5-8% at 256^3 and 512^3, where the solved surface is already within the samples' noise.
+bool auto_sign_constraints(double samples_per_axis);
+
+/// The band, in spacings, of the samples whose balls carve GCP's mesh on a grid
+/// `samples_per_axis` across with the band options `given`: 16 with the automatic band below 128
+/// samples per axis (a user's band bounds every sample used); 0: the band's own samples.
+double auto_carving_band(const BandOptions& given, double samples_per_axis);
+
+/// Whether GCP carving's triangle rounds (CarvingOptions::side_passes) run by default, for samples
+/// `samples_per_axis` across (a grid's largest dimension; for scattered samples and OpenVDB level
+/// sets the band's extent in spacings): below 128. Above, they lower L1 by ~11% for 2.3-2.8x the
+/// whole run's time (bunny 256^3: grid 3.98e-5 -> 3.55e-5 and 14 -> 40 s; .vdb of half width 3
+/// 4.15e-5 -> 3.75e-5 and 14 -> 31 s).
+bool auto_carve_sides(double samples_per_axis);
+
+struct ContourOptions {
+  Method method = Method::Gcp;
+  bool want_mesh = true;     ///< produce the method's mesh
+  bool want_points = false;  ///< produce contact points (GCP's, or GTCP's for method gtcp)
+  GradientSource gradient_source = GradientSource::Regular;
+  int knn = 18;  ///< k for GradientSource::Knn
+  GradientOptions gradient;
+  ContactPointOptions contact;
+  /// The samples the triangulation methods use (every method but mc).
+  BandOptions band;
+  /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
+  BrickOptions bricks;
+  /// GCP's mesh. Auto: local for grids from 256 samples per axis (auto_local_reconstruction),
+  /// else Poisson (more accurate below: docs/local.md). Local needs a grid's cells: scattered
+  /// samples and .vdb level sets always take Poisson.
+  Reconstruction reconstruction = Reconstruction::Auto;
+  LocalReconstructionOptions local;
+  /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no
+  /// residual limit (the subdivided mesh's new vertices are chords, not a smooth surface). Measured
+  /// on bunny at 32^3 with 2 subdivisions: L1 2.14e-3 with the Poisson path's options, 1.37e-3.
+  ContactProjectionOptions local_projection = [] {
+    ContactProjectionOptions p;
+    p.radius = 1.25;
+    p.max_residual = 0;
+    return p;
+  }();
+  /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
+  /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.
+  int subdivisions = -1;
+  PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes; depth 0: automatic
+  /// GCP: the samples within sign_band spacings of the surface (in the band proper) constrain the
+  /// indicator so that each ends on its own side of the mesh (poisson.h, SignedSamples). Auto:
+  /// where auto_sign_constraints says so.
+  Switch enforce_signs = Switch::Auto;
+  double sign_band = 2.0;
+  double sign_radius = 1.5;  ///< the correction's radius, in spacings (SignConstraintOptions)
+  SignConstraintOptions sign_constraints;
+  /// GCP: move the mesh out of the samples' spheres (sphere_carving.h): the band's samples, or
+  /// on a grid below 128 samples per axis with the automatic band, every sample within 16
+  /// spacings. Auto: on, except on values smoothed for noise (their spheres are not empty).
+  Switch carve = Switch::Auto;
+  CarvingOptions carving;
+  /// GCP carving's triangle phase (CarvingOptions::side_passes). Auto: where auto_carve_sides
+  /// says so, for every kind of input.
+  Switch carve_sides = Switch::Auto;
+  /// GCP: after carving and its untangling, dent the mesh off the samples still on the wrong side
+  /// (side_repair.h). Auto: where carving's triangle phase ran.
+  Switch side_repair = Switch::Auto;
+  /// GCP: move the reconstructed mesh onto a local quadric fit of its contact points
+  /// (contact_projection.h), before carving. Auto: on at every resolution (it was off from 128
+  /// until measured: it gains more the finer the grid, L1 0.98x at 128^3 on bunny, spot and
+  /// armadillo, 0.91x on bunny 256^3, 0.70x on bunny 512^3; docs/scale.md).
+  Switch project = Switch::Auto;
+  ContactProjectionOptions projection;
+  bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
+  /// Called with a short message as each stage starts; empty for silence.
+  std::function<void(const std::string&)> progress;
+  /// Called as a long stage advances: (stage, done, total). Empty for silence.
+  std::function<void(const std::string&, long, long)> progress_fraction;
+  /// When set and it becomes true, contouring stops soon (at the next stage, brick or solver
+  /// iteration) by throwing Cancelled.
+  const std::atomic<bool>* cancel = nullptr;
+  /// Fields that are not distances (a distance times m, a smooth implicit): on a grid, measure
+  /// the gradient norm next to the surface and, if it is off 1 by more than 10%, rescale the
+  /// values by its inverse before the band is chosen (all methods but mc and gtcp). Not less: an
+  /// exact distance to a detailed mesh measures up to ~1% off at 64^3 (thin parts, medial axis),
+  /// and rescaling an exact distance by 1% hides most samples.
+  bool normalize_values = true;
+  /// When GCP's mesh on a grid cannot be trusted (no usable band in a truncated grid, no contact
+  /// point, or fewer than a tenth as many as grid edges crossing the surface: the values do not
+  /// behave as distances), return marching cubes' mesh instead, and say why in
+  /// ContourResult::fallback. Without it, those cases throw Error.
+  bool fallback_to_mc = true;
+  /// GCP on a noisy grid (noise_level() above 5% of a spacing, times the gradient norm): the
+  /// values are smoothed with a Gaussian of one sample first, and everything after runs on the
+  /// smoothed grid (ContourResult::noise_level, smoothed). Noise of 0.1 h already leaves GCP
+  /// almost no contact point, and 0.5 h gives marching cubes ~60 bubbles on a sphere.
+  bool smooth_noise = true;
+  /// Merging the mesh where the surface is flat enough (reconstruction/adaptivity.h), after
+  /// everything else: over the contact points for GCP and GTCP, the mesh's own planes otherwise.
+  /// Tolerance 0 (the default): the mesh as it is.
+  AdaptivityOptions adaptivity;
+};
+
+struct StageTime {
+  std::string name;
+  double seconds = 0;
+};
+
+struct ContourResult {
+  std::optional<Mesh> mesh;
+  /// GCP's or GTCP's contact points. Without want_points, a GCP mesh's reconstruction takes
+  /// their points and normals (freed there): only the counts and sample indices remain.
+  std::optional<ContactPoints> contact_points;
+  int samples = 0;                   ///< samples in the input
+  int band_samples = 0;              ///< of those, in the band (triangulated); 0 for mc alone
+  long isolated_samples = 0;         ///< scattered samples dropped as strays (BandSamples)
+  double band_spacing = 0;           ///< the spacing h the band is measured in
+  Truncation truncation;             ///< the truncation found or given
+  std::optional<BrickStats> bricks;  ///< when GCP ran in bricks
+  /// gcp, gtcp: the reconstruction that made the mesh (Poisson or Local, never Auto)
+  Reconstruction reconstruction = Reconstruction::Poisson;
+  std::optional<LocalReconstructionStats> local;  ///< when the local reconstruction ran
+  std::optional<LocalBricksStats> local_bricks;   ///< when it ran brick by brick
+  int poisson_depth = 0;                          ///< the depth the mesh was reconstructed at
+  int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
+  std::vector<StageTime> stages;
+  std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
+  /// Inside the "local" stage run brick by brick: each step's seconds summed over the bricks.
+  std::vector<StageTime> local_stages;
+  double gradient_norm = 0;            ///< median |grad value| next to the surface, when measured
+  GradientNormSummary gradient_norms;  ///< its 10th, 50th and 90th percentiles
+  /// GCP on a grid: the fraction of the mesh's vertices more than a spacing off the field's zero
+  /// set (trilinear; after rescaling). Over 1% means the values are no distances: see fallback.
+  double off_zero_set = 0;
+  double noise_level = 0;    ///< GCP on a grid: the values' noise_level(), in spacings
+  double band_spacings = 0;  ///< the band used (auto resolved), in spacings
+  int pieces_removed = 0;    ///< gcp, gtcp: pieces of the mesh smaller than a spacing, removed
+  /// gcp on a grid whose surface runs out of it: the mesh was cut to the grid's box (the
+  /// reconstruction closes it outside, where no sample says where it is)
+  bool clipped_to_grid = false;
+  /// gcp with enforce_signs: samples on the wrong side of the indicator before its correction,
+  /// and after it (0 unless the sweeps ran out).
+  long sign_violations = 0, sign_violations_left = 0;
+  bool sign_constraints_dropped = false;  ///< they changed the topology: the solved surface kept
+  bool sign_constraints = false;          ///< gcp: the samples' sides constrained the indicator
+  std::optional<ContactProjectionStats> projection;  ///< gcp: when the mesh was projected
+  std::optional<CarvingStats> carving;               ///< gcp: when the mesh was carved
+  /// gcp: projection's and carving's moves undone where they made the mesh cross itself
+  /// (self_intersections.h), summed over both stages
+  std::optional<UntangleStats> untangling;
+  std::optional<AdaptivityStats> adaptivity;  ///< with a positive adaptivity tolerance
+  /// gcp, when carving's triangle phase ran: the samples still on the wrong side after the
+  /// untangling, dented onto their sides (side_repair.h)
+  std::optional<SideRepairStats> side_repair;
+  bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
+  double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
+  std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
+};
+
+/// The Poisson depth for samples `spacing` apart spanning `points`' extent: 7 up to 48 samples
+/// per axis, 8 up to 129, 9 up to 257, 10 up to 513, 11 above, so that the mesh follows the
+/// grid. Measured on the 17 shared meshes (bench/poisson_depth.py,
+/// docs/results/poisson_depth.md): at 32^3 depth 7 gives GCP/MC L1 0.349 with 17x MC's
+/// triangles, depth 8 0.376 with 61x; at 16^3 depth 7 0.306 with 78x, depth 8 0.317 with 100x;
+/// at 64^3 depth 8 0.341, depth 7 0.390. Depth 6 (0.305 with 22x at 16^3 on grids) left a
+/// spurious far sheet on 3000 random samples of a sphere: not used. Measured (bench/scale.py,
+/// docs/scale.md): at
+/// 256^3 depth 8 is coarser than the grid (GCP's L1 1.27x MC's) and depth 9 gives 0.59x; at 512^3
+/// depth 9 gives 1.3-1.9x MC's L1 (bunny, spot, armadillo) and depth 10 0.57-0.95x; at 1024^3
+/// depth 10 gives 1.43x MC's L1 (bunny, 6.9 GB) and depth 11 0.61-0.74x (bunny, spot, armadillo;
+/// 6.1-8.4 GB). Deeper than 11 is left to the user (--depth): each depth needs ~4x the memory.
+int auto_poisson_depth(const PointMatrix& points, double spacing);
+
+/// The options of GCP's local reconstruction in bricks (local_brick.h) that `options` asks for:
+/// its band (truncation as given), gradients, contact points, local options, subdivisions and
+/// projection (ContourOptions::local_projection), and cancel flag.
+LocalBrickOptions local_brick_options(const ContourOptions& options);
+
+/// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
+/// it may be null for other methods. Throws Error for an input the method cannot use (no sign
+/// change, MC without a grid, GTCP without an exact SDF, no contact point kept).
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
+                      const ContourOptions& options);
+
+}  // namespace sdfcontour

@@ -1,0 +1,171 @@
+// GCP's local reconstruction one brick at a time, from end to end: each brick of a grid, read
+// with a halo, gives the piece of the mesh that it owns (contact points, vertices, subdivision and
+// projection all computed from the brick's block), with global vertex keys, so that pieces made
+// anywhere (threads, processes, machines) join into one mesh, bit for bit the same whatever the
+// bricks.
+//
+// Ownership: a brick owns the grid edges whose low sample lies in its range [own_first,
+// own_end) on each axis, and the triangles of those edges' dual polygons (local_reconstruction.h),
+// each subdivided. Every value a piece's vertex depends on (the cells' contact points and their
+// samples' certified stars, the gradients at the cells' corners, the contact points within the
+// projection's radius, the triangles around the vertex for its normal) lies in the block, and is
+// combined in an order fixed by global names: the result equals the whole grid's run (one brick).
+// Carving runs vertex by vertex; its triangle rounds and the untangling (whole-mesh stages) are
+// not part of it.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/input/samples.h"
+#include "sdfcontour/reconstruction/contact_projection.h"
+#include "sdfcontour/reconstruction/local_reconstruction.h"
+
+namespace sdfcontour {
+
+/// The bricks' side (cells) with which contour() runs the local reconstruction when no brick
+/// size is given: one brick up to 256 samples per axis, memory bounded by a brick beyond.
+constexpr int kLocalBrick = 256;
+
+/// Rounds of undoing crossing moves. A piece's triangles depend on the triangles within
+/// kCrossingReach grid edges of them per round (carving moves a vertex at most kMaxCarveMove
+/// spacings, projection at most its max_move: triangles that start farther apart cannot meet),
+/// so a brick computes the mesh of its edges and kUntangleRing more on each side.
+constexpr int kUntangleRounds = 2;
+constexpr int kSideRounds = 1;
+constexpr double kMaxCarveMove = 0.5;
+constexpr double kLongestSideMove = 0.5;
+/// Vertices move at most 0.25 (projection) + kMaxCarveMove + kSideRounds * kLongestSideMove
+/// spacings: triangles of grid edges this far apart cannot meet.
+constexpr int kCrossingReach = 5;
+/// A side round's move depends on the samples within a spacing of a triangle near the vertex.
+constexpr int kSideReach = 4;
+/// Rounds that move the quadrics' vertices of crossing triangles to their crossings' mean
+/// (inside their cells: triangles of grid edges kCrossingReach apart cannot meet).
+constexpr int kDualUntangleRounds = 2;
+/// (The rounds: the dual mesh's, the side rounds and the undoing rounds, then one side round and
+/// one undoing round for the samples whose sides the undoing lost.)
+constexpr int kUntangleRing = 1 + kSideReach * (kSideRounds + 1) +
+                              kCrossingReach * (kDualUntangleRounds + kUntangleRounds + 2);
+
+struct LocalBrickOptions {
+  /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the
+  /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
+  BandOptions band;
+  GradientOptions gradient;
+  ContactPointOptions contact;
+  LocalReconstructionOptions local;
+  /// Lattice subdivisions of each triangle (2^s segments per edge), 0..4; -1: auto_subdivisions
+  /// of the whole grid (pipeline.h).
+  int subdivisions = -1;
+  bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
+  /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit.
+  ContactProjectionOptions projection = [] {
+    ContactProjectionOptions p;
+    p.radius = 1.25;
+    p.max_residual = 0;
+    return p;
+  }();
+  /// Carving, vertex by vertex: up to `carve_passes` rounds of each vertex pushed onto the sphere
+  /// of the band sample's ball it enters deepest (sphere_carving.h without its triangle checks
+  /// and rounds, which are whole-mesh stages).
+  bool carve = true;
+  int carve_passes = 3;
+  /// Rounds that move the mesh's nearest feature off each band sample within a spacing of the
+  /// surface that lies on the wrong side of it (carving's triangle rounds, for the sides alone).
+  int side_rounds = kSideRounds;
+  /// Vertices on the reconstruction's sharp features (feature vertices, and the subdivision's
+  /// vertices between two of them) are neither projected nor carved. Off: at 64³ it sharpens
+  /// the cube's edges (0.0125 -> 0.0083 h) and wingnut's (0.158 -> 0.148 h), but on a coarse
+  /// grid a curved patch's cells read as features and stay chords (torus 32³: L1 0.176 -> 0.208
+  /// of MC's, spot 0.236 -> 0.288).
+  bool keep_features = false;
+  /// Undo the projection's and carving's moves of the vertices of triangles that then cross
+  /// another, in kUntangleRounds rounds (each over the triangles the last one changed).
+  bool untangle = true;
+  /// When set and it becomes true, the bricks stop soon (throws Cancelled).
+  const std::atomic<bool>* cancel = nullptr;
+  /// local_mesh_in_bricks: called as bricks finish (done, total), serialised; empty for silence.
+  std::function<void(int, int)> progress;
+  /// Keep the owned samples' contact points in LocalPiece (for adaptivity after the join).
+  bool keep_contact_points = false;
+};
+
+/// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,
+/// (ky + 1) * 64 + j) for the subdivision vertex j / 2^s of the way along edge (kx, ky), kx < ky;
+/// (2^63 + triangle, slot) for a vertex inside one of the reconstruction's triangles.
+using VertexKey = std::array<std::uint64_t, 2>;
+
+/// The part of the mesh that one brick owns.
+struct LocalPiece {
+  PointMatrix vertices;         ///< v x 3, in ascending key order
+  std::vector<VertexKey> keys;  ///< v, ascending and distinct
+  TriangleMatrix triangles;     ///< outward oriented, indices into `vertices`
+  /// Per triangle, ascending: 256 * (8 * its grid edge + rank in the edge's polygon) + its rank
+  /// among that triangle's subdivisions (the whole grid's order).
+  std::vector<std::uint64_t> triangle_names;
+  long contact_points = 0;  ///< contact points of the block's flagged samples
+  /// With keep_contact_points: the contact points of the owned samples (each sample's once over
+  /// all bricks), their unit normals, and their samples' global C-order indices, ascending.
+  PointMatrix owned_points, owned_normals;
+  std::vector<std::uint64_t> owned_samples;
+  LocalReconstructionStats stats;  ///< of the owned cells (those with their low corner owned)
+  /// Seconds per step: band, contact points, reconstruction, subdivision and projection,
+  /// carving, untangling (kLocalSteps names them).
+  std::array<double, 6> seconds{};
+};
+
+/// The names of LocalPiece::seconds' steps.
+constexpr std::array<const char*, 6> kLocalSteps{"band",           "contact points",
+                                                 "reconstruction", "subdivision and projection",
+                                                 "carving",        "untangling"};
+
+/// The halo, in samples, that a brick's block needs first with these options on a grid of
+/// whole-grid `dims` (the contact points' stars may ask for more: HaloTooSmall).
+int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims);
+
+/// The distance from the surface, in spacings of distance (values times the band's value_scale),
+/// within which the bricks read the grid's values: the band with its margin, and the carving
+/// band. Beyond it they read only the values' signs and that they lie beyond, so a sampler may
+/// put any value of the right sign and larger size there (a callable's bound).
+double local_values_reach(const LocalBrickOptions& options, const std::array<int, 3>& dims);
+
+/// The piece owned by the edges with global low sample in [own_first, own_end) of the grid that
+/// `block` is a block of (GridGeometry::first and ::whole set; the block should reach
+/// local_brick_halo samples beyond the owned range where the grid goes on). Throws HaloTooSmall
+/// if the block is too small for a star it needs, Error for bad options or values.
+LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
+                             const std::array<int, 3>& own_end, const LocalBrickOptions& options);
+
+/// Joins pieces: vertices with equal keys become one (ascending keys), triangles in the order of
+/// their names: the same arrays whatever the bricks. Throws InternalError if two pieces give one
+/// key two positions.
+Mesh join_local_pieces(const std::vector<LocalPiece>& pieces);
+
+/// The whole grid's mesh from bricks of `brick` samples per side (0: one brick), computed in
+/// parallel and joined; each brick's halo doubles until its stars fit. The mesh does not depend
+/// on `brick` or the thread count.
+struct LocalBricksStats {
+  int bricks = 0;                   ///< bricks with a piece of the surface
+  int wider_halos = 0;              ///< bricks read again with a wider halo
+  long contact_points = 0;          ///< over all bricks (a halo's samples counted again)
+  LocalReconstructionStats local;   ///< summed over the bricks' owned cells
+  std::array<double, 6> seconds{};  ///< LocalPiece::seconds summed over the bricks (CPU time)
+};
+
+/// `contact_points` (optional, with options.keep_contact_points): every brick's owned contact
+/// points joined in sample order (the same for any bricks).
+Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& options, int brick = 0,
+                          LocalBricksStats* stats = nullptr,
+                          OrientedPoints* contact_points = nullptr);
+
+/// The pieces' owned contact points (LocalPiece::owned_points) in their samples' order.
+OrientedPoints join_owned_contact_points(const std::vector<LocalPiece>& pieces);
+
+}  // namespace sdfcontour

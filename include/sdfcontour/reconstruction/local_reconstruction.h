@@ -1,0 +1,70 @@
+// GCP's local reconstruction: a mesh from a grid's signs and the contact points near each cell,
+// with no global solve (dual contouring with the contact points as Hermite data).
+//
+// Topology comes from the samples' signs: each cell the surface crosses gets one vertex per
+// polygon of its marching-cubes case (the asymptotic decider resolves ambiguous faces the same way
+// in both cells that share them), and each grid edge with a sign change gets the quad of the four
+// vertices around it. The mesh is the dual of the marching-cubes mesh, so it is closed and
+// 2-manifold wherever that one is (the surface inside the grid). Geometry comes from the contact
+// points: a vertex minimises the squared distances to the tangent planes of the contact points near
+// its cell (a quadric error, solved with rank truncation), so that on a flat patch it stays at the
+// points' centroid, on an edge it moves onto the edge and at a corner onto the corner.
+#pragma once
+
+#include "sdfcontour/input/samples.h"
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+struct LocalReconstructionOptions {
+  /// Contact points within the cell grown by this many spacings on each side feed its vertex.
+  /// Measured on bunny at 32^3: 0 and 0.2 alike, 0.5 worse (its centroid leaves the cell); on a
+  /// box, 0.2 puts the faces' vertices 10x closer than 0 (GCP's face points lie on cell sides).
+  double reach = 0.2;
+  /// Rank truncation of the quadric: a direction whose eigenvalue of sum(n n^T) is below this
+  /// fraction of the largest is not solved for (the vertex keeps the points' centroid along it).
+  /// Planes that meet at more than ~2 asin(sqrt(ratio)) (16 degrees for 0.02) make a feature.
+  double feature_ratio = 0.02;
+  /// Robust reweighting rounds: after each solve a point whose plane misses the vertex by r
+  /// weighs 1 / (1 + (r / (robust_scale spacings))^2), so that a few points with bent normals
+  /// (next to an edge, where the field is not linear) do not pull a vertex off the feature.
+  int robust_rounds = 3;
+  double robust_scale = 0.01;
+  /// Cells with fewer contact points than this use their edge crossings instead (linear
+  /// interpolation, with the grid's central-difference gradient as normal).
+  int min_points = 1;
+  /// A contact point from a sample |value| away weighs 1 / (1 + (|value| / (depth_scale
+  /// spacings))^2): a far sample's gradient error moves its point |value| times as far. 0: every
+  /// point weighs the same (also when no depths are given).
+  double depth_scale = 0;
+  /// A vertex on a smooth patch (not an edge or corner, where the interpolant itself cuts the
+  /// feature) farther than this many spacings from the zero set of the cell's trilinear
+  /// interpolant (|value| / |gradient| there) disagrees with the samples' own sign changes
+  /// (contact points of a field that is only roughly a distance): the cell falls back to its edge
+  /// crossings. 0: no check.
+  double max_field_miss = 0.5;
+};
+
+struct LocalReconstructionStats {
+  long cells = 0;             ///< cells the surface crosses
+  long vertices = 0;          ///< one per polygon of each such cell
+  long split_cells = 0;       ///< cells with more than one polygon (a vertex each)
+  long crossing_cells = 0;    ///< vertices placed from edge crossings (too few contact points)
+  long feature_vertices = 0;  ///< vertices whose quadric had rank 2 or 3 (an edge or a corner)
+  long clamped = 0;           ///< vertices whose quadric's minimiser left the cell, clamped to it
+  long field_misses = 0;      ///< vertices off the cell's interpolated zero set (max_field_miss)
+};
+
+/// The local reconstruction of the zero level set of `grid` (inside: value < 0) from contact
+/// points `points` (k x 3) with unit outward `normals` (k x 3) of the same field. Returns a mesh
+/// whose vertices each lie in their own cell, triangles counter-clockwise seen from outside.
+/// `depths` (k, or empty) are the |value|s of the points' samples, for options.depth_scale.
+/// The result depends only on the inputs, not on their row order or the thread count.
+/// Throws Error for mismatched sizes or non-finite points or normals.
+Mesh local_reconstruction(const GridView& grid, const PointMatrix& points,
+                          const PointMatrix& normals,
+                          const LocalReconstructionOptions& options = {},
+                          LocalReconstructionStats* stats = nullptr,
+                          const Eigen::VectorXd& depths = Eigen::VectorXd());
+
+}  // namespace sdfcontour

@@ -1,0 +1,421 @@
+#include "sdfcontour/band/band.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sdfcontour/band/point_clusters.h"
+
+namespace sdfcontour {
+
+namespace {
+
+// Values within this relative distance of a truncation value count as truncated: writers
+// store T in float32 and may round it.
+constexpr double kTruncationTolerance = 1e-6;
+// Fewer samples at a sign's extreme than this are a coincidence (a grid's corners, a centre).
+constexpr long kMinTruncatedSamples = 64;
+
+// Keep sample i when it lies in the band or its margin and carries a distance; it is a core
+// sample (one that gives a contact point) when it lies in the band and a margin away from a
+// truncation distance.
+struct BandTest {
+  double keep_limit;  // (band + margin) * h
+  double core_limit;  // band * h
+  double margin;      // margin * h
+  Truncation truncation;
+  bool operator()(double v) const { return std::abs(v) <= keep_limit && !truncation.truncated(v); }
+  bool core(double v) const {
+    const double t = v < 0 ? truncation.inside : truncation.outside;
+    return std::abs(v) <= core_limit && std::abs(v) <= t * (1 - kTruncationTolerance) - margin;
+  }
+};
+
+BandTest make_test(const BandOptions& options, double h, const Truncation& truncation) {
+  return {(options.band + options.margin) * h, options.band * h, options.margin * h, truncation};
+}
+
+// 4 as "4", 2.5 as "2.5" (std::to_string writes 4.000000).
+std::string shortest(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
+void require_usable(const BandSamples& b, const BandOptions& options) {
+  const Eigen::Index n = b.samples.values.size();
+  bool inside = false, outside = false;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (b.core[std::size_t(i)]) (b.samples.values[i] < 0 ? inside : outside) = true;
+  if (n < 4 || !(inside && outside))
+    throw Error("only " + std::to_string(n) + " samples lie within the band of " +
+                shortest(options.band) + " spacings" +
+                (b.truncation.detected() ? " and inside the truncation distance" : "") +
+                (n >= 4 ? ", and they have no sign change" : "") +
+                "; widen it with --band (or --band all)");
+}
+
+}  // namespace
+
+bool Truncation::truncated(double value) const {
+  const double t = value < 0 ? inside : outside;
+  return std::abs(value) >= t * (1 - kTruncationTolerance);
+}
+
+namespace {
+
+template <class T>
+Truncation detect_in(const T* values, std::size_t n, double min_fraction) {
+  struct Extremes {
+    double most_negative = 0, most_positive = 0;
+  };
+  const Extremes e = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Extremes{},
+      [&](const tbb::blocked_range<std::size_t>& r, Extremes x) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          x.most_negative = std::min(x.most_negative, double(values[i]));
+          x.most_positive = std::max(x.most_positive, double(values[i]));
+        }
+        return x;
+      },
+      [](Extremes a, Extremes b) {
+        return Extremes{std::min(a.most_negative, b.most_negative),
+                        std::max(a.most_positive, b.most_positive)};
+      });
+  const double lo = -e.most_negative * (1 - kTruncationTolerance),
+               hi = e.most_positive * (1 - kTruncationTolerance);
+  struct Counts {
+    long at_inside = 0, at_outside = 0, negatives = 0;
+  };
+  const Counts c = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Counts{},
+      [&](const tbb::blocked_range<std::size_t>& r, Counts x) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          const double v = values[i];
+          x.negatives += v < 0;
+          x.at_inside += v < 0 && -v >= lo;
+          x.at_outside += v > 0 && v >= hi;
+        }
+        return x;
+      },
+      [](Counts a, Counts b) {
+        return Counts{a.at_inside + b.at_inside, a.at_outside + b.at_outside,
+                      a.negatives + b.negatives};
+      });
+  auto clamped = [&](long at_extreme, long of_sign) {
+    return at_extreme >= kMinTruncatedSamples &&
+           double(at_extreme) >= min_fraction * double(of_sign);
+  };
+  Truncation t;
+  if (e.most_negative < 0 && clamped(c.at_inside, c.negatives)) t.inside = -e.most_negative;
+  if (e.most_positive > 0 && clamped(c.at_outside, long(n) - c.negatives))
+    t.outside = e.most_positive;
+  return t;
+}
+
+}  // namespace
+
+Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction) {
+  return detect_in(values.data(), std::size_t(values.size()), min_fraction);
+}
+
+Truncation detect_truncation(const GridView& grid, double min_fraction) {
+  return grid.visit([&](const auto* f) { return detect_in(f, grid.size(), min_fraction); });
+}
+
+namespace {
+
+template <class Values>
+Truncation resolve(const Values& values, const BandOptions& options) {
+  switch (options.truncation_mode) {
+    case TruncationMode::Auto:
+      return detect_truncation(values);
+    case TruncationMode::Given: {
+      Truncation t;
+      t.inside = t.outside = options.truncation;
+      return t;
+    }
+    case TruncationMode::Resolved:
+      return options.resolved;
+    case TruncationMode::None:
+      break;
+  }
+  return {};
+}
+
+// What both selections start with: checked options, the spacing, the truncation, the test.
+template <class Values>
+BandTest begin_band(BandSamples& out, const Values& values, const BandOptions& options, double h) {
+  validate_band_options(options);
+  out.spacing = h;
+  out.band = options.band;
+  out.truncation = resolve(values, options);
+  return make_test(options, h / options.value_scale, out.truncation);
+}
+
+// The selected values and the truncation in distance units.
+void scale_values(BandSamples& out, const BandOptions& options) {
+  if (options.value_scale == 1.0) return;
+  out.samples.values *= options.value_scale;
+  out.truncation.inside *= options.value_scale;
+  out.truncation.outside *= options.value_scale;
+}
+
+}  // namespace
+
+Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options) {
+  return resolve(values, options);
+}
+
+Truncation resolve_truncation(const GridView& grid, const BandOptions& options) {
+  return resolve(grid, options);
+}
+
+double auto_band(double samples_per_axis) {
+  return samples_per_axis < 128 ? 8.0 : samples_per_axis < 256 ? 4.0 : 3.0;
+}
+
+void validate_band_options(const BandOptions& options) {
+  if (!(options.band >= 0))
+    throw Error("the band must be a positive number of spacings (or 'all' or 'auto'), got " +
+                std::to_string(options.band));
+  if (!(options.margin >= 0) || !std::isfinite(options.margin))
+    throw Error("the band's margin must be a non-negative number of spacings");
+  if (options.truncation_mode == TruncationMode::Given &&
+      !(options.truncation > 0 && std::isfinite(options.truncation)))
+    throw Error("the truncation distance must be positive and finite");
+  if (!(options.value_scale > 0) || !std::isfinite(options.value_scale))
+    throw Error("the value scale must be positive and finite");
+}
+
+BandSamples select_band(const GridView& grid, const BandOptions& given) {
+  BandOptions options = given;
+  BandSamples out;
+  const std::array<int, 3> whole = grid.whole_dims();  // a block's band is its whole grid's
+  out.samples_per_axis = double(*std::max_element(whole.begin(), whole.end()));
+  if (options.band == 0) options.band = auto_band(out.samples_per_axis);
+  const BandTest keep = begin_band(out, grid, options, grid.spacing().maxCoeff());
+  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  // Per-slab counts, then each slab fills its own rows: C order for any thread count.
+  std::vector<Eigen::Index> slab_start(std::size_t(nx) + 1, 0);
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(0, nx, [&](int i) {
+      Eigen::Index c = 0;
+      const std::size_t begin = grid.index(i, 0, 0), end = begin + std::size_t(ny) * nz;
+      for (std::size_t p = begin; p < end; ++p) c += keep(double(f[p]));
+      slab_start[std::size_t(i) + 1] = c;
+    });
+  });
+  for (int i = 0; i < nx; ++i) slab_start[std::size_t(i) + 1] += slab_start[std::size_t(i)];
+  const Eigen::Index count = slab_start.back();
+  out.samples.points.resize(count, 3);
+  out.samples.values.resize(count);
+  out.source.resize(std::size_t(count));
+  out.core.resize(std::size_t(count));
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(0, nx, [&](int i) {
+      Eigen::Index at = slab_start[std::size_t(i)];
+      for (int j = 0; j < ny; ++j)
+        for (int k = 0; k < nz; ++k) {
+          const std::size_t p = grid.index(i, j, k);
+          const double v = f[p];
+          if (!keep(v)) continue;
+          out.samples.points.row(at) = grid.point(i, j, k).transpose();
+          out.samples.values[at] = v;
+          out.core[std::size_t(at)] = keep.core(v);
+          out.source[std::size_t(at++)] = long(p);
+        }
+    });
+  });
+  scale_values(out, options);
+  require_usable(out, options);
+  return out;
+}
+
+BandSamples select_band(const Grid& grid, const BandOptions& options) {
+  return select_band(view_of(grid), options);
+}
+
+namespace {
+
+// The side of a cube holding one sample on average, measured in the box of the central 98% of
+// the samples on each axis, so that a stray sample far away does not inflate it.
+double robust_spacing(const PointMatrix& points) {
+  const Eigen::Index n = points.rows();
+  Eigen::Vector3d extent;
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> x(points.col(a).data(), points.col(a).data() + n);
+    const auto lo = x.begin() + long(0.01 * double(n - 1)),
+               hi = x.begin() + long(0.99 * double(n - 1));
+    std::nth_element(x.begin(), lo, x.end());
+    const double low = *lo;
+    std::nth_element(x.begin(), hi, x.end());
+    extent[a] = *hi - low;
+  }
+  // The central 98% of each axis holds 0.98^3 of uniformly spread samples.
+  const double volume = extent.prod(), inner = 0.98 * 0.98 * 0.98 * double(n);
+  // A flat box still has a spacing: measure it in the largest extent then.
+  return volume > 0 ? std::cbrt(volume / inner) : extent.maxCoeff() / std::cbrt(inner);
+}
+
+}  // namespace
+
+BandSamples select_band(const Samples& samples, const BandOptions& given, double spacing) {
+  const Eigen::Index n = samples.points.rows();
+  const double h0 = spacing > 0 ? spacing : robust_spacing(samples.points);
+  // A sample with fewer than 3 others within a few spacings (a stray row far from the rest)
+  // makes no tetrahedron of its own size: its gradient, and so its contact point, would come
+  // from tetrahedra spanning the gap. Such samples are dropped, and counted.
+  std::vector<char> usable(static_cast<std::size_t>(n), 1);
+  BandSamples out;
+  if (h0 > 0) {
+    const std::vector<int> cluster = point_clusters(samples.points, kIsolationReach * h0);
+    std::vector<int> members(std::size_t(*std::max_element(cluster.begin(), cluster.end()) + 1));
+    for (int c : cluster) ++members[std::size_t(c)];
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (members[std::size_t(cluster[std::size_t(i)])] < 4) usable[std::size_t(i)] = 0;
+    out.isolated = long(std::count(usable.begin(), usable.end(), 0));
+    if (out.isolated == long(n))
+      throw Error("every sample lies alone, more than " + shortest(kIsolationReach) +
+                  " spacings from 3 others: no surface can be found");
+  }
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = -low;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (usable[std::size_t(i)]) {
+      low = low.cwiseMin(samples.points.row(i).transpose());
+      high = high.cwiseMax(samples.points.row(i).transpose());
+    }
+  const Eigen::Vector3d extent = high - low;
+  const double h = h0;
+  BandOptions options = given;
+  out.samples_per_axis = extent.maxCoeff() / h + 1;
+  if (options.band == 0) options.band = auto_band(out.samples_per_axis);
+  const BandTest keep = begin_band(out, samples.values, options, h);
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (usable[std::size_t(i)] && keep(samples.values[i])) kept.push_back(i);
+  out.samples = samples_at(samples, kept);
+  out.source.resize(kept.size());
+  out.core.resize(kept.size());
+  for (std::size_t r = 0; r < kept.size(); ++r) {
+    out.core[r] = keep.core(samples.values[kept[r]]);
+    out.source[r] = long(kept[r]);
+  }
+  scale_values(out, options);
+  require_usable(out, options);
+  return out;
+}
+
+long sign_change_edges(const GridView& grid) {
+  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  const std::size_t stride[3] = {std::size_t(ny) * std::size_t(nz), std::size_t(nz), 1};
+  std::vector<long> per_slab(static_cast<std::size_t>(nx), 0);
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(0, nx, [&](int i) {
+      long count = 0;
+      for (int j = 0; j < ny; ++j)
+        for (int k = 0; k < nz; ++k) {
+          const std::size_t p = grid.index(i, j, k);
+          const bool inside = f[p] < 0;
+          if (i + 1 < nx) count += (f[p + stride[0]] < 0) != inside;
+          if (j + 1 < ny) count += (f[p + stride[1]] < 0) != inside;
+          if (k + 1 < nz) count += (f[p + stride[2]] < 0) != inside;
+        }
+      per_slab[std::size_t(i)] = count;
+    });
+  });
+  long total = 0;
+  for (long c : per_slab) total += c;
+  return total;
+}
+
+std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                            std::array<int, 3> own_first,
+                                            std::array<int, 3> own_end) {
+  const std::array<int, 3> whole = grid.whole_dims();
+  std::array<int, 3> from{}, to{};  // block indices of the owned samples measured
+  for (int a = 0; a < 3; ++a) {
+    from[a] = std::max(own_first[a], 2) - grid.first[a];
+    to[a] = std::min(own_end[a], whole[a] - 2) - grid.first[a];
+    if (from[a] < to[a] && (from[a] < 2 || to[a] + 2 > grid.dims[a]))
+      throw Error("the block must hold 2 samples beyond the samples whose gradients it measures");
+  }
+  if (from[0] >= to[0] || from[1] >= to[1] || from[2] >= to[2]) return {};
+  const Eigen::Vector3d h = grid.spacing();
+  const std::size_t stride[3] = {std::size_t(grid.dims[1]) * std::size_t(grid.dims[2]),
+                                 std::size_t(grid.dims[2]), 1};
+  std::vector<std::vector<double>> per_slab(std::size_t(to[0] - from[0]));
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(from[0], to[0], [&](int i) {
+      for (int j = from[1]; j < to[1]; ++j)
+        for (int k = from[2]; k < to[2]; ++k) {
+          const std::size_t p = grid.index(i, j, k);
+          // Only next to a sign change, where a field is read and truncation never reaches.
+          bool crossing = false;
+          for (int a = 0; a < 3; ++a)
+            crossing |=
+                (f[p - stride[a]] < 0) != (f[p] < 0) || (f[p + stride[a]] < 0) != (f[p] < 0);
+          if (!crossing) continue;
+          bool clamped = false;
+          for (int a = 0; a < 3; ++a)
+            for (long o : {-2L, -1L, 1L, 2L})
+              clamped |= truncation.truncated(double(f[p + o * long(stride[a])]));
+          if (clamped) continue;
+          // Central differences with steps h and 2h, extrapolated (Richardson): the curvature's
+          // O(h^2) bias cancels, so an exact distance measures 1 to O(h^4).
+          double near = 0, far = 0;
+          for (int a = 0; a < 3; ++a) {
+            const double d1 = (double(f[p + stride[a]]) - double(f[p - stride[a]])) / (2 * h[a]);
+            const double d2 =
+                (double(f[p + 2 * stride[a]]) - double(f[p - 2 * stride[a]])) / (4 * h[a]);
+            near += d1 * d1, far += d2 * d2;
+          }
+          per_slab[std::size_t(i - from[0])].push_back((4 * std::sqrt(near) - std::sqrt(far)) / 3);
+        }
+    });
+  });
+  std::vector<double> norms;
+  for (const auto& s : per_slab) norms.insert(norms.end(), s.begin(), s.end());
+  return norms;
+}
+
+GradientNormSummary summarize_gradient_norms(std::vector<double> norms) {
+  GradientNormSummary summary;
+  summary.count = long(norms.size());
+  if (norms.size() < 16) return summary;
+  auto percentile = [&](std::size_t q) {
+    const auto at = norms.begin() + long(norms.size() * q / 100);
+    std::nth_element(norms.begin(), at, norms.end());
+    return *at;
+  };
+  summary.low = percentile(10);
+  summary.median = percentile(50);
+  summary.high = percentile(90);
+  return summary;
+}
+
+GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation) {
+  const std::array<int, 3> end = grid.whole_dims();
+  return summarize_gradient_norms(crossing_gradient_norms(grid, truncation, grid.first, end));
+}
+
+double distance_value_scale(double median_norm) {
+  const double m = median_norm;
+  return std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1 ? 1 / m : 1.0;
+}
+
+Samples core_samples(const BandSamples& band) {
+  std::vector<Eigen::Index> core;
+  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
+    if (band.core[std::size_t(i)]) core.push_back(i);
+  return samples_at(band.samples, core);
+}
+
+}  // namespace sdfcontour

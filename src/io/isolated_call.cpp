@@ -1,0 +1,143 @@
+#include "io/isolated_call.h"
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <new>
+
+#include "sdfcontour/types.h"
+
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SDFCONTOUR_ASAN 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define SDFCONTOUR_ASAN 1
+#endif
+
+// Set by a sanitizer runtime (and libFuzzer) to report a crash as the process's own; absent in a
+// normal build.
+extern "C" void __sanitizer_set_death_callback(void (*callback)()) __attribute__((weak));
+
+namespace sdfcontour::detail {
+
+namespace {
+
+// The child's reply: one status byte, then the payload (the result, or an error message).
+enum Status : char { kResult = 0, kInputError = 1, kIoError = 2, kOutOfMemory = 3, kOther = 4 };
+
+bool write_all(int fd, const char* data, std::size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    data += n, size -= std::size_t(n);
+  }
+  return true;
+}
+
+[[noreturn]] void child(int fd, const std::function<std::string()>& work,
+                        const IsolationLimits& limits) {
+  // A crash in here is the reader's failure, reported by the parent: die by the signal, without
+  // the parent's crash handlers (a fuzzer's would file it as its own finding).
+  for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) ::signal(sig, SIG_DFL);
+  if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);
+#ifdef SDFCONTOUR_ASAN  // ASan reserves its shadow memory up front: a data limit breaks it
+  (void)limits.memory_bytes;
+#else
+  if (limits.memory_bytes > 0) {
+    const rlimit limit{rlim_t(limits.memory_bytes), rlim_t(limits.memory_bytes)};
+    ::setrlimit(RLIMIT_DATA, &limit);
+  }
+#endif
+  std::string reply(1, kOther);
+  try {
+    reply += work();
+    reply[0] = kResult;
+  } catch (const IoError& e) {
+    reply = std::string(1, kIoError) + e.what();
+  } catch (const Error& e) {
+    reply = std::string(1, kInputError) + e.what();
+  } catch (const std::bad_alloc&) {
+    reply = std::string(1, kOutOfMemory);
+  } catch (const std::exception& e) {
+    reply = std::string(1, kOther) + e.what();
+  } catch (...) {
+  }
+  const bool ok = write_all(fd, reply.data(), reply.size());
+  ::_exit(ok ? 0 : 1);  // no atexit handlers, no destructors of the parent's state
+}
+
+}  // namespace
+
+std::string run_isolated(const std::function<std::string()>& work, const std::string& what,
+                         const IsolationLimits& limits) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw IoError(what + ": cannot create a pipe: " + std::strerror(errno));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]), ::close(fds[1]);
+    throw IoError(what + ": cannot start the reader: " + std::strerror(errno));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    child(fds[1], work, limits);
+  }
+  ::close(fds[1]);
+  std::string reply;
+  bool timed_out = false;
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(limits.seconds);
+  char buffer[1 << 16];
+  for (;;) {
+    const double left =
+        std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+    if (left <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{fds[0], POLLIN, 0};
+    const int ready = ::poll(&p, 1, int(std::min(left * 1000 + 1, 1e9)));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) continue;
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    reply.append(buffer, std::size_t(n));
+  }
+  ::close(fds[0]);
+  if (timed_out) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out)
+    throw IoError(what + ": the reader took longer than " + std::to_string(int(limits.seconds)) +
+                  " s");
+  if (WIFSIGNALED(status) || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || reply.empty())
+    throw IoError(what + ": the file made the reader fail" +
+                  (WIFSIGNALED(status) ? " (signal " + std::to_string(WTERMSIG(status)) + ")"
+                                       : std::string()));
+  const char status_byte = reply[0];
+  std::string payload = std::move(reply.erase(0, 1));  // no copy of a large reply
+  switch (status_byte) {
+    case kResult:
+      return payload;
+    case kInputError:
+      throw Error(payload);
+    case kIoError:
+      throw IoError(payload);
+    case kOutOfMemory:
+      throw IoError(what + ": reading it needs more memory than such a file should");
+    default:
+      throw IoError(what + (payload.empty() ? std::string() : ": " + payload));
+  }
+}
+
+}  // namespace sdfcontour::detail

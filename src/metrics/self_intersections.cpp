@@ -1,0 +1,264 @@
+#include "sdfcontour/metrics/self_intersections.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "pipeline/work_counter.h"
+
+namespace sdfcontour {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = K::Point_3;
+
+// Triangles bucketed by the cubes of side `cell` that their bounding boxes meet, sorted by cube
+// (x fastest). The cubes are about twice a typical triangle's extent, so most triangles sit in one
+// to eight of them.
+class TriangleCubes {
+ public:
+  explicit TriangleCubes(const std::vector<Eigen::AlignedBox3d>& boxes) {
+    Eigen::AlignedBox3d all;
+    std::vector<double> extents(boxes.size());
+    for (std::size_t t = 0; t < boxes.size(); ++t) {
+      all.extend(boxes[t]);
+      extents[t] = (boxes[t].max() - boxes[t].min()).maxCoeff();
+    }
+    auto middle = extents.begin() + long(extents.size() / 2);
+    std::nth_element(extents.begin(), middle, extents.end());
+    origin_ = all.min();
+    const Eigen::Vector3d extent = all.max() - all.min();
+    cell_ = std::max(2 * *middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
+    // Only occupied cubes are stored, so empty space between far-apart parts costs nothing; but
+    // the triangles may not sit in too many cubes in all (a few huge ones would): coarser cubes
+    // only cost more tests.
+    auto entries = [&] {
+      double sum = 0;
+      for (const auto& b : boxes) sum += (((b.max() - b.min()).array() / cell_).floor() + 2).prod();
+      return sum;
+    };
+    while (entries() > 64.0 * double(boxes.size()) + 1e6) cell_ *= 2;
+    for (int a = 0; a < 3; ++a) size_[a] = long(std::min(extent[a] / cell_, 1e15)) + 1;
+    std::vector<long> offsets(boxes.size() + 1, 0);
+    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
+      const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
+      offsets[t + 1] = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    });
+    for (std::size_t t = 0; t < boxes.size(); ++t) offsets[t + 1] += offsets[t];
+    keyed_.resize(std::size_t(offsets.back()));
+    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
+      const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
+      long at = offsets[t];
+      for (long k = lo[2]; k <= hi[2]; ++k)
+        for (long j = lo[1]; j <= hi[1]; ++j)
+          for (long i = lo[0]; i <= hi[0]; ++i) keyed_[std::size_t(at++)] = {key(i, j, k), int(t)};
+    });
+    tbb::parallel_sort(keyed_.begin(), keyed_.end());
+  }
+
+  // Calls f(u) once for every triangle u whose current box (`current`) meets `box`, found in the
+  // cube holding the lower corner of `box`'s overlap with u's bucketed box (`bucketed`, as given
+  // to the constructor, which holds u's current box).
+  template <class F>
+  void for_each_near(const Eigen::AlignedBox3d& box,
+                     const std::vector<Eigen::AlignedBox3d>& bucketed,
+                     const std::vector<Eigen::AlignedBox3d>& current, F&& f) const {
+    const auto lo = cube_of(box.min()), hi = cube_of(box.max());
+    for (long k = lo[2]; k <= hi[2]; ++k)
+      for (long j = lo[1]; j <= hi[1]; ++j)
+        for (long i = lo[0]; i <= hi[0]; ++i) {
+          const Key here = key(i, j, k);
+          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<Key, int>{here, -1});
+          for (; it != keyed_.end() && it->first == here; ++it) {
+            const std::size_t u = std::size_t(it->second);
+            if (!box.intersects(current[u])) continue;
+            const auto corner = cube_of(box.min().cwiseMax(bucketed[u].min()));
+            if (key(corner[0], corner[1], corner[2]) == here) f(it->second);
+          }
+        }
+  }
+
+ private:
+  std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
+    std::array<long, 3> c;
+    for (int a = 0; a < 3; ++a)
+      c[std::size_t(a)] =
+          std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), 0L, size_[a] - 1);
+    return c;
+  }
+  // z slowest, x fastest; three longs, so no spread of the parts can overflow a key.
+  using Key = std::array<long, 3>;
+  static Key key(long i, long j, long k) { return {k, j, i}; }
+
+  double cell_ = 1;
+  Eigen::Vector3d origin_;
+  long size_[3] = {1, 1, 1};
+  std::vector<std::pair<Key, int>> keyed_;  // (cube key, triangle), sorted
+};
+
+Point vertex_point(const Mesh& mesh, int v) {
+  return Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
+}
+
+// Whether triangles s and t (not sharing an edge) meet other than in a shared vertex.
+bool cross(const Mesh& mesh, int s, int t) {
+  auto at = [&](int v) { return vertex_point(mesh, v); };
+  const auto S = mesh.triangles.row(s), T = mesh.triangles.row(t);
+  int shared_s = -1, shared_t = -1, shared = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (S[i] == T[j]) shared_s = i, shared_t = j, ++shared;
+  if (shared >= 2) return false;
+  const K::Triangle_3 a(at(S[0]), at(S[1]), at(S[2])), b(at(T[0]), at(T[1]), at(T[2]));
+  if (shared == 0) return CGAL::do_intersect(a, b);
+  // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.
+  const K::Segment_3 opposite_s(at(S[(shared_s + 1) % 3]), at(S[(shared_s + 2) % 3])),
+      opposite_t(at(T[(shared_t + 1) % 3]), at(T[(shared_t + 2) % 3]));
+  return CGAL::do_intersect(opposite_s, b) || CGAL::do_intersect(opposite_t, a);
+}
+
+bool degenerate(const Mesh& mesh, int t) {
+  const auto T = mesh.triangles.row(t);
+  return CGAL::collinear(vertex_point(mesh, T[0]), vertex_point(mesh, T[1]),
+                         vertex_point(mesh, T[2]));
+}
+
+// One flag per triangle: whether any of its vertices is flagged in `vertices`.
+std::vector<char> triangles_with(const Mesh& mesh, const std::vector<char>& vertices) {
+  std::vector<char> out(std::size_t(mesh.triangles.rows()), 0);
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) out[std::size_t(t)] |= vertices[std::size_t(mesh.triangles(t, c))];
+  return out;
+}
+
+// The triangles' boxes and cube buckets, built once for rounds of tests while vertices move back
+// to `before`: each triangle is bucketed by the box of its current and earlier positions, which
+// holds every box it can have in between.
+class CrossingSearch {
+ public:
+  CrossingSearch(const Mesh& mesh, const PointMatrix* before)
+      : current_(std::size_t(mesh.triangles.rows())),
+        flat_(std::size_t(mesh.triangles.rows()), 0),
+        cubes_(bucketed_boxes(mesh, before)) {
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(),
+                      [&](Eigen::Index t) { refresh(mesh, int(t)); });
+  }
+
+  // Triangle t's box and flatness from the mesh's current positions.
+  void refresh(const Mesh& mesh, int t) {
+    Eigen::AlignedBox3d box;
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.row(mesh.triangles(t, c)).transpose());
+    current_[std::size_t(t)] = box;
+    flat_[std::size_t(t)] = degenerate(mesh, t);
+  }
+
+  // The crossing pairs with a watched triangle (all if `watch` is null), ascending.
+  // `counter` (optional) counts the watched triangles tested.
+  std::vector<std::pair<int, int>> find(const Mesh& mesh, const std::vector<char>* watch,
+                                        detail::WorkCounter* counter = nullptr) const {
+    auto watched = [&](int t) { return !watch || (*watch)[std::size_t(t)]; };
+    tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>> found;
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index ti) {
+      const int t = int(ti);
+      if (!watched(t)) return;
+      if (counter) counter->add();
+      if (flat_[std::size_t(t)]) return;
+      cubes_.for_each_near(current_[std::size_t(t)], bucketed_, current_, [&](int u) {
+        // Each pair once: from its lower triangle when both are watched.
+        if (u == t || (watched(u) && u < t) || flat_[std::size_t(u)]) return;
+        if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
+      });
+    });
+    std::vector<std::pair<int, int>> pairs;
+    for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+  }
+
+ private:
+  const std::vector<Eigen::AlignedBox3d>& bucketed_boxes(const Mesh& mesh,
+                                                         const PointMatrix* before) {
+    bucketed_.resize(std::size_t(mesh.triangles.rows()));
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
+      Eigen::AlignedBox3d& box = bucketed_[std::size_t(t)];
+      for (int c = 0; c < 3; ++c) {
+        const int v = mesh.triangles(t, c);
+        box.extend(mesh.vertices.row(v).transpose());
+        if (before) box.extend(before->row(v).transpose());
+      }
+    });
+    return bucketed_;
+  }
+
+  std::vector<Eigen::AlignedBox3d> bucketed_, current_;
+  std::vector<char> flat_;
+  TriangleCubes cubes_;
+};
+
+}  // namespace
+
+std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
+                                                             const std::vector<char>* watch) {
+  const Eigen::Index m = mesh.triangles.rows();
+  if (watch && watch->size() != std::size_t(m))
+    throw Error("self-intersections: " + std::to_string(watch->size()) + " flags for " +
+                std::to_string(m) + " triangles");
+  if (m < 2) return {};
+  return CrossingSearch(mesh, nullptr).find(mesh, watch);
+}
+
+UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, int max_rounds,
+                                        std::vector<char>* reverted,
+                                        const std::function<void(long, long)>& progress) {
+  if (before.rows() != mesh.vertices.rows())
+    throw Error("self-intersections: " + std::to_string(before.rows()) + " earlier positions for " +
+                std::to_string(mesh.vertices.rows()) + " vertices");
+  UntangleStats stats;
+  const Eigen::Index n = mesh.vertices.rows(), m = mesh.triangles.rows();
+  auto moved = [&](int v) { return mesh.vertices.row(v) != before.row(v); };
+  if (reverted) reverted->assign(std::size_t(n), 0);
+  if (m < 2) return stats;
+  // First the triangles around any moved vertex, then those around the vertices moved back.
+  std::vector<char> moved_vertices(std::size_t(n), 0);
+  for (Eigen::Index v = 0; v < n; ++v) moved_vertices[std::size_t(v)] = moved(int(v));
+  std::vector<char> watch = triangles_with(mesh, moved_vertices);
+  CrossingSearch search(mesh, &before);
+  detail::WorkCounter tested(
+      progress, long(watch.size() - std::size_t(std::count(watch.begin(), watch.end(), char(0)))));
+  for (; max_rounds <= 0 || stats.rounds < max_rounds;) {
+    const auto pairs = search.find(mesh, &watch, stats.rounds == 0 ? &tested : nullptr);
+    if (stats.rounds++ == 0) stats.intersections_found = long(pairs.size());
+    std::vector<char> back(std::size_t(n), 0);
+    bool any = false;
+    for (const auto& [s, t] : pairs)
+      for (int tri : {s, t})
+        for (int c = 0; c < 3; ++c) {
+          const int v = mesh.triangles(tri, c);
+          if (moved(v)) back[std::size_t(v)] = 1, any = true;
+        }
+    if (!any) {
+      stats.intersections_left = long(pairs.size());
+      return stats;
+    }
+    for (Eigen::Index v = 0; v < n; ++v)
+      if (back[std::size_t(v)]) {
+        mesh.vertices.row(v) = before.row(v);
+        ++stats.vertices_reverted;
+        if (reverted) (*reverted)[std::size_t(v)] = 1;
+      }
+    watch = triangles_with(mesh, back);
+    for (Eigen::Index t = 0; t < m; ++t)
+      if (watch[std::size_t(t)]) search.refresh(mesh, int(t));
+  }
+  return stats;  // after max_rounds: the pairs left are not counted
+}
+
+}  // namespace sdfcontour

@@ -1,0 +1,51 @@
+#include "sdfcontour/pipeline/option_ranges.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour {
+
+const std::vector<OptionRange>& option_ranges() {
+  static const std::vector<OptionRange> ranges = {
+      {"--knn", "knn", 3, 1000},
+      {"--james-epsilon", "", 0, 1e6},
+      {"--tie-tolerance", "tie_tolerance", 0, 1},
+      {"--margin", "margin", 0, 64},
+      {"--brick-size", "brick_size", 8, 1e6},  // 0 (no bricks) is accepted apart
+      {"--brick-halo", "brick_halo", 0, 1e3},
+      {"--alpha", "alpha", 0, 1e4},
+      {"--depth", "depth", 1, 14},
+      {"--full-depth", "full_depth", 1, 8},
+      {"--refine-dilation", "refine_dilation", 1, 4},
+      {"--samples-per-node", "samples_per_node", 0.01, 1e6},
+      {"--scale", "scale", 1, 16},
+      {"--solver-tolerance", "solver_tolerance", 1e-16, 0.5},
+      {"--finest-solver-tolerance", "finest_solver_tolerance", 1e-16, 0.5},
+      {"--subdivisions", "subdivisions", 0, 4},
+      {"--adaptivity", "adaptivity", 0, 10},
+      {"--side-passes", "side_passes", 0, 100},
+      {"--res", "resolution", 2, 1024},
+      {"--threads", "", 0, 4096},
+  };
+  return ranges;
+}
+
+const OptionRange& option_range(const std::string& cli_name) {
+  for (const OptionRange& r : option_ranges())
+    if (cli_name == r.cli) return r;
+  throw InternalError("no range for option " + cli_name);
+}
+
+void require_in_range(const std::string& cli_name, double value, const std::string& name) {
+  const OptionRange& r = option_range(cli_name);
+  if (!std::isfinite(value) || value < r.lo || value > r.hi) {
+    std::ostringstream m;
+    m << name << " must be a finite number between " << r.lo << " and " << r.hi << ", got "
+      << value;
+    throw Error(m.str());
+  }
+}
+
+}  // namespace sdfcontour

@@ -1,0 +1,358 @@
+#include "sdfcontour/pipeline/pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "pipeline/enum_names.h"
+#include "pipeline/pipeline_stages.h"
+#include "sdfcontour/extraction/marching.h"
+
+namespace sdfcontour {
+
+namespace {
+const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
+                                            {"gtcp", Method::Gtcp},
+                                            {"mc", Method::Mc},
+                                            {"mt-rt", Method::MtRt},
+                                            {"mt-dt", Method::MtDt}};
+const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
+                                                            {"delaunay", GradientSource::Delaunay},
+                                                            {"knn", GradientSource::Knn}};
+const detail::NameTable<Reconstruction> kReconstructions = {{"auto", Reconstruction::Auto},
+                                                            {"poisson", Reconstruction::Poisson},
+                                                            {"local", Reconstruction::Local}};
+const detail::NameTable<Switch> kSwitches = {
+    {"auto", Switch::Auto}, {"on", Switch::On}, {"off", Switch::Off}};
+}  // namespace
+
+Switch parse_switch(const std::string& what, const std::string& name) {
+  return detail::parse_name(kSwitches, what, name);
+}
+
+Reconstruction parse_reconstruction(const std::string& name) {
+  return detail::parse_name(kReconstructions, "reconstruction", name);
+}
+std::string reconstruction_name(Reconstruction reconstruction) {
+  return detail::name_of(kReconstructions, reconstruction);
+}
+
+Method parse_method(const std::string& name) {
+  return detail::parse_name(kMethods, "method", name);
+}
+std::string method_name(Method method) {
+  return detail::name_of(kMethods, method);
+}
+GradientSource parse_gradient_source(const std::string& name) {
+  return detail::parse_name(kGradientSources, "gradient source", name);
+}
+std::string gradient_source_name(GradientSource source) {
+  return detail::name_of(kGradientSources, source);
+}
+
+int auto_poisson_depth(const PointMatrix& points, double spacing) {
+  if (points.rows() == 0 || !(spacing > 0)) return 8;
+  const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
+  const double samples_per_axis = extent / spacing + 1;
+  if (samples_per_axis > 513) return 11;
+  if (samples_per_axis > 257) return 10;
+  if (samples_per_axis > 129) return 9;
+  return samples_per_axis > 48 ? 8 : 7;
+}
+
+bool auto_local_reconstruction(double samples_per_axis) {
+  return samples_per_axis >= 256;
+}
+
+int auto_subdivisions(double samples_per_axis) {
+  return samples_per_axis < 96 ? 2 : 1;
+}
+
+bool auto_sign_constraints(double samples_per_axis) {
+  return samples_per_axis < 128;
+}
+
+double auto_carving_band(const BandOptions& given, double samples_per_axis) {
+  // Every sample within 16 spacings, not only the band's 8: the farther balls are large (64^3:
+  // wingnut and hammer 6-7% lower L1, bunny 1%; every sample gains little more;
+  // docs/carving.md). Finer grids gain less for more.
+  constexpr double kCarvingBand = 16;
+  return given.band == 0 && samples_per_axis < 128 ? kCarvingBand : 0.0;
+}
+
+bool auto_carve_sides(double samples_per_axis) {
+  return samples_per_axis < 128;
+}
+
+namespace {
+
+using detail::NotDistances;
+using detail::Stages;
+
+// Noise above this many spacings is smoothed away before GCP (ContourOptions::smooth_noise).
+// Exact distances to the shared meshes measure at most 0.067 (armadillo 16^3), 0.045 at 32^3.
+constexpr double kNoisy = 0.08;
+
+// What contour() measures of a grid before choosing to smooth it, handed on so that the
+// pipeline does not measure it again.
+struct GridMeasures {
+  GradientNormSummary gradient_norms;  // with the truncation of the options' band
+  double noise = 0;                    // in spacings, see noise_in_spacings
+};
+
+// The grid validated, its gradient norms, and the noise on its values near the surface, in
+// spacings. A distance scaled by m has its noise scaled by m too, so the noise is divided by the
+// gradient norm when that is far from 1 (by more than half: noise itself inflates the measured
+// norm, 1.25 at 0.5 h).
+GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
+  validate_grid(grid);
+  const Truncation truncation = resolve_truncation(grid, options.band);
+  GridMeasures m;
+  m.gradient_norms = gradient_norm_summary(grid, truncation);
+  const double slope = m.gradient_norms.median;
+  const double scale = std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.5 ? slope : 1;
+  m.noise = noise_level(grid, truncation) / scale / grid.spacing().maxCoeff();
+  return m;
+}
+
+// Throws Error where the input cannot be contoured with the options' method. `measured`: the
+// grid was validated already.
+void check_input_for_method(const GridView* grid, const ScatteredInput* scattered,
+                            const AnalyticShape* shape, const ContourOptions& options,
+                            const GridMeasures* measured) {
+  if (grid) {
+    if (!measured) validate_grid(*grid);
+    require_sign_change(*grid);
+  } else {
+    validate_samples(scattered->samples);
+    require_sign_change(scattered->samples.values);
+  }
+  if (options.method == Method::Mc && !grid)
+    throw Error("method mc needs a grid input, not scattered samples");
+  if (!grid && options.reconstruction == Reconstruction::Local &&
+      (options.method == Method::Gcp || options.method == Method::Gtcp))
+    throw Error(
+        "the local reconstruction needs a grid input (scattered samples and .vdb level "
+        "sets: --reconstruction poisson)");
+  if (options.method == Method::Gtcp && !shape)
+    throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
+}
+
+// Values that change by m per unit length near the surface (m far from 1) are rescaled by 1/m
+// into distances: result.value_scale and the band's value_scale.
+void rescale_to_distances(const GridView& grid, const ContourOptions& options,
+                          const GridMeasures* measured, BandOptions& band_options,
+                          ContourResult& result) {
+  result.gradient_norms = measured
+                              ? measured->gradient_norms
+                              : gradient_norm_summary(grid, resolve_truncation(grid, band_options));
+  result.gradient_norm = result.gradient_norms.median;
+  const double m = result.gradient_norm;
+  if (distance_value_scale(m) != 1.0) {
+    result.value_scale = band_options.value_scale = distance_value_scale(m);
+    if (options.progress)
+      options.progress("the values change by " + std::to_string(m) +
+                       " per unit length near the surface, not 1: rescaled to distances");
+  }
+}
+
+// The band's samples, seen by the later stages as scattered samples (a grid's positions are made
+// for the band only). A band that cannot be used means the values are not distances.
+BandSamples band_stage(const GridView* grid, const ScatteredInput* scattered,
+                       const BandOptions& band_options, Stages& stages) {
+  return stages.run("band", "samples within the band", [&] {
+    try {
+      return grid ? select_band(*grid, band_options)
+                  : select_band(scattered->samples, band_options, scattered->spacing);
+    } catch (const Cancelled&) {
+      throw;
+    } catch (const InternalError&) {
+      throw;
+    } catch (const Error& e) {
+      // No usable band in a truncated grid: values clamped too close to the surface to be
+      // distances (a band the user narrowed stays the user's error).
+      if (grid && resolve_truncation(*grid, band_options).detected()) throw NotDistances(e.what());
+      throw;
+    }
+  });
+}
+
+// `measured`: the grid's measures when contour() took them (the grid is then validated).
+ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
+                               const ContourOptions& options, const GridMeasures* measured) {
+  const GridView* grid = grid_view_of(input);
+  const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
+  check_input_for_method(grid, scattered, shape, options, measured);
+  const Method method = options.method;
+  ContourResult result;
+  result.samples = int(grid ? grid->size() : std::size_t(scattered->samples.points.rows()));
+  Stages stages(result, options);
+
+  if (method == Method::Mc && options.want_mesh)
+    result.mesh =
+        stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
+                   [&] { return marching_cubes(*grid); });
+  if (!options.want_points && method == Method::Mc) return result;
+
+  BandOptions band_options = options.band;
+  if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp)
+    rescale_to_distances(*grid, options, measured, band_options, result);
+  const bool bricked = detail::bricked_local(grid, options);
+  if (bricked) {
+    detail::reconstruct_in_bricks(*grid, band_options, options, result, stages);
+    if (!options.want_points) return result;
+  }
+  BandSamples band = band_stage(grid, scattered, band_options, stages);
+  result.band_samples = int(band.samples.values.size());
+  result.isolated_samples = band.isolated;
+  if (band.isolated > 0 && options.progress)
+    options.progress("dropped " + std::to_string(band.isolated) +
+                     " isolated samples (fewer than 3 others nearby)");
+  result.band_spacing = band.spacing;
+  result.band_spacings = band.band;
+  result.truncation = band.truncation;
+
+  detail::SampleTriangulations triangulations =
+      detail::contact_point_stage(band, shape, options, result, stages);
+  const bool contact_mesh =
+      (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh && !bricked;
+  const bool local = contact_mesh && grid && options.reconstruction == Reconstruction::Local;
+  if (local) {
+    detail::check_contact_point_count(grid, options, *result.contact_points);
+    const detail::ReconstructionInputs in =
+        detail::prepare_reconstruction(band, band_options, grid, options, result);
+    detail::reconstruct_locally(*grid, in, options, result, stages);
+  }
+  std::optional<detail::ReconstructionInputs> inputs;
+  if (contact_mesh && !local) {
+    detail::check_contact_point_count(grid, options, *result.contact_points);
+    inputs = detail::prepare_reconstruction(band, band_options, grid, options, result);
+  }
+  // Contact points name their samples by input index.
+  if (result.contact_points)
+    for (int& i : result.contact_points->samples) i = int(band.source[std::size_t(i)]);
+  if (contact_mesh && !local) {
+    // Nothing after the reconstruction needs the samples or triangulations: free them first.
+    band = BandSamples();
+    triangulations = {};
+    release_resident_pages(input);
+    detail::reconstruct_mesh(std::move(*inputs), grid, options, result, stages);
+  }
+  const Samples& s = band.samples;
+  if (method == Method::MtRt && options.want_mesh)
+    result.mesh = stages.run(
+        "marching",
+        "marching tetrahedra on " + std::to_string(triangulations.regular->tets.rows()) + " tets",
+        [&] { return marching_tetrahedra(s.points, s.values, triangulations.regular->tets); });
+  if (method == Method::MtDt && options.want_mesh)
+    result.mesh = stages.run(
+        "marching",
+        "marching tetrahedra on " + std::to_string(triangulations.delaunay->tets.rows()) + " tets",
+        [&] { return marching_tetrahedra(s.points, s.values, triangulations.delaunay->tets); });
+  return result;
+}
+
+}  // namespace
+
+namespace {
+
+// contour_or_throw, or marching cubes' mesh when GCP's cannot be trusted.
+ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* shape,
+                                    const ContourOptions& options,
+                                    const GridMeasures* measured = nullptr) {
+  const auto started = std::chrono::steady_clock::now();
+  try {
+    return contour_or_throw(input, shape, options, measured);
+  } catch (const NotDistances& e) {
+    const double discarded =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const GridView* grid = grid_view_of(input);
+    if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
+        !options.fallback_to_mc)
+      throw Error(std::string(e.what()) + ": the values do not behave as distances");
+    ContourResult result;
+    result.samples = int(grid->size());
+    result.fallback = std::string(e.what()) + ": the values do not behave as distances";
+    // The work thrown away is part of the run's cost: said, not hidden.
+    result.stages.push_back({"gcp (discarded)", discarded});
+    if (options.progress)
+      options.progress("GCP: " + result.fallback + "; this is marching cubes' mesh instead");
+    Stages stages(result, options);
+    result.mesh =
+        stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
+                   [&] { return marching_cubes(*grid); });
+    return result;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// The mesh merged where the surface is flat enough (AdaptivityOptions), over the contact points
+// when the method made them.
+void adapt_stage(const SdfInput& input, const ContourOptions& options, ContourResult& result) {
+  if (!(options.adaptivity.tolerance > 0) || !result.mesh) return;
+  const GridView* grid = grid_view_of(input);
+  const double h = result.band_spacing > 0 ? result.band_spacing
+                   : grid                  ? grid->spacing().maxCoeff()
+                                           : 0.0;
+  if (!(h > 0)) throw Error("adaptivity needs the samples' spacing");
+  const bool points = result.contact_points && result.contact_points->points.rows() > 0;
+  const PointMatrix none(0, 3);
+  Stages stages(result, options);
+  AdaptivityStats stats;
+  result.mesh = stages.run("adaptivity", "merging the mesh where it is flat", [&] {
+    return adapt_mesh(*result.mesh, points ? result.contact_points->points : none,
+                      points ? result.contact_points->normals : none, h, options.adaptivity,
+                      &stats);
+  });
+  result.adaptivity = stats;
+}
+
+ContourResult contour_before_adaptivity(const SdfInput& input, const AnalyticShape* shape,
+                                        const ContourOptions& options);
+
+}  // namespace
+
+ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
+                      const ContourOptions& options) {
+  ContourResult result = contour_before_adaptivity(input, shape, options);
+  adapt_stage(input, options, result);
+  return result;
+}
+
+namespace {
+
+ContourResult contour_before_adaptivity(const SdfInput& input, const AnalyticShape* shape,
+                                        const ContourOptions& options) {
+  const GridView* grid = grid_view_of(input);
+  if (!grid || options.method != Method::Gcp || !options.smooth_noise)
+    return contour_with_fallback(input, shape, options);
+  const GridMeasures measured = measure_grid(*grid, options);
+  if (!(measured.noise > kNoisy)) {
+    ContourResult result = contour_with_fallback(input, shape, options, &measured);
+    result.noise_level = measured.noise;
+    return result;
+  }
+  if (options.progress) {
+    std::ostringstream message;
+    message << std::setprecision(2) << "the values are noisy (about " << measured.noise
+            << " spacings): smoothed with a Gaussian of one sample";
+    options.progress(message.str());
+  }
+  // Smoothed values are no longer distances: their spheres are not empty.
+  ContourOptions smoothed = options;
+  if (smoothed.carve == Switch::Auto) smoothed.carve = Switch::Off;
+  ContourResult result =
+      contour_with_fallback(grid_input(gaussian_smoothed(*grid, 1.0)), shape, smoothed);
+  result.noise_level = measured.noise;
+  result.smoothed = true;
+  return result;
+}
+
+}  // namespace
+
+}  // namespace sdfcontour

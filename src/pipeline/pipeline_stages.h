@@ -1,0 +1,122 @@
+// The stages of contour() (pipeline.cpp) as named units: the contact points and the triangulations
+// they come from (contact_stage.cpp), and GCP's or GTCP's mesh made from them
+// (reconstruction_stage.cpp). Internal to the library.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <type_traits>
+
+#include "sdfcontour/contact_points/triangulation.h"
+#include "sdfcontour/pipeline/pipeline.h"
+
+namespace sdfcontour::detail {
+
+// Times each stage into the result and reports its start through the progress callback.
+class Stages {
+ public:
+  Stages(ContourResult& result, const ContourOptions& options)
+      : result_(result), options_(options) {}
+  template <class F>
+  auto run(const std::string& name, const std::string& message, F&& work) {
+    check_cancel(options_.cancel);
+    if (options_.progress) options_.progress(message);
+    const auto start = std::chrono::steady_clock::now();
+    auto finish = [&] {
+      result_.stages.push_back(
+          {name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
+    };
+    if constexpr (std::is_void_v<decltype(work())>) {
+      work();
+      finish();
+    } else {
+      auto value = work();
+      finish();
+      return value;
+    }
+  }
+
+  /// A stage's (done, total) callback onto options.progress_fraction (empty if none).
+  std::function<void(long, long)> fraction(const std::string& name) const {
+    if (!options_.progress_fraction) return {};
+    return [this, name](long done, long total) { options_.progress_fraction(name, done, total); };
+  }
+
+ private:
+  ContourResult& result_;
+  const ContourOptions& options_;
+};
+
+// GCP's mesh cannot be trusted on these values (they do not behave as distances): contour()
+// falls back to marching cubes where it may.
+class NotDistances : public Error {
+ public:
+  using Error::Error;
+};
+
+// The band's triangulations that the method's mesh still needs (marching tetrahedra), if any.
+struct SampleTriangulations {
+  std::optional<Triangulation> regular, delaunay;
+};
+
+// Contact points into result.contact_points (GCP's, in bricks or from one triangulation, or
+// GTCP's from `shape`), naming their samples by index into `band.samples`; result.hidden and
+// result.bricks as they come. Returns the triangulations made on the way.
+SampleTriangulations contact_point_stage(const BandSamples& band, const AnalyticShape* shape,
+                                         const ContourOptions& options, ContourResult& result,
+                                         Stages& stages);
+
+// What GCP's or GTCP's reconstruction needs once the band's samples are freed.
+struct ReconstructionInputs {
+  PoissonOptions poisson;   // the depth and dilation chosen
+  bool auto_depth = false;  // the depth follows each cluster's extent (ContourOptions 0)
+  SignedSamples sides;      // samples whose sides the indicator keeps (may be empty)
+  bool project = false;     // move the vertices onto the contact points
+  ContactProjectionOptions projection;  // how (the Poisson path's or the local one's)
+  Eigen::VectorXd contact_depths;       // with `project`: |value| of each contact point's sample
+  bool carve = false;                   // carve the mesh out of `carving_samples`' spheres
+  Samples carving_samples;
+  CarvingOptions carving;
+};
+
+// Throws NotDistances where the contact points are too few for the values to be distances.
+void check_contact_point_count(const GridView* grid, const ContourOptions& options,
+                               const ContactPoints& cp);
+
+// The reconstruction's inputs from the band (result.poisson_depth and result.sign_constraints
+// set); `band_options` as the band was selected with. result.contact_points must still name their
+// samples by index into `band.samples`.
+ReconstructionInputs prepare_reconstruction(const BandSamples& band,
+                                            const BandOptions& band_options, const GridView* grid,
+                                            const ContourOptions& options, ContourResult& result);
+
+// GCP's or GTCP's mesh into result.mesh: screened Poisson reconstruction of
+// result.contact_points, then (GCP) projection, carving and the undoing of moves that cross the
+// mesh, clipped to the grid's box where the surface leaves it. Throws NotDistances where the mesh
+// shows that the values were not distances.
+// Projection onto the contact points and carving out of the samples' spheres, as `in` says, each
+// move undone where it makes the mesh cross itself.
+void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
+                  ContourResult& result, Stages& stages);
+
+void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
+                      const ContourOptions& options, ContourResult& result, Stages& stages);
+
+// GCP's or GTCP's mesh into result.mesh by the local reconstruction of result.contact_points on
+// `grid`'s cells (result.local, result.reconstruction set), subdivided, then projected and carved
+// as `inputs` (prepare_reconstruction's) say.
+/// True where GCP's local reconstruction runs brick by brick (reconstruct_in_bricks): a grid,
+/// regular-triangulation gradients.
+bool bricked_local(const GridView* grid, const ContourOptions& options);
+
+/// GCP's local reconstruction from `grid` brick by brick (local_mesh_in_bricks), values scaled
+/// by `band`'s value_scale: result.mesh, .local, .local_bricks.
+void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
+                           const ContourOptions& options, ContourResult& result, Stages& stages);
+
+void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
+                         const ContourOptions& options, ContourResult& result, Stages& stages);
+
+}  // namespace sdfcontour::detail

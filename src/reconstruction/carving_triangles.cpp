@@ -1,0 +1,321 @@
+// The triangle phase of sphere carving: samples whose ball a triangle cuts (not only a vertex),
+// or that lie on the wrong side of the mesh, push the nearest feature of the mesh away.
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "reconstruction/carving_internal.h"
+
+namespace sdfcontour::detail {
+
+namespace {
+
+using K = CGAL::Simple_cartesian<double>;
+using Triangle = K::Triangle_3;
+using Iterator = std::vector<Triangle>::const_iterator;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, CGAL::AABB_triangle_primitive<K, Iterator>>>;
+
+Eigen::Vector3d triangle_normal(const PointMatrix& V, const TriangleMatrix& F, Eigen::Index t) {
+  const Eigen::Vector3d a = V.row(F(t, 0)).transpose();
+  return (V.row(F(t, 1)).transpose() - a).cross(V.row(F(t, 2)).transpose() - a);
+}
+
+// A barycentric coordinate below this counts as zero: the nearest point is on an edge or vertex.
+constexpr double kOnFeature = 1e-9;
+// A sample pushed exactly onto its sphere would sit on the boundary of the test: aim this much
+// (relative) beyond it.
+constexpr double kBeyond = 1e-6;
+
+// The outward (pseudo)normal of the feature of triangle t holding the point with barycentric
+// coordinates `bary`: the triangle's normal inside it, the sum of the two triangles' unit normals
+// on an edge, their angle-weighted sum at a vertex (Baerentzen and Aanaes: the sign of (p - q) .
+// n is then the side of p for the nearest point q). Appends the feature's vertices to `feature`.
+Eigen::Vector3d feature_normal(const Mesh& mesh, const VertexTriangles& around, Eigen::Index t,
+                               const Eigen::Vector3d& bary, std::vector<int>& feature) {
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto unit_normal = [&](int u) { return triangle_normal(V, F, u).normalized(); };
+  feature.clear();
+  for (int c = 0; c < 3; ++c)
+    if (bary[c] > kOnFeature) feature.push_back(F(t, c));
+  if (feature.size() == 3) return unit_normal(int(t));
+  if (feature.empty()) feature.push_back(F(t, 0));  // a degenerate triangle: its first corner
+  const int a = feature[0];
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (int o = around.offsets[std::size_t(a)]; o < around.offsets[std::size_t(a) + 1]; ++o) {
+    const int u = around.triangles[std::size_t(o)];
+    if (feature.size() == 2) {
+      if (F(u, 0) == feature[1] || F(u, 1) == feature[1] || F(u, 2) == feature[1])
+        n += unit_normal(u);
+      continue;
+    }
+    int c = 0;
+    while (F(u, c) != a) ++c;
+    const Eigen::Vector3d e1 = V.row(F(u, (c + 1) % 3)) - V.row(a),
+                          e2 = V.row(F(u, (c + 2) % 3)) - V.row(a);
+    const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+    n += angle * unit_normal(u);
+  }
+  return n.normalized();
+}
+
+// Barycentric coordinates of q (in the plane of triangle t) in triangle t.
+Eigen::Vector3d barycentric(const Mesh& mesh, Eigen::Index t, const Eigen::Vector3d& q) {
+  const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
+                        b = mesh.vertices.row(mesh.triangles(t, 1)),
+                        c = mesh.vertices.row(mesh.triangles(t, 2));
+  const Eigen::Vector3d e0 = b - a, e1 = c - a, d = q - a;
+  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), d20 = d.dot(e0),
+               d21 = d.dot(e1), den = d00 * d11 - d01 * d01;
+  if (!(den > 0)) return Eigen::Vector3d(0, 0, 0);
+  const double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
+  return Eigen::Vector3d(1 - v - w, v, w);
+}
+
+// Above this many queries a tree builds its kd-tree of hints first.
+constexpr std::size_t kManyQueries = 2000;
+
+// A vertex's requested move, from sample `sample`, `length` long.
+struct Request {
+  int sample = -1;
+  bool wrong_side = false;
+  double length = 0;
+  Eigen::Vector3d move = Eigen::Vector3d::Zero();
+  // Whether this request goes before r: a wrong side first, then the longer, then the lower sample.
+  bool before(const Request& r) const {
+    if (r.sample < 0 || wrong_side != r.wrong_side) return r.sample < 0 || wrong_side;
+    return length > r.length || (length == r.length && sample < r.sample);
+  }
+};
+
+}  // namespace
+
+void check_ball_samples(const char* what, const PointMatrix& points, const Eigen::VectorXd& values,
+                        double spacing) {
+  const std::string name(what);
+  if (points.rows() != values.size())
+    throw Error(name + ": " + std::to_string(points.rows()) + " points but " +
+                std::to_string(values.size()) + " values");
+  if (!(spacing > 0) || !std::isfinite(spacing))
+    throw Error(name + ": the spacing must be positive and finite");
+  if (!values.allFinite() || !points.allFinite())
+    throw Error(name + ": the samples must be finite");
+}
+
+VertexTriangles::VertexTriangles(const Mesh& mesh) {
+  const TriangleMatrix& F = mesh.triangles;
+  offsets.assign(std::size_t(mesh.vertices.rows()) + 1, 0);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) ++offsets[std::size_t(F(t, c)) + 1];
+  for (std::size_t v = 1; v < offsets.size(); ++v) offsets[v] += offsets[v - 1];
+  triangles.resize(std::size_t(offsets.back()));
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) triangles[std::size_t(fill[std::size_t(F(t, c))]++)] = int(t);
+}
+
+std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& around,
+                                  const std::vector<int>& seeds, int rings) {
+  const TriangleMatrix& F = mesh.triangles;
+  std::vector<char> in(std::size_t(F.rows()), 0);
+  std::vector<int> frontier;
+  for (int t : seeds)
+    if (t >= 0 && !in[std::size_t(t)]) in[std::size_t(t)] = 1, frontier.push_back(t);
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<int> next;
+    for (int t : frontier)
+      for (int c = 0; c < 3; ++c) {
+        const int v = F(t, c);
+        for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
+          const int u = around.triangles[std::size_t(o)];
+          if (!in[std::size_t(u)]) in[std::size_t(u)] = 1, next.push_back(u);
+        }
+      }
+    frontier = std::move(next);
+  }
+  std::vector<int> out;
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    if (in[std::size_t(t)]) out.push_back(int(t));
+  return out;
+}
+
+std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& around,
+                                       const std::vector<int>& vertices, const PointMatrix& points,
+                                       const Eigen::VectorXd& values, double reach, double grow,
+                                       double ball) {
+  std::vector<int> seeds;
+  for (int v : vertices)
+    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
+      seeds.push_back(around.triangles[std::size_t(o)]);
+  std::sort(seeds.begin(), seeds.end());
+  seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+  if (seeds.empty()) return {};
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+  std::vector<Triangle> triangles;
+  for (int t : seeds) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+  const Tree tree(triangles.begin(), triangles.end());
+  std::vector<char> near(std::size_t(values.size()), 0);
+  tbb::parallel_for(Eigen::Index(0), values.size(), [&](Eigen::Index s) {
+    const double r = std::abs(values[s]);
+    if (!(r <= reach)) return;
+    const K::Point_3 p(points(s, 0), points(s, 1), points(s, 2));
+    const double radius = ball * r + grow;
+    near[std::size_t(s)] = tree.do_intersect(K::Sphere_3(p, radius * radius));
+  });
+  std::vector<int> out;
+  for (std::size_t s = 0; s < near.size(); ++s)
+    if (near[s]) out.push_back(int(s));
+  return out;
+}
+
+// Scales each vertex's move (factor 1, halved, then 0) until no triangle's normal turns by more
+// than the allowed angle; returns the vertices held back.
+long hold_back_turning_triangles(const Mesh& mesh, const PointMatrix& moves,
+                                 std::vector<double>& factor, const CarvingOptions& options) {
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  std::vector<Eigen::Index> moving;  // triangles with a moving vertex
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    if (factor[std::size_t(F(t, 0))] > 0 || factor[std::size_t(F(t, 1))] > 0 ||
+        factor[std::size_t(F(t, 2))] > 0)
+      moving.push_back(t);
+  std::vector<Eigen::Vector3d> before(moving.size());
+  for (std::size_t q = 0; q < moving.size(); ++q) before[q] = triangle_normal(V, F, moving[q]);
+  const double min_cos = std::cos(options.max_turn_degrees * M_PI / 180);
+  std::vector<char> turned(moving.size());
+  std::vector<char> held(std::size_t(V.rows()), 0);
+  for (int round = 0;; ++round) {
+    tbb::parallel_for(std::size_t(0), moving.size(), [&](std::size_t q) {
+      const Eigen::Index t = moving[q];
+      Eigen::Matrix3d corners;
+      for (int c = 0; c < 3; ++c) {
+        const int v = F(t, c);
+        corners.col(c) = (V.row(v) + factor[std::size_t(v)] * moves.row(v)).transpose();
+      }
+      const Eigen::Vector3d after =
+          (corners.col(1) - corners.col(0)).cross(corners.col(2) - corners.col(0));
+      turned[q] = !(before[q].dot(after) >= min_cos * before[q].norm() * after.norm());
+    });
+    bool any = false;
+    for (std::size_t q = 0; q < moving.size(); ++q) {
+      if (!turned[q]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t v = std::size_t(F(moving[q], c));
+        if (factor[v] == 0) continue;
+        factor[v] = round < options.halvings ? factor[v] / 2 : 0;
+        held[v] = 1;
+        any = true;
+      }
+    }
+    if (!any) break;
+  }
+  return long(std::count(held.begin(), held.end(), 1));
+}
+
+// The feature of triangle t holding q, p's nearest point on the mesh.
+static NearestFeature feature_at(const Mesh& mesh, const VertexTriangles& around, int t,
+                                 const Eigen::Vector3d& q, const Eigen::Vector3d& p) {
+  NearestFeature out;
+  out.triangle = t;
+  out.point = q;
+  out.normal = feature_normal(mesh, around, t, barycentric(mesh, t, q), out.vertices);
+  out.height = (p - q).dot(out.normal);
+  return out;
+}
+
+NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
+                               const Eigen::Vector3d& p, const std::vector<int>& among) {
+  if (among.empty()) return {};
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+  std::vector<Triangle> triangles;
+  triangles.reserve(among.size());
+  for (int t : among) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+  Tree tree(triangles.begin(), triangles.end());
+  tree.do_not_accelerate_distance_queries();  // one query: no kd-tree of hints
+  const auto [nearest, primitive] = tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
+  return feature_at(mesh, around, among[std::size_t(primitive - triangles.cbegin())],
+                    Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z()), p);
+}
+
+SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
+                             const PointMatrix& points, const Eigen::VectorXd& values,
+                             const std::vector<int>& which, double slack, double longest,
+                             const std::vector<int>* among) {
+  SideCheck out;
+  out.moves = PointMatrix::Zero(mesh.vertices.rows(), 3);
+  if (mesh.triangles.rows() == 0 || which.empty()) return out;
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  std::vector<Triangle> triangles;
+  std::vector<int> index;  // the mesh's triangle of each tree triangle
+  if (among) {
+    index = *among;
+  } else {
+    index.resize(std::size_t(F.rows()));
+    std::iota(index.begin(), index.end(), 0);
+  }
+  if (index.empty()) return out;
+  triangles.reserve(index.size());
+  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+  for (int t : index) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+  Tree tree(triangles.begin(), triangles.end());
+  // The kd-tree of hints pays off over many queries, not over the few of later rounds.
+  if (which.size() > kManyQueries) tree.accelerate_distance_queries();
+  // Per checked sample: the feature's vertices and the move asked of them (empty if none).
+  std::vector<std::vector<int>> features(which.size());
+  std::vector<Eigen::Vector3d> asked(which.size());
+  std::vector<char> wrong(which.size(), 0);
+  out.nearest.assign(which.size(), -1);
+  out.failed.assign(which.size(), 0);
+  tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t w) {
+    const int s = which[w];
+    const double r = std::abs(values[s]);
+    if (!(r > 0)) return;
+    const Eigen::Vector3d p = points.row(s).transpose();
+    const auto [nearest, primitive] =
+        tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
+    const int t = index[std::size_t(primitive - triangles.cbegin())];
+    out.nearest[w] = t;
+    NearestFeature at =
+        feature_at(mesh, around, t, Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z()), p);
+    const Eigen::Vector3d q = at.point, n = at.normal;
+    std::vector<int>& feature = at.vertices;
+    const double side = values[s] > 0 ? 1 : -1, height = at.height;
+    wrong[w] = !(side * height > 0);
+    if (!wrong[w] && (p - q).norm() >= r - slack) return;
+    out.failed[w] = 1;
+    // Move the feature along n so that p would lie r (and a little) beyond it on its own side.
+    asked[w] = (height - side * r * (1 + kBeyond)) * n;
+    // A longer move is no local correction (a missing thin part, or the other side's sheet):
+    // it counts, but moves nothing.
+    if (asked[w].norm() > longest) feature.clear();
+    features[w] = std::move(feature);
+  });
+  std::vector<Request> best(std::size_t(V.rows()));
+  for (std::size_t w = 0; w < which.size(); ++w) {
+    if (!out.failed[w]) continue;
+    ++out.violations;
+    out.wrong_side += wrong[w];
+    if (features[w].empty()) continue;
+    const Request asks{which[w], bool(wrong[w]), asked[w].norm(), asked[w]};
+    for (int v : features[w])
+      if (asks.before(best[std::size_t(v)])) best[std::size_t(v)] = asks;
+  }
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (best[std::size_t(v)].sample >= 0) out.moves.row(v) = best[std::size_t(v)].move.transpose();
+  return out;
+}
+
+}  // namespace sdfcontour::detail

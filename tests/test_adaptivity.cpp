@@ -1,0 +1,96 @@
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+#include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/metrics/mesh_properties.h"
+#include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/pipeline/pipeline.h"
+#include "sdfcontour/reconstruction/adaptivity.h"
+#include "test_support.h"
+
+namespace sdfcontour {
+namespace {
+
+ContourResult local_mesh(const Grid& g, double tolerance) {
+  ContourOptions o;
+  o.reconstruction = Reconstruction::Local;
+  o.adaptivity.tolerance = tolerance;
+  return contour(grid_input(g), nullptr, o);
+}
+
+double largest_distance(const AnalyticShape& shape, const Mesh& m) {
+  double worst = 0;
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    worst = std::max(worst, std::abs(shape.distance(m.vertices.row(v).transpose())));
+  return worst;
+}
+
+TEST(Adaptivity, BoxFacesCollapseToFewTriangles) {
+  // Planar faces: their contact points agree on one plane each, so the faces merge (measured:
+  // 136 triangles, over 100x fewer; what is left lies along the reconstruction's rounded edges);
+  // the mesh stays closed, 2-manifold and on the box.
+  const auto box = make_builtin_shape("box");
+  const Grid g = sample_grid(*box, 32, Bounds{});
+  const double h = g.spacing().maxCoeff();
+  const ContourResult fine = local_mesh(g, 0), coarse = local_mesh(g, 0.25);
+  ASSERT_TRUE(coarse.adaptivity);
+  EXPECT_EQ(coarse.adaptivity->triangles_before, fine.mesh->triangles.rows());
+  EXPECT_EQ(coarse.adaptivity->triangles_after, coarse.mesh->triangles.rows());
+  EXPECT_LE(coarse.mesh->triangles.rows(), 200);
+  EXPECT_GT(fine.mesh->triangles.rows(), 100 * coarse.mesh->triangles.rows());
+  test::expect_closed_and_outward(*coarse.mesh);
+  EXPECT_TRUE(self_intersecting_triangles(*coarse.mesh).empty());
+  // No vertex farther off than the reconstruction's own worst (at its rounded corners).
+  EXPECT_LE(largest_distance(*box, *coarse.mesh), largest_distance(*box, *fine.mesh));
+  EXPECT_LT(largest_distance(*box, *coarse.mesh), 0.3 * h);
+}
+
+TEST(Adaptivity, CurvedShapeStaysCloseAndTheSameForAnyThreadCount) {
+  // A torus keeps its curvature: fewer triangles where the planes allow, every vertex near the
+  // surface, closed and manifold, and one result for 1 and 2 threads (the merges run in order).
+  const auto torus = make_builtin_shape("torus");
+  const Grid g = sample_grid(*torus, 40, Bounds{});
+  const double h = g.spacing().maxCoeff();
+  const ContourResult fine = local_mesh(g, 0);
+  ContourResult one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = local_mesh(g, 0.1);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = local_mesh(g, 0.1);
+  }
+  EXPECT_EQ(one.mesh->vertices, two.mesh->vertices);
+  EXPECT_EQ(one.mesh->triangles, two.mesh->triangles);
+  EXPECT_LT(5 * one.mesh->triangles.rows(), fine.mesh->triangles.rows());
+  test::expect_closed_and_outward(*one.mesh);
+  EXPECT_LT(largest_distance(*torus, *one.mesh), 0.25 * h);
+}
+
+TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {
+  const auto sphere = make_builtin_shape("sphere");
+  const Grid g = sample_grid(*sphere, 16, Bounds{});
+  const Mesh m = marching_cubes(g);
+  const PointMatrix none(0, 3);
+  const Mesh same = adapt_mesh(m, none, none, g.spacing().maxCoeff(), AdaptivityOptions{});
+  EXPECT_EQ(same.vertices, m.vertices);
+  EXPECT_EQ(same.triangles, m.triangles);
+  AdaptivityOptions o;
+  o.tolerance = -1;
+  EXPECT_THROW(adapt_mesh(m, none, none, 0.1, o), Error);
+  o.tolerance = 0.1;
+  EXPECT_THROW(adapt_mesh(m, none, none, 0, o), Error);
+  EXPECT_THROW(adapt_mesh(m, PointMatrix::Zero(2, 3), none, 0.1, o), Error);
+  // Marching cubes' own planes only: still closed and manifold, fewer triangles.
+  AdaptivityStats stats;
+  const Mesh merged = adapt_mesh(m, none, none, g.spacing().maxCoeff(), o, &stats);
+  EXPECT_LT(stats.triangles_after, stats.triangles_before);
+  test::expect_closed_and_outward(merged);
+}
+
+}  // namespace
+}  // namespace sdfcontour
