@@ -84,12 +84,7 @@ def main():
     rows = ["| N | wall (s) | network (s) | dense MC alone (s) | wall / (network + MC) | "
             "evaluated | lipschitz used | peak RSS above start (MB) | mesh (MB) | triangles |",
             "|---|---|---|---|---|---|---|---|---|---|"]
-    for n in map(int, a.res.split(",")):
-        r = subprocess.run([sys.executable, __file__, "--one", str(n)], capture_output=True,
-                           text=True, cwd=HERE)
-        if r.returncode:
-            raise SystemExit(r.stderr[-2000:])
-        x = json.loads(r.stdout.strip().splitlines()[-1])
+    for n, x in each_in_its_process(a.res, "mc"):
         rows.append(f"| {n} | {x['wall']:.1f} | {x['network']:.1f} | {x['marching']:.2f} | "
                     f"{x['wall'] / (x['network'] + x['marching']):.2f} | {100 * x['fraction']:.1f}% | "
                     f"{x['lipschitz']:g} | "
@@ -103,16 +98,22 @@ def main():
     report(text, a.out)
 
 
+def each_in_its_process(resolutions, method):
+    """(N, one(N, method)) for each N of the comma-separated list, each run in its own process
+    so that each peak RSS is its own."""
+    for n in map(int, resolutions.split(",")):
+        r = subprocess.run([sys.executable, __file__, "--one", str(n), "--method", method],
+                           capture_output=True, text=True, cwd=HERE)
+        if r.returncode:
+            raise SystemExit(r.stderr[-2000:])
+        yield n, json.loads(r.stdout.strip().splitlines()[-1])
+
+
 def gcp_table(a):
     rows = ["| N | wall (s) | network (s) | local reconstruction (s) | rest (s) | evaluated | "
             "bricks | peak RSS above start (MB) | dense N³ float64 grid (MB) | triangles |",
             "|---|---|---|---|---|---|---|---|---|---|"]
-    for n in map(int, a.res.split(",")):
-        r = subprocess.run([sys.executable, __file__, "--one", str(n), "--method", "gcp"],
-                           capture_output=True, text=True, cwd=HERE)
-        if r.returncode:
-            raise SystemExit(r.stderr[-2000:])
-        x = json.loads(r.stdout.strip().splitlines()[-1])
+    for n, x in each_in_its_process(a.res, "gcp"):
         rows.append(f"| {n} | {x['wall']:.1f} | {x['network']:.1f} | {x['local']:.1f} | "
                     f"{x['wall'] - x['network'] - x['local']:.1f} | {100 * x['fraction']:.1f}% | "
                     f"{x['bricks']} | {x['peak_above_mb']:.0f} | {x['dense_mb']:.0f} | "

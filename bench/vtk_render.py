@@ -15,9 +15,11 @@ def ensure_display():
         os.execvp("xvfb-run", ["xvfb-run", "-a", sys.executable] + sys.argv)
 
 
-def render(V, F, size=420, color=(0.62, 0.72, 0.86), azimuth=-35.0, elevation=20.0, zoom=1.25):
+def render(V, F, size=420, color=(0.62, 0.72, 0.86), azimuth=-35.0, elevation=20.0, zoom=1.25,
+           edges=False):
     """An RGB image (size, size, 3) in [0, 1] of the mesh (V (n, 3), F (m, 3)), y up, seen from
-    the front right and a little above, lit by a headlight and one key light."""
+    the front right and a little above, lit by a headlight and one key light; with `edges`, the
+    triangles' edges drawn."""
     import vtk
     from vtk.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray, vtk_to_numpy
     points = vtk.vtkPoints()
@@ -36,6 +38,10 @@ def render(V, F, size=420, color=(0.62, 0.72, 0.86), azimuth=-35.0, elevation=20
     prop.SetColor(*color)
     prop.SetInterpolationToFlat()
     prop.SetSpecular(0.15)
+    if edges:
+        prop.EdgeVisibilityOn()
+        prop.SetEdgeColor(0.15, 0.2, 0.3)
+        prop.SetLineWidth(0.6)
     renderer = vtk.vtkRenderer()
     renderer.AddActor(actor)
     renderer.SetBackground(1, 1, 1)

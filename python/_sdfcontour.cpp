@@ -327,6 +327,22 @@ py::tuple run_marching_cubes_brick(const py::array& block, const std::array<int,
                         to_numpy(std::move(piece.triangles)));
 }
 
+// A view of `block`, the samples [first, first + block.shape) of a grid of `dims` over [lo, hi]
+// (`keep` holds a converted copy while the view is used).
+GridView block_view(const py::array& block, const std::array<int, 3>& first,
+                    const std::array<int, 3>& dims, const std::array<double, 3>& lo,
+                    const std::array<double, 3>& hi, py::object& keep) {
+  if (block.ndim() != 3) throw Error("a block must be a 3D array");
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  const SdfInput input = sdf_input(block, bounds, 0.0, keep);
+  GridView view = *grid_view_of(input);
+  view.first = first;
+  view.whole = dims;
+  return view;
+}
+
 // One brick of GCP's local reconstruction (local_brick.h): `block` holds the samples [first,
 // first + block.shape) of a grid of `dims` over [lo, hi]; the brick owns the edges from samples
 // [own_first, own_end). `options` as contour()'s; `truncation` (inside, outside; inf: none) as
@@ -337,15 +353,8 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
                            const std::array<double, 3>& hi, const std::array<int, 3>& own_first,
                            const std::array<int, 3>& own_end, const py::dict& options,
                            const std::array<double, 2>& truncation, double value_scale) {
-  if (block.ndim() != 3) throw Error("a brick must be a 3D array");
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
   py::object keep;
-  const SdfInput input = sdf_input(block, bounds, 0.0, keep);
-  GridView view = *grid_view_of(input);
-  view.first = first;
-  view.whole = dims;
+  const GridView view = block_view(block, first, dims, lo, hi, keep);
   LocalBrickOptions lb = local_brick_options(contour_options(options));
   lb.band.truncation_mode = TruncationMode::Resolved;
   lb.band.resolved.inside = truncation[0];
@@ -383,15 +392,8 @@ py::array_t<double> run_crossing_gradient_norms(
     const py::array& block, const std::array<int, 3>& first, const std::array<int, 3>& dims,
     const std::array<double, 3>& lo, const std::array<double, 3>& hi,
     const std::array<int, 3>& own_first, const std::array<int, 3>& own_end) {
-  if (block.ndim() != 3) throw Error("a block must be a 3D array");
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
   py::object keep;
-  const SdfInput input = sdf_input(block, bounds, 0.0, keep);
-  GridView view = *grid_view_of(input);
-  view.first = first;
-  view.whole = dims;
+  const GridView view = block_view(block, first, dims, lo, hi, keep);
   std::vector<double> norms;
   {
     py::gil_scoped_release release;
