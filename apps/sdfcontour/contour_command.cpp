@@ -283,7 +283,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
     j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
                  {"triangles", r.mesh->triangles.rows()},
                  {"file", a.output}};
-  if (r.contact_points) {
+  if (r.contact_points && !r.local_bricks) {  // (the bricks' are in "local_bricks")
     const ContactPoints& cp = *r.contact_points;
     nlohmann::json c = {{"kept", cp.size()},
                         {"hidden", cp.hidden},
@@ -325,8 +325,10 @@ void print_summary(const ContourResult& r, double total) {
   std::cout << "samples " << r.samples;
   if (r.band_samples > 0) std::cout << ", in band " << r.band_samples;
   if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
-  if (r.contact_points) std::cout << ", contact points kept " << r.contact_points->size();
-  if (r.local_bricks && !r.contact_points)
+  // (The bricks' contact points, kept for adaptivity, name no samples: the bricks' line counts.)
+  if (r.contact_points && !r.local_bricks)
+    std::cout << ", contact points kept " << r.contact_points->size();
+  if (r.local_bricks)
     std::cout << ", contact points " << r.local_bricks->contact_points << " (over "
               << r.local_bricks->bricks << " bricks)";
   if (r.mesh)
