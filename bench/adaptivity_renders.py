@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from common import CLI, MESHES  # noqa: E402
+from common import CLI, sample_shared_mesh  # noqa: E402
 from vtk_render import ensure_display, render  # noqa: E402
 
 import sdfcontour  # noqa: E402
@@ -42,10 +42,7 @@ def main():
     fig = plt.figure(figsize=(12, 4.1 * len(names)), dpi=100)
     for row, name in enumerate(names):
         with tempfile.TemporaryDirectory() as d:
-            prefix = os.path.join(d, name)
-            subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
-                            str(args.res), "-o", prefix, "-q"], check=True,
-                           stdout=subprocess.DEVNULL)
+            prefix = sample_shared_mesh(name, args.res, d)
             gt = sdfcontour.read_mesh(prefix + "_mesh.ply")
             meshes = []
             for tol in (0.0, args.tol):

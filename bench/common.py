@@ -41,3 +41,12 @@ def report(text, out):
     if out:
         with open(out, "w") as f:
             f.write(text)
+
+
+def sample_shared_mesh(name, res, folder):
+    """Samples the shared mesh `name` on a res^3 grid into `folder` (`sdfcontour sample`): the
+    prefix of its `.npy` grid and `_mesh.ply` ground truth."""
+    prefix = os.path.join(folder, name)
+    subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
+                    prefix, "-q"], check=True, stdout=subprocess.DEVNULL)
+    return prefix

@@ -10,7 +10,6 @@ reconstruction (brick by brick), side by side, each titled with its L1 to the gr
 """
 import argparse
 import os
-import subprocess
 import sys
 import tempfile
 
@@ -21,14 +20,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+from common import sample_shared_mesh  # noqa: E402
 from vtk_render import ensure_display, render  # noqa: E402
 
 ROOT = os.path.dirname(HERE)
 import numpy as np  # noqa: E402
 import sdfcontour  # noqa: E402
 
-MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
-CLI = os.path.join(ROOT, "build", "sdfcontour")
 METHODS = [("MC", dict(method="mc")),
            ("GCP-Poisson", dict(method="gcp", reconstruction="poisson")),
            ("GCP-local", dict(method="gcp", reconstruction="local"))]
@@ -45,10 +43,7 @@ def main():
     fig = plt.figure(figsize=(12, 4.1 * len(names)), dpi=100)
     for row, name in enumerate(names):
         with tempfile.TemporaryDirectory() as d:
-            prefix = os.path.join(d, name)
-            subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
-                            str(args.res), "-o", prefix, "-q"], check=True,
-                           stdout=subprocess.DEVNULL)
+            prefix = sample_shared_mesh(name, args.res, d)
             V_gt, F_gt = sdfcontour.read_mesh(prefix + "_mesh.ply")
             grid = np.load(prefix + ".npy")
         for col, (label, options) in enumerate(METHODS):
