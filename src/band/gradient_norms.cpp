@@ -1,0 +1,87 @@
+// The field's gradient norm next to its sign changes: how far the values are from distances.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "sdfcontour/band/band.h"
+
+namespace sdfcontour {
+
+std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                            std::array<int, 3> own_first,
+                                            std::array<int, 3> own_end) {
+  const std::array<int, 3> whole = grid.whole_dims();
+  std::array<int, 3> from{}, to{};  // block indices of the owned samples measured
+  for (int a = 0; a < 3; ++a) {
+    from[a] = std::max(own_first[a], 2) - grid.first[a];
+    to[a] = std::min(own_end[a], whole[a] - 2) - grid.first[a];
+    if (from[a] < to[a] && (from[a] < 2 || to[a] + 2 > grid.dims[a]))
+      throw Error("the block must hold 2 samples beyond the samples whose gradients it measures");
+  }
+  if (from[0] >= to[0] || from[1] >= to[1] || from[2] >= to[2]) return {};
+  const Eigen::Vector3d h = grid.spacing();
+  const std::size_t stride[3] = {std::size_t(grid.dims[1]) * std::size_t(grid.dims[2]),
+                                 std::size_t(grid.dims[2]), 1};
+  std::vector<std::vector<double>> per_slab(std::size_t(to[0] - from[0]));
+  grid.visit([&](const auto* f) {
+    tbb::parallel_for(from[0], to[0], [&](int i) {
+      for (int j = from[1]; j < to[1]; ++j)
+        for (int k = from[2]; k < to[2]; ++k) {
+          const std::size_t p = grid.index(i, j, k);
+          // Only next to a sign change, where a field is read and truncation never reaches.
+          bool crossing = false;
+          for (int a = 0; a < 3; ++a)
+            crossing |=
+                (f[p - stride[a]] < 0) != (f[p] < 0) || (f[p + stride[a]] < 0) != (f[p] < 0);
+          if (!crossing) continue;
+          bool clamped = false;
+          for (int a = 0; a < 3; ++a)
+            for (long o : {-2L, -1L, 1L, 2L})
+              clamped |= truncation.truncated(double(f[p + o * long(stride[a])]));
+          if (clamped) continue;
+          // Central differences with steps h and 2h, extrapolated (Richardson): the curvature's
+          // O(h^2) bias cancels, so an exact distance measures 1 to O(h^4).
+          double near = 0, far = 0;
+          for (int a = 0; a < 3; ++a) {
+            const double d1 = (double(f[p + stride[a]]) - double(f[p - stride[a]])) / (2 * h[a]);
+            const double d2 =
+                (double(f[p + 2 * stride[a]]) - double(f[p - 2 * stride[a]])) / (4 * h[a]);
+            near += d1 * d1, far += d2 * d2;
+          }
+          per_slab[std::size_t(i - from[0])].push_back((4 * std::sqrt(near) - std::sqrt(far)) / 3);
+        }
+    });
+  });
+  std::vector<double> norms;
+  for (const auto& s : per_slab) norms.insert(norms.end(), s.begin(), s.end());
+  return norms;
+}
+
+GradientNormSummary summarize_gradient_norms(std::vector<double> norms) {
+  GradientNormSummary summary;
+  summary.count = long(norms.size());
+  if (norms.size() < 16) return summary;
+  auto percentile = [&](std::size_t q) {
+    const auto at = norms.begin() + long(norms.size() * q / 100);
+    std::nth_element(norms.begin(), at, norms.end());
+    return *at;
+  };
+  summary.low = percentile(10);
+  summary.median = percentile(50);
+  summary.high = percentile(90);
+  return summary;
+}
+
+GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation) {
+  const std::array<int, 3> end = grid.whole_dims();
+  return summarize_gradient_norms(crossing_gradient_norms(grid, truncation, grid.first, end));
+}
+
+double distance_value_scale(double median_norm) {
+  const double m = median_norm;
+  return std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1 ? 1 / m : 1.0;
+}
+
+}  // namespace sdfcontour
