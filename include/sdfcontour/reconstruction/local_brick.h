@@ -37,7 +37,7 @@ constexpr int kLocalBrick = 256;
 /// kCrossingReach grid edges of them per round (carving moves a vertex at most kMaxCarveMove
 /// spacings, projection at most its max_move: triangles that start farther apart cannot meet),
 /// so a brick computes the mesh of its edges and kUntangleRing more on each side.
-constexpr int kUntangleRounds = 2;
+constexpr int kUntangleRounds = 4;
 constexpr int kSideRounds = 1;
 constexpr double kMaxCarveMove = 0.5;
 constexpr double kLongestSideMove = 0.5;
