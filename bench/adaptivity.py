@@ -113,11 +113,9 @@ def write_markdown(rows, path):
                   "|---|---|---|---|"]
         for tol, v in sorted(ratios.items()):
             peers = [p for _, _, p in v if p is not None]
+            peer = f"{geomean(peers):.3f}" if peers else "–"
             lines.append(f"| {tol:g} | {geomean([x for x, _, _ in v]):.1f}x | "
-                         f"{geomean([y for _, y, _ in v]):.3f} | "
-                         f"{geomean(peers):.3f} |" if peers else
-                         f"| {tol:g} | {geomean([x for x, _, _ in v]):.1f}x | "
-                         f"{geomean([y for _, y, _ in v]):.3f} | – |")
+                         f"{geomean([y for _, y, _ in v]):.3f} | {peer} |")
         lines.append("")
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")

@@ -470,9 +470,10 @@ Command add_contour_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--adaptivity", a->adaptivity,
                 "Merge the mesh where the surface is flat enough: edges collapse while the merged "
-                "vertex stays within this many spacings (RMS) of the tangent planes it gathers "
-                "(GCP's contact points, or the mesh's own planes for the other methods); creases "
-                "and corners stay. 0 (default): the mesh as reconstructed")
+                "vertex's squared distances to the tangent planes its region gathers (GCP's "
+                "contact points, or the mesh's own planes for the other methods), summed, stay "
+                "under this many spacings squared; creases and corners stay. 0 (default): the "
+                "mesh as reconstructed")
       ->capture_default_str();
   c->add_option(
        "--subdivisions", a->subdivisions,

@@ -524,9 +524,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Local reconstruction: midpoint subdivisions before projection onto the contact points
         (0 to 4; "auto": 2 below 96 samples per axis, else 1).
     adaptivity : float
-        Merge the mesh where the surface is flat enough: edges collapse while the merged vertex
-        stays within this many spacings (RMS, 0 to 10) of the tangent planes it gathers (GCP's
-        contact points; the mesh's own planes for the other methods); creases and corners stay.
+        Merge the mesh where the surface is flat enough: edges collapse while the merged
+        vertex's squared distances to the tangent planes its region gathers (GCP's contact
+        points; the mesh's own planes for the other methods), summed, stay under this many
+        spacings (0 to 10) squared; creases and corners stay.
         0 (default): the mesh as reconstructed. ``stats["adaptivity"]`` gives the triangles
         before and after. A callable is then sampled on the full grid. CLI ``--adaptivity``.
     brick_size : int or "auto"

@@ -10,8 +10,9 @@
 #include <array>
 #include <cmath>
 #include <string>
-#include <unordered_map>
 #include <vector>
+
+#include "reconstruction/point_cubes.h"
 
 namespace sdfcontour {
 
@@ -22,22 +23,21 @@ using SurfaceMesh = CGAL::Surface_mesh<K::Point_3>;
 using Vertex = SurfaceMesh::Vertex_index;
 namespace SMS = CGAL::Surface_mesh_simplification;
 
-// Sum over planes (n, d) of w (n.x + d)^2 = x^T A x + 2 b.x + c, with the planes' weight.
+// Sum over planes (n, d) of w (n.x + d)^2 = x^T A x + 2 b.x + c.
 struct Quadric {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
-  double c = 0, weight = 0;
+  double c = 0;
 
   void add_plane(const Eigen::Vector3d& n, const Eigen::Vector3d& p, double w) {
     const double d = -n.dot(p);
     A += w * n * n.transpose();
     b += w * d * n;
     c += w * d * d;
-    weight += w;
   }
   Quadric operator+(const Quadric& o) const {
     Quadric q;
-    q.A = A + o.A, q.b = b + o.b, q.c = c + o.c, q.weight = weight + o.weight;
+    q.A = A + o.A, q.b = b + o.b, q.c = c + o.c;
     return q;
   }
   double at(const Eigen::Vector3d& x) const {
@@ -63,35 +63,18 @@ Eigen::Vector3d vec(const K::Point_3& p) {
   return {p.x(), p.y(), p.z()};
 }
 
-// Each point's nearest vertex within a spacing (-1 if none), from cubes of a spacing.
+// Each point's nearest vertex within a spacing (-1 if none; ties: the lower vertex).
 std::vector<int> nearest_vertices(const PointMatrix& V, const PointMatrix& P, double h) {
-  auto cell = [&](const Eigen::Vector3d& x) {
-    return std::array<long, 3>{long(std::floor(x[0] / h)), long(std::floor(x[1] / h)),
-                               long(std::floor(x[2] / h))};
-  };
-  auto key = [](const std::array<long, 3>& c) {
-    return (std::uint64_t(c[0] & 0x1FFFFF) << 42) | (std::uint64_t(c[1] & 0x1FFFFF) << 21) |
-           std::uint64_t(c[2] & 0x1FFFFF);
-  };
-  std::unordered_map<std::uint64_t, std::vector<int>> cubes;
-  for (Eigen::Index v = 0; v < V.rows(); ++v)
-    cubes[key(cell(V.row(v).transpose()))].push_back(int(v));
+  const detail::PointCubes cubes(V, h);
   std::vector<int> nearest(std::size_t(P.rows()), -1);
   tbb::parallel_for(Eigen::Index(0), P.rows(), [&](Eigen::Index i) {
     const Eigen::Vector3d p = P.row(i).transpose();
-    const auto c = cell(p);
     double best = h * h;
-    for (long dx = -1; dx <= 1; ++dx)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dz = -1; dz <= 1; ++dz) {
-          const auto it = cubes.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
-          if (it == cubes.end()) continue;
-          for (int v : it->second) {
-            const double d = (V.row(v).transpose() - p).squaredNorm();
-            if (d < best || (d == best && v < nearest[std::size_t(i)]))
-              best = d, nearest[std::size_t(i)] = v;
-          }
-        }
+    cubes.for_each_near(p, [&](int v) {
+      const double d = (V.row(v).transpose() - p).squaredNorm();
+      if (d < best || (d == best && v < nearest[std::size_t(i)]))
+        best = d, nearest[std::size_t(i)] = v;
+    });
   });
   return nearest;
 }

@@ -7,8 +7,9 @@
 namespace sdfcontour {
 
 struct AdaptivityOptions {
-  /// Largest RMS distance, in spacings, from a merged vertex to the tangent planes it gathered
-  /// (its region's contact points, and its triangles' own planes); 0 leaves the mesh as it is.
+  /// In spacings: a merge stands while the squared distances from the merged vertex to the
+  /// tangent planes its region gathered (its contact points', and its triangles' own planes at a
+  /// tenth of their area's weight), summed, stay under tolerance^2; 0 leaves the mesh as it is.
   double tolerance = 0;
   /// A merge turns no triangle's normal by more than this many degrees (nor flips one).
   double max_normal_turn = 45;
@@ -21,15 +22,15 @@ struct AdaptivityStats {
 };
 
 /// `mesh` (closed, 2-manifold, oriented) with its edges collapsed, cheapest first, while the
-/// merged vertex stays within options.tolerance spacings (RMS) of the tangent planes of the
-/// points (n x 3) with unit `normals` (n x 3) that its region gathered: each point joins the
-/// quadric of its nearest vertex, each vertex also holds its triangles' planes (so a region
-/// without points keeps its shape). The merged vertex minimises the summed quadric, with the
-/// directions the planes leave free kept at the edge's midpoint, so two planes keep a crease and
-/// three a corner. Merges keep the mesh closed and 2-manifold (the link condition) and turn no
-/// triangle by more than options.max_normal_turn. Sequential and deterministic: the same mesh for
-/// any thread count. Throws Error for mismatched sizes, a spacing that is not positive, or a
-/// tolerance outside [0, 10].
+/// summed squared distance of the merged vertex to the tangent planes of the points (n x 3) with
+/// unit `normals` (n x 3) that its region gathered stays under (options.tolerance spacings)^2:
+/// each point joins the quadric of its nearest vertex, each vertex also holds its triangles'
+/// planes (so a region without points keeps its shape). The merged vertex minimises the summed
+/// quadric, with the directions the planes leave free kept at the edge's midpoint, so two planes
+/// keep a crease and three a corner. Merges keep the mesh closed and 2-manifold (the link
+/// condition) and turn no triangle by more than options.max_normal_turn. Sequential and
+/// deterministic: the same mesh for any thread count. Throws Error for mismatched sizes, a spacing
+/// that is not positive, or a tolerance outside [0, 10].
 Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
                 double spacing, const AdaptivityOptions& options, AdaptivityStats* stats = nullptr);
 

@@ -1,0 +1,64 @@
+// Internal: points bucketed in cubes, for the points near a position (projection, adaptivity).
+#pragma once
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour::detail {
+
+// The points bucketed in cubes of side `cell`, sorted by cube (x fastest): the points within a
+// cell's reach of a position lie in nine runs of three consecutive cubes.
+class PointCubes {
+ public:
+  PointCubes(const PointMatrix& P, double cell) : cell_(cell) {
+    origin_ = P.colwise().minCoeff().transpose();
+    const Eigen::Vector3d extent = P.colwise().maxCoeff().transpose() - origin_;
+    // Keys must fit in 63 bits whatever the spread: coarser cubes only cost more tests.
+    while ((extent / cell_).prod() > 1e17) cell_ *= 2;
+    for (int a = 0; a < 3; ++a) size_[a] = long(extent[a] / cell_) + 1;
+    keyed_.resize(std::size_t(P.rows()));
+    tbb::parallel_for(Eigen::Index(0), P.rows(), [&](Eigen::Index i) {
+      const auto c = cube_of(P.row(i).transpose());
+      keyed_[std::size_t(i)] = {key(c[0], c[1], c[2]), int(i)};
+    });
+    tbb::parallel_sort(keyed_.begin(), keyed_.end());
+  }
+
+  // Calls f(point index) for every point in the 27 cubes around p.
+  template <class F>
+  void for_each_near(const Eigen::Vector3d& p, F&& f) const {
+    const auto c = cube_of(p);
+    const long x0 = std::max(0L, c[0] - 1), x1 = std::min(size_[0] - 1, c[0] + 1);
+    for (long k = std::max(0L, c[2] - 1); k <= std::min(size_[2] - 1, c[2] + 1); ++k)
+      for (long j = std::max(0L, c[1] - 1); j <= std::min(size_[1] - 1, c[1] + 1); ++j) {
+        auto it =
+            std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<long, int>{key(x0, j, k), -1});
+        const long end = key(x1, j, k);
+        for (; it != keyed_.end() && it->first <= end; ++it) f(it->second);
+      }
+  }
+
+ private:
+  std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
+    std::array<long, 3> c;
+    for (int a = 0; a < 3; ++a)
+      c[std::size_t(a)] = std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), -1L, size_[a]);
+    return c;
+  }
+  long key(long i, long j, long k) const { return (k * size_[1] + j) * size_[0] + i; }
+
+  double cell_;
+  Eigen::Vector3d origin_;
+  long size_[3];
+  std::vector<std::pair<long, int>> keyed_;  // (cube key, point), sorted
+};
+
+}  // namespace sdfcontour::detail
