@@ -251,6 +251,13 @@ ContourOptions contour_options(const py::dict& o) {
   return c;
 }
 
+Bounds bounds_of(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  Bounds bounds;
+  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  return bounds;
+}
+
 // The input as the library takes it: a 3D array is a grid over [lo, hi] viewed in place when it
 // is C-contiguous float32 or float64 (else converted once); an (n, 4) array holds scattered
 // samples. `keep` holds any converted copy.
@@ -310,8 +317,7 @@ py::tuple run_marching_cubes_brick(const py::array& block, const std::array<int,
   if (block.ndim() != 3) throw Error("a brick must be a 3D array");
   GridGeometry grid;
   grid.dims = dims;
-  grid.bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-  grid.bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  grid.bounds = bounds_of(lo, hi);
   py::object keep;
   const SdfInput input = sdf_input(block, grid.bounds, 0.0, keep);
   const GridView view = *grid_view_of(input);
@@ -333,10 +339,7 @@ GridView block_view(const py::array& block, const std::array<int, 3>& first,
                     const std::array<int, 3>& dims, const std::array<double, 3>& lo,
                     const std::array<double, 3>& hi, py::object& keep) {
   if (block.ndim() != 3) throw Error("a block must be a 3D array");
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
-  const SdfInput input = sdf_input(block, bounds, 0.0, keep);
+  const SdfInput input = sdf_input(block, bounds_of(lo, hi), 0.0, keep);
   GridView view = *grid_view_of(input);
   view.first = first;
   view.whole = dims;
@@ -362,6 +365,8 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
   if (!(value_scale > 0) || !std::isfinite(value_scale))
     throw Error("value_scale must be positive and finite");
   lb.band.value_scale = value_scale;
+  // Adaptivity merges the joined mesh over the contact points: the pieces hand theirs on.
+  lb.keep_contact_points = lb.keep_contact_points || get<double>(options, "adaptivity", 0.0) > 0;
   LocalPiece piece;
   {
     py::gil_scoped_release release;
@@ -381,6 +386,16 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
   stats["local_feature_vertices"] = piece.stats.feature_vertices;
   stats["local_field_misses"] = piece.stats.field_misses;
   stats["local_crossing_cells"] = piece.stats.crossing_cells;
+  py::array_t<std::uint64_t> names(py::ssize_t(piece.triangle_names.size()));
+  std::copy(piece.triangle_names.begin(), piece.triangle_names.end(), names.mutable_data());
+  stats["triangle_names"] = names;
+  if (lb.keep_contact_points) {
+    py::array_t<std::uint64_t> samples(py::ssize_t(piece.owned_samples.size()));
+    std::copy(piece.owned_samples.begin(), piece.owned_samples.end(), samples.mutable_data());
+    stats["owned_samples"] = samples;
+    stats["owned_points"] = to_numpy(std::move(piece.owned_points));
+    stats["owned_normals"] = to_numpy(std::move(piece.owned_normals));
+  }
   return py::make_tuple(keys, to_numpy(std::move(piece.vertices)),
                         to_numpy(std::move(piece.triangles)), stats);
 }
@@ -425,14 +440,9 @@ py::dict topology_stats(const Mesh& mesh) {
   return out;
 }
 
-py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
-                     const std::array<double, 3>& hi, double spacing, const py::dict& options,
-                     bool want_mesh, bool want_points, const py::object& progress_callback) {
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
-  py::object keep;
-  const SdfInput input = sdf_input(array, bounds, spacing, keep);
+// contour() of `input` (whose memory `owners` keeps alive) as the module returns it.
+py::dict contour_input(const SdfInput& input, const py::object& owners, const py::dict& options,
+                       bool want_mesh, bool want_points, const py::object& progress_callback) {
   const GridView* view = grid_view_of(input);
   ContourOptions opt = contour_options(options);
   opt.want_mesh = want_mesh;
@@ -452,7 +462,7 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
         opt.cancel = &cancel;
         return contour(input, nullptr, opt);
       },
-      py::make_tuple(array, keep ? keep : py::object(py::none())), deliver);
+      owners, deliver);
   py::dict out;
   py::dict stats;
   if (r.mesh) {
@@ -515,6 +525,91 @@ py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
   return out;
 }
 
+py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
+                     const std::array<double, 3>& hi, double spacing, const py::dict& options,
+                     bool want_mesh, bool want_points, const py::object& progress_callback) {
+  py::object keep;
+  const SdfInput input = sdf_input(array, bounds_of(lo, hi), spacing, keep);
+  return contour_input(input, py::make_tuple(array, keep ? keep : py::object(py::none())), options,
+                       want_mesh, want_points, progress_callback);
+}
+
+// contour() of a sparse grid: `blocks` a list of (brick index (3 ints), float64 array of the
+// brick's samples and the next on each high side), `fill` (bricks per axis) the value of each
+// brick not in the list (SparseGrid).
+py::dict run_contour_sparse(const py::list& blocks, const py::array& fill, int brick,
+                            const std::array<int, 3>& dims, const std::array<double, 3>& lo,
+                            const std::array<double, 3>& hi, double value_scale,
+                            double gradient_norm, const py::dict& options, bool want_mesh,
+                            bool want_points, const py::object& progress_callback) {
+  SparseGridInput input;
+  SparseGrid& grid = input.grid;
+  grid.dims = dims;
+  grid.bounds = bounds_of(lo, hi);
+  grid.brick = brick;
+  if (brick < 1) throw Error("the sparse grid's bricks must be at least one cell wide");
+  validate_grid_geometry(grid);
+  for (int a = 0; a < 3; ++a) grid.bricks[a] = bricks_along(dims[a], brick);
+  const auto f = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(fill);
+  if (!f || f.ndim() != 3 || f.shape(0) != grid.bricks[0] || f.shape(1) != grid.bricks[1] ||
+      f.shape(2) != grid.bricks[2])
+    throw Error("the sparse grid's fill must hold one value per brick");
+  grid.fill.assign(f.data(), f.data() + f.size());
+  grid.block_of.assign(grid.fill.size(), -1);
+  py::list owners;
+  owners.append(f);
+  for (const py::handle item : blocks) {
+    const auto pair = item.cast<py::tuple>();
+    const auto index = pair[0].cast<std::array<int, 3>>();
+    const auto values =
+        py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(pair[1]);
+    if (!values || values.ndim() != 3) throw Error("a block of the sparse grid must be 3D");
+    GridView block;
+    for (int a = 0; a < 3; ++a) {
+      if (index[a] < 0 || index[a] >= grid.bricks[a])
+        throw Error("a block of the sparse grid lies outside it");
+      block.dims[a] = int(values.shape(a));
+      block.first[a] = index[a] * brick;
+    }
+    block.whole = dims;
+    block.bounds = grid.bounds;
+    block.data = values.data();
+    const int b = (index[0] * grid.bricks[1] + index[1]) * grid.bricks[2] + index[2];
+    if (grid.block_of[std::size_t(b)] >= 0)
+      throw Error("a brick of the sparse grid is given twice");
+    grid.block_of[std::size_t(b)] = int(grid.blocks.size());
+    grid.blocks.push_back(block);
+    owners.append(values);
+  }
+  input.value_scale = value_scale;
+  input.gradient_norm = gradient_norm;
+  return contour_input(input, owners, options, want_mesh, want_points, progress_callback);
+}
+
+// The mesh (V, F) merged where flat (adaptivity.h) over the contact points (P, N), `spacing` the
+// grid's: (V, F, stats).
+py::tuple run_adapt_mesh(const py::array& V, const py::array& F, const py::array& P,
+                         const py::array& N, double spacing, double tolerance) {
+  const Mesh mesh = mesh_from(V, F);
+  const PointMatrix points =
+      points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(P), "P");
+  const PointMatrix normals =
+      points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(N), "N");
+  if (points.rows() != normals.rows()) throw Error("P and N must have the same shape");
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
+  AdaptivityOptions options;
+  options.tolerance = tolerance;
+  AdaptivityStats stats;
+  Mesh out = run_interruptible([&](std::atomic<bool>&) {
+    return adapt_mesh(mesh, points, normals, spacing, options, &stats);
+  });
+  py::dict a;
+  a["triangles_before"] = stats.triangles_before;
+  a["triangles_after"] = stats.triangles_after;
+  a["merges"] = stats.merges;
+  return py::make_tuple(to_numpy(std::move(out.vertices)), to_numpy(std::move(out.triangles)), a);
+}
+
 py::tuple run_poisson(const py::array& P, const py::array& N, const py::object& W,
                       const py::dict& options) {
   OrientedPoints points;
@@ -546,9 +641,7 @@ py::tuple run_sample(const py::array& V, const py::array& F, int resolution,
   if (resolution < 2 || resolution > 1024) throw Error("resolution must be between 2 and 1024");
   Mesh mesh = mesh_from(V, F);
   if (scale > 0) mesh = normalize_mesh(mesh, scale);
-  Bounds bounds;
-  bounds.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-  bounds.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  const Bounds bounds = bounds_of(lo, hi);
   Grid grid = run_interruptible([mesh, resolution, bounds](std::atomic<bool>&) {
     require_closed_mesh(mesh, "the mesh");
     const MeshSdf sdf(union_of_overlapping_parts(mesh));
@@ -615,6 +708,10 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("contour", &run_contour, py::arg("array"), py::arg("lo"), py::arg("hi"), py::arg("spacing"),
         py::arg("options"), py::arg("want_mesh"), py::arg("want_points"),
         py::arg("progress_callback") = py::none());
+  m.def("contour_sparse", &run_contour_sparse, py::arg("blocks"), py::arg("fill"), py::arg("brick"),
+        py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("value_scale"),
+        py::arg("gradient_norm"), py::arg("options"), py::arg("want_mesh"), py::arg("want_points"),
+        py::arg("progress_callback") = py::none());
   m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
   m.def("local_brick", &run_local_brick, py::arg("block"), py::arg("first"), py::arg("dims"),
@@ -632,6 +729,12 @@ PYBIND11_MODULE(_sdfcontour, m) {
       },
       py::arg("norms"),
       "(value_scale, median) of gradient norms: the factor that makes the values distances.");
+  m.def(
+      "contour_values_reach",
+      [](const py::dict& options, const std::array<int, 3>& dims) {
+        return contour_values_reach(contour_options(options), dims);
+      },
+      py::arg("options"), py::arg("dims"));
   m.def(
       "local_values_reach",
       [](const py::dict& options, const std::array<int, 3>& dims) {
@@ -685,6 +788,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
         py::arg("ascii"));
+  m.def("adapt_mesh", &run_adapt_mesh, py::arg("V"), py::arg("F"), py::arg("P"), py::arg("N"),
+        py::arg("spacing"), py::arg("tolerance"));
   m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("W"), py::arg("options"));
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
         py::arg("hi"), py::arg("scale"));

@@ -207,42 +207,43 @@ def _from_path(sdf, grid_name):
 
 
 def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_points, lipschitz):
-    """A callable sampled near the surface and contoured. Marching cubes and GCP's local
-    reconstruction go brick by brick (memory follows the surface); the other methods (and contact
-    points alone) get the sampled grid. A field found steeper
-    than `lipschitz` is sampled again with a larger bound, and said (LipschitzWarning)."""
+    """A callable sampled near the surface and contoured; memory follows the surface. Marching
+    cubes and GCP's local reconstruction go brick by brick; the other methods, and contact points
+    alone, get the sampled bricks as the core's sparse grid. A field found steeper than
+    `lipschitz` is sampled again with a larger bound, and said (LipschitzWarning)."""
     import time
-    from ._callable import SamplingReport, sample_callable
+    from ._callable import SamplingReport
+    from ._callable_bricks import sample_near_surface
     options = dict(options)
     callback = options.pop("progress_callback", None)
     if resolution is None:
         raise ValueError("a callable SDF needs a resolution (samples per axis)")
     n = int(resolution)
-    # (Adaptivity merges the whole mesh in the core: it takes the sampled grid.)
-    whole = options.get("adaptivity", 0.0) > 0
-    bricked = options["method"] == "mc" and want_mesh and not want_points and not whole
-    # GCP's local reconstruction goes brick by brick too (local_brick.h).
-    local = (options["method"] == "gcp" and options["reconstruction"] == "local" and
-             options["gradient"] == "regular" and want_mesh and not want_points and not whole)
-    _callable_budget(resolution, batch_size, dense=not (bricked or local))
+    bricked = options["method"] == "mc" and want_mesh and not want_points
+    local = (options["method"] == "gcp" and options.get("reconstruction") == "local" and
+             options["gradient"] == "regular" and want_mesh and not want_points)
+    # (Adaptivity of marching cubes' mesh merges it whole, in the core.)
+    bricked = bricked and not options.get("adaptivity", 0.0) > 0
+    _callable_budget(resolution, batch_size)
     h = float(((hi - lo) / (n - 1)).max())
     started = time.perf_counter()
+    evaluations, grid = 0, None
     for attempt in range(4):
+        # (Each attempt's slopes afresh; every attempt's evaluations counted. An attempt with a
+        # larger bound reuses the values that the last one evaluated.)
+        report = SamplingReport()
+        report.evaluations = evaluations
         if bricked:
             from ._callable_bricks import contour_callable_mc
-            report = SamplingReport()
             V, F, piece_stats = contour_callable_mc(f, lo, hi, n, int(batch_size), report,
                                                     lipschitz, callback or options["progress"])
-        elif local:
-            from ._callable_bricks import sample_near_surface
-            report = SamplingReport()
-            grid, scale = sample_near_surface(f, lo, hi, n, options, int(batch_size), report,
-                                              lipschitz, callback or options["progress"])
         else:
-            # The band the core will use (0: auto, from the samples per axis), sampled exactly.
-            band = options["band"] or _sdfcontour.auto_band(n)
-            array, report = sample_callable(f, lo, hi, n, band + options["margin"],
-                                            int(batch_size), options["progress"], lipschitz)
+            reach = (_sdfcontour.local_values_reach if local else
+                     _sdfcontour.contour_values_reach)(options, (n, n, n))
+            grid, scale = sample_near_surface(f, lo, hi, n, reach, int(batch_size), report,
+                                              lipschitz, callback or options["progress"],
+                                              earlier=grid)
+        evaluations = report.evaluations
         if not report.breaks(lipschitz, h) or attempt == 3:
             break
         steeper = max(2.0 * lipschitz, 1.25 * report.steepest)
@@ -268,9 +269,10 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
         stats["reconstruction"] = "local"
         out = {"V": V, "F": F, "stats": stats}
     else:
-        out = _sdfcontour.contour(array, lo, hi, 0.0, dict(options, truncation="none"),
-                                  want_mesh, want_points, callback)
+        from ._callable_bricks import contour_sparse
+        out = contour_sparse(grid, scale, options, want_mesh, want_points, callback)
         out["stats"]["seconds"]["sampling"] = sampled
+        out["stats"]["sampled_bricks"] = len(grid.arrays)
     out["stats"].update(evaluations=report.evaluations, lipschitz=lipschitz,
                         evaluated_fraction=report.evaluations / float(n) ** 3,
                         steepest_slope=report.steepest)
@@ -305,9 +307,8 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, s
     return out
 
 
-def _callable_budget(resolution, batch_size, dense=True):
-    """Refuses a callable's resolution or batch whose arrays cannot fit, before allocating (a
-    dense grid only where the method needs one)."""
+def _callable_budget(resolution, batch_size):
+    """Refuses a callable's resolution or batch out of range (no path makes an n^3 array)."""
     if isinstance(resolution, bool) or not isinstance(resolution, (int, _np.integer)) \
             or not 2 <= resolution <= 2048:
         raise ValueError(f"resolution must be a whole number from 2 to 2048, got {resolution!r}")
@@ -315,18 +316,6 @@ def _callable_budget(resolution, batch_size, dense=True):
             or not 1 <= batch_size <= 2**26:
         raise ValueError(f"batch_size must be a whole number from 1 to {2**26}, got "
                          f"{batch_size!r}")
-    if not dense:
-        return
-    import os
-    needed = 8.0 * float(resolution) ** 3  # the sampler's float64 grid
-    try:
-        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return
-    if needed > 0.5 * memory:
-        raise ValueError(f"resolution {resolution} needs a {resolution}^3 grid of "
-                         f"{needed / 2**30:.1f} GiB, more than half of this machine's "
-                         f"{memory / 2**30:.1f} GiB; choose a smaller resolution")
 
 
 def _count_or_auto(name, value, most):
@@ -671,10 +660,11 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
                    gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
                    brick_size="auto", brick_halo=0.0, batch_size=65536, progress=False,
-                   grid_name=None, lipschitz=1.0):
+                   grid_name=None, lipschitz=1.0, return_stats=False):
     """GCP's contact points with their normals, without the surface reconstruction.
 
-    Parameters are those of :func:`contour`.
+    Parameters are those of :func:`contour`. A callable is sampled near its surface only (the
+    band's bricks), never on the full grid.
 
     Returns
     -------
@@ -682,6 +672,8 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
         Contact points c = p - value * n.
     N : ndarray (k, 3) float64
         Unit outward normals.
+    stats : dict
+        Only with ``return_stats=True``: as :func:`contour`'s (for a callable, its evaluations).
 
     Examples
     --------
@@ -694,6 +686,8 @@ def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0
                  brick_size, brick_halo, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, progress)
     out = _run(sdf, bounds, resolution, batch_size, o, False, True, sample_spacing,
                _lipschitz(lipschitz))
+    if _checks.flag("return_stats", return_stats):
+        return out["P"], out["N"], out["stats"]
     return out["P"], out["N"]
 
 

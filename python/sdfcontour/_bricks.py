@@ -66,7 +66,10 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
     ``with_stats`` the piece's stats dict: joined with the other bricks' pieces (`join_pieces`),
     the whole grid's local mesh, bit for bit."""
     own_first = [int(f) for f in first]
-    own_end = [min(int(f) + int(d) - 1, int(n)) for f, d, n in zip(first, dims, shape)]
+    # Its cells' low samples; the brick at the grid's end also owns the last sample (whose
+    # contact point adaptivity reads), as the core's bricks do.
+    own_end = [int(n) if int(f) + int(d) >= int(n) else int(f) + int(d) - 1
+               for f, d, n in zip(first, dims, shape)]
     halo = int(_sdfcontour.local_brick_halo(options, tuple(int(n) for n in shape)))
     while True:
         lo_read = [max(0, f - halo) for f in own_first]

@@ -59,20 +59,6 @@ class SamplingReport:
         return self.steepest > 1.5 * lipschitz or self.undercut > 0.25 * spacing
 
 
-def sample_callable(f, lo, hi, n, threshold, batch_size, progress=False, lipschitz=1.0):
-    """The n^3 grid of f over [lo, hi], exact where |f| <= threshold spacings (and wherever the
-    bounds could not exclude it), signed lower bounds elsewhere; and its SamplingReport."""
-    if not 2 <= n <= 2048:
-        raise ValueError("resolution must be between 2 and 2048")
-    if batch_size < 1:
-        raise ValueError("batch_size must be at least 1")
-    h = (hi - lo) / (n - 1)
-    report = SamplingReport()
-    grid = sample_block(f, lo, h, (0, 0, 0), (n, n, n), threshold * float(h.max()), batch_size,
-                        report, progress, lipschitz)
-    return grid, report
-
-
 def steepest_slope(values, positions):
     """The largest |difference| / distance between neighbours along the axes of a block of
     samples at the coordinates `positions` (3 increasing 1D arrays)."""
@@ -87,21 +73,31 @@ def steepest_slope(values, positions):
 def sample_block(f, lo, h, first, dims, threshold, batch_size, report, progress=False,
                  lipschitz=1.0):
     """The samples [first, first + dims) of the grid lo + index * h (float64 arrays of 3) of f:
-    exact where |f| / lipschitz <= threshold (a length), signed lower bounds elsewhere, as
-    sample_callable. A point's position depends on its global index only, so blocks of one grid
+    exact where |f| / lipschitz <= threshold (a length), signed lower bounds elsewhere (see the
+    module's docstring). A point's position depends on its global index only, so blocks of one grid
     agree where they overlap. Adds to `report` (a SamplingReport)."""
     return sample_blocks(f, lo, h, [(first, dims)], threshold, batch_size, report, progress,
                          lipschitz)[0]
 
 
 def sample_blocks(f, lo, h, blocks, threshold, batch_size, report, progress=False,
-                  lipschitz=1.0):
+                  lipschitz=1.0, known=None, with_exact=False):
     """sample_block for each (first, dims) of `blocks`, level by level together, so that the
-    callable sees batches of all the blocks' points (few large calls, not many small ones)."""
+    callable sees batches of all the blocks' points (few large calls, not many small ones).
+    `known`: for each block, None or (values, exact) of an earlier sampling of it, whose exact
+    values are taken instead of evaluated again. With `with_exact`, each block comes as (values,
+    exact), exact flagging the values evaluated."""
+    known = known or [None] * len(blocks)
     steppers = [_block_steps(lo, h, first, dims, threshold, report, progress and len(blocks) == 1,
-                             lipschitz) for first, dims in blocks]
+                             lipschitz, earlier)
+                for (first, dims), earlier in zip(blocks, known)]
     grids = [None] * len(steppers)
-    requests = {b: next(s) for b, s in enumerate(steppers)}
+    requests = {}
+    for b, stepper in enumerate(steppers):  # (one with every value known asks for none)
+        try:
+            requests[b] = next(stepper)
+        except StopIteration as done:
+            grids[b] = done.value
     counter = [0]
     while requests:
         points = np.concatenate([requests[b] for b in requests])
@@ -117,27 +113,41 @@ def sample_blocks(f, lo, h, blocks, threshold, batch_size, report, progress=Fals
             except StopIteration as done:
                 grids[b] = done.value
     report.evaluations += counter[0]
-    return grids
+    return grids if with_exact else [values for values, _ in grids]
 
 
-def _block_steps(lo, h, first, dims, threshold, report, progress, lipschitz):
+def _block_steps(lo, h, first, dims, threshold, report, progress, lipschitz, earlier=None):
     """The coarse-to-fine sampling of one block as a generator: yields the positions it needs
-    evaluated (possibly none), receives their values, returns the block."""
+    evaluated (possibly none), receives their values, returns the block and its flags of the
+    values evaluated. `earlier`: None or (values, exact) of this block, exact values reused."""
     first = np.asarray(first, dtype=np.int64)
     dims = tuple(int(d) for d in dims)
     levels = 0
     while levels < 6 and (min(dims) - 1) >> (levels + 1) >= 4:
         levels += 1
     grid = np.full(dims, np.nan)
+    exact = np.zeros(dims, bool)
 
     def position(i, j, k):
         return np.column_stack([lo[0] + (first[0] + i) * h[0], lo[1] + (first[1] + j) * h[1],
                                 lo[2] + (first[2] + k) * h[2]])
 
+    def evaluated(i, j, k):
+        # f at samples (i, j, k): what an earlier sampling evaluated, the rest asked for.
+        values = np.empty(len(i))
+        todo = np.ones(len(i), bool)
+        if earlier is not None:
+            todo = ~earlier[1][i, j, k]
+            values[~todo] = earlier[0][i[~todo], j[~todo], k[~todo]]
+        if todo.any():
+            values[todo] = yield position(i[todo], j[todo], k[todo])
+        exact[i, j, k] = True
+        return values
+
     # The coarsest level, everywhere.
     coarse = [_axis_indices(d, 1 << levels) for d in dims]
     ci, cj, ck = (a.ravel() for a in np.meshgrid(*coarse, indexing="ij"))
-    grid[ci, cj, ck] = yield position(ci, cj, ck)
+    grid[ci, cj, ck] = yield from evaluated(ci, cj, ck)
     report.steepest = max(report.steepest, steepest_slope(
         grid[np.ix_(*coarse)], [coarse[a] * h[a] for a in range(3)]))
     for level in range(levels - 1, -1, -1):
@@ -183,7 +193,7 @@ def _block_steps(lo, h, first, dims, threshold, report, progress, lipschitz):
                 (sign * bound * lipschitz)[~evaluate]
             ie, je, ke = i[evaluate], j[evaluate], k[evaluate]
             if len(ie):
-                values = yield position(ie, je, ke)
+                values = yield from evaluated(ie, je, ke)
                 grid[ie, je, ke] = values
                 # A value under its bound near the band: the field is steeper than assumed
                 # where it matters (far from the surface a neural SDF's values wander).
@@ -191,7 +201,7 @@ def _block_steps(lo, h, first, dims, threshold, report, progress, lipschitz):
                 if near.any():
                     under = bound[evaluate][near] - np.abs(values[near]) / lipschitz
                     report.undercut = max(report.undercut, float(under.max()))
-    return grid
+    return grid, exact
 
 
 def vertex_normals(V, F):

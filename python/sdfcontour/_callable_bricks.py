@@ -90,18 +90,24 @@ class NearSurfaceGrid:
     block of it, for a reconstruction that goes brick by brick."""
 
     def __init__(self, f, lo, hi, n, threshold, batch_size, report, lipschitz=1.0,
-                 progress=False):
+                 progress=False, earlier=None):
+        """`earlier`: a NearSurfaceGrid of the same f and grid sampled to a smaller threshold,
+        whose evaluations are reused."""
         self.lo, self.hi, self.shape = lo, hi, (n, n, n)
         h = (hi - lo) / (n - 1)
         bricks, self.fill = active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz,
                                           fill=True)
-        self.arrays = {}
+        self.arrays, self.exact = {}, {}
+        before = earlier.arrays if earlier is not None else {}
         for start in range(0, len(bricks), GROUP):  # sampled together: large calls to f
             group = bricks[start:start + GROUP]
+            known = [(before[index], earlier.exact[index]) if index in before else None
+                     for index, _, _ in group]
             blocks = sample_blocks(f, lo, h, [(first, dims) for _, first, dims in group],
-                                   threshold, batch_size, report, lipschitz=lipschitz)
-            for (index, _, _), block in zip(group, blocks):
-                self.arrays[index] = block
+                                   threshold, batch_size, report, lipschitz=lipschitz,
+                                   known=known, with_exact=True)
+            for (index, _, _), (block, exact) in zip(group, blocks):
+                self.arrays[index], self.exact[index] = block, exact
             _report_bricks(progress, "sampling", start + len(group), len(bricks), report)
 
     def owns_surface(self, first, end):
@@ -158,22 +164,37 @@ def _report_bricks(progress, stage, done, total, report):
               file=sys.stderr, end="\r", flush=True)
 
 
-def sample_near_surface(f, lo, hi, n, options, batch_size, report, lipschitz=1.0,
-                        progress=False):
-    """(NearSurfaceGrid, (value_scale, median gradient norm)) for GCP's local reconstruction with
-    contour()'s `options`: exact wherever the bricks read a value (local_values_reach, and 4
-    spacings for the gradient norms, of distance). The sampler is exact where |f| / lipschitz <=
-    its threshold; the values read are those with |f| * value_scale <= reach, so a field steeper
-    than `lipschitz` says (value_scale * lipschitz < 1) is sampled again over the reach it
-    needs."""
+def sample_near_surface(f, lo, hi, n, reach, batch_size, report, lipschitz=1.0, progress=False,
+                        earlier=None):
+    """(NearSurfaceGrid, (value_scale, median gradient norm)) exact wherever a reconstruction
+    reads a value: `reach` spacings of distance (local_values_reach, contour_values_reach), and 4
+    for the gradient norms. The sampler is exact where |f| / lipschitz <= its threshold; the
+    values read are those with |f| * value_scale <= reach, so a field steeper than `lipschitz`
+    says (value_scale * lipschitz < 1) is sampled again over the reach it needs, its values
+    evaluated once. `earlier`: a NearSurfaceGrid of f sampled before (with a smaller bound),
+    whose evaluations are reused."""
     h = float(((hi - lo) / (n - 1)).max())
-    reach = max(_sdfcontour.local_values_reach(options, (n, n, n)), 4.0) * h
-    grid = NearSurfaceGrid(f, lo, hi, n, reach, batch_size, report, lipschitz, progress)
+    reach = max(reach, 4.0) * h
+    # A little beyond the reach, so that a value scale of 1 / lipschitz, rounded, needs no more.
+    grid = NearSurfaceGrid(f, lo, hi, n, reach * (1 + 1e-6), batch_size, report, lipschitz,
+                           progress, earlier)
     scale = grid.value_scale()
-    if scale[0] * lipschitz < 1:
+    if scale[0] * lipschitz * (1 + 1e-6) < 1:
         grid = NearSurfaceGrid(f, lo, hi, n, reach / (scale[0] * lipschitz), batch_size, report,
-                               lipschitz, progress)
+                               lipschitz, progress, earlier=grid)
     return grid, scale
+
+
+def contour_sparse(grid, scale, options, want_mesh, want_points, callback=None):
+    """contour() of a NearSurfaceGrid as the core's sparse grid (input/sparse_grid.h): its
+    sampled bricks and the fill of the others, never an n^3 array. The dict of
+    _sdfcontour.contour, for any method but the local reconstruction (which goes brick by brick:
+    contour_callable_gcp)."""
+    blocks = sorted(grid.arrays.items())
+    return _sdfcontour.contour_sparse(blocks, grid.fill, BRICK, grid.shape, tuple(grid.lo),
+                                      tuple(grid.hi), float(scale[0]), float(scale[1]),
+                                      dict(options, truncation="none"), want_mesh, want_points,
+                                      callback)
 
 
 def contour_callable_gcp(grid, scale, options, progress=False):
@@ -186,13 +207,16 @@ def contour_callable_gcp(grid, scale, options, progress=False):
     size = options["brick_size"] if options["brick_size"] > 0 else _sdfcontour.LOCAL_BRICK
     todo = [(index, first, dims) for index, first, dims in bricks(grid.shape, size)
             if grid.owns_surface(first, [f0 + d - 1 for f0, d in zip(first, dims)])]
-    pieces, contact_points = [], 0
+    pieces, contact_points, owned, names = [], 0, [], []
     for number, (index, first, dims) in enumerate(todo):
         keys, V, F, stats = gcp_brick_piece(grid.read, index, first, dims, grid.shape, grid.lo,
                                             grid.hi, options, (np.inf, np.inf), value_scale,
                                             with_stats=True)
         contact_points += stats["contact_points"]
         pieces.append((number, (keys, V, F)))
+        names.append(stats["triangle_names"])
+        if "owned_samples" in stats:
+            owned.append((stats["owned_samples"], stats["owned_points"], stats["owned_normals"]))
         if callable(progress):
             progress("bricks", number + 1, len(todo))
     if progress is True:
@@ -200,6 +224,18 @@ def contour_callable_gcp(grid, scale, options, progress=False):
     V, F, stats = join_pieces(pieces, len(pieces))
     if len(F) == 0:
         raise ValueError("the local reconstruction found no surface inside the grid")
+    # Triangles by their global names, as the core joins its bricks: the same order for any
+    # bricks (what adaptivity's merges depend on).
+    F = F[np.argsort(np.concatenate(names), kind="stable")]
     stats.update(local_bricks=len(todo), contact_points=contact_points, value_scale=value_scale,
                  gradient_norm=norm, samples=n ** 3)
+    if options.get("adaptivity", 0.0) > 0:
+        # Merged over the bricks' own contact points, in their samples' order (as the core's
+        # join_owned_contact_points), once the mesh is whole.
+        samples = np.concatenate([o[0] for o in owned])
+        order = np.argsort(samples, kind="stable")
+        P = np.concatenate([o[1] for o in owned])[order]
+        N = np.concatenate([o[2] for o in owned])[order]
+        h = float(((grid.hi - grid.lo) / (n - 1)).max())
+        V, F, stats["adaptivity"] = _sdfcontour.adapt_mesh(V, F, P, N, h, options["adaptivity"])
     return V, F, stats

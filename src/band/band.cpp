@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -241,6 +242,51 @@ BandSamples select_band(const GridView& grid, const BandOptions& given) {
 
 BandSamples select_band(const Grid& grid, const BandOptions& options) {
   return select_band(view_of(grid), options);
+}
+
+BandSamples select_band(const SparseGrid& grid, const BandOptions& given) {
+  BandOptions options = given;
+  BandSamples out;
+  out.samples_per_axis = double(*std::max_element(grid.dims.begin(), grid.dims.end()));
+  if (options.band == 0) options.band = auto_band(out.samples_per_axis);
+  // A sparse grid holds a sampled field: nothing to detect a truncation in.
+  const BandTest keep = begin_band(out, Eigen::VectorXd(), options, grid.spacing().maxCoeff());
+  // Each block's own samples in the band (by global index), then all in the grid's C order.
+  std::vector<std::vector<std::pair<long, double>>> found(grid.blocks.size());
+  tbb::parallel_for(std::size_t(0), grid.blocks.size(), [&](std::size_t s) {
+    const GridView& block = grid.blocks[s];
+    std::array<int, 3> own;
+    for (int a = 0; a < 3; ++a)
+      own[a] = block.first[a] + block.dims[a] == grid.dims[a] ? block.dims[a] : block.dims[a] - 1;
+    for (int i = 0; i < own[0]; ++i)
+      for (int j = 0; j < own[1]; ++j)
+        for (int k = 0; k < own[2]; ++k) {
+          const double v = block.value(block.index(i, j, k));
+          if (keep(v))
+            found[s].emplace_back(
+                long(grid.index(block.first[0] + i, block.first[1] + j, block.first[2] + k)), v);
+        }
+  });
+  std::vector<std::pair<long, double>> kept;
+  for (const auto& f : found) kept.insert(kept.end(), f.begin(), f.end());
+  tbb::parallel_sort(kept.begin(), kept.end());
+  const Eigen::Index count = Eigen::Index(kept.size());
+  out.samples.points.resize(count, 3);
+  out.samples.values.resize(count);
+  out.source.resize(std::size_t(count));
+  out.core.resize(std::size_t(count));
+  const long nz = grid.dims[2], nyz = long(grid.dims[1]) * nz;
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index r) {
+    const auto [p, v] = kept[std::size_t(r)];
+    out.samples.points.row(r) =
+        grid.point(int(p / nyz), int(p % nyz / nz), int(p % nz)).transpose();
+    out.samples.values[r] = v;
+    out.core[std::size_t(r)] = keep.core(v);
+    out.source[std::size_t(r)] = p;
+  });
+  scale_values(out, options);
+  require_usable(out, options);
+  return out;
 }
 
 namespace {

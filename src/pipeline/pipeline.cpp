@@ -86,6 +86,14 @@ bool auto_carve_sides(double samples_per_axis) {
   return samples_per_axis < 128;
 }
 
+double contour_values_reach(const ContourOptions& options, const std::array<int, 3>& dims) {
+  const double samples_per_axis = *std::max_element(dims.begin(), dims.end());
+  const BandOptions& band = options.band;
+  const double reach = (band.band > 0 ? band.band : auto_band(samples_per_axis)) + band.margin;
+  if (options.method != Method::Gcp || options.carve == Switch::Off) return reach;
+  return std::max(reach, auto_carving_band(band, samples_per_axis));
+}
+
 namespace {
 
 using detail::NotDistances;
@@ -119,18 +127,26 @@ GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
 
 // Throws Error where the input cannot be contoured with the options' method. `measured`: the
 // grid was validated already.
-void check_input_for_method(const GridView* grid, const ScatteredInput* scattered,
+void check_input_for_method(const detail::GridSource& grid, const ScatteredInput* scattered,
                             const AnalyticShape* shape, const ContourOptions& options,
                             const GridMeasures* measured) {
-  if (grid) {
-    if (!measured) validate_grid(*grid);
-    require_sign_change(*grid);
+  if (grid.dense) {
+    if (!measured) validate_grid(*grid.dense);
+    require_sign_change(*grid.dense);
+  } else if (grid.sparse) {
+    validate_sparse_grid(*grid.sparse);
+    require_sign_change(*grid.sparse);
   } else {
     validate_samples(scattered->samples);
     require_sign_change(scattered->samples.values);
   }
   if (options.method == Method::Mc && !grid)
     throw Error("method mc needs a grid input, not scattered samples");
+  if (grid.sparse && options.reconstruction == Reconstruction::Local &&
+      (options.method == Method::Gcp || options.method == Method::Gtcp) && options.want_mesh)
+    throw Error(
+        "the local reconstruction of a sparse grid goes brick by brick (its blocks contoured "
+        "one by one), not through contour()");
   if (!grid && options.reconstruction == Reconstruction::Local &&
       (options.method == Method::Gcp || options.method == Method::Gtcp))
     throw Error(
@@ -160,11 +176,11 @@ void rescale_to_distances(const GridView& grid, const ContourOptions& options,
 
 // The band's samples, seen by the later stages as scattered samples (a grid's positions are made
 // for the band only). A band that cannot be used means the values are not distances.
-BandSamples band_stage(const GridView* grid, const ScatteredInput* scattered,
+BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* scattered,
                        const BandOptions& band_options, Stages& stages) {
   return stages.run("band", "samples within the band", [&] {
     try {
-      return grid ? select_band(*grid, band_options)
+      return grid ? grid.select_band(band_options)
                   : select_band(scattered->samples, band_options, scattered->spacing);
     } catch (const Cancelled&) {
       throw;
@@ -173,7 +189,8 @@ BandSamples band_stage(const GridView* grid, const ScatteredInput* scattered,
     } catch (const Error& e) {
       // No usable band in a truncated grid: values clamped too close to the surface to be
       // distances (a band the user narrowed stays the user's error).
-      if (grid && resolve_truncation(*grid, band_options).detected()) throw NotDistances(e.what());
+      if (grid.dense && resolve_truncation(*grid.dense, band_options).detected())
+        throw NotDistances(e.what());
       throw;
     }
   });
@@ -182,26 +199,32 @@ BandSamples band_stage(const GridView* grid, const ScatteredInput* scattered,
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
-  const GridView* grid = grid_view_of(input);
+  const detail::GridSource grid = detail::grid_source_of(input);
   const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
   check_input_for_method(grid, scattered, shape, options, measured);
   const Method method = options.method;
   ContourResult result;
-  result.samples = int(grid ? grid->size() : std::size_t(scattered->samples.points.rows()));
+  result.samples =
+      int(grid ? grid.geometry().size() : std::size_t(scattered->samples.points.rows()));
   Stages stages(result, options);
 
   if (method == Method::Mc && options.want_mesh)
     result.mesh =
         stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
-                   [&] { return marching_cubes(*grid); });
+                   [&] { return grid.marching_cubes(); });
   if (!options.want_points && method == Method::Mc) return result;
 
   BandOptions band_options = options.band;
-  if (grid && options.normalize_values && method != Method::Mc && method != Method::Gtcp)
-    rescale_to_distances(*grid, options, measured, band_options, result);
-  const bool bricked = detail::bricked_local(grid, options);
+  if (grid.dense && options.normalize_values && method != Method::Mc && method != Method::Gtcp)
+    rescale_to_distances(*grid.dense, options, measured, band_options, result);
+  if (const auto* sparse = std::get_if<SparseGridInput>(&input)) {
+    // Measured where it was sampled, as rescale_to_distances measures a dense grid.
+    result.gradient_norm = sparse->gradient_norm;
+    result.value_scale = band_options.value_scale = sparse->value_scale;
+  }
+  const bool bricked = detail::bricked_local(grid.dense, options);
   if (bricked) {
-    detail::reconstruct_in_bricks(*grid, band_options, options, result, stages);
+    detail::reconstruct_in_bricks(*grid.dense, band_options, options, result, stages);
     if (!options.want_points) return result;
   }
   BandSamples band = band_stage(grid, scattered, band_options, stages);
@@ -218,12 +241,12 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
       detail::contact_point_stage(band, shape, options, result, stages);
   const bool contact_mesh =
       (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh && !bricked;
-  const bool local = contact_mesh && grid && options.reconstruction == Reconstruction::Local;
+  const bool local = contact_mesh && grid.dense && options.reconstruction == Reconstruction::Local;
   if (local) {
     detail::check_contact_point_count(grid, options, *result.contact_points);
     const detail::ReconstructionInputs in =
         detail::prepare_reconstruction(band, band_options, grid, options, result);
-    detail::reconstruct_locally(*grid, in, options, result, stages);
+    detail::reconstruct_locally(*grid.dense, in, options, result, stages);
   }
   std::optional<detail::ReconstructionInputs> inputs;
   if (contact_mesh && !local) {
@@ -268,12 +291,12 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
   } catch (const NotDistances& e) {
     const double discarded =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const GridView* grid = grid_view_of(input);
+    const detail::GridSource grid = detail::grid_source_of(input);
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
         !options.fallback_to_mc)
       throw Error(std::string(e.what()) + ": the values do not behave as distances");
     ContourResult result;
-    result.samples = int(grid->size());
+    result.samples = int(grid.geometry().size());
     result.fallback = std::string(e.what()) + ": the values do not behave as distances";
     // The work thrown away is part of the run's cost: said, not hidden.
     result.stages.push_back({"gcp (discarded)", discarded});
@@ -282,7 +305,7 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
     Stages stages(result, options);
     result.mesh =
         stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
-                   [&] { return marching_cubes(*grid); });
+                   [&] { return grid.marching_cubes(); });
     return result;
   }
 }
@@ -295,9 +318,9 @@ namespace {
 // when the method made them.
 void adapt_stage(const SdfInput& input, const ContourOptions& options, ContourResult& result) {
   if (!(options.adaptivity.tolerance > 0) || !result.mesh) return;
-  const GridView* grid = grid_view_of(input);
+  const detail::GridSource grid = detail::grid_source_of(input);
   const double h = result.band_spacing > 0 ? result.band_spacing
-                   : grid                  ? grid->spacing().maxCoeff()
+                   : grid                  ? grid.geometry().spacing().maxCoeff()
                                            : 0.0;
   if (!(h > 0)) throw Error("adaptivity needs the samples' spacing");
   const bool points = result.contact_points && result.contact_points->points.rows() > 0;

@@ -9,6 +9,7 @@
 #include <string>
 #include <type_traits>
 
+#include "pipeline/grid_source.h"
 #include "sdfcontour/contact_points/triangulation.h"
 #include "sdfcontour/pipeline/pipeline.h"
 
@@ -82,14 +83,14 @@ struct ReconstructionInputs {
 };
 
 // Throws NotDistances where the contact points are too few for the values to be distances.
-void check_contact_point_count(const GridView* grid, const ContourOptions& options,
+void check_contact_point_count(const GridSource& grid, const ContourOptions& options,
                                const ContactPoints& cp);
 
 // The reconstruction's inputs from the band (result.poisson_depth and result.sign_constraints
 // set); `band_options` as the band was selected with. result.contact_points must still name their
 // samples by index into `band.samples`.
 ReconstructionInputs prepare_reconstruction(const BandSamples& band,
-                                            const BandOptions& band_options, const GridView* grid,
+                                            const BandOptions& band_options, const GridSource& grid,
                                             const ContourOptions& options, ContourResult& result);
 
 // GCP's or GTCP's mesh into result.mesh: screened Poisson reconstruction of
@@ -101,7 +102,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
 void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
                   ContourResult& result, Stages& stages);
 
-void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
+void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
                       const ContourOptions& options, ContourResult& result, Stages& stages);
 
 // GCP's or GTCP's mesh into result.mesh by the local reconstruction of result.contact_points on

@@ -8,7 +8,6 @@
 
 #include "pipeline/pipeline_stages.h"
 #include "sdfcontour/band/point_clusters.h"
-#include "sdfcontour/extraction/marching.h"
 #include "sdfcontour/input/mesh_transform.h"
 #include "sdfcontour/metrics/field_agreement.h"
 #include "sdfcontour/metrics/mesh_properties.h"
@@ -27,9 +26,9 @@ constexpr double kClusterGap = 16;
 // GCP's mesh must lie on the field's zero set: more than 1% of its vertices a spacing or more
 // off it means the contact points were not on the surface (a smooth implicit whose gradient norm
 // varies along the surface passes the other checks, then makes a mesh of ~2000 pieces).
-void check_on_zero_set(const GridView& grid, ContourResult& result) {
-  const double h = grid.spacing().maxCoeff();
-  result.off_zero_set = fraction_off_zero_set(grid, *result.mesh, h, result.value_scale);
+void check_on_zero_set(const GridSource& grid, ContourResult& result) {
+  const double h = grid.geometry().spacing().maxCoeff();
+  result.off_zero_set = grid.fraction_off_zero_set(*result.mesh, h, result.value_scale);
   if (result.off_zero_set > kMostOffZeroSet) {
     std::ostringstream message;
     message << std::setprecision(3) << 100 * result.off_zero_set
@@ -42,25 +41,10 @@ void check_on_zero_set(const GridView& grid, ContourResult& result) {
   // whole grid) only when GCP's mesh has more.
   const int pieces = connected_components(*result.mesh);
   if (pieces <= 1) return;
-  const int mc_pieces = connected_components(marching_cubes(grid));
+  const int mc_pieces = connected_components(grid.marching_cubes());
   if (pieces > mc_pieces)
     throw NotDistances("the mesh has " + std::to_string(pieces) +
                        " connected pieces where marching cubes finds " + std::to_string(mc_pieces));
-}
-
-// Whether some sample on the grid's sides is inside (negative): the surface runs out of the grid
-// (or the grid lies inside it), so the far field is not all outside.
-bool grid_sides_inside(const GridView& grid) {
-  const auto& n = grid.dims;
-  for (int i = 0; i < n[0]; ++i)
-    for (int j = 0; j < n[1]; ++j) {
-      const bool side_ij = i == 0 || j == 0 || i == n[0] - 1 || j == n[1] - 1;
-      for (int k = 0; k < n[2]; k += side_ij ? 1 : n[2] - 1) {
-        if (grid.value(grid.index(i, j, k)) < 0) return true;
-        if (n[2] == 1) break;
-      }
-    }
-  return false;
 }
 
 // The band's own samples within `reach` of the surface, whose sides the indicator keeps.
@@ -145,9 +129,10 @@ void poisson_stage(ReconstructionInputs& in, const ContourOptions& options, Cont
 
 // A surface that runs out of the grid (a cropped scan's TSDF) ends at its sides, as marching
 // cubes' does; the reconstruction closed it outside, where no sample was.
-void clip_to_grid(const GridView* grid, const ContourOptions& options, ContourResult& result) {
+void clip_to_grid(const GridSource& grid, const ContourOptions& options, ContourResult& result) {
   if (options.method != Method::Gcp || !grid) return;
-  result.clipped_to_grid |= clip_mesh_to_box(*result.mesh, grid->bounds.min, grid->bounds.max);
+  const Bounds& box = grid.geometry().bounds;
+  result.clipped_to_grid |= clip_mesh_to_box(*result.mesh, box.min, box.max);
   if (result.mesh->triangles.rows() == 0)
     throw NotDistances("no part of the reconstructed surface lies in the grid");
 }
@@ -210,7 +195,7 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
     });
 }
 
-void check_contact_point_count(const GridView* grid, const ContourOptions& options,
+void check_contact_point_count(const GridSource& grid, const ContourOptions& options,
                                const ContactPoints& cp) {
   if (cp.size() == 0)
     throw NotDistances(
@@ -219,7 +204,7 @@ void check_contact_point_count(const GridView* grid, const ContourOptions& optio
   // crosses (flat faces aligned with the grid hide the rest); far fewer means the values are
   // not distances.
   if (options.method == Method::Gcp && grid) {
-    const long crossings = sign_change_edges(*grid);
+    const long crossings = grid.sign_change_edges();
     if (10 * long(cp.size()) < crossings)
       throw NotDistances("only " + std::to_string(cp.size()) + " contact points for " +
                          std::to_string(crossings) + " grid edges crossing the surface");
@@ -227,7 +212,7 @@ void check_contact_point_count(const GridView* grid, const ContourOptions& optio
 }
 
 ReconstructionInputs prepare_reconstruction(const BandSamples& band,
-                                            const BandOptions& band_options, const GridView* grid,
+                                            const BandOptions& band_options, const GridSource& grid,
                                             const ContourOptions& options, ContourResult& result) {
   const Method method = options.method;
   ReconstructionInputs in;
@@ -241,7 +226,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   result.poisson_depth = popt.depth;
   if (popt.refine_dilation == 0) popt.refine_dilation = band.samples_per_axis < 256 ? 2 : 1;
   // A grid whose sides are inside in part cuts the surface: its far field is inside there.
-  if (grid && grid_sides_inside(*grid)) popt.dirichlet_fallback = false;
+  if (grid && grid.sides_inside()) popt.dirichlet_fallback = false;
   // GCP's mesh keeps the samples next to the surface on their sides.
   result.sign_constraints =
       method == Method::Gcp &&
@@ -268,7 +253,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
     BandOptions wide = band_options;
     wide.band = carving_band;
     wide.margin = 0;
-    in.carving_samples = core_samples(select_band(*grid, wide));
+    in.carving_samples = core_samples(grid.select_band(wide));
   } else if (in.carve) {
     in.carving_samples = core_samples(band);
   }
@@ -279,7 +264,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   return in;
 }
 
-void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
+void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
                       const ContourOptions& options, ContourResult& result, Stages& stages) {
   poisson_stage(inputs, options, result, stages);
   // The iso-surface closes tiny bubbles where chi grazes the iso-value next to the surface
@@ -291,7 +276,7 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridView* grid,
   clip_to_grid(grid, options, result);
   refine_stage(inputs, options, result, stages);
   if (result.clipped_to_grid) clip_to_grid(grid, options, result);
-  if (options.method == Method::Gcp && grid) check_on_zero_set(*grid, result);
+  if (options.method == Method::Gcp && grid) check_on_zero_set(grid, result);
 }
 
 }  // namespace sdfcontour::detail

@@ -502,6 +502,92 @@ def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     assert stats["local_bricks"] == (8 if brick == 24 else 1)
 
 
+def test_callable_poisson_and_contact_points_come_from_the_bricks_near_the_surface():
+    # The Poisson path and contact_points() of a callable read the bricks sampled near the
+    # surface as the core's sparse grid: the full grid's mesh and points, bit for bit, without an
+    # n^3 array (a field 1.3x a distance: rescaled by the same factor).
+    n = 72
+
+    def f(p):
+        return 1.3 * sphere(p)
+    axis = -1 + np.arange(n) * (2 / (n - 1))
+    P = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    grid = f(P).reshape(n, n, n)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sdfcontour.RescaleWarning)
+        V, F, stats = sdfcontour.contour(f, resolution=n, reconstruction="poisson", refine=False,
+                                         lipschitz=1.3, return_stats=True)
+        V2, F2, stats2 = sdfcontour.contour(grid, reconstruction="poisson", return_stats=True)
+        Pc, Nc, pstats = sdfcontour.contact_points(f, resolution=n, lipschitz=1.3,
+                                                   return_stats=True)
+        Pc2, Nc2 = sdfcontour.contact_points(grid)
+        # lipschitz left at 1: the field breaks it, and is sampled again with a larger bound
+        # (and over the wider band its value scale asks for), evaluating only what the first
+        # pass did not: the same points, for far fewer than two passes' evaluations.
+        Pc3, Nc3, again = sdfcontour.contact_points(f, resolution=n, return_stats=True)
+    from sdfcontour.dask import canonical_mesh
+    (Vc, Fc), (Vc2, Fc2) = canonical_mesh(V, F), canonical_mesh(V2, F2)
+    assert np.array_equal(Vc, Vc2) and np.array_equal(Fc, Fc2)
+    assert np.array_equal(Pc, Pc2) and np.array_equal(Nc, Nc2)
+    assert stats["value_scale"] == stats2["value_scale"] and stats["reconstruction"] == "poisson"
+    assert 0 < stats["sampled_bricks"] < 3**3  # bricks of 32 cells: some left unread
+    assert np.array_equal(Pc, Pc3) and np.array_equal(Nc, Nc3)
+    assert again["lipschitz"] > 1.3 and again["evaluations"] < 1.4 * pstats["evaluations"]
+    # The same path for marching tetrahedra: the full grid's mesh.
+    Vt, Ft = sdfcontour.contour(f, resolution=40, method="mt-rt", lipschitz=1.3)
+    axis = -1 + np.arange(40) * (2 / 39)
+    P = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    Vt2, Ft2 = sdfcontour.contour(f(P).reshape(40, 40, 40), method="mt-rt")
+    (Vc, Fc), (Vc2, Fc2) = canonical_mesh(Vt, Ft), canonical_mesh(Vt2, Ft2)
+    assert np.array_equal(Vc, Vc2) and np.array_equal(Fc, Fc2)
+
+
+def test_callable_local_mesh_with_adaptivity_is_the_full_grids():
+    # Adaptivity merges the joined mesh of the callable's bricks over their own contact points,
+    # in the core's order: the full grid's merged mesh, bit for bit, for any bricks.
+    grid = full_grid(torus, 48)
+    Vg, Fg, sg = sdfcontour.contour(grid, reconstruction="local", adaptivity=0.1,
+                                    return_stats=True)
+    from sdfcontour.dask import canonical_mesh
+    for brick in ("auto", 24):
+        V, F, stats = sdfcontour.contour(torus, resolution=48, refine=False, brick_size=brick,
+                                         adaptivity=0.1, return_stats=True)
+        (Vc, Fc), (Vc2, Fc2) = canonical_mesh(V, F), canonical_mesh(Vg, Fg)
+        assert np.array_equal(Vc, Vc2) and np.array_equal(Fc, Fc2)
+        assert stats["adaptivity"] == sg["adaptivity"]
+        assert stats["adaptivity"]["triangles_after"] * 20 < stats["adaptivity"]["triangles_before"]
+
+
+@pytest.mark.parametrize("method,reconstruction,adaptivity", [
+    ("gcp", "poisson", 0.0), ("gcp", "local", 0.1), ("mc", "auto", 0.1), ("points", "auto", 0.0)])
+def test_no_callable_path_makes_an_n3_array(method, reconstruction, adaptivity):
+    # Memory follows the surface on every path: a small sphere peaks well below an n^3 float64
+    # array in Python's allocations (the sampler's batches of bricks; the core's allocations are
+    # its bricks' and the band's). The local reconstruction reads its bricks of 256 cells (their
+    # halos included) as dense blocks: below an n^3 array from n = 512.
+    import tracemalloc
+    n = 512 if reconstruction == "local" else 256
+    centre = np.array([-0.5, -0.5, -0.5])
+
+    def small(p):
+        return np.linalg.norm(p - centre, axis=1) - 0.1
+    tracemalloc.start()
+    try:
+        if method == "points":
+            P, N = sdfcontour.contact_points(small, resolution=n)
+            assert len(P) > 1000
+        else:
+            V, F, stats = sdfcontour.contour(small, resolution=n, method=method,
+                                             reconstruction=reconstruction, refine=False,
+                                             adaptivity=adaptivity, return_stats=True)
+            assert stats["closed"] and np.abs(small(V)).max() < 2 / (n - 1)
+            assert ("adaptivity" in stats) == (adaptivity > 0)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 0.4 * 8 * n**3
+
+
 def test_adaptivity_merges_flat_parts_and_says_so():
     grid = full_grid(torus, 40)
     V, F, stats = sdfcontour.contour(grid, reconstruction="local", return_stats=True)

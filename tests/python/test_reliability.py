@@ -75,12 +75,6 @@ def test_poisson_options_and_bounds_are_bounded():
     for bounds in [(-1e308, 1e308), (-1e160, 1e160)]:
         with pytest.raises(ValueError, match="bounds"):
             sdfcontour.contour(np.zeros((4, 4, 4)), bounds=bounds, method="mc")
-    import os
-    if 8 * 2048**3 > os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2:
-        # (The Poisson path samples a callable on the full grid; marching cubes and the local
-        # reconstruction go brick by brick, their memory following the surface.)
-        with pytest.raises(ValueError, match="GiB"):
-            sdfcontour.contour(lambda p: p[:, 0], resolution=2048, reconstruction="poisson")
 
 
 def test_a_stray_scattered_sample_is_dropped_and_said():

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sdfcontour/input/samples.h"
+#include "sdfcontour/input/sparse_grid.h"
 
 namespace sdfcontour {
 
@@ -98,6 +99,9 @@ double auto_band(double samples_per_axis);
 /// truncation distance. Never builds the full grid's positions.
 BandSamples select_band(const GridView& grid, const BandOptions& options);
 BandSamples select_band(const Grid& grid, const BandOptions& options);
+/// The same for a sparse grid: the samples of its stored bricks, bit for bit the dense grid's
+/// band wherever the bricks not stored lie outside it. Truncation is never detected.
+BandSamples select_band(const SparseGrid& grid, const BandOptions& options);
 
 /// The same for scattered samples; h is `spacing` if positive, else the side of a cube holding
 /// one sample on average (measured in the box of the central 98% of the samples on each axis).

@@ -1,10 +1,11 @@
-// What `contour` takes: a grid of samples viewed in place, or scattered samples.
+// What `contour` takes: a grid of samples viewed in place, a sparse grid, or scattered samples.
 #pragma once
 
 #include <memory>
 #include <variant>
 
 #include "sdfcontour/input/samples.h"
+#include "sdfcontour/input/sparse_grid.h"
 
 namespace sdfcontour {
 
@@ -22,7 +23,17 @@ struct ScatteredInput {
   double spacing = 0;  ///< the samples' spacing when known (an OpenVDB voxel size); 0: estimated
 };
 
-using SdfInput = std::variant<GridInput, ScatteredInput>;
+/// A grid held only near the surface (a sampled callable), its values already distances or
+/// scaled into them by `value_scale` (measured where it was sampled: distance_value_scale of its
+/// median gradient norm `gradient_norm`).
+struct SparseGridInput {
+  SparseGrid grid;
+  std::shared_ptr<const void> storage;  ///< keeps the blocks' data alive
+  double value_scale = 1;
+  double gradient_norm = 1;
+};
+
+using SdfInput = std::variant<GridInput, ScatteredInput, SparseGridInput>;
 
 /// An input that owns `grid`.
 SdfInput grid_input(Grid grid);

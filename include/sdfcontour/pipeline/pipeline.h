@@ -242,6 +242,11 @@ int auto_poisson_depth(const PointMatrix& points, double spacing);
 /// projection (ContourOptions::local_projection), and cancel flag.
 LocalBrickOptions local_brick_options(const ContourOptions& options);
 
+/// The largest |value|, in spacings of distance, that contour() reads from a grid of `dims` with
+/// `options` (the local reconstruction aside: local_values_reach): the band with its margin, and
+/// GCP's carving band. A sparse grid exact to here gives what the dense grid gives.
+double contour_values_reach(const ContourOptions& options, const std::array<int, 3>& dims);
+
 /// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
 /// it may be null for other methods. Throws Error for an input the method cannot use (no sign
 /// change, MC without a grid, GTCP without an exact SDF, no contact point kept).
