@@ -92,7 +92,7 @@ class NearSurfaceGrid:
     def __init__(self, f, lo, hi, n, threshold, batch_size, report, lipschitz=1.0,
                  progress=False, earlier=None):
         """`earlier`: a NearSurfaceGrid of the same f and grid sampled to a smaller threshold,
-        whose evaluations are reused."""
+        whose evaluations are reused (its bricks are moved out of it)."""
         self.lo, self.hi, self.shape = lo, hi, (n, n, n)
         h = (hi - lo) / (n - 1)
         bricks, self.fill = active_bricks(f, lo, h, n, threshold, batch_size, report, lipschitz,
@@ -101,7 +101,8 @@ class NearSurfaceGrid:
         before = earlier.arrays if earlier is not None else {}
         for start in range(0, len(bricks), GROUP):  # sampled together: large calls to f
             group = bricks[start:start + GROUP]
-            known = [(before[index], earlier.exact[index]) if index in before else None
+            # (Taken out of the earlier grid: each brick held once.)
+            known = [(before.pop(index), earlier.exact.pop(index)) if index in before else None
                      for index, _, _ in group]
             blocks = sample_blocks(f, lo, h, [(first, dims) for _, first, dims in group],
                                    threshold, batch_size, report, lipschitz=lipschitz,
