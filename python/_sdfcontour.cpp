@@ -510,6 +510,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
     a["triangles_before"] = r.adaptivity->triangles_before;
     a["triangles_after"] = r.adaptivity->triangles_after;
     a["merges"] = r.adaptivity->merges;
+    a["freeze_rounds"] = r.adaptivity->freeze_rounds;
     stats["adaptivity"] = a;
   }
   stats["side_repaired_samples"] = r.side_repair ? r.side_repair->repaired : 0L;
@@ -607,6 +608,7 @@ py::tuple run_adapt_mesh(const py::array& V, const py::array& F, const py::array
   a["triangles_before"] = stats.triangles_before;
   a["triangles_after"] = stats.triangles_after;
   a["merges"] = stats.merges;
+  a["freeze_rounds"] = stats.freeze_rounds;
   return py::make_tuple(to_numpy(std::move(out.vertices)), to_numpy(std::move(out.triangles)), a);
 }
 

@@ -264,7 +264,8 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   if (r.adaptivity)
     j["adaptivity"] = {{"triangles_before", r.adaptivity->triangles_before},
                        {"triangles_after", r.adaptivity->triangles_after},
-                       {"merges", r.adaptivity->merges}};
+                       {"merges", r.adaptivity->merges},
+                       {"freeze_rounds", r.adaptivity->freeze_rounds}};
   if (r.untangling)
     j["untangling"] = {{"rounds", r.untangling->rounds},
                        {"vertices_reverted", r.untangling->vertices_reverted},

@@ -18,17 +18,22 @@ struct AdaptivityOptions {
 struct AdaptivityStats {
   long triangles_before = 0;
   long triangles_after = 0;
-  long merges = 0;  ///< edges collapsed
+  long merges = 0;        ///< edges collapsed (in the last round)
+  int freeze_rounds = 0;  ///< rounds merged again with the vertices around crossings frozen
 };
 
 /// `mesh` (closed, 2-manifold, oriented) with its edges collapsed, cheapest first, while the
 /// summed squared distance of the merged vertex to the tangent planes of the points (n x 3) with
 /// unit `normals` (n x 3) that its region gathered stays under (options.tolerance spacings)^2:
 /// each point joins the quadric of its nearest vertex, each vertex also holds its triangles'
-/// planes (so a region without points keeps its shape). The merged vertex minimises the summed
+/// planes, weighed by area over spacing^2 (a point stands for about h^2 of surface). The merged
+/// vertex minimises the summed
 /// quadric, with the directions the planes leave free kept at the edge's midpoint, so two planes
 /// keep a crease and three a corner. Merges keep the mesh closed and 2-manifold (the link
-/// condition) and turn no triangle by more than options.max_normal_turn. Sequential and
+/// condition) and turn no triangle by more than options.max_normal_turn. Where the merged mesh
+/// crosses itself, it is merged again from `mesh` with the vertices within 3 spacings of the
+/// crossing triangles frozen (up to 4 rounds): an input free of self-intersections gives an
+/// output free of them unless 4 rounds do not suffice. Sequential and
 /// deterministic: the same mesh for any thread count. Throws Error for mismatched sizes, a spacing
 /// that is not positive, or a tolerance outside [0, 10].
 Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
