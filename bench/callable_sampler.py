@@ -95,25 +95,7 @@ def main():
     if a.one:
         print(json.dumps(one(a.one, a.method)))
         return
-    if a.method == "gcp":
-        return gcp_table(a)
-    if a.method == "poisson":
-        return poisson_table(a)
-    rows = ["| N | wall (s) | network (s) | dense MC alone (s) | wall / (network + MC) | "
-            "evaluated | lipschitz used | peak RSS above start (MB) | mesh (MB) | triangles |",
-            "|---|---|---|---|---|---|---|---|---|---|"]
-    for n, x in each_in_its_process(a.res, "mc"):
-        rows.append(f"| {n} | {x['wall']:.1f} | {x['network']:.1f} | {x['marching']:.2f} | "
-                    f"{x['wall'] / (x['network'] + x['marching']):.2f} | {100 * x['fraction']:.1f}% | "
-                    f"{x['lipschitz']:g} | "
-                    f"{x['peak_above_mb']:.0f} | {x['mesh_mb']:.0f} | {x['triangles']:,} |")
-        print(rows[-1], flush=True)
-    text = ("# The callable sampler against the network\n\nMarching cubes of the neural SDF "
-            "fixture passed as a callable (`/usr/bin/python3 bench/callable_sampler.py`), on this "
-            "2-core machine: bricks of 32 cells that may hold the surface (found on a coarse grid "
-            "every 8 samples) sampled coarse to fine and contoured one by one, no N³ array.\n\n"
-            + "\n".join(rows) + "\n")
-    report(text, a.out)
+    table(a, TABLES[a.method])
 
 
 def each_in_its_process(resolutions, method):
@@ -127,44 +109,61 @@ def each_in_its_process(resolutions, method):
         yield n, json.loads(r.stdout.strip().splitlines()[-1])
 
 
-def gcp_table(a):
-    rows = ["| N | wall (s) | network (s) | local reconstruction (s) | rest (s) | evaluated | "
-            "bricks | peak RSS above start (MB) | dense N³ float64 grid (MB) | triangles |",
-            "|---|---|---|---|---|---|---|---|---|---|"]
-    for n, x in each_in_its_process(a.res, "gcp"):
-        rows.append(f"| {n} | {x['wall']:.1f} | {x['network']:.1f} | {x['local']:.1f} | "
-                    f"{x['wall'] - x['network'] - x['local']:.1f} | {100 * x['fraction']:.1f}% | "
-                    f"{x['bricks']} | {x['peak_above_mb']:.0f} | {x['dense_mb']:.0f} | "
-                    f"{x['triangles']:,} |")
+def table(a, spec):
+    """The markdown table of `spec` (title, introduction, column names, the cells of a run) over
+    a.res, each N in its own process, into a.out."""
+    title, intro, columns, cells = spec
+    rows = ["| " + " | ".join(["N"] + columns) + " |", "|---" * (len(columns) + 1) + "|"]
+    for n, x in each_in_its_process(a.res, a.method):
+        rows.append("| " + " | ".join([str(n)] + cells(x)) + " |")
         print(rows[-1], flush=True)
-    text = ("# GCP of a callable, brick by brick\n\nGCP's local reconstruction of the neural SDF "
-            "fixture passed as a callable (`/usr/bin/python3 bench/callable_sampler.py --method "
-            "gcp`), on this 2-core machine, refined on the callable (the default): bricks of 32 "
-            "cells that may hold the surface sampled once each, exact within the reach of the "
-            "reconstruction's reads, then bricks of 256 cells reconstructed from blocks assembled "
-            "out of them. 'rest': sampling bookkeeping, assembly, joining and refining.\n\n"
-            + "\n".join(rows) + "\n")
-    report(text, a.out)
+    report(f"# {title}\n\n{intro}\n\n" + "\n".join(rows) + "\n", a.out)
 
 
-def poisson_table(a):
-    rows = ["| N | wall (s) | network (s) | core's stages (s) | rest (s) | evaluated | sampled "
-            "bricks | fell back to MC | peak RSS above start (MB) | dense N³ float64 grid (MB) | "
-            "triangles |", "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for n, x in each_in_its_process(a.res, "poisson"):
-        rows.append(f"| {n} | {x['wall']:.1f} | {x['network']:.1f} | {x['core']:.1f} | "
-                    f"{x['wall'] - x['network'] - x['core']:.1f} | {100 * x['fraction']:.1f}% | "
-                    f"{x['bricks']} | {'yes' if x['fallback'] else 'no'} | "
-                    f"{x['peak_above_mb']:.0f} | {x['dense_mb']:.0f} | {x['triangles']:,} |")
-        print(rows[-1], flush=True)
-    text = ("# GCP-Poisson of a callable, from a sparse grid\n\nGCP with the Poisson "
-            "reconstruction of the neural SDF fixture passed as a callable (`/usr/bin/python3 "
-            "bench/callable_sampler.py --method poisson`), on this 2-core machine: bricks of 32 "
-            "cells that may hold the surface sampled once each, exact within the band and the "
-            "carving band, handed to the core as a sparse grid (no N³ array). 'core's stages': "
-            "band, contact points, Poisson, projection, carving, checks (and marching cubes where "
-            "GCP fell back); 'rest': sampling bookkeeping.\n\n" + "\n".join(rows) + "\n")
-    report(text, a.out)
+TABLES = {
+    "mc": (
+        "The callable sampler against the network",
+        "Marching cubes of the neural SDF fixture passed as a callable (`/usr/bin/python3 "
+        "bench/callable_sampler.py`), on this 2-core machine: bricks of 32 cells that may hold the "
+        "surface (found on a coarse grid every 8 samples) sampled coarse to fine and contoured one "
+        "by one, no N³ array.",
+        ["wall (s)", "network (s)", "dense MC alone (s)", "wall / (network + MC)", "evaluated",
+         "lipschitz used", "peak RSS above start (MB)", "mesh (MB)", "triangles"],
+        lambda x: [f"{x['wall']:.1f}", f"{x['network']:.1f}", f"{x['marching']:.2f}",
+                   f"{x['wall'] / (x['network'] + x['marching']):.2f}",
+                   f"{100 * x['fraction']:.1f}%", f"{x['lipschitz']:g}",
+                   f"{x['peak_above_mb']:.0f}", f"{x['mesh_mb']:.0f}", f"{x['triangles']:,}"]),
+    "gcp": (
+        "GCP of a callable, brick by brick",
+        "GCP's local reconstruction of the neural SDF fixture passed as a callable "
+        "(`/usr/bin/python3 bench/callable_sampler.py --method gcp`), on this 2-core machine, "
+        "refined on the callable (the default): bricks of 32 cells that may hold the surface "
+        "sampled once each, exact within the reach of the reconstruction's reads, then bricks of "
+        "256 cells reconstructed from blocks assembled out of them. 'rest': sampling "
+        "bookkeeping, assembly, joining and refining.",
+        ["wall (s)", "network (s)", "local reconstruction (s)", "rest (s)", "evaluated", "bricks",
+         "peak RSS above start (MB)", "dense N³ float64 grid (MB)", "triangles"],
+        lambda x: [f"{x['wall']:.1f}", f"{x['network']:.1f}", f"{x['local']:.1f}",
+                   f"{x['wall'] - x['network'] - x['local']:.1f}",
+                   f"{100 * x['fraction']:.1f}%", str(x["bricks"]),
+                   f"{x['peak_above_mb']:.0f}", f"{x['dense_mb']:.0f}", f"{x['triangles']:,}"]),
+    "poisson": (
+        "GCP-Poisson of a callable, from a sparse grid",
+        "GCP with the Poisson reconstruction of the neural SDF fixture passed as a callable "
+        "(`/usr/bin/python3 bench/callable_sampler.py --method poisson`), on this 2-core machine: "
+        "bricks of 32 cells that may hold the surface sampled once each, exact within the band "
+        "and the carving band, handed to the core as a sparse grid (no N³ array). 'core's "
+        "stages': band, contact points, Poisson, projection, carving, checks (and marching cubes "
+        "where GCP fell back); 'rest': sampling bookkeeping.",
+        ["wall (s)", "network (s)", "core's stages (s)", "rest (s)", "evaluated",
+         "sampled bricks", "fell back to MC", "peak RSS above start (MB)",
+         "dense N³ float64 grid (MB)", "triangles"],
+        lambda x: [f"{x['wall']:.1f}", f"{x['network']:.1f}", f"{x['core']:.1f}",
+                   f"{x['wall'] - x['network'] - x['core']:.1f}",
+                   f"{100 * x['fraction']:.1f}%", str(x["bricks"]),
+                   "yes" if x["fallback"] else "no", f"{x['peak_above_mb']:.0f}",
+                   f"{x['dense_mb']:.0f}", f"{x['triangles']:,}"]),
+}
 
 
 if __name__ == "__main__":
