@@ -483,6 +483,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   stats["poisson_depth"] = r.poisson_depth;
   stats["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) stats["fallback"] = r.fallback;
+  if (!r.rescale_dropped.empty()) stats["rescale_dropped"] = r.rescale_dropped;
   stats["noise_level"] = r.noise_level;
   stats["smoothed"] = r.smoothed;
   stats["pieces_removed"] = r.pieces_removed;

@@ -6,6 +6,7 @@ huge coordinates) are sampled right or refused.
 
 Usage: test_cli_reliability.py PATH_TO_SDFCONTOUR
 """
+import json
 import os
 import signal
 import stat
@@ -128,5 +129,17 @@ with tempfile.TemporaryDirectory() as d:
     write_obj(p("huge.obj"), V * 1e150, F)
     expect_error("huge coordinates, eval", ["eval", p("huge.obj"), p("cube.obj")], "too large")
     expect_error("huge coordinates, sample", ["sample", p("huge.obj"), "--res", "8", "-o", p("h")], "too large")
+
+    # Decisions are said on stderr even with --quiet, and recorded in --stats: an exact distance
+    # whose thin parts make rescaling it fail (the plane at 16^3) is contoured as given.
+    plane = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "data",
+                         "meshes", "plane.obj")
+    r = run("sample", plane, "--res", "16", "-o", p("plane"), "-q")
+    check("plane sampled", r.returncode == 0, r.stderr)
+    r = run("contour", p("plane.npy"), "-o", p("plane.ply"), "--stats", p("plane.json"), "-q")
+    check("rescaling dropped, said", r.returncode == 0 and "values as given" in r.stderr, r.stderr)
+    stats = json.load(open(p("plane.json")))
+    check("rescaling dropped, in the stats", "contact point" in stats.get("rescale_dropped", "") and
+          "fallback" not in stats and "value_scale" not in stats, stats)
 
 finish()

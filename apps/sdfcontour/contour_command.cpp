@@ -279,6 +279,7 @@ nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, con
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
+  if (!r.rescale_dropped.empty()) j["rescale_dropped"] = r.rescale_dropped;
   if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;
   if (r.mesh)
     j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
@@ -365,6 +366,9 @@ int run_contour(const ContourArgs& a) {
   // Every decision that changes what the user gets is said, even with --quiet.
   if (!r.fallback.empty())
     std::cerr << "sdfcontour: warning: GCP returned marching cubes' mesh: " << r.fallback << "\n";
+  if (!r.rescale_dropped.empty())
+    std::cerr << "sdfcontour: warning: GCP failed on the values rescaled to distances ("
+              << r.rescale_dropped << "): this is GCP's mesh of the values as given\n";
   if (r.value_scale != 1)
     std::cerr << "sdfcontour: warning: the values were rescaled by " << r.value_scale
               << " to distances (they change by " << 1 / r.value_scale

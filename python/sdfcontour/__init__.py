@@ -296,6 +296,10 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, s
     if out["stats"].get("fallback"):
         _warnings.warn(f"GCP returned marching cubes' mesh: {out['stats']['fallback']}",
                        FallbackWarning, stacklevel=3)
+    if out["stats"].get("rescale_dropped"):
+        _warnings.warn(f"GCP failed on the values rescaled to distances "
+                       f"({out['stats']['rescale_dropped']}): this is GCP's mesh of the values "
+                       f"as given", FallbackWarning, stacklevel=3)
     if out["stats"].get("value_scale", 1.0) != 1.0:
         _warnings.warn(f"the values were rescaled by {out['stats']['value_scale']:.4g} to "
                        f"distances (they change by {1 / out['stats']['value_scale']:.4g} per unit "
@@ -534,8 +538,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     batch_size : int
         Points per call of a callable ``sdf``.
     strict : bool
-        Where GCP cannot trust the values as distances it returns marching cubes' mesh with a
-        ``FallbackWarning`` (``stats["fallback"]``); ``strict=True`` raises ValueError instead.
+        Where GCP cannot trust the values rescaled to distances, it runs again on the values
+        as given (``stats["rescale_dropped"]``), and where it cannot trust those either it
+        returns marching cubes' mesh (``stats["fallback"]``), each with a ``FallbackWarning``;
+        ``strict=True`` raises ValueError instead.
     refine : bool or "auto"
         GCP with a callable ``sdf``: move each vertex along its normal onto the callable's zero
         set (two secant steps, each move at most half a spacing; a vertex whose field does not

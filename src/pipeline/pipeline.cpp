@@ -281,20 +281,51 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 
 namespace {
 
+// Whether contour_or_throw rescales the values (rescale_to_distances) with these options.
+bool rescaled(const detail::GridSource& grid, const ContourOptions& options,
+              const GridMeasures* measured) {
+  if (!grid.dense || !options.normalize_values) return false;
+  const double norm =
+      measured ? measured->gradient_norms.median
+               : gradient_norm_summary(*grid.dense, resolve_truncation(*grid.dense, options.band))
+                     .median;
+  return distance_value_scale(norm) != 1.0;
+}
+
 // contour_or_throw, or marching cubes' mesh when GCP's cannot be trusted.
 ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* shape,
                                     const ContourOptions& options,
                                     const GridMeasures* measured = nullptr) {
   const auto started = std::chrono::steady_clock::now();
+  auto since_start = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
   try {
     return contour_or_throw(input, shape, options, measured);
   } catch (const NotDistances& e) {
-    const double discarded =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     const detail::GridSource grid = detail::grid_source_of(input);
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
         !options.fallback_to_mc)
       throw Error(std::string(e.what()) + ": the values do not behave as distances");
+    if (rescaled(grid, options, measured)) {
+      // Thin parts make central differences across a sheet: the measured norm of an exact
+      // distance can fall far under 1 (plane at 16^3: 0.77), and rescaling it then hides every
+      // contact point. The values as given, next.
+      const double discarded = since_start();
+      ContourOptions as_given = options;
+      as_given.normalize_values = false;
+      try {
+        ContourResult result = contour_or_throw(input, shape, as_given, measured);
+        result.rescale_dropped = e.what();
+        result.stages.insert(result.stages.begin(), {"gcp rescaled (discarded)", discarded});
+        if (options.progress)
+          options.progress(std::string("GCP on the rescaled values: ") + e.what() +
+                           "; this is GCP's mesh of the values as given");
+        return result;
+      } catch (const NotDistances&) {
+      }
+    }
+    const double discarded = since_start();
     ContourResult result;
     result.samples = int(grid.geometry().size());
     result.fallback = std::string(e.what()) + ": the values do not behave as distances";

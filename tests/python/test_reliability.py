@@ -2,6 +2,7 @@
 checked once, in Python, so that no input reaches the C++ core as a string, a NaN, a wrapped index
 or an option out of range (the interpreter never dies); stray scattered samples are dropped and
 said; objects far apart are reconstructed each in its own octree."""
+import os
 import warnings
 
 import numpy as np
@@ -195,6 +196,17 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     assert stats["seconds"]["gcp (discarded)"] > 0 and "marching" in stats["seconds"]
     with pytest.raises(ValueError, match="distances"):
         sdfcontour.contour(implicit, strict=True)
+    # An exact distance whose thin parts make its measured gradient norm 0.77 (the plane at
+    # 16^3): GCP fails on the rescaled values, runs again on the values as given, and says so.
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    plane = sdfcontour.sample(*sdfcontour.read_mesh(
+        os.path.join(root, "..", "shared", "data", "meshes", "plane.obj")), resolution=16)
+    with pytest.warns(sdfcontour.FallbackWarning, match="values as given"):
+        V, F, stats = sdfcontour.contour(plane, return_stats=True)
+    assert "contact point" in stats["rescale_dropped"] and stats["value_scale"] == 1
+    assert "fallback" not in stats and stats["closed"]
+    with pytest.raises(ValueError, match="distances"):
+        sdfcontour.contour(plane, strict=True)
     # A distance scaled by 3: rescaled, and said.
     sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.6
     with pytest.warns(sdfcontour.RescaleWarning, match="rescaled"):

@@ -153,7 +153,8 @@ struct ContourOptions {
   bool normalize_values = true;
   /// When GCP's mesh on a grid cannot be trusted (no usable band in a truncated grid, no contact
   /// point, or fewer than a tenth as many as grid edges crossing the surface: the values do not
-  /// behave as distances), return marching cubes' mesh instead, and say why in
+  /// behave as distances), GCP first runs again on the values as given if they were rescaled
+  /// (ContourResult::rescale_dropped), then returns marching cubes' mesh instead, and says why in
   /// ContourResult::fallback. Without it, those cases throw Error.
   bool fallback_to_mc = true;
   /// GCP on a noisy grid (noise_level() above 5% of a spacing, times the gradient norm): the
@@ -221,6 +222,9 @@ struct ContourResult {
   bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
+  /// Why GCP ran again on the values as given after the rescaled values failed (empty: it did
+  /// not); value_scale is then 1.
+  std::string rescale_dropped;
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 7 up to 48 samples
