@@ -249,7 +249,7 @@ Mesh collapse(const Mesh& mesh, std::vector<Quadric> quadrics, double h, double 
 // Freezes the vertices of `mesh` (the input) within kFrozenReach spacings of the vertices of
 // `merged`'s triangles that cross: returns whether any vertex was newly frozen.
 constexpr double kFrozenReach = 3;
-// Rounds of freezing at most: an input that crosses itself already keeps its crossings.
+// Rounds of freezing at most.
 constexpr int kFreezeRounds = 4;
 bool freeze_around_crossings(const Mesh& mesh, const Mesh& merged, const std::vector<int>& source,
                              double h, std::vector<char>& frozen) {
@@ -299,7 +299,11 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
   // Merges that make the mesh cross itself are undone by merging again with the vertices around
   // the crossings frozen: the input's own triangles stay there.
   std::vector<char> frozen(std::size_t(mesh.vertices.rows()), 0);
-  std::vector<int> source;
+  std::vector<int> source(frozen.size());
+  // The input's own crossings (the cube's at 128^3) stay as they are, frozen from the start, so
+  // that the rounds below chase only new ones.
+  for (std::size_t v = 0; v < source.size(); ++v) source[v] = int(v);
+  freeze_around_crossings(mesh, mesh, source, spacing, frozen);
   Mesh out;
   for (int round = 0;; ++round) {
     s.merges = 0;

@@ -32,8 +32,8 @@ struct AdaptivityStats {
 /// keep a crease and three a corner. Merges keep the mesh closed and 2-manifold (the link
 /// condition) and turn no triangle by more than options.max_normal_turn. Where the merged mesh
 /// crosses itself, it is merged again from `mesh` with the vertices within 3 spacings of the
-/// crossing triangles frozen (up to 4 rounds): an input free of self-intersections gives an
-/// output free of them unless 4 rounds do not suffice. Sequential and
+/// crossing triangles frozen (up to 4 rounds; the regions of the input's own crossings are frozen
+/// from the start): no merge adds a crossing unless 4 rounds do not suffice. Sequential and
 /// deterministic: the same mesh for any thread count. Throws Error for mismatched sizes, a spacing
 /// that is not positive, or a tolerance outside [0, 10].
 Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
