@@ -1,7 +1,9 @@
 // A regular grid held only where it may hold the surface, as OpenVDB holds a level set: a callable
 // SDF sampled near its zero set (python/sdfcontour/_callable_bricks.py) is contoured from it
-// without an n^3 array. Every operation here gives what the same operation on the dense grid
-// gives, bit for bit (trilinear_value and fraction_off_zero_set: metrics/field_agreement.h).
+// without an n^3 array. Each operation here gives what the same operation gives on the dense
+// grid whose samples outside the stored bricks are bounds of the same sign (as the callable
+// sampler leaves them): the same counts, signs and mesh (trilinear_value and
+// fraction_off_zero_set: metrics/field_agreement.h; select_band: band/band.h).
 #pragma once
 
 #include <array>
