@@ -282,13 +282,13 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 namespace {
 
 // Whether contour_or_throw rescales the values (rescale_to_distances) with these options.
-bool rescaled(const detail::GridSource& grid, const ContourOptions& options,
-              const GridMeasures* measured) {
-  if (!grid.dense || !options.normalize_values) return false;
+bool rescaled(const SdfInput& input, const ContourOptions& options, const GridMeasures* measured) {
+  if (const auto* sparse = std::get_if<SparseGridInput>(&input)) return sparse->value_scale != 1;
+  const GridView* dense = grid_view_of(input);
+  if (!dense || !options.normalize_values) return false;
   const double norm =
       measured ? measured->gradient_norms.median
-               : gradient_norm_summary(*grid.dense, resolve_truncation(*grid.dense, options.band))
-                     .median;
+               : gradient_norm_summary(*dense, resolve_truncation(*dense, options.band)).median;
   return distance_value_scale(norm) != 1.0;
 }
 
@@ -307,15 +307,17 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
         !options.fallback_to_mc)
       throw Error(std::string(e.what()) + ": the values do not behave as distances");
-    if (rescaled(grid, options, measured)) {
+    if (rescaled(input, options, measured)) {
       // Thin parts make central differences across a sheet: the measured norm of an exact
       // distance can fall far under 1 (plane at 16^3: 0.77), and rescaling it then hides every
       // contact point. The values as given, next.
       const double discarded = since_start();
       ContourOptions as_given = options;
       as_given.normalize_values = false;
+      SdfInput given = input;  // (a copy of views, for a grid)
+      if (auto* sparse = std::get_if<SparseGridInput>(&given)) sparse->value_scale = 1;
       try {
-        ContourResult result = contour_or_throw(input, shape, as_given, measured);
+        ContourResult result = contour_or_throw(given, shape, as_given, measured);
         result.rescale_dropped = e.what();
         result.stages.insert(result.stages.begin(), {"gcp rescaled (discarded)", discarded});
         if (options.progress)

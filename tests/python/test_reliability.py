@@ -207,6 +207,18 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     assert "fallback" not in stats and stats["closed"]
     with pytest.raises(ValueError, match="distances"):
         sdfcontour.contour(plane, strict=True)
+    # The same field as a callable (its grid's nearest sample), through the sparse grid's
+    # Poisson path: the same decision, the same mesh.
+    from scipy.interpolate import RegularGridInterpolator
+    axis = np.linspace(-1, 1, 16)
+    nearest = RegularGridInterpolator((axis, axis, axis), plane, method="nearest")
+    with pytest.warns(sdfcontour.FallbackWarning, match="values as given"):
+        Vc, Fc, cstats = sdfcontour.contour(nearest, resolution=16, reconstruction="poisson",
+                                            refine=False, return_stats=True)
+    assert cstats["rescale_dropped"] == stats["rescale_dropped"]
+    from sdfcontour.dask import canonical_mesh
+    (A, B), (C, D) = canonical_mesh(V, F), canonical_mesh(Vc, Fc)
+    assert np.array_equal(A, C) and np.array_equal(B, D)
     # A distance scaled by 3: rescaled, and said.
     sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.6
     with pytest.warns(sdfcontour.RescaleWarning, match="rescaled"):
