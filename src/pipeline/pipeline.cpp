@@ -52,48 +52,6 @@ std::string gradient_source_name(GradientSource source) {
   return detail::name_of(kGradientSources, source);
 }
 
-int auto_poisson_depth(const PointMatrix& points, double spacing) {
-  if (points.rows() == 0 || !(spacing > 0)) return 8;
-  const double extent = (points.colwise().maxCoeff() - points.colwise().minCoeff()).maxCoeff();
-  const double samples_per_axis = extent / spacing + 1;
-  if (samples_per_axis > 513) return 11;
-  if (samples_per_axis > 257) return 10;
-  if (samples_per_axis > 129) return 9;
-  return samples_per_axis > 48 ? 8 : 7;
-}
-
-bool auto_local_reconstruction(double samples_per_axis) {
-  return samples_per_axis >= 256;
-}
-
-int auto_subdivisions(double samples_per_axis) {
-  return samples_per_axis < 96 ? 2 : 1;
-}
-
-bool auto_sign_constraints(double samples_per_axis) {
-  return samples_per_axis < 128;
-}
-
-double auto_carving_band(const BandOptions& given, double samples_per_axis) {
-  // Every sample within 16 spacings, not only the band's 8: the farther balls are large (64^3:
-  // wingnut and hammer 6-7% lower L1, bunny 1%; every sample gains little more;
-  // docs/carving.md). Finer grids gain less for more.
-  constexpr double kCarvingBand = 16;
-  return given.band == 0 && samples_per_axis < 128 ? kCarvingBand : 0.0;
-}
-
-bool auto_carve_sides(double samples_per_axis) {
-  return samples_per_axis < 128;
-}
-
-double contour_values_reach(const ContourOptions& options, const std::array<int, 3>& dims) {
-  const double samples_per_axis = *std::max_element(dims.begin(), dims.end());
-  const BandOptions& band = options.band;
-  const double reach = (band.band > 0 ? band.band : auto_band(samples_per_axis)) + band.margin;
-  if (options.method != Method::Gcp || options.carve == Switch::Off) return reach;
-  return std::max(reach, auto_carving_band(band, samples_per_axis));
-}
-
 namespace {
 
 using detail::NotDistances;
