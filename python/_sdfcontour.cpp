@@ -440,6 +440,16 @@ py::dict topology_stats(const Mesh& mesh) {
   return out;
 }
 
+// What adaptivity did, as Python's stats["adaptivity"].
+py::dict adaptivity_stats(const AdaptivityStats& s) {
+  py::dict a;
+  a["triangles_before"] = s.triangles_before;
+  a["triangles_after"] = s.triangles_after;
+  a["merges"] = s.merges;
+  a["freeze_rounds"] = s.freeze_rounds;
+  return a;
+}
+
 // contour() of `input` (whose memory `owners` keeps alive) as the module returns it.
 py::dict contour_input(const SdfInput& input, const py::object& owners, const py::dict& options,
                        bool want_mesh, bool want_points, const py::object& progress_callback) {
@@ -506,14 +516,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
     stats["local_crossing_cells"] = r.local->crossing_cells;
   }
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;
-  if (r.adaptivity) {
-    py::dict a;
-    a["triangles_before"] = r.adaptivity->triangles_before;
-    a["triangles_after"] = r.adaptivity->triangles_after;
-    a["merges"] = r.adaptivity->merges;
-    a["freeze_rounds"] = r.adaptivity->freeze_rounds;
-    stats["adaptivity"] = a;
-  }
+  if (r.adaptivity) stats["adaptivity"] = adaptivity_stats(*r.adaptivity);
   stats["side_repaired_samples"] = r.side_repair ? r.side_repair->repaired : 0L;
   stats["wrong_side_left"] = r.side_repair ? r.side_repair->left : 0L;
   py::dict seconds;  // per stage, as the CLI's --stats "seconds" (repeated stages summed)
@@ -597,20 +600,14 @@ py::tuple run_adapt_mesh(const py::array& V, const py::array& F, const py::array
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(P), "P");
   const PointMatrix normals =
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(N), "N");
-  if (points.rows() != normals.rows()) throw Error("P and N must have the same shape");
-  if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");
-  AdaptivityOptions options;
+  AdaptivityOptions options;  // (adapt_mesh checks the sizes, spacing and tolerance)
   options.tolerance = tolerance;
   AdaptivityStats stats;
   Mesh out = run_interruptible([&](std::atomic<bool>&) {
     return adapt_mesh(mesh, points, normals, spacing, options, &stats);
   });
-  py::dict a;
-  a["triangles_before"] = stats.triangles_before;
-  a["triangles_after"] = stats.triangles_after;
-  a["merges"] = stats.merges;
-  a["freeze_rounds"] = stats.freeze_rounds;
-  return py::make_tuple(to_numpy(std::move(out.vertices)), to_numpy(std::move(out.triangles)), a);
+  return py::make_tuple(to_numpy(std::move(out.vertices)), to_numpy(std::move(out.triangles)),
+                        adaptivity_stats(stats));
 }
 
 py::tuple run_poisson(const py::array& P, const py::array& N, const py::object& W,

@@ -224,7 +224,7 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
              options["gradient"] == "regular" and want_mesh and not want_points)
     # (Adaptivity of marching cubes' mesh merges it whole, in the core.)
     bricked = bricked and not options.get("adaptivity", 0.0) > 0
-    _callable_budget(resolution, batch_size)
+    _check_callable_arguments(resolution, batch_size)
     h = float(((hi - lo) / (n - 1)).max())
     started = time.perf_counter()
     evaluations, grid = 0, None
@@ -311,7 +311,7 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, s
     return out
 
 
-def _callable_budget(resolution, batch_size):
+def _check_callable_arguments(resolution, batch_size):
     """Refuses a callable's resolution or batch out of range (no path makes an n^3 array)."""
     if isinstance(resolution, bool) or not isinstance(resolution, (int, _np.integer)) \
             or not 2 <= resolution <= 2048:

@@ -255,9 +255,7 @@ BandSamples select_band(const SparseGrid& grid, const BandOptions& given) {
   std::vector<std::vector<std::pair<long, double>>> found(grid.blocks.size());
   tbb::parallel_for(std::size_t(0), grid.blocks.size(), [&](std::size_t s) {
     const GridView& block = grid.blocks[s];
-    std::array<int, 3> own;
-    for (int a = 0; a < 3; ++a)
-      own[a] = block.first[a] + block.dims[a] == grid.dims[a] ? block.dims[a] : block.dims[a] - 1;
+    const std::array<int, 3> own = owned_dims(grid, block);
     for (int i = 0; i < own[0]; ++i)
       for (int j = 0; j < own[1]; ++j)
         for (int k = 0; k < own[2]; ++k) {

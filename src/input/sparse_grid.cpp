@@ -13,6 +13,13 @@
 
 namespace sdfcontour {
 
+std::array<int, 3> owned_dims(const SparseGrid& grid, const GridView& block) {
+  std::array<int, 3> own;
+  for (int a = 0; a < 3; ++a)
+    own[a] = block.first[a] + block.dims[a] == grid.dims[a] ? block.dims[a] : block.dims[a] - 1;
+  return own;
+}
+
 int bricks_along(int n, int brick) {
   return (n - 1 + brick - 1) / brick;
 }
@@ -112,10 +119,7 @@ long sign_change_edges(const SparseGrid& grid) {
         for (std::size_t s = r.begin(); s < r.end(); ++s) {
           const GridView& block = grid.blocks[s];
           const std::array<int, 3>& d = block.dims;
-          // The block's own samples: all but its high sides, unless those are the grid's.
-          std::array<int, 3> own;
-          for (int a = 0; a < 3; ++a)
-            own[a] = block.first[a] + d[a] == grid.dims[a] ? d[a] : d[a] - 1;
+          const std::array<int, 3> own = owned_dims(grid, block);
           block.visit([&](const auto* f) {
             for (int i = 0; i < own[0]; ++i)
               for (int j = 0; j < own[1]; ++j)

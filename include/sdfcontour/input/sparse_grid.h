@@ -35,6 +35,10 @@ struct SparseGrid : GridGeometry {
   double value(int i, int j, int k) const;
 };
 
+/// The samples a stored block owns, from its first one: all but its high sides, unless those are
+/// the grid's.
+std::array<int, 3> owned_dims(const SparseGrid& grid, const GridView& block);
+
 /// The number of bricks of `brick` cells along an axis of n samples.
 int bricks_along(int n, int brick);
 
