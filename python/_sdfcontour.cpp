@@ -594,7 +594,7 @@ py::dict run_contour_sparse(const py::list& blocks, const py::array& fill, int b
 // The mesh (V, F) merged where flat (adaptivity.h) over the contact points (P, N), `spacing` the
 // grid's: (V, F, stats).
 py::tuple run_adapt_mesh(const py::array& V, const py::array& F, const py::array& P,
-                         const py::array& N, double spacing, double tolerance) {
+                         const py::array& N, double spacing, double tolerance, int brick_spacings) {
   const Mesh mesh = mesh_from(V, F);
   const PointMatrix points =
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(P), "P");
@@ -602,6 +602,7 @@ py::tuple run_adapt_mesh(const py::array& V, const py::array& F, const py::array
       points_from(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(N), "N");
   AdaptivityOptions options;  // (adapt_mesh checks the sizes, spacing and tolerance)
   options.tolerance = tolerance;
+  options.brick_spacings = brick_spacings;
   AdaptivityStats stats;
   Mesh out = run_interruptible([&](std::atomic<bool>&) {
     return adapt_mesh(mesh, points, normals, spacing, options, &stats);
@@ -789,7 +790,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
         py::arg("ascii"));
   m.def("adapt_mesh", &run_adapt_mesh, py::arg("V"), py::arg("F"), py::arg("P"), py::arg("N"),
-        py::arg("spacing"), py::arg("tolerance"));
+        py::arg("spacing"), py::arg("tolerance"),
+        py::arg("brick_spacings") = AdaptivityOptions{}.brick_spacings);
   m.def("poisson", &run_poisson, py::arg("P"), py::arg("N"), py::arg("W"), py::arg("options"));
   m.def("sample", &run_sample, py::arg("V"), py::arg("F"), py::arg("resolution"), py::arg("lo"),
         py::arg("hi"), py::arg("scale"));

@@ -30,6 +30,7 @@ struct ContourArgs {
   int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double adaptivity = 0;
+  int adaptivity_bricks = AdaptivityOptions{}.brick_spacings;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, serial_triangulation = false, no_sign_constraints = false,
@@ -157,6 +158,8 @@ ContourOptions contour_options(const ContourArgs& a) {
           .value_or(-1);
   require_in_range("--adaptivity", a.adaptivity, "--adaptivity");
   opt.adaptivity.tolerance = a.adaptivity;
+  require_in_range("--adaptivity-bricks", a.adaptivity_bricks, "--adaptivity-bricks");
+  opt.adaptivity.brick_spacings = a.adaptivity_bricks;
   require_range("--local-reach", a.local.reach, 0, 1);
   require_range("--local-feature-ratio", a.local.feature_ratio, 0, 1);
   require_range("--local-robust-rounds", a.local.robust_rounds, 0, 100);
@@ -479,6 +482,12 @@ Command add_contour_command(CLI::App& app) {
                 "contact points, or the mesh's own planes for the other methods), summed, stay "
                 "under this many spacings squared; creases and corners stay. 0 (default): the "
                 "mesh as reconstructed")
+      ->capture_default_str();
+  c->add_option("--adaptivity-bricks", a->adaptivity_bricks,
+                "Adaptivity merges brick by brick, in parallel: bricks of this many spacings, "
+                "then again on bricks shifted by half a brick (across the first pass's seams). "
+                "0: the whole mesh as one brick, sequential (the same mesh for any thread count "
+                "either way)")
       ->capture_default_str();
   c->add_option(
        "--subdivisions", a->subdivisions,

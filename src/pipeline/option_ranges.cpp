@@ -25,6 +25,7 @@ const std::vector<OptionRange>& option_ranges() {
       {"--finest-solver-tolerance", "finest_solver_tolerance", 1e-16, 0.5},
       {"--subdivisions", "subdivisions", 0, 4},
       {"--adaptivity", "adaptivity", 0, 10},
+      {"--adaptivity-bricks", "", 0, 4096},
       {"--side-passes", "side_passes", 0, 100},
       {"--res", "resolution", 2, 1024},
       {"--threads", "", 0, 4096},

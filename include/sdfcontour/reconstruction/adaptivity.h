@@ -8,9 +8,13 @@ namespace sdfcontour {
 
 struct AdaptivityOptions {
   /// In spacings: a merge stands while the squared distances from the merged vertex to the
-  /// tangent planes its region gathered (its contact points', and its triangles' own planes at a
-  /// tenth of their area's weight), summed, stay under tolerance^2; 0 leaves the mesh as it is.
+  /// tangent planes its region gathered (its contact points', and its triangles' own planes
+  /// weighed by area over spacing^2), summed, stay under tolerance^2; 0 leaves the mesh as it is.
   double tolerance = 0;
+  /// The merging runs brick by brick, in parallel: cubes of this many spacings from the mesh's
+  /// lowest corner, then again on the bricks shifted by half a brick, so that every seam of the
+  /// first pass lies inside a brick of the second. 0: the whole mesh as one brick (sequential).
+  int brick_spacings = 64;
   /// A merge turns no triangle's normal by more than this many degrees (nor flips one).
   double max_normal_turn = 45;
 };
@@ -33,9 +37,11 @@ struct AdaptivityStats {
 /// condition) and turn no triangle by more than options.max_normal_turn. Where the merged mesh
 /// crosses itself, it is merged again from `mesh` with the vertices within 3 spacings of the
 /// crossing triangles frozen (up to 4 rounds; the regions of the input's own crossings are frozen
-/// from the start): no merge adds a crossing unless 4 rounds do not suffice. Sequential and
-/// deterministic: the same mesh for any thread count. Throws Error for mismatched sizes, a spacing
-/// that is not positive, or a tolerance outside [0, 10].
+/// from the start): no merge adds a crossing unless 4 rounds do not suffice. Brick by brick
+/// (options.brick_spacings): a vertex merges within its brick while its neighbours lie in it too;
+/// the bricks run in parallel and are joined in order: the same mesh for any thread count.
+/// Throws Error for mismatched sizes, a spacing that is not positive, a tolerance outside
+/// [0, 10] or a negative brick size.
 Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
                 double spacing, const AdaptivityOptions& options, AdaptivityStats* stats = nullptr);
 

@@ -1,0 +1,99 @@
+#include "sdfcontour/reconstruction/adaptivity.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "reconstruction/adaptivity/brick_merging.h"
+#include "reconstruction/point_cubes.h"
+#include "sdfcontour/metrics/self_intersections.h"
+
+namespace sdfcontour {
+
+namespace {
+
+// Freezes the vertices of `mesh` (the input) within kFrozenReach spacings of the vertices of
+// `merged`'s triangles that cross: returns whether any vertex was newly frozen.
+constexpr double kFrozenReach = 3;
+// Rounds of freezing at most.
+constexpr int kFreezeRounds = 4;
+bool freeze_around_crossings(const Mesh& mesh, const Mesh& merged, const std::vector<int>& source,
+                             double h, std::vector<char>& frozen) {
+  const auto pairs = self_intersecting_triangles(merged);
+  if (pairs.empty()) return false;
+  std::vector<char> crossing(std::size_t(merged.vertices.rows()), 0);
+  for (const auto& [s, t] : pairs)
+    for (int k = 0; k < 3; ++k)
+      crossing[std::size_t(merged.triangles(s, k))] =
+          crossing[std::size_t(merged.triangles(t, k))] = 1;
+  const detail::PointCubes cubes(mesh.vertices, kFrozenReach * h);
+  bool changed = false;
+  for (std::size_t v = 0; v < crossing.size(); ++v) {
+    if (!crossing[v]) continue;
+    changed |= !frozen[std::size_t(source[v])];
+    frozen[std::size_t(source[v])] = 1;
+    const Eigen::Vector3d p = merged.vertices.row(Eigen::Index(v)).transpose();
+    cubes.for_each_near(p, [&](int u) {
+      if (!frozen[std::size_t(u)] &&
+          (mesh.vertices.row(u).transpose() - p).norm() <= kFrozenReach * h)
+        frozen[std::size_t(u)] = 1, changed = true;
+    });
+  }
+  return changed;
+}
+
+}  // namespace
+
+Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
+                double spacing, const AdaptivityOptions& options, AdaptivityStats* stats) {
+  if (points.rows() != normals.rows())
+    throw Error("adaptivity: " + std::to_string(points.rows()) + " points but " +
+                std::to_string(normals.rows()) + " normals");
+  if (!(spacing > 0) || !std::isfinite(spacing))
+    throw Error("adaptivity: the spacing must be positive");
+  if (!(options.tolerance >= 0 && options.tolerance <= 10))
+    throw Error("adaptivity: the tolerance must lie in [0, 10] spacings");
+  if (!(options.max_normal_turn > 0 && options.max_normal_turn <= 180))
+    throw Error("adaptivity: the normal turn must lie in (0, 180] degrees");
+  if (options.brick_spacings < 0) throw Error("adaptivity: the brick size must not be negative");
+  AdaptivityStats s;
+  s.triangles_before = s.triangles_after = long(mesh.triangles.rows());
+  if (options.tolerance == 0 || mesh.triangles.rows() == 0) {
+    if (stats) *stats = s;
+    return mesh;
+  }
+  const std::vector<detail::MergeQuadric> quadrics =
+      detail::vertex_quadrics(mesh, points, normals, spacing);
+  // Merges that make the mesh cross itself are undone by merging again with the vertices around
+  // the crossings frozen: the input's own triangles stay there.
+  std::vector<char> frozen(std::size_t(mesh.vertices.rows()), 0);
+  std::vector<int> source(frozen.size());
+  // The input's own crossings (the cube's at 128^3) stay as they are, frozen from the start, so
+  // that the rounds below chase only new ones.
+  for (std::size_t v = 0; v < source.size(); ++v) source[v] = int(v);
+  freeze_around_crossings(mesh, mesh, source, spacing, frozen);
+  const detail::CollapseLimits limits{spacing, options.tolerance, options.max_normal_turn};
+  // Bricks on a lattice from the mesh's lowest corner; 0 spacings: one brick holds it all.
+  const Eigen::Vector3d origin = mesh.vertices.colwise().minCoeff().transpose();
+  const double extent = (mesh.vertices.colwise().maxCoeff().transpose() - origin).maxCoeff();
+  const double side =
+      options.brick_spacings > 0 ? options.brick_spacings * spacing : 2 * extent + spacing;
+  detail::MergeState state;
+  for (int round = 0;; ++round) {
+    state = {mesh, quadrics, frozen, source};
+    // Every seam of the first pass lies inside a brick of the second, shifted by half a brick.
+    s.merges = detail::merge_in_bricks(state, origin, side, 0.0, limits);
+    if (options.brick_spacings > 0)
+      s.merges += detail::merge_in_bricks(state, origin, side, 0.5, limits);
+    if (round == kFreezeRounds ||
+        !freeze_around_crossings(mesh, state.mesh, state.source, spacing, frozen))
+      break;
+    ++s.freeze_rounds;
+  }
+  Mesh out = std::move(state.mesh);
+  s.triangles_after = long(out.triangles.rows());
+  if (stats) *stats = s;
+  return out;
+}
+
+}  // namespace sdfcontour

@@ -1,0 +1,57 @@
+#include "reconstruction/adaptivity/merge_quadric.h"
+
+#include <tbb/parallel_for.h>
+
+#include "reconstruction/point_cubes.h"
+
+namespace sdfcontour::detail {
+
+namespace {
+
+// Each point's nearest vertex within a spacing (-1 if none; ties: the lower vertex).
+std::vector<int> nearest_vertices(const PointMatrix& V, const PointMatrix& P, double h) {
+  const PointCubes cubes(V, h);
+  std::vector<int> nearest(std::size_t(P.rows()), -1);
+  tbb::parallel_for(Eigen::Index(0), P.rows(), [&](Eigen::Index i) {
+    const Eigen::Vector3d p = P.row(i).transpose();
+    double best = h * h;
+    cubes.for_each_near(p, [&](int v) {
+      const double d = (V.row(v).transpose() - p).squaredNorm();
+      if (d < best || (d == best && v < nearest[std::size_t(i)]))
+        best = d, nearest[std::size_t(i)] = v;
+    });
+  });
+  return nearest;
+}
+
+// A contact point stands for about a cell's h^2 of surface, a triangle for its area over h^2:
+// weighed alike. The triangles' planes keep the merged mesh near the unmerged one where points
+// are few; at a tenth of this weight, merges went there first (bunny and wingnut 128^3 at equal
+// triangle counts: L1 1.18x and 1.18x TOL 0's with 0.1 against 1.04x and 1.09x with 1).
+constexpr double kFaceWeight = 1.0;
+
+}  // namespace
+
+std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& points,
+                                          const PointMatrix& normals, double h) {
+  std::vector<MergeQuadric> q(std::size_t(mesh.vertices.rows()));
+  const std::vector<int> nearest = nearest_vertices(mesh.vertices, points, h);
+  for (Eigen::Index i = 0; i < points.rows(); ++i)  // in row order: the same sums every run
+    if (nearest[std::size_t(i)] >= 0)
+      q[std::size_t(nearest[std::size_t(i)])].add_plane(normals.row(i).transpose(),
+                                                        points.row(i).transpose(), 1.0);
+
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)).transpose();
+    const Eigen::Vector3d b = mesh.vertices.row(mesh.triangles(t, 1)).transpose();
+    const Eigen::Vector3d c = mesh.vertices.row(mesh.triangles(t, 2)).transpose();
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() == 0) continue;
+    const double w = kFaceWeight * n.norm() / 6 / (h * h);
+    for (int k = 0; k < 3; ++k)
+      q[std::size_t(mesh.triangles(t, k))].add_plane(n.normalized(), a, w);
+  }
+  return q;
+}
+
+}  // namespace sdfcontour::detail

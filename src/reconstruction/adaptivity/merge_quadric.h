@@ -1,0 +1,56 @@
+// Internal: the quadric a merged vertex minimises (adaptivity), and each vertex's first one.
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <vector>
+
+#include "sdfcontour/types.h"
+
+namespace sdfcontour::detail {
+
+// Sum over planes (n, d) of w (n.x + d)^2 = x^T A x + 2 b.x + c.
+struct MergeQuadric {
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  double c = 0;
+
+  void add_plane(const Eigen::Vector3d& n, const Eigen::Vector3d& p, double w) {
+    const double d = -n.dot(p);
+    A += w * n * n.transpose();
+    b += w * d * n;
+    c += w * d * d;
+  }
+  MergeQuadric operator+(const MergeQuadric& o) const {
+    MergeQuadric q;
+    q.A = A + o.A, q.b = b + o.b, q.c = c + o.c;
+    return q;
+  }
+  double at(const Eigen::Vector3d& x) const {
+    return std::max(0.0, x.dot(A * x) + 2 * b.dot(x) + c);
+  }
+  // The minimiser nearest `centre` along the directions the planes leave free (eigenvalues
+  // under kFree of the largest): a plane keeps its vertex, a crease or corner draws it. Only
+  // directions that no curvature fixes are left free: with 1e-3, merged vertices slid along
+  // gently curved regions (bunny 128^3, TOL 0.1: L1 1.28x TOL 0's against 1.13x with 1e-6).
+  Eigen::Vector3d minimiser(const Eigen::Vector3d& centre) const {
+    constexpr double kFree = 1e-6;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(A);
+    const Eigen::Vector3d lambda = eig.eigenvalues();
+    const Eigen::Matrix3d U = eig.eigenvectors();
+    const Eigen::Vector3d r = -(A * centre + b);
+    Eigen::Vector3d x = centre;
+    for (int j = 0; j < 3; ++j)
+      if (lambda[j] > kFree * lambda[2] && lambda[j] > 0)
+        x += U.col(j) * (U.col(j).dot(r) / lambda[j]);
+    return x;
+  }
+};
+
+/// The quadric of each vertex of `mesh`: the tangent planes of the `points` (n x 3, unit
+/// `normals` n x 3) nearest it within spacing `h`, and its triangles' own planes, weighed by area
+/// over h^2 (a point stands for about h^2 of surface).
+std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& points,
+                                          const PointMatrix& normals, double h);
+
+}  // namespace sdfcontour::detail
