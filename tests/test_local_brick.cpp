@@ -101,6 +101,17 @@ TEST(LocalBrick, QuadricVerticesDoNotMakeTheMeshCrossItself) {
   }
 }
 
+TEST(LocalBrick, VerticesClampedAtTheBoxEdgesDoNotMeet) {
+  // The built-in box at 48^3: cells next to its edges clamp their vertices to a shared side;
+  // kept a little inside their cells, no two meet, and the mesh is free of crossings (measured:
+  // 80 crossing pairs when clamped onto the sides).
+  const auto box = make_builtin_shape("box");
+  const Grid g = sample_grid(*box, 48, Bounds{});
+  const Mesh m = local_mesh_in_bricks(view_of(g), LocalBrickOptions{}, 0);
+  test::expect_closed_and_outward(m);
+  EXPECT_TRUE(self_intersecting_triangles(m).empty());
+}
+
 TEST(LocalBrick, SmoothShapeInBricksIsCloseToTheSurface) {
   // A smooth shape: the bricked mesh's vertices lie within 0.02 spacings of the torus on average.
   const auto torus = make_builtin_shape("torus");

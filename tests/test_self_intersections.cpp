@@ -82,6 +82,26 @@ TEST(SelfIntersections, TheSamePairsAsCgal) {
   EXPECT_THROW(self_intersecting_triangles(mesh, &watch), Error);
 }
 
+// Two triangles that share an edge overlap when they fold onto each other (coplanar, on the same
+// side of the edge), as CGAL counts them; unfolded, or bent out of the plane, they do not.
+TEST(SelfIntersections, TrianglesFoldedOntoTheirSharedEdgeOverlap) {
+  Mesh fold;
+  fold.vertices.resize(4, 3);
+  fold.vertices << 0, 0, 0, 1, 0, 0, 0.3, 1, 0, 0.6, 0.8, 0;
+  fold.triangles.resize(2, 3);
+  fold.triangles << 0, 1, 2, 1, 0, 3;
+  const std::vector<std::pair<int, int>> both{{0, 1}};
+  EXPECT_EQ(self_intersecting_triangles(fold), both);
+  EXPECT_EQ(cgal_pairs(fold), both);
+  Mesh open = fold, bent = fold;
+  open.vertices(3, 1) = -0.8;  // the other side of the edge
+  bent.vertices(3, 2) = 1e-9;  // out of the plane: they meet only along the edge
+  for (const Mesh& m : {open, bent}) {
+    EXPECT_TRUE(self_intersecting_triangles(m).empty());
+    EXPECT_TRUE(cgal_pairs(m).empty());
+  }
+}
+
 // Undoing the moves that cross: the noisy torus, moved back only where it crosses itself, is
 // free of crossings by CGAL's test, and most moves are kept (MC's slivers make many crossings).
 TEST(SelfIntersections, RevertOnlyTheCrossingMoves) {

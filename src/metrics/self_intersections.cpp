@@ -108,15 +108,26 @@ Point vertex_point(const Mesh& mesh, int v) {
   return Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
 }
 
-// Whether triangles s and t (not sharing an edge) meet other than in a shared vertex.
+// Whether triangles s and t meet other than in the vertices and edge they share.
 bool cross(const Mesh& mesh, int s, int t) {
   auto at = [&](int v) { return vertex_point(mesh, v); };
   const auto S = mesh.triangles.row(s), T = mesh.triangles.row(t);
   int shared_s = -1, shared_t = -1, shared = 0;
+  bool in_t[3] = {false, false, false};
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
-      if (S[i] == T[j]) shared_s = i, shared_t = j, ++shared;
-  if (shared >= 2) return false;
+      if (S[i] == T[j]) shared_s = i, shared_t = j, ++shared, in_t[i] = true;
+  if (shared == 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // A shared edge: they overlap iff they fold onto each other (coplanar, the opposite vertices
+    // on the same side of the edge); subdividing such a fold makes triangles that cross.
+    const int a = !in_t[0] ? 0 : !in_t[1] ? 1 : 2;
+    int b = 0;
+    while (T[b] == S[0] || T[b] == S[1] || T[b] == S[2]) ++b;
+    const Point u = at(S[(a + 1) % 3]), v = at(S[(a + 2) % 3]), p = at(S[a]), q = at(T[b]);
+    return !CGAL::collinear(u, v, p) && CGAL::coplanar(u, v, p, q) &&
+           CGAL::coplanar_orientation(u, v, p, q) == CGAL::POSITIVE;
+  }
   const K::Triangle_3 a(at(S[0]), at(S[1]), at(S[2])), b(at(T[0]), at(T[1]), at(T[2]));
   if (shared == 0) return CGAL::do_intersect(a, b);
   // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.

@@ -13,9 +13,10 @@
 namespace sdfcontour {
 
 /// Pairs (s, t), s < t, ascending, of triangles of `mesh` that intersect other than in the
-/// vertices and edge they share: triangles with no common vertex that meet, and triangles with one
-/// common vertex whose opposite edges cut the other triangle. Triangles sharing an edge, and
-/// degenerate (zero-area) triangles, are not tested. With `watch` (one flag per triangle), only
+/// vertices and edge they share: triangles with no common vertex that meet, triangles with one
+/// common vertex whose opposite edges cut the other triangle, and triangles sharing an edge that
+/// fold onto each other (coplanar, on the same side of it). Degenerate (zero-area) triangles are
+/// not tested. With `watch` (one flag per triangle), only
 /// pairs with at least one flagged triangle are reported. Exact predicates (CGAL); parallel
 /// (TBB), the same result for any thread count.
 std::vector<std::pair<int, int>> self_intersecting_triangles(
