@@ -44,6 +44,18 @@ def vdb_at_count(grid, out, triangles):
 
 
 
+def sampled_mesh(work, name, res):
+    """The grid of shared mesh `name` at res^3 in `work` (sampled if missing): (file prefix,
+    ground-truth mesh, points along its sharp edges, spacing)."""
+    h = 2.0 / (res - 1)
+    prefix = os.path.join(work, f"{name}{res}")
+    if not os.path.exists(prefix + ".npy"):
+        subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res),
+                        "-o", prefix, "--quiet"], check=True)
+    gt = prefix + "_mesh.ply"
+    return prefix, gt, sharp_edge_points(*read_ply(gt), step=h / 4), h
+
+
 def evaluate(out, gt, edge_points, h):
     e = json.loads(subprocess.run([CLI, "eval", out, gt], capture_output=True, text=True).stdout)
     topo = e["recon_mesh"]
@@ -67,14 +79,8 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     rows = []
     for res in map(int, a.res.split(",")):
-        h = 2.0 / (res - 1)
         for name in a.meshes.split(","):
-            prefix = os.path.join(a.work, f"{name}{res}")
-            if not os.path.exists(prefix + ".npy"):
-                subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
-                                str(res), "-o", prefix, "--quiet"], check=True)
-            gt = prefix + "_mesh.ply"
-            edges = sharp_edge_points(*read_ply(gt), step=h / 4)
+            prefix, gt, edges, h = sampled_mesh(a.work, name, res)
             for tol in map(float, a.tol.split(",")):
                 out = f"{prefix}_adapt{tol:g}.ply"
                 seconds, peak, _, err = timed([CLI, "contour", prefix + ".npy", "-o", out,

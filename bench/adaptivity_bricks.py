@@ -11,14 +11,12 @@ brick's. JSON lines on stdout; --markdown writes the table.
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from adaptivity import evaluate  # noqa: E402
-from common import CLI, MESHES, geomean, timed  # noqa: E402
-from local import read_ply, sharp_edge_points  # noqa: E402
+from adaptivity import evaluate, sampled_mesh  # noqa: E402
+from common import CLI, geomean, timed  # noqa: E402
 
 
 def main():
@@ -33,14 +31,8 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     rows = []
     for res in map(int, a.res.split(",")):
-        h = 2.0 / (res - 1)
         for name in a.meshes.split(","):
-            prefix = os.path.join(a.work, f"{name}{res}")
-            if not os.path.exists(prefix + ".npy"):
-                subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
-                                str(res), "-o", prefix, "--quiet"], check=True)
-            gt = prefix + "_mesh.ply"
-            edges = sharp_edge_points(*read_ply(gt), step=h / 4)
+            prefix, gt, edges, h = sampled_mesh(a.work, name, res)
             for tol in map(float, a.tol.split(",")):
                 for bricks in map(int, a.bricks.split(",")):
                     out = f"{prefix}_adapt{tol:g}_b{bricks}.ply"

@@ -32,6 +32,7 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
     if (!(lambda[j] > feature_ratio * lambda[2]) || !(lambda[j] > 0)) break;
     const Eigen::Vector3d v = eigen.eigenvectors().col(j);
     out.position += v * (v.dot(atb) / lambda[j]);
+    out.free -= v * v.transpose();
     ++out.rank;
   }
   return out;

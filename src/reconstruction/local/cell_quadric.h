@@ -15,6 +15,9 @@ struct TangentPlane {
 struct QuadricSolution {
   Eigen::Vector3d position;
   int rank = 0;  ///< directions solved for: 1 a plane, 2 an edge, 3 a corner
+  /// The projector onto the directions not solved for (along which every point of
+  /// `position` + free * d minimises the quadric as well).
+  Eigen::Matrix3d free = Eigen::Matrix3d::Identity();
 };
 
 /// The point that minimises sum_i w_i (n_i . (x - p_i))^2 over `planes` (not empty), solving only

@@ -123,13 +123,15 @@ double trilinear_miss(const SurfaceCells& cells, const std::array<int, 3>& at,
   return g > 0 ? std::abs(value) / g : INFINITY;
 }
 
-// A vertex stays this fraction of its cell inside it. Clamped onto the cell's side, the vertices
-// of two cells next to a feature could meet (1 ulp apart on the cube at 128^3): their triangles
-// then overlap, and neither the crossing test nor the untangling sees a zero-area triangle.
-// Measured (bench/local.py, gcp-local): the cube at 128^3 67 crossing pairs -> 0 (L1 1.23x ->
-// 1.33x MC's, sharp edges 0.34 h -> 0.27 h), the built-in box at 48^3-64^3 80 -> 0; every other
-// shared mesh at 32^3 and 64^3 (and seven at 128^3) within 1.5% of its L1 (plane 32^3: 1.5%
-// lower), the geometric means unchanged (0.379x and 0.365x MC's).
+// A vertex stays this fraction of its cell inside it. On the cell's side (clamped there, or the
+// planes' centroid on a grid line), the vertices of two cells next to a feature could meet (1 ulp
+// apart on the cube at 128^3): their triangles then overlap, and neither the crossing test nor
+// the untangling sees it. It moves along the directions the planes leave free where it can (so
+// vertices of a linear field stay on its plane), else straight in. Measured (bench/local.py,
+// gcp-local): the cube at 128^3 67 crossing pairs -> 0 (L1 1.23x -> 1.33x MC's, sharp edges 0.34 h
+// -> 0.27 h), the built-in box at 48^3-64^3 80 -> 0; every other shared mesh at 32^3 and 64^3 (and
+// seven at 128^3) within 1.5% of its L1 (plane 32^3: 1.5% lower), the geometric means unchanged
+// (0.379x and 0.365x MC's).
 constexpr double kCellMargin = 1e-3;
 
 VertexResult place_vertex(const std::vector<TangentPlane>& planes,
@@ -143,8 +145,18 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
                                options.robust_rounds, options.robust_scale * h);
   out.feature = s.rank >= 2;
   const Eigen::Vector3d margin = kCellMargin * (hi - lo);
+  const Eigen::Vector3d inner_lo = lo + margin, inner_hi = hi - margin;
   out.clamped = s.position != s.position.cwiseMax(lo).cwiseMin(hi);
-  out.position = s.position.cwiseMax(lo + margin).cwiseMin(hi - margin);
+  // Into the cell shrunk by the margin, along the directions the planes leave free where they
+  // suffice (the quadric's minimum stays: a plane's vertices stay on it), else straight.
+  Eigen::Vector3d x = s.position;
+  for (int round = 0; round < 8; ++round) {
+    const Eigen::Vector3d inside = x.cwiseMax(inner_lo).cwiseMin(inner_hi);
+    if (inside == x) break;
+    x += s.free * (inside - x);
+  }
+  const bool in_cell = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
+  out.position = in_cell && !out.clamped ? x : s.position.cwiseMax(inner_lo).cwiseMin(inner_hi);
   return out;
 }
 
