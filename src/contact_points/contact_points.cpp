@@ -35,6 +35,47 @@ bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& v
   return false;
 }
 
+namespace {
+
+// Whether a triangulation neighbour of sample i misses the linear prediction from gradient g by
+// more than `slope` times its distance.
+bool misses_linear_prediction(const PointMatrix& points, const Eigen::VectorXd& values,
+                              const Triangulation& tri, int i, const Eigen::Vector3d& g,
+                              double slope) {
+  const Eigen::Vector3d p = row(points, i);
+  for (int o = tri.neighbour_offsets[std::size_t(i)]; o < tri.neighbour_offsets[std::size_t(i) + 1];
+       ++o) {
+    const int j = tri.neighbour_indices[std::size_t(o)];
+    const Eigen::Vector3d d = row(points, j) - p;
+    if (std::abs(values[j] - values[i] - g.dot(d)) > slope * d.norm()) return true;
+  }
+  return false;
+}
+
+// Point c of sample i's sphere pushed out of the neighbours' spheres it lies in (each by its
+// depth) and back onto the sphere, for up to `rounds` rounds.
+Eigen::Vector3d slide_out_of_spheres(const PointMatrix& points, const Eigen::VectorXd& values,
+                                     const Triangulation& tri, int i, Eigen::Vector3d c,
+                                     int rounds) {
+  const Eigen::Vector3d p = row(points, i);
+  const double radius = std::abs(values[i]);
+  for (int round = 0; round < rounds; ++round) {
+    Eigen::Vector3d push = Eigen::Vector3d::Zero();
+    for (int o = tri.neighbour_offsets[std::size_t(i)];
+         o < tri.neighbour_offsets[std::size_t(i) + 1]; ++o) {
+      const int j = tri.neighbour_indices[std::size_t(o)];
+      const Eigen::Vector3d away = c - row(points, j);
+      const double depth = std::abs(values[j]) - away.norm();
+      if (depth > 0) push += depth * away.normalized();
+    }
+    if (push.squaredNorm() == 0) break;
+    c = p + radius * (c + push - p).normalized();
+  }
+  return c;
+}
+
+}  // namespace
+
 ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::VectorXd& values,
                                       const PointMatrix& gradients, const Triangulation& tri,
                                       const ContactPointOptions& options,
@@ -66,10 +107,28 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
       return true;
     };
     const Eigen::Vector3d g = row(gradients, i);
+    if (options.max_slope_miss > 0 &&
+        misses_linear_prediction(points, values, tri, int(i), g, options.max_slope_miss)) {
+      out = Outcome::Discarded;
+      return;
+    }
     if (!(g.norm() > kTinyGradient)) {
       out = Outcome::ZeroGradient;
     } else {
       out = candidate(g) ? Outcome::Kept : Outcome::Discarded;
+    }
+    if (out == Outcome::Discarded && options.sphere_slide_rounds > 0) {
+      const Eigen::Vector3d start = p - values[i] * g.normalized();
+      const Eigen::Vector3d slid =
+          slide_out_of_spheres(points, values, tri, int(i), start, options.sphere_slide_rounds);
+      // (Farther than the radius, the gradient said little about where the point lies.)
+      if ((slid - start).norm() <= std::abs(values[i]) &&
+          !inside_neighbour_sphere(points, values, tri, int(i), slid, options.tie_tolerance)) {
+        c.row(i) = slid.transpose();
+        normal.row(i) = ((p - slid) / values[i]).transpose();
+        out = Outcome::Rescued;
+        return;
+      }
     }
     if (out == Outcome::Kept || !options.try_tet_gradients) return;
     for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];

@@ -20,6 +20,16 @@ struct ContactPointOptions {
   /// "+FN": when the averaged gradient's point is discarded, try each incident tet's own gradient
   /// (in ascending tet order) until one gives a point that passes.
   bool try_tet_gradients = false;
+  /// A sample whose triangulation neighbours miss its gradient's linear prediction by more than
+  /// this many times their distance (|value_j - value_i - g.(p_j - p_i)| > s |p_j - p_i|) straddles
+  /// a crease or a medial axis: its averaged gradient mixes the two sides, and its point would
+  /// land off the surface where no sphere refutes it. It gets no point. 0: no test (the paper).
+  double max_slope_miss = 0;
+  /// A candidate inside a neighbour's sphere is pushed out of the spheres it lies in and back
+  /// onto its own sphere, for up to this many rounds, and kept if it then passes the test: at a
+  /// convex edge or corner the only point of the sphere that no neighbour's sphere holds is the
+  /// feature, which an averaged gradient misses. 0: discarded (the paper).
+  int sphere_slide_rounds = 0;
 };
 
 /// Oriented contact points and where they came from.
@@ -29,8 +39,9 @@ struct ContactPoints {
   std::vector<int> samples;  ///< k source sample indices, ascending
   int hidden = 0;            ///< samples that are not triangulation vertices (no point)
   int zero_gradient = 0;     ///< visible samples whose gradient vanished (no point)
-  int discarded = 0;         ///< candidates inside a neighbour's sphere and not rescued
-  int rescued = 0;           ///< points kept thanks to a tet gradient (+FN)
+  int discarded = 0;         ///< candidates inside a neighbour's sphere and not rescued, or
+                             ///< missing the slope test (max_slope_miss)
+  int rescued = 0;  ///< points kept thanks to a tet gradient (+FN) or to sliding over the sphere
 
   int size() const { return int(samples.size()); }
 };
