@@ -170,3 +170,45 @@ TEST(ContactPoints, TetGradientFallbackRescuesPoints) {
                                          b.samples[std::size_t(k)], b.points.row(k).transpose(),
                                          fn.tie_tolerance));
 }
+
+// At a box's convex edges the paper's points fail both ways: outside samples near an edge lose
+// theirs (the averaged gradient misses the edge, the point falls inside a neighbour's sphere)
+// and inside samples near the edge's medial axis give points inside the box that no sphere
+// refutes. Sliding over the sphere brings points onto the edges; the slope test drops the
+// medial-axis samples' points.
+TEST(ContactPoints, SlidingFindsConvexEdgesAndTheSlopeTestDropsMedialAxisPoints) {
+  const Fixture f = make_fixture("box", 32);
+  const double h = f.grid.spacing().maxCoeff();
+  const Vector3d half(0.6, 0.45, 0.35);  // the built-in box's half extents
+  const PointMatrix g = vertex_gradients(f.samples.points, f.samples.values, f.regular);
+  auto count = [&](const ContactPoints& cp, bool on_edge) {
+    int n = 0;
+    for (Eigen::Index k = 0; k < cp.points.rows(); ++k) {
+      const Vector3d q = (cp.points.row(k).transpose().cwiseAbs() - half) / h;
+      const int faces = int((q.array().abs() < 0.01).count());
+      n += on_edge ? faces >= 2
+                   : std::abs(f.shape->distance(cp.points.row(k).transpose())) > 0.05 * h;
+    }
+    return n;
+  };
+  ContactPointOptions paper, slide, slope;
+  slide.sphere_slide_rounds = 50;
+  slope.max_slope_miss = 0.45;
+  const ContactPoints a =
+      gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, paper);
+  const ContactPoints b =
+      gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, slide);
+  const ContactPoints c =
+      gradient_contact_points(f.samples.points, f.samples.values, g, f.regular, slope);
+  std::cout << "box 32^3: points on an edge " << count(a, true) << " -> " << count(b, true)
+            << " slid; off the surface by > 0.05 h " << count(a, false) << " -> " << count(c, false)
+            << " with the slope test\n";
+  EXPECT_EQ(count(a, true), 0);
+  EXPECT_GT(count(b, true), 0);
+  EXPECT_GT(b.rescued, 0);
+  for (Eigen::Index k = 0; k < b.points.rows(); ++k)
+    EXPECT_FALSE(inside_neighbour_sphere(f.samples.points, f.samples.values, f.regular,
+                                         b.samples[std::size_t(k)], b.points.row(k).transpose(),
+                                         slide.tie_tolerance));
+  EXPECT_LT(2 * count(c, false), count(a, false));
+}
