@@ -66,7 +66,7 @@ Eigen::Vector3d slide_out_of_spheres(const PointMatrix& points, const Eigen::Vec
       const int j = tri.neighbour_indices[std::size_t(o)];
       const Eigen::Vector3d away = c - row(points, j);
       const double depth = std::abs(values[j]) - away.norm();
-      if (depth > 0) push += depth * away.normalized();
+      if (depth > 0 && away.norm() > 0) push += depth * away.normalized();
     }
     if (push.squaredNorm() == 0) break;
     c = p + radius * (c + push - p).normalized();
@@ -117,12 +117,12 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
     } else {
       out = candidate(g) ? Outcome::Kept : Outcome::Discarded;
     }
-    if (out == Outcome::Discarded && options.sphere_slide_rounds > 0) {
+    if (out == Outcome::Discarded && options.sphere_slide_rounds > 0 && values[i] != 0) {
       const Eigen::Vector3d start = p - values[i] * g.normalized();
       const Eigen::Vector3d slid =
           slide_out_of_spheres(points, values, tri, int(i), start, options.sphere_slide_rounds);
       // (Farther than the radius, the gradient said little about where the point lies.)
-      if ((slid - start).norm() <= std::abs(values[i]) &&
+      if (slid.allFinite() && (slid - start).norm() <= std::abs(values[i]) &&
           !inside_neighbour_sphere(points, values, tri, int(i), slid, options.tie_tolerance)) {
         c.row(i) = slid.transpose();
         normal.row(i) = ((p - slid) / values[i]).transpose();
