@@ -56,6 +56,32 @@ def sampled_mesh(work, name, res):
     return prefix, gt, sharp_edge_points(*read_ply(gt), step=h / 4), h
 
 
+def add_case_arguments(ap, tol, meshes):
+    """The grids (--res), tolerances (--tol), meshes, work folder and markdown file."""
+    ap.add_argument("--res", default="128")
+    ap.add_argument("--tol", default=tol)
+    ap.add_argument("--meshes", default=meshes)
+    ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "sdfcontour-local"))
+    ap.add_argument("--markdown", default="")
+
+
+def cases(a):
+    """(res, mesh name, TOL, file prefix, ground truth, sharp-edge points, spacing) for every
+    grid, mesh and TOL the arguments name, each grid sampled once."""
+    os.makedirs(a.work, exist_ok=True)
+    for res in map(int, a.res.split(",")):
+        for name in a.meshes.split(","):
+            prefix, gt, edges, h = sampled_mesh(a.work, name, res)
+            for tol in map(float, a.tol.split(",")):
+                yield res, name, tol, prefix, gt, edges, h
+
+
+def keep(rows, row):
+    """Adds a result row and prints it as a JSON line."""
+    rows.append(row)
+    print(json.dumps(row), flush=True)
+
+
 def evaluate(out, gt, edge_points, h):
     e = json.loads(subprocess.run([CLI, "eval", out, gt], capture_output=True, text=True).stdout)
     topo = e["recon_mesh"]
@@ -69,48 +95,37 @@ def evaluate(out, gt, edge_points, h):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--res", default="128")
-    ap.add_argument("--tol", default="0,0.05,0.1,0.25,0.5")
-    ap.add_argument("--meshes", default="bunny,spot,wingnut,hammer,cube,armadillo")
-    ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "sdfcontour-local"))
-    ap.add_argument("--markdown", default="")
+    add_case_arguments(ap, "0,0.05,0.1,0.25,0.5", "bunny,spot,wingnut,hammer,cube,armadillo")
     ap.add_argument("--no-openvdb", action="store_true")
     a = ap.parse_args()
-    os.makedirs(a.work, exist_ok=True)
     rows = []
-    for res in map(int, a.res.split(",")):
-        for name in a.meshes.split(","):
-            prefix, gt, edges, h = sampled_mesh(a.work, name, res)
-            for tol in map(float, a.tol.split(",")):
-                out = f"{prefix}_adapt{tol:g}.ply"
-                seconds, peak, _, err = timed([CLI, "contour", prefix + ".npy", "-o", out,
-                                               "--quiet", "--reconstruction", "local",
-                                               "--adaptivity", str(tol)])
-                if err:
-                    raise SystemExit(" ".join(err))
-                row = dict(mesh=name, res=res, tol=tol, method="adaptivity", seconds=seconds,
-                           **evaluate(out, gt, edges, h))
-                rows.append(row)
-                print(json.dumps(row), flush=True)
-                if tol == 0:
-                    full = out
-                    continue
-                peer = f"{prefix}_decimated{tol:g}.ply"
-                seconds, _, _, err = timed([DECIMATE, full, peer, str(row["triangles"])])
-                if err:
-                    raise SystemExit(" ".join(err))
-                row = dict(mesh=name, res=res, tol=tol, method="cgal-gh", seconds=seconds,
-                           **evaluate(peer, gt, edges, h))
-                rows.append(row)
-                print(json.dumps(row), flush=True)
-                if a.no_openvdb:
-                    continue
-                vdb = f"{prefix}_vdb{tol:g}.ply"
-                adaptivity, seconds = vdb_at_count(prefix + ".npy", vdb, row["triangles"])
-                row = dict(mesh=name, res=res, tol=tol, method="openvdb", seconds=seconds,
-                           vdb_adaptivity=adaptivity, **evaluate(vdb, gt, edges, h))
-                rows.append(row)
-                print(json.dumps(row), flush=True)
+    for res, name, tol, prefix, gt, edges, h in cases(a):
+        out = f"{prefix}_adapt{tol:g}.ply"
+        seconds, peak, _, err = timed([CLI, "contour", prefix + ".npy", "-o", out,
+                                       "--quiet", "--reconstruction", "local",
+                                       "--adaptivity", str(tol)])
+        if err:
+            raise SystemExit(" ".join(err))
+        row = dict(mesh=name, res=res, tol=tol, method="adaptivity", seconds=seconds,
+                   **evaluate(out, gt, edges, h))
+        keep(rows, row)
+        if tol == 0:
+            full = out
+            continue
+        peer = f"{prefix}_decimated{tol:g}.ply"
+        seconds, _, _, err = timed([DECIMATE, full, peer, str(row["triangles"])])
+        if err:
+            raise SystemExit(" ".join(err))
+        row = dict(mesh=name, res=res, tol=tol, method="cgal-gh", seconds=seconds,
+                   **evaluate(peer, gt, edges, h))
+        keep(rows, row)
+        if a.no_openvdb:
+            continue
+        vdb = f"{prefix}_vdb{tol:g}.ply"
+        adaptivity, seconds = vdb_at_count(prefix + ".npy", vdb, row["triangles"])
+        row = dict(mesh=name, res=res, tol=tol, method="openvdb", seconds=seconds,
+                   vdb_adaptivity=adaptivity, **evaluate(vdb, gt, edges, h))
+        keep(rows, row)
     if a.markdown:
         write_markdown(rows, a.markdown)
 

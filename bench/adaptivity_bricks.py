@@ -12,47 +12,36 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from adaptivity import evaluate, sampled_mesh  # noqa: E402
+from adaptivity import add_case_arguments, cases, evaluate, keep  # noqa: E402
 from common import CLI, geomean, timed  # noqa: E402
 
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--res", default="128")
-    ap.add_argument("--tol", default="0.02,0.05")
+    add_case_arguments(ap, "0.02,0.05", "bunny,wingnut,spot")
     ap.add_argument("--bricks", default="0,32,64")
-    ap.add_argument("--meshes", default="bunny,wingnut,spot")
-    ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "sdfcontour-local"))
-    ap.add_argument("--markdown", default="")
     a = ap.parse_args()
-    os.makedirs(a.work, exist_ok=True)
     rows = []
-    for res in map(int, a.res.split(",")):
-        for name in a.meshes.split(","):
-            prefix, gt, edges, h = sampled_mesh(a.work, name, res)
-            for tol in map(float, a.tol.split(",")):
-                for bricks in map(int, a.bricks.split(",")):
-                    out = f"{prefix}_adapt{tol:g}_b{bricks}.ply"
-                    stats = out + ".json"
-                    seconds, peak, _, err = timed(
-                        [CLI, "contour", prefix + ".npy", "-o", out, "--quiet", "--reconstruction",
-                         "local", "--adaptivity", str(tol), "--adaptivity-bricks", str(bricks),
-                         "--stats", stats])
-                    if err:
-                        raise SystemExit(" ".join(err))
-                    with open(stats) as f:
-                        s = json.load(f)
-                    row = dict(mesh=name, res=res, tol=tol, bricks=bricks, seconds=seconds,
-                               peak_mb=peak, adaptivity_seconds=s["seconds"]["adaptivity"],
-                               freeze_rounds=s["adaptivity"]["freeze_rounds"],
-                               **evaluate(out, gt, edges, h))
-                    rows.append(row)
-                    print(json.dumps(row), flush=True)
-    if a.markdown:
-        write_markdown(rows, a.markdown)
+    for res, name, tol, prefix, gt, edges, h in cases(a):
+        for bricks in map(int, a.bricks.split(",")):
+            out = f"{prefix}_adapt{tol:g}_b{bricks}.ply"
+            stats = out + ".json"
+            seconds, peak, _, err = timed(
+                [CLI, "contour", prefix + ".npy", "-o", out, "--quiet", "--reconstruction",
+                 "local", "--adaptivity", str(tol), "--adaptivity-bricks", str(bricks),
+                 "--stats", stats])
+            if err:
+                raise SystemExit(" ".join(err))
+            with open(stats) as f:
+                s = json.load(f)
+            row = dict(mesh=name, res=res, tol=tol, bricks=bricks, seconds=seconds,
+                       peak_mb=peak, adaptivity_seconds=s["seconds"]["adaptivity"],
+                       freeze_rounds=s["adaptivity"]["freeze_rounds"],
+                       **evaluate(out, gt, edges, h))
+            keep(rows, row)
+    return rows, a.markdown
 
 
 def write_markdown(rows, path):
@@ -87,4 +76,6 @@ def write_markdown(rows, path):
 
 
 if __name__ == "__main__":
-    main()
+    measured, markdown = main()
+    if markdown:
+        write_markdown(measured, markdown)
