@@ -126,22 +126,19 @@ BrickChanges merge_brick(const MergeState& state, const std::vector<BrickKey>& o
   BrickChanges changes;
   std::vector<int> source;
   const Mesh merged = collapse_edges(piece, quadrics, frozen, limits, source, changes.merges);
-  std::vector<char> kept(global.size(), 0);
-  for (int l : source) kept[std::size_t(l)] = 1;
+  std::vector<int> row_of(global.size(), -1);  // local vertex -> its row in `merged`
+  for (std::size_t r = 0; r < source.size(); ++r) row_of[std::size_t(source[r])] = int(r);
   for (int l = 0; l < inner_count; ++l) {
     const int g = global[std::size_t(l)];
     if (!movable[std::size_t(g)]) continue;
-    if (!kept[std::size_t(l)]) {
+    if (row_of[std::size_t(l)] < 0) {
       changes.removed.push_back(g);
     } else {
       changes.moved.push_back(g);
+      changes.places.push_back(merged.vertices.row(row_of[std::size_t(l)]).transpose());
       changes.quadrics.push_back(quadrics[std::size_t(l)]);
     }
   }
-  std::vector<Eigen::Vector3d> place(global.size());
-  for (std::size_t r = 0; r < source.size(); ++r)
-    place[std::size_t(source[r])] = merged.vertices.row(Eigen::Index(r)).transpose();
-  for (int g : changes.moved) changes.places.push_back(place[std::size_t(inner_local(g))]);
   for (Eigen::Index t = 0; t < merged.triangles.rows(); ++t) {
     std::array<int, 3> tri;
     bool changed = false;
