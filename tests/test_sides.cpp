@@ -119,8 +119,9 @@ TEST(Sides, NoSampleOnTheWrongSideOfTheLocalMesh) {
 }
 
 // Where a gap or crease is narrower than a spacing, carving's one-feature moves are spikes that the
-// untangling undoes, and an outside sample stays inside the mesh: four on the plane's tail at 32^3,
-// one on its wing at 64^3. The side repair dents the sheet over them (side_repair.h) without a
+// untangling undoes, and an outside sample stays inside the mesh: one on the plane's tail at 32^3
+// (four, and one on its wing at 64^3, until the band's margin stopped hiding band samples,
+// capped_weight_values). The side repair dents the sheet over them (side_repair.h) without a
 // crossing, and none is left.
 TEST(Sides, RepairDentsTheMeshOffSamplesInThinGaps) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
@@ -137,7 +138,9 @@ TEST(Sides, RepairDentsTheMeshOffSamplesInThinGaps) {
     const Sides repaired = wrong_sides(grid, *a.mesh), left = wrong_sides(grid, *b.mesh);
     std::cout << "plane " << n << "^3: wrong side " << left.wrong << " -> " << repaired.wrong
               << " (" << a.side_repair->vertices_moved << " vertices dented)\n";
-    EXPECT_GE(left.wrong, 1);
+    if (n == 32) {
+      EXPECT_GE(left.wrong, 1);
+    }
     EXPECT_EQ(repaired.wrong, 0);
     EXPECT_EQ(a.side_repair->left, 0);
     EXPECT_TRUE(self_intersecting_triangles(*a.mesh).empty());

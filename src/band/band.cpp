@@ -33,10 +33,12 @@ struct BandTest {
   double margin;      // margin * h
   Truncation truncation;
   bool operator()(double v) const { return std::abs(v) <= keep_limit && !truncation.truncated(v); }
-  bool core(double v) const {
-    const double t = v < 0 ? truncation.inside : truncation.outside;
-    return std::abs(v) <= core_limit && std::abs(v) <= t * (1 - kTruncationTolerance) - margin;
+  // The largest |value| of a core sample on one side.
+  double core_bound(bool inside) const {
+    const double t = inside ? truncation.inside : truncation.outside;
+    return std::min(core_limit, t * (1 - kTruncationTolerance) - margin);
   }
+  bool core(double v) const { return std::abs(v) <= core_bound(v < 0); }
 };
 
 BandTest make_test(const BandOptions& options, double h, const Truncation& truncation) {
@@ -158,7 +160,10 @@ BandTest begin_band(BandSamples& out, const Values& values, const BandOptions& o
   out.spacing = h;
   out.band = options.band;
   out.truncation = resolve(values, options);
-  return make_test(options, h / options.value_scale, out.truncation);
+  const BandTest test = make_test(options, h / options.value_scale, out.truncation);
+  out.core_inside = test.core_bound(true) * options.value_scale;
+  out.core_outside = test.core_bound(false) * options.value_scale;
+  return test;
 }
 
 // The selected values and the truncation in distance units.

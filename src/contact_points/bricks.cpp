@@ -141,6 +141,10 @@ class BrickRunner {
         options_(o),
         only_(only),
         grid_(bucket(s.points, o.size * h)) {
+    if (std::isfinite(o.weight_cap_inside) || std::isfinite(o.weight_cap_outside)) {
+      capped_ = capped_weight_values(s.values, o.weight_cap_inside, o.weight_cap_outside);
+      weight_values_ = &capped_;
+    }
     max_weight_ =
         o.within ? o.largest_value * o.largest_value : s.values.array().square().maxCoeff();
     whole_block_ = o.within && (o.within->min.array() == -INFINITY).all() &&
@@ -200,14 +204,15 @@ class BrickRunner {
     std::vector<int> local, outside;
     for (int s : gather(grid_, s_.points, {box.min - shell_width, box.max + shell_width}))
       (box.contains(point(s)) ? local : outside).push_back(s);
-    const BrickShell shell(s_.points, s_.values, outside,
+    const BrickShell shell(s_.points, *weight_values_, outside,
                            {box.min - shell_width, box.max + shell_width}, 2 * h_);
-    Samples ls;
+    Samples ls;  // values: the weights' (capped_weight_values)
+    Eigen::VectorXd values;
     Triangulation tri;
     std::vector<int> failed;
     std::vector<Box> needs;  // per failed target: the failing spheres (and the target)
     std::vector<char> keep(local.size(), 0);
-    if (triangulate_local(local, everything, ls, tri)) {
+    if (triangulate_local(local, everything, ls, values, tri)) {
       check_cancel(options_.cancel);
       out.triangulated += long(local.size());
       out.largest = std::max(out.largest, long(local.size()));
@@ -223,8 +228,8 @@ class BrickRunner {
           needs.push_back(need);
         }
       }
-      const PointMatrix g = vertex_gradients(ls.points, ls.values, tri, gradient_, &keep);
-      collect(gradient_contact_points(ls.points, ls.values, g, tri, contact_, &keep), local, out);
+      const PointMatrix g = vertex_gradients(ls.points, values, tri, gradient_, &keep);
+      collect(gradient_contact_points(ls.points, values, g, tri, contact_, &keep), local, out);
     } else {
       failed = targets;
       for (int s : targets) needs.push_back({point(s), point(s)});
@@ -288,10 +293,14 @@ class BrickRunner {
   Vector3d point(int s) const { return s_.points.row(s).transpose(); }
 
   // The local samples' triangulation; false if there is none yet (too few or flat samples).
+  // `ls` gets their weights' values, `values` their own.
   bool triangulate_local(const std::vector<int>& local, bool everything, Samples& ls,
-                         Triangulation& tri) const {
+                         Eigen::VectorXd& values, Triangulation& tri) const {
     if (local.size() < 4 && !everything) return false;
     ls = samples_at(s_, local);
+    values = ls.values;
+    for (std::size_t r = 0; r < local.size(); ++r)
+      ls.values[Eigen::Index(r)] = (*weight_values_)[local[r]];
     TriangulationOptions topt;
     topt.parallel = false;  // bricks are the parallel unit
     try {
@@ -342,6 +351,8 @@ class BrickRunner {
   const ContactPointOptions& contact_;
   const BrickOptions& options_;
   const std::vector<char>* only_;
+  Eigen::VectorXd capped_;
+  const Eigen::VectorXd* weight_values_ = &s_.values;
   BrickGrid grid_;
   double max_weight_ = 0, margin_ = 0, shell_width_ = 0;
   bool whole_block_ = false;  // `within` is unbounded: the samples are the whole set
@@ -350,6 +361,14 @@ class BrickRunner {
 };
 
 }  // namespace
+
+Eigen::VectorXd capped_weight_values(const Eigen::VectorXd& values, double inside, double outside) {
+  if (!(inside > 0) || !(outside > 0)) throw Error("the weight caps must be positive");
+  Eigen::VectorXd out(values.size());
+  for (Eigen::Index i = 0; i < values.size(); ++i)
+    out[i] = std::min(std::abs(values[i]), values[i] < 0 ? inside : outside);
+  return out;
+}
 
 double auto_brick_halo(double largest, double spacing) {
   if (!(spacing > 0) || !std::isfinite(spacing)) throw Error("the spacing must be positive");

@@ -59,13 +59,21 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
       (need_gcp && !gcp_in_bricks) || (method == Method::MtRt && options.want_mesh);
   const bool need_delaunay = (method == Method::MtDt && options.want_mesh) ||
                              (need_gcp && options.gradient_source == GradientSource::Delaunay);
+  // GCP's triangulation: the margin closes the band's stars without hiding its samples
+  // (capped_weight_values); MT-RT's is the paper's.
+  const bool capped = method != Method::MtRt &&
+                      (std::isfinite(band.core_inside) || std::isfinite(band.core_outside));
   TriangulationOptions topt;
   topt.parallel = options.parallel;
   SampleTriangulations t;
   if (need_regular) {
     topt.kind = TriangulationKind::Regular;
-    t.regular = stages.run("triangulation", "regular triangulation of " + n + " samples",
-                           [&] { return triangulate(s.points, s.values, topt); });
+    t.regular = stages.run("triangulation", "regular triangulation of " + n + " samples", [&] {
+      return triangulate(
+          s.points,
+          capped ? capped_weight_values(s.values, band.core_inside, band.core_outside) : s.values,
+          topt);
+    });
     result.hidden = t.regular->hidden_count;
   }
   if (need_delaunay) {
@@ -76,6 +84,10 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
   if (gcp_in_bricks) {
     BrickOptions bricks = options.bricks;
     if (bricks.halo == 0) bricks.halo = auto_brick_halo(largest, band.spacing);
+    if (capped) {
+      bricks.weight_cap_inside = band.core_inside;
+      bricks.weight_cap_outside = band.core_outside;
+    }
     bricks.cancel = options.cancel;
     result.contact_points =
         stages.run("contact_points", "triangulation, gradients and contact points in bricks", [&] {

@@ -78,6 +78,9 @@ struct BandSamples {
   /// choices (auto_band, auto_sign_constraints) go by.
   double samples_per_axis = 0;
   Truncation truncation;
+  /// The largest |value| a core sample may have inside and outside, in distance units (the band,
+  /// or a margin within the truncation distance; infinite for every sample).
+  double core_inside = INFINITY, core_outside = INFINITY;
   /// Scattered samples dropped as isolated (fewer than 3 others within kIsolationReach spacings).
   long isolated = 0;
 };

@@ -282,6 +282,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   bricks.halo = auto_brick_halo(largest, h);
   bricks.within = &within;
   bricks.largest_value = largest;
+  bricks.weight_cap_inside = band.core_inside;
+  bricks.weight_cap_outside = band.core_outside;
   bricks.cancel = options.cancel;
   clock.next(0);
   ContactPoints cp;
