@@ -2,6 +2,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "sdfcontour/contact_points/gradients.h"
@@ -74,6 +77,56 @@ Eigen::Vector3d slide_out_of_spheres(const PointMatrix& points, const Eigen::Vec
   return c;
 }
 
+// The orthocentre of tetrahedron t (the point of equal power to its four weighted samples) and
+// that power. Vertices in position order, so that a tet gives the same bits in any brick.
+std::pair<Eigen::Vector3d, double> orthocentre(const PointMatrix& points,
+                                               const Eigen::VectorXd& values, const TetMatrix& tets,
+                                               int t) {
+  std::array<int, 4> v{tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
+  std::sort(v.begin(), v.end(), [&](int a, int b) {
+    const auto pa = points.row(a), pb = points.row(b);
+    return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
+  });
+  const Eigen::Vector3d p0 = row(points, v[0]);
+  const double w0 = values[v[0]] * values[v[0]];
+  Eigen::Matrix3d a;
+  Eigen::Vector3d b;
+  for (int j = 0; j < 3; ++j) {
+    const Eigen::Vector3d d = row(points, v[std::size_t(j) + 1]) - p0;
+    const double wj = values[v[std::size_t(j) + 1]] * values[v[std::size_t(j) + 1]];
+    a.row(j) = 2 * d.transpose();
+    b[j] = d.squaredNorm() - (wj - w0);
+  }
+  const Eigen::Vector3d y = a.fullPivLu().solve(b);
+  return {p0 + y, y.squaredNorm() - w0};
+}
+
+// The vertex of sample i's power cell on its sphere: the orthocentre of an incident tet of
+// samples on its side with power within tolerance * value_i^2 of zero (the nearest to zero; ties
+// by position), where four spheres meet.
+bool power_vertex_point(const PointMatrix& points, const Eigen::VectorXd& values,
+                        const Triangulation& tri, int i, double tolerance, Eigen::Vector3d& out) {
+  const double limit = tolerance * values[i] * values[i];
+  double best = INFINITY;
+  for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
+       ++o) {
+    const int t = tri.incident_tets[std::size_t(o)];
+    bool same_side = true;
+    for (int k = 0; k < 4; ++k) same_side &= values[tri.tets(t, k)] * values[i] > 0;
+    if (!same_side) continue;
+    const auto [centre, power] = orthocentre(points, values, tri.tets, t);
+    const double miss = std::abs(power);
+    if (!(miss <= limit) || !centre.allFinite()) continue;
+    if (miss < best ||
+        (miss == best && std::lexicographical_compare(centre.data(), centre.data() + 3, out.data(),
+                                                      out.data() + 3))) {
+      best = miss;
+      out = centre;
+    }
+  }
+  return best < INFINITY;
+}
+
 }  // namespace
 
 ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::VectorXd& values,
@@ -106,10 +159,23 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
       normal.row(i) = unit.transpose();
       return true;
     };
+    // What is left of a (nearly) covered sphere: a power vertex on it, such as a convex corner.
+    auto power_vertex = [&] {
+      Eigen::Vector3d at;
+      if (!(options.power_vertex_tolerance > 0) || values[i] == 0 ||
+          !power_vertex_point(points, values, tri, int(i), options.power_vertex_tolerance, at) ||
+          inside_neighbour_sphere(points, values, tri, int(i), at, options.tie_tolerance))
+        return false;
+      c.row(i) = at.transpose();
+      normal.row(i) = ((p - at).normalized() * (values[i] > 0 ? 1 : -1)).transpose();
+      out = Outcome::Rescued;
+      return true;
+    };
     const Eigen::Vector3d g = row(gradients, i);
     if (options.max_slope_miss > 0 &&
         misses_linear_prediction(points, values, tri, int(i), g, options.max_slope_miss)) {
       out = Outcome::Discarded;
+      power_vertex();
       return;
     }
     if (!(g.norm() > kTinyGradient)) {
@@ -117,6 +183,7 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
     } else {
       out = candidate(g) ? Outcome::Kept : Outcome::Discarded;
     }
+    if (out != Outcome::Kept && power_vertex()) return;
     if (out == Outcome::Discarded && options.sphere_slide_rounds > 0 && values[i] != 0) {
       const Eigen::Vector3d start = p - values[i] * g.normalized();
       const Eigen::Vector3d slid =

@@ -30,6 +30,13 @@ struct ContactPointOptions {
   /// convex edge or corner the only point of the sphere that no neighbour's sphere holds is the
   /// feature, which an averaged gradient misses. 0: discarded (the paper).
   int sphere_slide_rounds = 0;
+  /// A sample without a point takes the vertex of its power cell that lies on its sphere: the
+  /// orthocentre of an incident tetrahedron of samples on its side whose power is within this
+  /// fraction of value_i^2 of zero. That vertex is on all four spheres (to the tolerance) and,
+  /// the orthosphere being empty, in no other sample's sphere: where a sphere is (nearly) covered
+  /// by its neighbours', what is left of it is there. At a convex corner every outside sample's
+  /// sphere passes through the corner, which no averaged gradient finds. 0: none (the paper).
+  double power_vertex_tolerance = 0;
 };
 
 /// Oriented contact points and where they came from.

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -134,15 +135,49 @@ double trilinear_miss(const SurfaceCells& cells, const std::array<int, 3>& at,
 // (0.379x and 0.365x MC's).
 constexpr double kCellMargin = 1e-3;
 
+// Where three or more of the planes' points coincide (to 1e-9 h) with normals that span every
+// direction, samples on different sides of a corner touch the surface at that one point (a
+// smooth surface is touched at one point only along one normal): the corner itself. The largest
+// such cluster (ties by position), or nothing.
+bool shared_corner(const std::vector<TangentPlane>& planes, double feature_ratio, double h,
+                   Eigen::Vector3d& corner) {
+  int best = 0;
+  for (std::size_t a = 0; a < planes.size(); ++a) {
+    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+    int count = 0;
+    for (const TangentPlane& t : planes)
+      if ((t.point - planes[a].point).norm() <= 1e-9 * h) {
+        spread += t.normal * t.normal.transpose();
+        ++count;
+      }
+    if (count < 3 || count < best) continue;
+    const Eigen::Vector3d lambda =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues();
+    if (!(lambda[0] > feature_ratio * lambda[2])) continue;
+    if (count == best &&
+        !std::lexicographical_compare(planes[a].point.data(), planes[a].point.data() + 3,
+                                      corner.data(), corner.data() + 3))
+      continue;
+    best = count;
+    corner = planes[a].point;
+  }
+  return best > 0;
+}
+
 VertexResult place_vertex(const std::vector<TangentPlane>& planes,
                           const std::vector<TangentPlane>& crossings, const Eigen::Vector3d& lo,
                           const Eigen::Vector3d& hi, double h,
                           const LocalReconstructionOptions& options) {
   VertexResult out;
   out.from_crossings = int(planes.size()) < options.min_points;
-  const detail::QuadricSolution s =
-      detail::minimise_quadric(out.from_crossings ? crossings : planes, options.feature_ratio,
-                               options.robust_rounds, options.robust_scale * h);
+  detail::QuadricSolution s;
+  if (!out.from_crossings && shared_corner(planes, options.feature_ratio, h, s.position)) {
+    s.rank = 3;
+    s.free.setZero();
+  } else {
+    s = detail::minimise_quadric(out.from_crossings ? crossings : planes, options.feature_ratio,
+                                 options.robust_rounds, options.robust_scale * h);
+  }
   out.feature = s.rank >= 2;
   const Eigen::Vector3d margin = kCellMargin * (hi - lo);
   const Eigen::Vector3d inner_lo = lo + margin, inner_hi = hi - margin;
