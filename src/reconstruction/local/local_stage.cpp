@@ -84,6 +84,13 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   result.mesh = stages.run("local", "local reconstruction in bricks", [&] {
     return local_mesh_in_bricks(grid, lb, size, &stats, lb.keep_contact_points ? &kept : nullptr);
   });
+  // Rescaled values that hide nearly every contact point were not distances before either: a
+  // thin shape's central differences read a sheet's two sides (hammer 32^3: norm 0.90, no point
+  // left rescaled; 0.62x MC's L1 from the edge crossings, 0.20x from the values as given).
+  // contour() then runs on the values as given; those keep their cells' fallbacks.
+  if (band.value_scale != 1 && 10 * stats.contact_points < stats.local.cells)
+    throw NotDistances("only " + std::to_string(stats.contact_points) + " contact points for " +
+                       std::to_string(stats.local.cells) + " cells crossing the surface");
   if (lb.keep_contact_points) {
     ContactPoints cp;
     cp.points = std::move(kept.points);
