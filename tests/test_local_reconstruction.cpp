@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -256,4 +257,23 @@ TEST(LocalReconstruction, RejectsMismatchedInput) {
   PointMatrix bad = PointMatrix::Zero(1, 3);
   bad(0, 0) = std::nan("");
   EXPECT_THROW(local_reconstruction(view_of(g), bad, PointMatrix::Zero(1, 3)), Error);
+}
+
+TEST(LocalReconstruction, EverySampleTakesTheWholeBandPath) {
+  // With every sample (--band all) no brick halo is local (one sphere can reach across the
+  // grid): the local reconstruction runs on one triangulation of the whole band instead of
+  // refusing the band (it threw "the brick halo must be a positive number of spacings").
+  const auto sphere = make_builtin_shape("sphere");
+  const Grid g = grid_of(*sphere, 24);
+  ContourOptions options;
+  options.reconstruction = Reconstruction::Local;
+  options.band.band = std::numeric_limits<double>::infinity();
+  const ContourResult r = contour(grid_input(g), nullptr, options);
+  ASSERT_TRUE(r.mesh);
+  EXPECT_EQ(r.reconstruction, Reconstruction::Local);
+  EXPECT_FALSE(r.local_bricks.has_value());
+  expect_closed_manifold(*r.mesh);
+  for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v)
+    EXPECT_LT(std::abs(sphere->distance(r.mesh->vertices.row(v).transpose())),
+              0.05 * g.spacing().maxCoeff());
 }

@@ -163,16 +163,20 @@ def test_float32_and_float64_agree():
     np.testing.assert_array_equal(F32, F64)
 
 
-def test_a_grid_that_cuts_the_surface_gives_gcp_cut_at_its_side():
+@pytest.mark.parametrize("reconstruction", ["poisson", "local"])
+def test_a_grid_that_cuts_the_surface_gives_gcp_cut_at_its_side(reconstruction):
     # A cropped volume (the sphere runs out of the grid at x = 0.3): GCP's mesh ends at the
-    # grid's side like marching cubes' and stays closer to the sphere.
+    # grid's side like marching cubes' and stays closer to the sphere. (Poisson's surface closes
+    # outside the grid and is cut there; the local mesh ends at the grid's last cells.)
     x = np.linspace(-1.0, 0.3, 40)
     yz = np.linspace(-1.0, 1.0, 61)
     p = np.stack(np.meshgrid(x, yz, yz, indexing="ij"), -1).reshape(-1, 3)
     grid = sphere(p).reshape(40, 61, 61)
     bounds = ((-1.0, -1.0, -1.0), (0.3, 1.0, 1.0))
-    V, F, stats = sdfcontour.contour(grid, bounds=bounds, return_stats=True)
-    assert "fallback" not in stats and stats["clipped_to_grid"]
+    V, F, stats = sdfcontour.contour(grid, bounds=bounds, reconstruction=reconstruction,
+                                     return_stats=True)
+    assert "fallback" not in stats
+    assert stats["clipped_to_grid"] == (reconstruction == "poisson")
     assert V[:, 0].max() <= 0.3
     V_mc, _ = sdfcontour.contour(grid, bounds=bounds, method="mc")
     assert mean_abs(sphere, V) < 0.25 * mean_abs(sphere, V_mc)

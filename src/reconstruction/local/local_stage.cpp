@@ -2,6 +2,7 @@
 // or, for GTCP's exact contact points, a mesh on the grid's cells, subdivided and projected onto
 // the contact points where they fit a smooth surface, then carved.
 #include <algorithm>
+#include <cmath>
 
 #include "pipeline/pipeline_stages.h"
 #include "sdfcontour/reconstruction/local_brick.h"
@@ -54,8 +55,9 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
 namespace sdfcontour::detail {
 
 bool bricked_local(const GridView* grid, const ContourOptions& options) {
+  // Bricks need a band: with every sample (--band all), one sphere can reach across the grid.
   if (!grid || options.method != Method::Gcp || !options.want_mesh ||
-      options.gradient_source != GradientSource::Regular)
+      options.gradient_source != GradientSource::Regular || !std::isfinite(options.band.band))
     return false;
   return options.reconstruction == Reconstruction::Local ||
          (options.reconstruction == Reconstruction::Auto &&
