@@ -33,8 +33,9 @@ struct ContactPointOptions {
   /// A sample without a point takes the vertex of its power cell that lies on its sphere: the
   /// orthocentre of an incident tetrahedron of samples on its side whose power is within this
   /// fraction of value_i^2 of zero. That vertex is on all four spheres (to the tolerance) and,
-  /// the orthosphere being empty, in no other sample's sphere: where a sphere is (nearly) covered
-  /// by its neighbours', what is left of it is there. At a convex corner every outside sample's
+  /// the orthosphere being empty, in no other sample's sphere (tested against the neighbours'
+  /// spheres as any point is, since the triangulation may weigh a margin sample less than its
+  /// value): where a sphere is (nearly) covered by its neighbours', what is left of it is there. At a convex corner every outside sample's
   /// sphere passes through the corner, which no averaged gradient finds. 0: none (the paper).
   double power_vertex_tolerance = 0;
 };

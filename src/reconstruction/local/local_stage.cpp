@@ -88,7 +88,7 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   });
   // Rescaled values that hide nearly every contact point were not distances before either: a
   // thin shape's central differences read a sheet's two sides (hammer 32^3: norm 0.90, no point
-  // left rescaled; 0.62x MC's L1 from the edge crossings, 0.20x from the values as given).
+  // left rescaled; 0.62x MC's L1 from the edge crossings, 0.27x from the values as given).
   // contour() then runs on the values as given; those keep their cells' fallbacks.
   if (band.value_scale != 1 && 10 * stats.contact_points < stats.local.cells)
     throw NotDistances("only " + std::to_string(stats.contact_points) + " contact points for " +
