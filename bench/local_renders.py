@@ -3,7 +3,7 @@ grid, contoured by marching cubes, GCP with its Poisson reconstruction and GCP w
 reconstruction (brick by brick), side by side, each titled with its L1 to the ground truth
 (rendered with VTK, bench/vtk_render.py; runs itself under xvfb-run where there is no display).
 
-    /usr/bin/python3 bench/local_renders.py [--meshes cube,bunny] [--res 32]
+    /usr/bin/python3 bench/local_renders.py [--meshes cube,wingnut,bunny] [--res 32]
         [--out docs/img/local_renders.png]
 
 (with the sdfcontour package importable: installed, or on PYTHONPATH)
@@ -34,7 +34,7 @@ METHODS = [("MC", dict(method="mc")),
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--meshes", default="cube,bunny")
+    ap.add_argument("--meshes", default="cube,wingnut,bunny")
     ap.add_argument("--res", type=int, default=32)
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "img", "local_renders.png"))
     args = ap.parse_args()
