@@ -35,8 +35,9 @@ struct ContactPointOptions {
   /// fraction of value_i^2 of zero. That vertex is on all four spheres (to the tolerance) and,
   /// the orthosphere being empty, in no other sample's sphere (tested against the neighbours'
   /// spheres as any point is, since the triangulation may weigh a margin sample less than its
-  /// value): where a sphere is (nearly) covered by its neighbours', what is left of it is there. At a convex corner every outside sample's
-  /// sphere passes through the corner, which no averaged gradient finds. 0: none (the paper).
+  /// value): where a sphere is (nearly) covered by its neighbours', what is left of it is there. At
+  /// a convex corner every outside sample's sphere passes through the corner, which no averaged
+  /// gradient finds. 0: none (the paper).
   double power_vertex_tolerance = 0;
 };
 
