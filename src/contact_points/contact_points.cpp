@@ -28,9 +28,7 @@ bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& v
                              const Triangulation& tri, int i, const Eigen::Vector3d& c,
                              double tau) {
   const Eigen::Vector3d p = row(points, i);
-  for (int o = tri.neighbour_offsets[std::size_t(i)]; o < tri.neighbour_offsets[std::size_t(i) + 1];
-       ++o) {
-    const int j = tri.neighbour_indices[std::size_t(o)];
+  for (const int j : tri.neighbours(i)) {
     const Eigen::Vector3d q = row(points, j);
     const double radius = std::abs(values[j]) - (tau > 0 ? tau * (q - p).norm() : 0.0);
     if (radius > 0 && (c - q).squaredNorm() < radius * radius) return true;
@@ -46,9 +44,7 @@ bool misses_linear_prediction(const PointMatrix& points, const Eigen::VectorXd& 
                               const Triangulation& tri, int i, const Eigen::Vector3d& g,
                               double slope) {
   const Eigen::Vector3d p = row(points, i);
-  for (int o = tri.neighbour_offsets[std::size_t(i)]; o < tri.neighbour_offsets[std::size_t(i) + 1];
-       ++o) {
-    const int j = tri.neighbour_indices[std::size_t(o)];
+  for (const int j : tri.neighbours(i)) {
     const Eigen::Vector3d d = row(points, j) - p;
     if (std::abs(values[j] - values[i] - g.dot(d)) > slope * d.norm()) return true;
   }
@@ -64,9 +60,7 @@ Eigen::Vector3d slide_out_of_spheres(const PointMatrix& points, const Eigen::Vec
   const double radius = std::abs(values[i]);
   for (int round = 0; round < rounds; ++round) {
     Eigen::Vector3d push = Eigen::Vector3d::Zero();
-    for (int o = tri.neighbour_offsets[std::size_t(i)];
-         o < tri.neighbour_offsets[std::size_t(i) + 1]; ++o) {
-      const int j = tri.neighbour_indices[std::size_t(o)];
+    for (const int j : tri.neighbours(i)) {
       const Eigen::Vector3d away = c - row(points, j);
       const double depth = std::abs(values[j]) - away.norm();
       if (depth > 0 && away.norm() > 0) push += depth * away.normalized();
@@ -108,9 +102,7 @@ bool power_vertex_point(const PointMatrix& points, const Eigen::VectorXd& values
                         const Triangulation& tri, int i, double tolerance, Eigen::Vector3d& out) {
   const double limit = tolerance * values[i] * values[i];
   double best = INFINITY;
-  for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
-       ++o) {
-    const int t = tri.incident_tets[std::size_t(o)];
+  for (const int t : tri.incident(i)) {
     bool same_side = true;
     for (int k = 0; k < 4; ++k) same_side &= values[tri.tets(t, k)] * values[i] > 0;
     if (!same_side) continue;
@@ -198,9 +190,8 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
       }
     }
     if (out == Outcome::Kept || !options.try_tet_gradients) return;
-    for (int o = tri.incident_offsets[std::size_t(i)]; o < tri.incident_offsets[std::size_t(i) + 1];
-         ++o) {
-      const Eigen::Vector3d gt = row(tet_g, tri.incident_tets[std::size_t(o)]);
+    for (const int t : tri.incident(int(i))) {
+      const Eigen::Vector3d gt = row(tet_g, t);
       if (gt.norm() > kTinyGradient && candidate(gt)) {
         out = Outcome::Rescued;
         return;

@@ -18,6 +18,14 @@ struct TriangulationOptions {
   bool parallel = true;  ///< insert points with TBB (the result is the same either way)
 };
 
+/// A run of indices inside a compressed row (range-for over it).
+struct IndexRun {
+  const int* first;
+  const int* last;
+  const int* begin() const { return first; }
+  const int* end() const { return last; }
+};
+
 /// A triangulation of n samples. Compressed rows: the neighbours of sample i are
 /// neighbour_indices[neighbour_offsets[i] .. neighbour_offsets[i+1]), ascending.
 struct Triangulation {
@@ -32,6 +40,16 @@ struct Triangulation {
   std::vector<char> on_hull;  ///< n flags: 1 if sample i is a vertex of the convex hull
 
   int sample_count() const { return int(hidden.size()); }
+  /// The samples sharing an edge with sample i, ascending.
+  IndexRun neighbours(int i) const { return run(neighbour_offsets, neighbour_indices, i); }
+  /// The rows of `tets` that contain sample i, ascending.
+  IndexRun incident(int i) const { return run(incident_offsets, incident_tets, i); }
+
+ private:
+  static IndexRun run(const std::vector<int>& offsets, const std::vector<int>& items, int i) {
+    const int* data = items.data();
+    return {data + offsets[std::size_t(i)], data + offsets[std::size_t(i) + 1]};
+  }
 };
 
 /// Triangulates `points` (n x 3) weighted by `values` (n; squared as weights for Regular).
