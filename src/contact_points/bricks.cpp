@@ -299,8 +299,9 @@ class BrickRunner {
     if (local.size() < 4 && !everything) return false;
     ls = samples_at(s_, local);
     values = ls.values;
-    for (std::size_t r = 0; r < local.size(); ++r)
-      ls.values[Eigen::Index(r)] = (*weight_values_)[local[r]];
+    if (weight_values_ != &s_.values)
+      for (std::size_t r = 0; r < local.size(); ++r)
+        ls.values[Eigen::Index(r)] = (*weight_values_)[local[r]];
     TriangulationOptions topt;
     topt.parallel = false;  // bricks are the parallel unit
     try {

@@ -50,7 +50,8 @@ struct ContactPoints {
   int zero_gradient = 0;     ///< visible samples whose gradient vanished (no point)
   int discarded = 0;         ///< candidates inside a neighbour's sphere and not rescued, or
                              ///< missing the slope test (max_slope_miss)
-  int rescued = 0;  ///< points kept thanks to a tet gradient (+FN) or to sliding over the sphere
+  int rescued = 0;  ///< points kept thanks to a tet gradient (+FN), sliding over the sphere or
+                    ///< a power vertex
 
   int size() const { return int(samples.size()); }
 };
