@@ -31,14 +31,8 @@ double largest_distance(const AnalyticShape& shape, const Mesh& m) {
 double farthest_corner(const Mesh& m) {
   const Eigen::Vector3d half(0.6, 0.45, 0.35);  // the built-in box's half extents
   double worst = 0;
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner((c & 1 ? 1 : -1) * half[0], (c & 2 ? 1 : -1) * half[1],
-                                 (c & 4 ? 1 : -1) * half[2]);
-    double nearest = INFINITY;
-    for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
-      nearest = std::min(nearest, (m.vertices.row(v).transpose() - corner).norm());
-    worst = std::max(worst, nearest);
-  }
+  for (int c = 0; c < 8; ++c)
+    worst = std::max(worst, test::nearest_row_distance(m.vertices, test::box_corner(half, c)));
   return worst;
 }
 

@@ -229,17 +229,10 @@ TEST(ContactPoints, SpheresMeetingAtAPointGiveTheBoxCornersExactly) {
       gradient_contact_points(box.samples.points, box.samples.values, g, box.regular, paper);
   const ContactPoints b =
       gradient_contact_points(box.samples.points, box.samples.values, g, box.regular, corners);
-  auto nearest = [](const ContactPoints& cp, const Vector3d& c) {
-    double d = INFINITY;
-    for (Eigen::Index k = 0; k < cp.points.rows(); ++k)
-      d = std::min(d, (cp.points.row(k).transpose() - c).norm());
-    return d;
-  };
   for (int c = 0; c < 8; ++c) {
-    const Vector3d corner((c & 1 ? 1 : -1) * half[0], (c & 2 ? 1 : -1) * half[1],
-                          (c & 4 ? 1 : -1) * half[2]);
-    EXPECT_GT(nearest(a, corner), 0.1 * h) << "corner " << c;
-    EXPECT_LT(nearest(b, corner), 1e-9) << "corner " << c;
+    const Vector3d corner = test::box_corner(half, c);
+    EXPECT_GT(test::nearest_row_distance(a.points, corner), 0.1 * h) << "corner " << c;
+    EXPECT_LT(test::nearest_row_distance(b.points, corner), 1e-9) << "corner " << c;
   }
   // The new points (samples without one of their own) lie in no sphere, up to round-off.
   EXPECT_GT(b.size(), a.size());

@@ -110,14 +110,9 @@ TEST(LocalReconstruction, BoxEdgesAndCornersAreExact) {
   expect_closed_manifold(m);
   for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
     EXPECT_NEAR(box->distance(m.vertices.row(v).transpose()), 0, 1e-6) << "vertex " << v;
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner((c & 1 ? 1 : -1) * e[0], (c & 2 ? 1 : -1) * e[1],
-                                 (c & 4 ? 1 : -1) * e[2]);
-    double nearest = 1e9;
-    for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
-      nearest = std::min(nearest, (m.vertices.row(v).transpose() - corner).norm());
-    EXPECT_LT(nearest, 1e-6) << "corner " << c;
-  }
+  for (int c = 0; c < 8; ++c)
+    EXPECT_LT(test::nearest_row_distance(m.vertices, test::box_corner(e, c)), 1e-6)
+        << "corner " << c;
   EXPECT_GE(stats.feature_vertices, 8);
 }
 
@@ -144,14 +139,9 @@ TEST(LocalReconstruction, GcpBoxFacesAndCornersAreExact) {
   for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v)
     sum += std::abs(box->distance(r.mesh->vertices.row(v).transpose()));
   EXPECT_LT(sum / double(r.mesh->vertices.rows()), 0.02 * h);
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner((c & 1 ? 1 : -1) * e[0], (c & 2 ? 1 : -1) * e[1],
-                                 (c & 4 ? 1 : -1) * e[2]);
-    double nearest = 1e9;
-    for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v)
-      nearest = std::min(nearest, (r.mesh->vertices.row(v).transpose() - corner).norm());
-    EXPECT_LT(nearest, 1e-9 * h) << "corner " << c;
-  }
+  for (int c = 0; c < 8; ++c)
+    EXPECT_LT(test::nearest_row_distance(r.mesh->vertices, test::box_corner(e, c)), 1e-9 * h)
+        << "corner " << c;
 }
 
 TEST(LocalReconstruction, EveryCornerConfigurationIsClosedAndManifold) {

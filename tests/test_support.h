@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -129,6 +130,19 @@ inline void expect_closed_and_outward(const Mesh& m) {
                         << " non-manifold edges";
   EXPECT_TRUE(t.consistently_oriented);
   EXPECT_GT(signed_volume(m), 0) << "not outward oriented";
+}
+
+/// Corner c of the origin-centred box with half extents `half`: bit k of c set for +half[k].
+inline Eigen::Vector3d box_corner(const Eigen::Vector3d& half, int c) {
+  return {(c & 1 ? 1 : -1) * half[0], (c & 2 ? 1 : -1) * half[1], (c & 4 ? 1 : -1) * half[2]};
+}
+
+/// The distance from p to the nearest row of `rows` (n x 3; infinite for none).
+inline double nearest_row_distance(const PointMatrix& rows, const Eigen::Vector3d& p) {
+  double nearest = INFINITY;
+  for (Eigen::Index r = 0; r < rows.rows(); ++r)
+    nearest = std::min(nearest, (rows.row(r).transpose() - p).norm());
+  return nearest;
 }
 
 }  // namespace sdfcontour::test
