@@ -7,8 +7,19 @@ namespace sdfcontour::detail {
 
 namespace {
 
+// The robust rounds' scale shrinks by this factor a round down to robust_scale in the last (three
+// rounds: 9, 3, 1 times it), so that a first solve pulled by a few bent normals next to an edge
+// does not judge a whole face's planes to be outliers (the exact box's edge vertex from planes
+// gathered farther: 2.1 h off at once, 5e-4 h annealed).
+constexpr double kRobustAnnealing = 3;
+
+// A direction solved in the first solve stays solved through the reweighting while its eigenvalue
+// is above this fraction of the largest (a tenth of feature_ratio's 0.02); below, the rounds stop.
+constexpr double kKeptRankRatio = 2e-3;
+
 QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
-                               const std::vector<double>& weight, double feature_ratio) {
+                               const std::vector<double>& weight, double feature_ratio,
+                               int keep_rank = 0) {
   // Centred on the weighted centroid: the minimiser moves from it only along solved directions.
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   double total = 0;
@@ -29,7 +40,8 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
   QuadricSolution out;
   out.position = centroid;
   for (int j = 2; j >= 0; --j) {
-    if (!(lambda[j] > feature_ratio * lambda[2]) || !(lambda[j] > 0)) break;
+    const double floor = out.rank < keep_rank ? kKeptRankRatio : feature_ratio;
+    if (!(lambda[j] > floor * lambda[2]) || !(lambda[j] > 0)) break;
     const Eigen::Vector3d v = eigen.eigenvectors().col(j);
     out.position += v * (v.dot(atb) / lambda[j]);
     out.free -= v * v.transpose();
@@ -45,12 +57,20 @@ QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double
   std::vector<double> weight(planes.size());
   for (std::size_t i = 0; i < planes.size(); ++i) weight[i] = planes[i].weight;
   QuadricSolution solution = solve_weighted(planes, weight, feature_ratio);
+  const int rank = solution.rank;
   for (int round = 0; round < robust_rounds; ++round) {
+    const double anneal = std::pow(kRobustAnnealing, robust_rounds - 1 - round);
     for (std::size_t i = 0; i < planes.size(); ++i) {
-      const double miss = planes[i].normal.dot(solution.position - planes[i].point) / robust_scale;
+      const double miss =
+          planes[i].normal.dot(solution.position - planes[i].point) / (robust_scale * anneal);
       weight[i] = planes[i].weight / (1 + miss * miss);
     }
-    solution = solve_weighted(planes, weight, feature_ratio);
+    // The first solve's rank stays: a whole family of planes (one face of an edge) that a
+    // solve pulled by a few bent normals missed must not vanish as outliers, or the feature
+    // would become a flat patch at the other face's centroid.
+    QuadricSolution next = solve_weighted(planes, weight, feature_ratio, rank);
+    if (next.rank < rank) break;  // a curved patch's spread, not a feature's faces
+    solution = next;
   }
   return solution;
 }

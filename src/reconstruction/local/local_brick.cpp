@@ -58,7 +58,8 @@ int ring(const LocalBrickOptions& o) {
 // ring of cells around the owned edges' cells (2), of a vertex's gathering or projection, and
 // of a sample to its contact point (its |value|).
 int flag_reach(const LocalBrickOptions& o, double largest) {
-  const double gather = std::max(o.local.reach, o.project ? o.projection.radius : 0.0);
+  const double gather =
+      std::max({o.local.reach, o.local.empty_cell_reach, o.project ? o.projection.radius : 0.0});
   return int(std::ceil(gather + largest)) + 2 + ring(o);
 }
 
