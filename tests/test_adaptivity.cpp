@@ -102,18 +102,19 @@ TEST(Adaptivity, CurvedShapeStaysCloseAndTheSameForAnyThreadCount) {
 }
 
 TEST(Adaptivity, MergesThatCrossTheMeshAreMadeAgainWithTheirRegionFrozen) {
-  // Goathead at 64^3, TOL 0.25: the first merging makes thin parts cross (measured: it needs a
-  // second round; the armadillo did until the contact points at corners); the result is free of
-  // self-intersections, closed and manifold, and still merged (the frozen regions keep the
-  // input's triangles, the rest merges as before).
-  const Grid g = test::shared_mesh_grid("goathead", 64);
+  // The plane at 64^3, TOL 0.25: the first merging makes thin parts cross (measured: it needs a
+  // second round; the armadillo did until the contact points at corners, the goathead and the
+  // penguin until the quadric kept its rank); the result is free of self-intersections, closed and
+  // manifold, and still merged (the frozen regions keep the input's triangles, the rest merges as
+  // before).
+  const Grid g = test::shared_mesh_grid("plane", 64);
   const ContourResult fine = local_mesh(g, 0), coarse = local_mesh(g, 0.25);
   ASSERT_TRUE(coarse.adaptivity);
   EXPECT_GE(coarse.adaptivity->freeze_rounds, 1);
   EXPECT_TRUE(self_intersecting_triangles(*fine.mesh).empty());
   EXPECT_TRUE(self_intersecting_triangles(*coarse.mesh).empty());
   test::expect_closed_and_outward(*coarse.mesh);
-  EXPECT_LT(10 * coarse.mesh->triangles.rows(), fine.mesh->triangles.rows());
+  EXPECT_LT(5 * coarse.mesh->triangles.rows(), fine.mesh->triangles.rows());  // 7.6x
 }
 
 TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {

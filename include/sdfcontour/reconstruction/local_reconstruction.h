@@ -33,10 +33,11 @@ struct LocalReconstructionOptions {
   /// Cells with fewer contact points than this use their edge crossings instead (linear
   /// interpolation, with the grid's central-difference gradient as normal).
   int min_points = 1;
-  /// A polygon with fewer points within `reach` gathers them within this many spacings before
-  /// it falls back to its edge crossings: on exactly degenerate data (an exact box, grid-aligned)
-  /// the regular triangulation's tie-breaking can leave a whole edge's cells without a point
-  /// while both faces' points lie 1.5 spacings off. 0: no second gathering.
+  /// A polygon with fewer points within `reach` gathers them within this many spacings and takes
+  /// its vertex from them if their quadric is an edge or corner in the cell, else uses its edge
+  /// crossings: on exactly degenerate data (an exact box, grid-aligned) the regular
+  /// triangulation's tie-breaking can leave a whole edge's cells without a point while both
+  /// faces' points lie 1.5 spacings off. 0: no second gathering.
   double empty_cell_reach = 2.0;
   /// A contact point from a sample |value| away weighs 1 / (1 + (|value| / (depth_scale
   /// spacings))^2): a far sample's gradient error moves its point |value| times as far. 0: every

@@ -23,7 +23,7 @@ struct QuadricSolution {
 /// The point that minimises sum_i w_i (n_i . (x - p_i))^2 over `planes` (not empty), solving only
 /// for directions whose eigenvalue of sum w_i n_i n_i^T exceeds `feature_ratio` times the largest
 /// and keeping the planes' weighted centroid along the others. `robust_rounds` reweightings follow
-/// (w_i = weight_i / (1 + (r_i / s)^2) for the plane's miss r_i, s shrinking to robust_scale, a
+/// (w_i = weight_i / (1 + (r_i / robust_scale)^2) for the plane's miss r_i; robust_scale is a
 /// length), so that planes that disagree with the rest lose their pull. The reweighted solves
 /// keep the first solve's directions while their eigenvalues exceed a tenth of `feature_ratio`
 /// (a whole face of an edge is not judged an outlier); a round that would lose one is not taken.
