@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <random>
 #include <set>
 
@@ -64,6 +65,28 @@ void expect_dual_of_marching_cubes(const Grid& g) {
 
 Grid grid_of(const AnalyticShape& shape, int n) {
   return sample_grid(shape, n, Bounds{});
+}
+
+// The quadrics' vertices themselves: GCP's local reconstruction of `g` with `band` spacings (0:
+// auto), without subdivision, projection or carving.
+Mesh quadric_vertices_mesh(const Grid& g, double band = 0) {
+  ContourOptions options;
+  options.reconstruction = Reconstruction::Local;
+  if (band > 0) options.band.band = band;
+  options.subdivisions = 0;
+  options.project = Switch::Off;
+  options.carve = Switch::Off;
+  const ContourResult r = contour(grid_input(g), nullptr, options);
+  EXPECT_EQ(r.reconstruction, Reconstruction::Local);
+  return *r.mesh;
+}
+
+// |shape's distance| at each vertex of `m`.
+std::vector<double> vertex_distances(const Mesh& m, const AnalyticShape& shape) {
+  std::vector<double> d(std::size_t(m.vertices.rows()));
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    d[std::size_t(v)] = std::abs(shape.distance(m.vertices.row(v).transpose()));
+  return d;
 }
 
 ContactPoints exact_points(const Grid& g, const AnalyticShape& shape, double band) {
@@ -127,21 +150,12 @@ TEST(LocalReconstruction, GcpBoxFacesAndCornersAreExact) {
   const Eigen::Vector3d e(0.6, 0.45, 0.35);
   const Grid g = grid_of(*box, 24);
   const double h = g.spacing().maxCoeff();
-  ContourOptions options;
-  options.reconstruction = Reconstruction::Local;
-  options.subdivisions = 0;
-  options.project = Switch::Off;
-  options.carve = Switch::Off;  // the quadrics' vertices themselves
-  const ContourResult r = contour(grid_input(g), nullptr, options);
-  ASSERT_TRUE(r.mesh);
-  EXPECT_EQ(r.reconstruction, Reconstruction::Local);
-  expect_closed_manifold(*r.mesh);
-  double sum = 0;
-  for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v)
-    sum += std::abs(box->distance(r.mesh->vertices.row(v).transpose()));
-  EXPECT_LT(sum / double(r.mesh->vertices.rows()), 0.02 * h);
+  const Mesh m = quadric_vertices_mesh(g);
+  expect_closed_manifold(m);
+  const std::vector<double> d = vertex_distances(m, *box);
+  EXPECT_LT(std::accumulate(d.begin(), d.end(), 0.0) / double(d.size()), 0.02 * h);
   for (int c = 0; c < 8; ++c)
-    EXPECT_LT(test::nearest_row_distance(r.mesh->vertices, test::box_corner(e, c)), 1e-9 * h)
+    EXPECT_LT(test::nearest_row_distance(m.vertices, test::box_corner(e, c)), 1e-9 * h)
         << "corner " << c;
 }
 
@@ -154,24 +168,12 @@ TEST(LocalReconstruction, GcpBoxEdgesSurviveTheTriangulationsTies) {
   const auto box = make_builtin_shape("box");
   const Grid g = grid_of(*box, 64);
   const double h = g.spacing().maxCoeff();
-  ContourOptions options;
-  options.reconstruction = Reconstruction::Local;
-  options.band.band = 4;
-  options.subdivisions = 0;
-  options.project = Switch::Off;
-  options.carve = Switch::Off;
-  const ContourResult r = contour(grid_input(g), nullptr, options);
-  ASSERT_TRUE(r.mesh);
-  expect_closed_manifold(*r.mesh);
-  int off = 0;
-  double sum = 0;
-  for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v) {
-    const double d = std::abs(box->distance(r.mesh->vertices.row(v).transpose()));
-    off += d > 0.01 * h;
-    sum += d;
-  }
-  EXPECT_LE(off, 8);  // next to the corners; a lost edge has 37 cells
-  EXPECT_LT(sum / double(r.mesh->vertices.rows()), 0.005 * h);
+  const Mesh m = quadric_vertices_mesh(g, 4);
+  expect_closed_manifold(m);
+  const std::vector<double> d = vertex_distances(m, *box);
+  // Next to the corners; a lost edge has 37 cells.
+  EXPECT_LE(std::count_if(d.begin(), d.end(), [&](double x) { return x > 0.01 * h; }), 8);
+  EXPECT_LT(std::accumulate(d.begin(), d.end(), 0.0) / double(d.size()), 0.005 * h);
 }
 
 TEST(CellQuadric, AFaceOfAnEdgeIsNotJudgedAnOutlier) {
@@ -284,10 +286,8 @@ TEST(LocalReconstruction, SmoothShapeIsCloseToTheSurface) {
   const Mesh local = *contour(grid_input(g), nullptr, options).mesh;
   const Mesh mc = marching_cubes(g);
   auto mean_error = [&](const Mesh& m) {
-    double sum = 0;
-    for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
-      sum += std::abs(torus->distance(m.vertices.row(v).transpose()));
-    return sum / double(m.vertices.rows()) / h;
+    const std::vector<double> d = vertex_distances(m, *torus);
+    return std::accumulate(d.begin(), d.end(), 0.0) / double(d.size()) / h;
   };
   expect_closed_manifold(local);
   EXPECT_LT(mean_error(local), 0.02);
