@@ -38,7 +38,7 @@ double farthest_corner(const Mesh& m) {
 
 TEST(Adaptivity, BoxFacesCollapseToFewTriangles) {
   // Planar faces: their contact points agree on one plane each, so the faces merge (measured:
-  // 218 triangles, over 100x fewer; what is left lies along the edges, whose GCP planes are not
+  // 206 triangles, over 100x fewer; what is left lies along the edges, whose GCP planes are not
   // quite the faces'); the corners, exact before, stay within 0.013 h of a vertex (measured);
   // the mesh stays closed, 2-manifold, free of self-intersections and on the box.
   const auto box = make_builtin_shape("box");
