@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <random>
 
 #include "sdfcontour/extraction/marching.h"
@@ -144,6 +145,30 @@ TEST(ContactProjection, DepthWeightsFavourNearSamples) {
   project_to_contact_points(weighted, P, N, depth, kSpacing, o);
   EXPECT_NEAR(plain.vertices.col(2).mean(), 0.05 * kSpacing, 0.01 * kSpacing);
   EXPECT_LT(weighted.vertices.col(2).cwiseAbs().maxCoeff(), 0.01 * kSpacing);
+}
+
+TEST(ContactProjection, RobustRoundsDiscountAFewPointsOffTheSurface) {
+  // Exact points on z = 0 and, as where mirror-symmetric spheres meet in a gap short of a saddle
+  // (the torus's inner equator at 64^3: eight coincident points 0.07 spacings off), eight
+  // coincident points 0.07 spacings above the middle: one fit lifts the middle vertices 0.023
+  // spacings toward them, two robust rounds at 0.03 spacings 0.007 (measured).
+  PointMatrix P, N;
+  add_plane_points(P, N, 300, 1.5 * kSpacing, 0.0, 1.0, 8);
+  const Eigen::Index first = P.rows();
+  P.conservativeResize(first + 8, 3);
+  N.conservativeResize(first + 8, 3);
+  for (int q = 0; q < 8; ++q) {
+    P.row(first + q) << 0, 0, 0.07 * kSpacing;
+    N.row(first + q) << 0, 0, 1;
+  }
+  ContactProjectionOptions o = local_projection_options();
+  o.robust_rounds = 0;
+  Mesh plain = flat_patch(5, kSpacing / 4, 0.01 * kSpacing), robust = plain;
+  project_to_contact_points(plain, P, N, {}, kSpacing, o);
+  project_to_contact_points(robust, P, N, {}, kSpacing, local_projection_options());
+  const double lifted = plain.vertices.col(2).cwiseAbs().maxCoeff();
+  EXPECT_GT(lifted, 0.015 * kSpacing);
+  EXPECT_LT(robust.vertices.col(2).cwiseAbs().maxCoeff(), std::min(0.4 * lifted, 0.01 * kSpacing));
 }
 
 TEST(ContactProjection, SameResultWhateverTheThreadCount) {

@@ -47,11 +47,14 @@ void validate(const Mesh& mesh, const PointMatrix& points, const PointMatrix& no
   if (!(o.radius > 0) || !std::isfinite(o.radius) || !(o.max_move >= 0) ||
       !std::isfinite(o.max_move) || !(o.normal_agreement >= -1 && o.normal_agreement <= 1) ||
       o.min_points < 6 || !(o.depth_scale >= 0) || !std::isfinite(o.depth_scale) ||
-      !(o.max_variance_factor >= 1) || !(o.max_residual >= 0) || !std::isfinite(o.max_residual))
+      !(o.max_variance_factor >= 1) || !(o.max_residual >= 0) || !std::isfinite(o.max_residual) ||
+      o.robust_rounds < 0 || o.robust_rounds > 10 || !(o.robust_scale > 0) ||
+      !std::isfinite(o.robust_scale))
     throw Error(
         "projection: radius must be positive, max_move non-negative, normal_agreement in [-1, 1], "
         "min_points at least 6 (a quadric has six coefficients), depth_scale non-negative, "
-        "max_variance_factor at least 1 and max_residual non-negative");
+        "max_variance_factor at least 1, max_residual non-negative, robust_rounds in [0, 10] and "
+        "robust_scale positive");
 }
 
 }  // namespace
@@ -89,10 +92,6 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
         n.cross(std::abs(n[0]) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY())
             .normalized();
     const Eigen::Vector3d b = n.cross(a);
-    Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
-    Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-    int count = 0;
-    double weight_sum = 0, weighted_z2 = 0;
     // Summed in row order: the same bits whatever the cubes (a brick's points start elsewhere).
     thread_local std::vector<int> near;
     near.clear();
@@ -100,33 +99,49 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
     });
     std::sort(near.begin(), near.end());
+    // The agreeing points: (1, x, y, x^2, xy, y^2) in spacings, height z in spacings, weight.
+    thread_local std::vector<std::pair<Eigen::Matrix<double, 6, 1>, std::array<double, 2>>> fit;
+    fit.clear();
     for (const int i : near) {
       const Eigen::Vector3d d = points.row(i).transpose() - p;
       if (normals.row(i).dot(n.transpose()) <= o.normal_agreement) continue;
       const double x = d.dot(a), y = d.dot(b), z = d.dot(n);
       double w = std::exp(-(x * x + y * y) * inv_two_sigma2);
       if (inv_depth_scale2 > 0) w /= 1 + depths[i] * depths[i] * inv_depth_scale2;
-      weight_sum += w;
       const double sx = x / spacing, sy = y / spacing;
       Eigen::Matrix<double, 6, 1> row;
       row << 1, sx, sy, sx * sx, sx * sy, sy * sy;
-      M.selfadjointView<Eigen::Lower>().rankUpdate(row, w);
-      rhs += w * (z / spacing) * row;
-      weighted_z2 += w * (z / spacing) * (z / spacing);
-      ++count;
+      fit.push_back({row, {z / spacing, w}});
     }
-    if (count < o.min_points) return;
-    M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
-    // A rank-deficient neighbourhood (the points on a line) gives no height: skip it.
-    const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(M);
-    if (!lu.isInvertible()) return;
-    const Eigen::Matrix<double, 6, 6> inverse = lu.inverse();
-    if (inverse(0, 0) * weight_sum > o.max_variance_factor) return;
-    const Eigen::Matrix<double, 6, 1> coefficients = inverse * rhs;
-    // Sum w (z - row.c)^2 = sum w z^2 - c.rhs at the least-squares solution.
-    if (o.max_residual > 0 &&
-        weighted_z2 - coefficients.dot(rhs) > o.max_residual * o.max_residual * weight_sum)
-      return;
+    if (int(fit.size()) < o.min_points) return;
+    Eigen::Matrix<double, 6, 1> coefficients;
+    for (int round = 0; round <= o.robust_rounds; ++round) {
+      Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+      double weight_sum = 0, weighted_z2 = 0;
+      for (const auto& [row, zw] : fit) {
+        double w = zw[1];
+        if (round > 0) {
+          const double miss = (zw[0] - row.dot(coefficients)) / o.robust_scale;
+          w /= 1 + miss * miss;
+        }
+        weight_sum += w;
+        M.selfadjointView<Eigen::Lower>().rankUpdate(row, w);
+        rhs += w * zw[0] * row;
+        weighted_z2 += w * zw[0] * zw[0];
+      }
+      M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
+      // A rank-deficient neighbourhood (the points on a line) gives no height: skip it.
+      const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(M);
+      if (!lu.isInvertible()) return;
+      const Eigen::Matrix<double, 6, 6> inverse = lu.inverse();
+      if (inverse(0, 0) * weight_sum > o.max_variance_factor) return;
+      coefficients = inverse * rhs;
+      // Sum w (z - row.c)^2 = sum w z^2 - c.rhs at the least-squares solution.
+      if (round == 0 && o.max_residual > 0 &&
+          weighted_z2 - coefficients.dot(rhs) > o.max_residual * o.max_residual * weight_sum)
+        return;
+    }
     const double z0 = coefficients[0];
     if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
   });

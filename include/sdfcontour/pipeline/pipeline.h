@@ -103,12 +103,10 @@ struct ContourOptions {
   /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no
   /// residual limit (the subdivided mesh's new vertices are chords, not a smooth surface). Measured
   /// on bunny at 32^3 with 2 subdivisions: L1 2.14e-3 with the Poisson path's options, 1.37e-3.
-  ContactProjectionOptions local_projection = [] {
-    ContactProjectionOptions p;
-    p.radius = 1.25;
-    p.max_residual = 0;
-    return p;
-  }();
+  /// Two robust rounds at 0.03 spacings (bench/local.py --res 32,64 --methods gcp-local, every
+  /// shared mesh): geometric mean L1 0.308x -> 0.305x MC's at 32^3, 0.287x -> 0.278x at 64^3
+  /// (wingnut 64^3 0.271x -> 0.226x; 0.01 spacings: 0.310x / 0.280x).
+  ContactProjectionOptions local_projection = local_projection_options();
   /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
   /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.
   int subdivisions = -1;

@@ -40,6 +40,11 @@ struct ContactProjectionOptions {
   /// they are no smooth surface (an edge, facets finer than the radius, a thin part's two sides):
   /// the vertex stays. 0: no limit.
   double max_residual = 0.005;
+  /// Rounds that refit with each point's weight divided by 1 + (its miss / robust_scale
+  /// spacings)^2, so that a few points off the surface (where spheres meet in a gap short of a
+  /// saddle) do not bend the fit. 0: one weighted least-squares fit.
+  int robust_rounds = 0;
+  double robust_scale = 0.02;
   /// Called with (vertices done, vertices) as the fit goes, from any thread, one call at a time.
   std::function<void(long, long)> progress;
 };
@@ -48,6 +53,17 @@ struct ContactProjectionStats {
   long vertices_moved = 0;  ///< vertices the fit moved
   double largest_move = 0;  ///< the longest move, in the mesh's units
 };
+
+/// The local reconstruction's projection options: radius 1.25 spacings, no residual limit, two
+/// robust rounds at 0.03 spacings (pipeline.h, ContourOptions::local_projection, says why).
+inline ContactProjectionOptions local_projection_options() {
+  ContactProjectionOptions p;
+  p.radius = 1.25;
+  p.max_residual = 0;
+  p.robust_rounds = 2;
+  p.robust_scale = 0.03;
+  return p;
+}
 
 /// Moves the vertices of `mesh` (in place) along their area-weighted normals onto the quadric
 /// fitted to the contact points `points` (k x 3) with unit outward `normals` (k x 3) near each;

@@ -17,6 +17,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <vector>
 
@@ -65,13 +66,8 @@ struct LocalBrickOptions {
   /// of the whole grid (pipeline.h).
   int subdivisions = -1;
   bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
-  /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit.
-  ContactProjectionOptions projection = [] {
-    ContactProjectionOptions p;
-    p.radius = 1.25;
-    p.max_residual = 0;
-    return p;
-  }();
+  /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit, robust.
+  ContactProjectionOptions projection = local_projection_options();
   /// Carving, vertex by vertex: up to `carve_passes` rounds of each vertex pushed onto the sphere
   /// of the band sample's ball it enters deepest (sphere_carving.h without its triangle checks
   /// and rounds, which are whole-mesh stages).
