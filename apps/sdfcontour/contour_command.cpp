@@ -472,7 +472,9 @@ Command add_contour_command(CLI::App& app) {
                 "crosses, from the contact points near it; topology from the samples' signs; "
                 "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
                 "and carving), or 'auto' (local for grids from 256 samples per axis, more "
-                "accurate there; poisson below, 4-8% more accurate at 32^3-64^3, docs/local.md; "
+                "accurate there; poisson below, whose worst vertex on mirror-symmetric analytic "
+                "shapes stays within marching cubes' (local is more accurate on average there "
+                "too, docs/local.md); "
                 "Python's callables get local). Scattered samples and "
                 ".vdb level sets always take poisson")
       ->capture_default_str();

@@ -511,7 +511,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         "auto": local for a callable (refined on it, 0.12x / 0.16x marching cubes' L1 on a neural
         SDF at 64^3 / 128^3, where Poisson falls back to marching cubes or reaches 0.80x), local
         for grids from 256 samples per axis (more accurate and faster there), poisson for smaller
-        grids and scattered samples (4-8% more accurate at 32^3-64^3; docs/local.md). CLI
+        grids (whose worst vertex on mirror-symmetric analytic shapes stays within marching
+        cubes'; local is more accurate on average there too: docs/local.md) and scattered
+        samples. CLI
         ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points

@@ -38,6 +38,19 @@ bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& v
 
 namespace {
 
+// Four spheres whose power at their orthocentre is within this fraction of value^2 of zero meet
+// exactly, up to the rounding of float32 values (a relative 6e-8 in each distance).
+constexpr double kExactMeeting = 1e-6;
+
+// How deep the deepest of sample i's triangulation neighbours' spheres holds c (0 if none).
+double neighbour_sphere_depth(const PointMatrix& points, const Eigen::VectorXd& values,
+                              const Triangulation& tri, int i, const Eigen::Vector3d& c) {
+  double depth = 0;
+  for (const int j : tri.neighbours(i))
+    depth = std::max(depth, std::abs(values[j]) - (c - row(points, j)).norm());
+  return depth;
+}
+
 // Whether a triangulation neighbour of sample i misses the linear prediction from gradient g by
 // more than `slope` times its distance.
 bool misses_linear_prediction(const PointMatrix& points, const Eigen::VectorXd& values,
@@ -152,10 +165,10 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
       return true;
     };
     // What is left of a (nearly) covered sphere: a power vertex on it, such as a convex corner.
-    auto power_vertex = [&] {
+    auto power_vertex = [&](double tolerance) {
       Eigen::Vector3d at;
-      if (!(options.power_vertex_tolerance > 0) || values[i] == 0 ||
-          !power_vertex_point(points, values, tri, int(i), options.power_vertex_tolerance, at) ||
+      if (!(tolerance > 0) || values[i] == 0 ||
+          !power_vertex_point(points, values, tri, int(i), tolerance, at) ||
           inside_neighbour_sphere(points, values, tri, int(i), at, options.tie_tolerance))
         return false;
       c.row(i) = at.transpose();
@@ -167,7 +180,7 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
     if (options.max_slope_miss > 0 &&
         misses_linear_prediction(points, values, tri, int(i), g, options.max_slope_miss)) {
       out = Outcome::Discarded;
-      power_vertex();
+      power_vertex(options.power_vertex_tolerance);
       return;
     }
     if (!(g.norm() > kTinyGradient)) {
@@ -175,19 +188,37 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
     } else {
       out = candidate(g) ? Outcome::Kept : Outcome::Discarded;
     }
-    if (out != Outcome::Kept && power_vertex()) return;
-    if (out == Outcome::Discarded && options.sphere_slide_rounds > 0 && values[i] != 0) {
+    // Pushed out of the spheres it lies in and back onto its own (sphere_slide_rounds).
+    auto slide = [&] {
+      if (!(options.sphere_slide_rounds > 0) || values[i] == 0) return false;
       const Eigen::Vector3d start = p - values[i] * g.normalized();
       const Eigen::Vector3d slid =
           slide_out_of_spheres(points, values, tri, int(i), start, options.sphere_slide_rounds);
       // (Farther than the radius, the gradient said little about where the point lies.)
-      if (slid.allFinite() && (slid - start).norm() <= std::abs(values[i]) &&
-          !inside_neighbour_sphere(points, values, tri, int(i), slid, options.tie_tolerance)) {
-        c.row(i) = slid.transpose();
-        normal.row(i) = ((p - slid) / values[i]).transpose();
-        out = Outcome::Rescued;
-        return;
+      if (!slid.allFinite() || (slid - start).norm() > std::abs(values[i]) ||
+          inside_neighbour_sphere(points, values, tri, int(i), slid, options.tie_tolerance))
+        return false;
+      c.row(i) = slid.transpose();
+      normal.row(i) = ((p - slid) / values[i]).transpose();
+      out = Outcome::Rescued;
+      return true;
+    };
+    if (out == Outcome::Discarded && options.near_miss_tolerance > 0) {
+      // Spheres that meet exactly (a corner or edge of exact data) keep their point there, and
+      // a slide that finds a free point of the sphere keeps it. Where only an inexact power
+      // vertex is left, a candidate discarded by a hair takes its place.
+      if (power_vertex(std::min(kExactMeeting, options.power_vertex_tolerance)) || slide()) return;
+      if (!power_vertex(options.power_vertex_tolerance)) return;
+      const Eigen::Vector3d point = p - values[i] * g.normalized();
+      if (neighbour_sphere_depth(points, values, tri, int(i), point) <=
+          options.near_miss_tolerance * std::abs(values[i])) {
+        c.row(i) = point.transpose();
+        normal.row(i) = g.normalized().transpose();
       }
+      return;
+    } else {
+      if (out != Outcome::Kept && power_vertex(options.power_vertex_tolerance)) return;
+      if (out == Outcome::Discarded && slide()) return;
     }
     if (out == Outcome::Kept || !options.try_tet_gradients) return;
     for (const int t : tri.incident(int(i))) {

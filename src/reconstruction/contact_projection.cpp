@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,12 +50,85 @@ void validate(const Mesh& mesh, const PointMatrix& points, const PointMatrix& no
       o.min_points < 6 || !(o.depth_scale >= 0) || !std::isfinite(o.depth_scale) ||
       !(o.max_variance_factor >= 1) || !(o.max_residual >= 0) || !std::isfinite(o.max_residual) ||
       o.robust_rounds < 0 || o.robust_rounds > 10 || !(o.robust_scale > 0) ||
-      !std::isfinite(o.robust_scale))
+      !std::isfinite(o.robust_scale) || !(o.wide_radius >= 0) || !std::isfinite(o.wide_radius))
     throw Error(
         "projection: radius must be positive, max_move non-negative, normal_agreement in [-1, 1], "
         "min_points at least 6 (a quadric has six coefficients), depth_scale non-negative, "
-        "max_variance_factor at least 1, max_residual non-negative, robust_rounds in [0, 10] and "
-        "robust_scale positive");
+        "max_variance_factor at least 1, max_residual non-negative, robust_rounds in [0, 10], "
+        "robust_scale positive and wide_radius non-negative");
+}
+
+// z(x, y) = c . (1, x, y, x^2, xy, y^2): a vertex's neighbourhood as heights over its tangent
+// plane, in spacings.
+using Coefficients = Eigen::Matrix<double, 6, 1>;
+struct FitRow {
+  Coefficients row;
+  double z, w;
+};
+
+// Weighted least squares, then robust_rounds refits with each row's weight divided by
+// 1 + (its miss / robust_scale)^2. False where the rows give no reliable height at the vertex: a
+// rank-deficient or one-sided neighbourhood (max_variance_factor), or points too far from any
+// quadric (max_residual).
+bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions& o,
+                 Coefficients& c) {
+  if (int(fit.size()) < o.min_points) return false;
+  for (int round = 0; round <= o.robust_rounds; ++round) {
+    Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
+    Coefficients rhs = Coefficients::Zero();
+    double weight_sum = 0, weighted_z2 = 0;
+    for (const FitRow& f : fit) {
+      double w = f.w;
+      if (round > 0) {
+        const double miss = (f.z - f.row.dot(c)) / o.robust_scale;
+        w /= 1 + miss * miss;
+      }
+      weight_sum += w;
+      M.selfadjointView<Eigen::Lower>().rankUpdate(f.row, w);
+      rhs += w * f.z * f.row;
+      weighted_z2 += w * f.z * f.z;
+    }
+    M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
+    const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(M);
+    if (!lu.isInvertible()) return false;
+    const Eigen::Matrix<double, 6, 6> inverse = lu.inverse();
+    if (inverse(0, 0) * weight_sum > o.max_variance_factor) return false;
+    c = inverse * rhs;
+    // Sum w (z - row.c)^2 = sum w z^2 - c.rhs at the least-squares solution.
+    if (round == 0 && o.max_residual > 0 &&
+        weighted_z2 - c.dot(rhs) > o.max_residual * o.max_residual * weight_sum)
+      return false;
+  }
+  return true;
+}
+
+// Per vertex, the sum over its triangles of e e^T over their three edges e (in spacings), and
+// the number of triangles: a flat triangle with its corners on z(x, y) lies
+// sum_e Q(e) / 12 above it on average, Q the quadric's quadratic part, so the vertex's chord
+// offset is minus the mean of that over its triangles.
+struct EdgeMoments {
+  std::vector<Eigen::Matrix3d> sum;
+  std::vector<int> triangles;
+};
+EdgeMoments edge_moments(const Mesh& mesh, double spacing) {
+  EdgeMoments m{
+      std::vector<Eigen::Matrix3d>(std::size_t(mesh.vertices.rows()), Eigen::Matrix3d::Zero()),
+      std::vector<int>(std::size_t(mesh.vertices.rows()), 0)};
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
+    Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
+                                 mesh.vertices.row(mesh.triangles(t, k)))
+                                    .transpose() /
+                                spacing;
+      e2 += e * e.transpose();
+    }
+    for (int k = 0; k < 3; ++k) {
+      m.sum[std::size_t(mesh.triangles(t, k))] += e2;
+      ++m.triangles[std::size_t(mesh.triangles(t, k))];
+    }
+  }
+  return m;
 }
 
 }  // namespace
@@ -75,11 +149,13 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
                                       : 0;
   ContactProjectionStats stats;
   if (points.rows() == 0 || mesh.vertices.rows() == 0) return stats;
-  const double r = o.radius * spacing;
-  const detail::PointCubes cubes(points, r);
   const PointMatrix N = vertex_normals(mesh);
-  // Gaussian weights exp(-d^2 / (2 sigma^2)), sigma = radius / sqrt(8), d in the tangent plane.
-  const double inv_two_sigma2 = 4.0 / (r * r);
+  const EdgeMoments chords = o.chord_offset ? edge_moments(mesh, spacing) : EdgeMoments{};
+  // Points within each radius, in cubes of that side.
+  const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
+  const detail::PointCubes cubes(points, radii[0]);
+  std::optional<detail::PointCubes> wide_cubes;
+  if (o.wide_radius > 0) wide_cubes.emplace(points, radii[1]);
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
   detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
@@ -92,57 +168,49 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
         n.cross(std::abs(n[0]) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY())
             .normalized();
     const Eigen::Vector3d b = n.cross(a);
-    // Summed in row order: the same bits whatever the cubes (a brick's points start elsewhere).
+    // The agreeing points within radius r, Gaussian weights exp(-d^2 / (2 sigma^2)) with sigma =
+    // r / sqrt(8), d in the tangent plane; summed in row order: the same bits whatever the cubes
+    // (a brick's points start elsewhere).
     thread_local std::vector<int> near;
-    near.clear();
-    cubes.for_each_near(p, [&](int i) {
-      if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
-    });
-    std::sort(near.begin(), near.end());
-    // The agreeing points: (1, x, y, x^2, xy, y^2) in spacings, height z in spacings, weight.
-    thread_local std::vector<std::pair<Eigen::Matrix<double, 6, 1>, std::array<double, 2>>> fit;
-    fit.clear();
-    for (const int i : near) {
-      const Eigen::Vector3d d = points.row(i).transpose() - p;
-      if (normals.row(i).dot(n.transpose()) <= o.normal_agreement) continue;
-      const double x = d.dot(a), y = d.dot(b), z = d.dot(n);
-      double w = std::exp(-(x * x + y * y) * inv_two_sigma2);
-      if (inv_depth_scale2 > 0) w /= 1 + depths[i] * depths[i] * inv_depth_scale2;
-      const double sx = x / spacing, sy = y / spacing;
-      Eigen::Matrix<double, 6, 1> row;
-      row << 1, sx, sy, sx * sx, sx * sy, sy * sy;
-      fit.push_back({row, {z / spacing, w}});
-    }
-    if (int(fit.size()) < o.min_points) return;
-    Eigen::Matrix<double, 6, 1> coefficients;
-    for (int round = 0; round <= o.robust_rounds; ++round) {
-      Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-      double weight_sum = 0, weighted_z2 = 0;
-      for (const auto& [row, zw] : fit) {
-        double w = zw[1];
-        if (round > 0) {
-          const double miss = (zw[0] - row.dot(coefficients)) / o.robust_scale;
-          w /= 1 + miss * miss;
-        }
-        weight_sum += w;
-        M.selfadjointView<Eigen::Lower>().rankUpdate(row, w);
-        rhs += w * zw[0] * row;
-        weighted_z2 += w * zw[0] * zw[0];
+    thread_local std::vector<FitRow> fit;
+    auto gather = [&](double r, const detail::PointCubes& in) {
+      near.clear();
+      in.for_each_near(p, [&](int i) {
+        if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
+      });
+      std::sort(near.begin(), near.end());
+      const double inv_two_sigma2 = 4.0 / (r * r);
+      fit.clear();
+      for (const int i : near) {
+        const Eigen::Vector3d d = points.row(i).transpose() - p;
+        if (normals.row(i).dot(n.transpose()) <= o.normal_agreement) continue;
+        const double xa = d.dot(a), ya = d.dot(b);
+        double w = std::exp(-(xa * xa + ya * ya) * inv_two_sigma2);
+        if (inv_depth_scale2 > 0) w /= 1 + depths[i] * depths[i] * inv_depth_scale2;
+        const double x = xa / spacing, y = ya / spacing;
+        FitRow f{Coefficients(), d.dot(n) / spacing, w};
+        f.row << 1, x, y, x * x, x * y, y * y;
+        fit.push_back(f);
       }
-      M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
-      // A rank-deficient neighbourhood (the points on a line) gives no height: skip it.
-      const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(M);
-      if (!lu.isInvertible()) return;
-      const Eigen::Matrix<double, 6, 6> inverse = lu.inverse();
-      if (inverse(0, 0) * weight_sum > o.max_variance_factor) return;
-      coefficients = inverse * rhs;
-      // Sum w (z - row.c)^2 = sum w z^2 - c.rhs at the least-squares solution.
-      if (round == 0 && o.max_residual > 0 &&
-          weighted_z2 - coefficients.dot(rhs) > o.max_residual * o.max_residual * weight_sum)
-        return;
+    };
+    Coefficients c;
+    gather(radii[0], cubes);
+    if (!fit_quadric(fit, o, c)) {
+      // Points on lines further apart than the radius (contact points of grid-aligned flats)
+      // leave a quadric undetermined: a wider neighbourhood holds the next line. Too few points
+      // that agree (an edge's vertex, whose normal neither face shares) would take the few
+      // points between the faces wider (the box at 32^3: its vertices 0.012 h off on average,
+      // 0.001 h without).
+      if (!wide_cubes || int(fit.size()) < o.min_points) return;
+      gather(radii[1], *wide_cubes);
+      if (!fit_quadric(fit, o, c)) return;
     }
-    const double z0 = coefficients[0];
+    double z0 = c[0];
+    if (o.chord_offset && chords.triangles[std::size_t(v)] > 0) {
+      const Eigen::Matrix3d& m = chords.sum[std::size_t(v)];
+      const double q = c[3] * a.dot(m * a) + c[4] * a.dot(m * b) + c[5] * b.dot(m * b);
+      z0 -= q / 12 / chords.triangles[std::size_t(v)];
+    }
     if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
   });
   for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {

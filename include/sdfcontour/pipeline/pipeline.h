@@ -105,7 +105,10 @@ struct ContourOptions {
   /// on bunny at 32^3 with 2 subdivisions: L1 2.14e-3 with the Poisson path's options, 1.37e-3.
   /// Two robust rounds at 0.03 spacings (bench/local.py --res 32,64 --methods gcp-local, every
   /// shared mesh): geometric mean L1 0.308x -> 0.305x MC's at 32^3, 0.287x -> 0.278x at 64^3
-  /// (wingnut 64^3 0.271x -> 0.226x; 0.01 spacings: 0.310x / 0.280x).
+  /// (wingnut 64^3 0.271x -> 0.226x; 0.01 spacings: 0.310x / 0.280x). Chord offsets and a
+  /// second fit within 2 spacings where the first has no height (with the local contact points'
+  /// near misses): 0.305x -> 0.300x at 32^3, 0.278x -> 0.267x at 64^3; the analytic torus at
+  /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (docs/local.md, session 9).
   ContactProjectionOptions local_projection = local_projection_options();
   /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
   /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.

@@ -45,6 +45,15 @@ struct ContactProjectionOptions {
   /// saddle) do not bend the fit. 0: one weighted least-squares fit.
   int robust_rounds = 0;
   double robust_scale = 0.02;
+  /// Where the fit within radius gives no reliable height (points on lines further apart than
+  /// the radius, as grid-aligned flats give), fit again within this many spacings; 0: no second
+  /// fit (the vertex stays).
+  double wide_radius = 0;
+  /// Each vertex goes to the fit's height plus its chord offset: minus the mean, over its
+  /// triangles, of the fit's quadratic part over their edges / 12, which is how far a flat
+  /// triangle with its corners on the fitted surface lies below it on average. The mesh then
+  /// straddles a curved surface instead of lying under it on the convex side.
+  bool chord_offset = false;
   /// Called with (vertices done, vertices) as the fit goes, from any thread, one call at a time.
   std::function<void(long, long)> progress;
 };
@@ -54,14 +63,17 @@ struct ContactProjectionStats {
   double largest_move = 0;  ///< the longest move, in the mesh's units
 };
 
-/// The local reconstruction's projection options: radius 1.25 spacings, no residual limit, two
-/// robust rounds at 0.03 spacings (pipeline.h, ContourOptions::local_projection, says why).
+/// The local reconstruction's projection options: radius 1.25 spacings (2 where that gives no
+/// height), no residual limit, two robust rounds at 0.03 spacings, chord offsets
+/// (pipeline.h, ContourOptions::local_projection, says why).
 inline ContactProjectionOptions local_projection_options() {
   ContactProjectionOptions p;
   p.radius = 1.25;
+  p.wide_radius = 2;
   p.max_residual = 0;
   p.robust_rounds = 2;
   p.robust_scale = 0.03;
+  p.chord_offset = true;
   return p;
 }
 

@@ -59,7 +59,8 @@ int ring(const LocalBrickOptions& o) {
 // of a sample to its contact point (its |value|).
 int flag_reach(const LocalBrickOptions& o, double largest) {
   const double gather =
-      std::max({o.local.reach, o.local.empty_cell_reach, o.project ? o.projection.radius : 0.0});
+      std::max({o.local.reach, o.local.empty_cell_reach,
+                o.project ? std::max(o.projection.radius, o.projection.wide_radius) : 0.0});
   return int(std::ceil(gather + largest)) + 2 + ring(o);
 }
 
