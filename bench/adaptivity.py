@@ -17,7 +17,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import CLI, MESHES, geomean, timed  # noqa: E402
+from common import CLI, MESHES, geomean, keep, timed  # noqa: E402
 from local import mean_distance, read_ply, sharp_edge_points  # noqa: E402
 
 DECIMATE = os.path.join(os.path.dirname(CLI), "bench", "decimate")
@@ -74,12 +74,6 @@ def cases(a):
             prefix, gt, edges, h = sampled_mesh(a.work, name, res)
             for tol in map(float, a.tol.split(",")):
                 yield res, name, tol, prefix, gt, edges, h
-
-
-def keep(rows, row):
-    """Adds a result row and prints it as a JSON line."""
-    rows.append(row)
-    print(json.dumps(row), flush=True)
 
 
 def evaluate(out, gt, edge_points, h):

@@ -14,8 +14,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from adaptivity import add_case_arguments, cases, evaluate, keep  # noqa: E402
-from common import CLI, geomean, timed  # noqa: E402
+from adaptivity import add_case_arguments, cases, evaluate  # noqa: E402
+from common import CLI, geomean, keep, timed  # noqa: E402
 
 
 def main():

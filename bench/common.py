@@ -30,6 +30,12 @@ def l1(cli, mesh, gt):
     return json.loads(r.stdout)["L1"] if r.returncode == 0 else None
 
 
+def keep(rows, row):
+    """Adds a result row and prints it as a JSON line."""
+    rows.append(row)
+    print(json.dumps(row), flush=True)
+
+
 def geomean(values):
     v = [x for x in values if x]
     return math.exp(sum(math.log(x) for x in v) / len(v)) if v else float("nan")

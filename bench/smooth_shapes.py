@@ -8,7 +8,6 @@ run) and the largest vertex distance, both in spacings, and the wall time. JSON 
     /usr/bin/python3 bench/smooth_shapes.py --res 64,256 --markdown docs/results/smooth_shapes.md
 """
 import argparse
-import json
 import os
 import sys
 import tempfile
@@ -16,7 +15,7 @@ import tempfile
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import CLI, timed  # noqa: E402
+from common import CLI, keep, timed  # noqa: E402
 from local import read_ply  # noqa: E402
 
 METHODS = {
@@ -70,24 +69,23 @@ def main():
                                l1_h=float(np.abs(distance(shape, area_samples(V, F))).mean() / h),
                                worst_vertex_h=float(np.abs(distance(shape, V)).max() / h),
                                seconds=seconds, peak_mb=peak)
-                    rows.append(row)
-                    print(json.dumps(row), flush=True)
+                    keep(rows, row)
     if a.markdown:
-        write_markdown(rows, a.markdown)
+        with open(a.markdown, "w") as f:
+            f.write(markdown_table(rows))
 
 
-def write_markdown(rows, path):
-    lines = ["# Smooth shapes: the built-in sphere and torus", "",
-             "`/usr/bin/python3 bench/smooth_shapes.py` (bench/smooth_shapes.py): mean distance "
-             "from the mesh's area to the exact surface and the largest vertex distance, in "
-             "spacings.", "",
-             "| shape | grid | method | triangles | L1 (h) | worst vertex (h) | seconds |",
-             "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['shape']} | {r['res']}^3 | {r['method']} | {r['triangles']:,} | "
-                     f"{r['l1_h']:.6f} | {r['worst_vertex_h']:.4f} | {r['seconds']:.1f} |")
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+def markdown_table(rows):
+    """The rows as docs/results/smooth_shapes.md shows them."""
+    head = ("# Smooth shapes: the built-in sphere and torus\n\n"
+            "`/usr/bin/python3 bench/smooth_shapes.py` (bench/smooth_shapes.py): mean distance "
+            "from the mesh's area to the exact surface and the largest vertex distance, in "
+            "spacings.\n\n"
+            "| shape | grid | method | triangles | L1 (h) | worst vertex (h) | seconds |\n"
+            "|---|---|---|---|---|---|---|\n")
+    return head + "".join(
+        f"| {r['shape']} | {r['res']}^3 | {r['method']} | {r['triangles']:,} | {r['l1_h']:.6f} | "
+        f"{r['worst_vertex_h']:.2g} | {r['seconds']:.1f} |\n" for r in rows)
 
 
 if __name__ == "__main__":
