@@ -39,12 +39,12 @@ struct ContactPointOptions {
   /// a convex corner every outside sample's sphere passes through the corner, which no averaged
   /// gradient finds. 0: none (the paper).
   double power_vertex_tolerance = 0;
-  /// A candidate that a neighbour's sphere holds at most this fraction of value_i deep is kept
-  /// as it is (after a power vertex where spheres meet exactly, as at a corner or edge of exact
-  /// data; before sliding or an inexact power vertex): on a smooth surface a gradient a little
-  /// off puts the point in the thin gap between the spheres and the surface, a few thousandths of
-  /// a spacing off, where the gap's power vertex lies farther (torus 64^3: 0.003 h against
-  /// 0.016 h at the median). 0: discarded (the paper).
+  /// Where a sample is left with only an inexact power vertex (no exact meeting of spheres, as at
+  /// a corner or edge of exact data, and no slide), its candidate is kept instead if no
+  /// neighbour's sphere holds it deeper than this fraction of |value_i|: on a smooth surface a
+  /// gradient a little off puts the point in the thin gap between the spheres and the surface, a
+  /// few thousandths of a spacing off, where the gap's power vertex lies farther (torus 64^3:
+  /// 0.003 h against 0.016 h at the median). 0: the power vertex (the paper: no point).
   double near_miss_tolerance = 0;
 };
 

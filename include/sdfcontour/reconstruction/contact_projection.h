@@ -45,9 +45,10 @@ struct ContactProjectionOptions {
   /// saddle) do not bend the fit. 0: one weighted least-squares fit.
   int robust_rounds = 0;
   double robust_scale = 0.02;
-  /// Where the fit within radius gives no reliable height (points on lines further apart than
-  /// the radius, as grid-aligned flats give), fit again within this many spacings; 0: no second
-  /// fit (the vertex stays).
+  /// Where the fit within radius gives no reliable height although at least min_points points
+  /// there agree with the vertex's normal (points on lines further apart than the radius, as
+  /// grid-aligned flats give), fit again within this many spacings; 0: no second fit (the vertex
+  /// stays).
   double wide_radius = 0;
   /// Each vertex goes to the fit's height plus its chord offset: minus the mean, over its
   /// triangles, of the fit's quadratic part over their edges / 12, which is how far a flat
