@@ -1,7 +1,9 @@
 #include "metrics/statistics.h"
+#include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/contact_points/contact_points.h"
 #include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "test_support.h"
 
 using namespace sdfcontour;
@@ -279,31 +281,22 @@ TEST(ContactPoints, SpheresMeetingAtAPointGiveTheBoxCornersExactly) {
 // they are, near misses bring the points closer; the box's corners, where spheres meet exactly,
 // keep their power vertices.
 TEST(ContactPoints, NearMissesKeepTheirGradientPoints) {
-  // The local reconstruction's contact points: band samples (8 spacings, a spacing of margin),
-  // weights capped at the band.
-  ContactPointOptions local;
-  local.max_slope_miss = 0.45;
-  local.sphere_slide_rounds = 50;
-  local.power_vertex_tolerance = 3e-4;
-  ContactPointOptions near = local;
-  near.near_miss_tolerance = 1e-3;
+  // The local reconstruction's contact points (its options; band samples, 8 spacings and a
+  // spacing of margin, weights capped at the band), with and without near misses.
+  const ContactPointOptions near = local_brick_options(ContourOptions{}).contact;
+  ContactPointOptions local = near;
+  local.near_miss_tolerance = 0;
+  ASSERT_GT(near.near_miss_tolerance, 0);
   auto points = [](const std::string& name, int n, const ContactPointOptions& o) {
-    const auto shape = make_builtin_shape(name);
-    const Samples all = sample_grid(*shape, n, Bounds{}).to_samples();
-    const double h = 2.0 / (n - 1), band = 8 * h;
-    std::vector<Eigen::Index> rows;
-    for (Eigen::Index i = 0; i < all.values.size(); ++i)
-      if (std::abs(all.values[i]) <= band + h) rows.push_back(i);
-    PointMatrix P(Eigen::Index(rows.size()), 3);
-    Eigen::VectorXd V(Eigen::Index(rows.size()));
-    std::vector<char> core(rows.size());
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-      P.row(Eigen::Index(k)) = all.points.row(rows[k]);
-      V[Eigen::Index(k)] = all.values[rows[k]];
-      core[k] = std::abs(V[Eigen::Index(k)]) <= band;
-    }
-    const Triangulation tri = triangulate(P, capped_weight_values(V, band, band), {});
-    return gradient_contact_points(P, V, vertex_gradients(P, V, tri), tri, o, &core);
+    BandOptions options;
+    options.band = 8;
+    const BandSamples band =
+        select_band(sample_grid(*make_builtin_shape(name), n, Bounds{}), options);
+    const PointMatrix& P = band.samples.points;
+    const Eigen::VectorXd& V = band.samples.values;
+    const Triangulation tri =
+        triangulate(P, capped_weight_values(V, band.core_inside, band.core_outside), {});
+    return gradient_contact_points(P, V, vertex_gradients(P, V, tri), tri, o, &band.core);
   };
   const auto torus = make_builtin_shape("torus");
   const double h = 2.0 / 47;

@@ -216,10 +216,9 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
         normal.row(i) = g.normalized().transpose();
       }
       return;
-    } else {
-      if (out != Outcome::Kept && power_vertex(options.power_vertex_tolerance)) return;
-      if (out == Outcome::Discarded && slide()) return;
     }
+    if (out != Outcome::Kept && power_vertex(options.power_vertex_tolerance)) return;
+    if (out == Outcome::Discarded && slide()) return;
     if (out == Outcome::Kept || !options.try_tet_gradients) return;
     for (const int t : tri.incident(int(i))) {
       const Eigen::Vector3d gt = row(tet_g, t);

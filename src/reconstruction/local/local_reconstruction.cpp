@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "extraction/cube_polygons.h"
@@ -102,8 +103,7 @@ struct VertexResult {
   bool from_crossings = false, feature = false, clamped = false, field_miss = false;
   // The minimiser moved into the cell along the directions the planes leave free, if it gets
   // there (the quadric's value unchanged).
-  bool fits = false;
-  Eigen::Vector3d fitted;
+  std::optional<Eigen::Vector3d> fitted;
 };
 
 // The distance from p (in cell `at`) to the zero set of the cell's trilinear interpolant, to
@@ -198,8 +198,7 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
     x += s.free * (inside - x);
   }
   const bool in_cell = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
-  out.fits = in_cell;
-  out.fitted = x;
+  if (in_cell) out.fitted = x;
   out.position = in_cell && !out.clamped ? x : s.position.cwiseMax(inner_lo).cwiseMin(inner_hi);
   return out;
 }
@@ -250,9 +249,9 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
         // does a feature beyond the cell (penguin 32^3: 16% higher L1 with those).
         if (wide.empty()) wide = planes_near(options.empty_cell_reach * cells.spacing);
         const VertexResult w = place_vertex(wide[std::size_t(q)], crossings, lo, hi, h, options);
-        if (!w.from_crossings && w.feature && w.fits) {
+        if (!w.from_crossings && w.feature && w.fitted) {
           v = w;
-          v.position = w.fitted;
+          v.position = *w.fitted;
         }
       }
       // (Not at a feature: there the interpolant itself cuts the corner.)
