@@ -559,7 +559,8 @@ Command add_contour_command(CLI::App& app) {
        "in parallel; memory follows a brick, the result equals one global "
        "triangulation's; 0 triangulates the whole band at once (so does --band all); "
        "'auto': the largest of 256 down to 96 that makes >= 4 bricks per thread of <= 1.5M "
-       "samples each, else 64")
+       "samples each, else 64. The local reconstruction runs in bricks of this many cells "
+       "(auto: one brick up to 512 samples per axis, bricks of 512 beyond)")
       ->capture_default_str();
   c->add_option("--brick-halo", a->brick_halo,
                 "First halo around a brick, in spacings (grown where it does not suffice); "

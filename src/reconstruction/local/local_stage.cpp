@@ -80,10 +80,10 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   lb.band = band;
   if (options.progress_fraction)
     lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
-  // One brick up to 256 samples per axis (its stages run in parallel inside it); beyond, bricks
-  // of 256 bound the memory by a brick.
+  // One brick up to 512 samples per axis (its stages run in parallel inside it); beyond, bricks
+  // of 512 bound the memory by a brick.
   const int size =
-      options.bricks.size == BrickOptions::kAutoSize ? kLocalBrick : options.bricks.size;
+      options.bricks.size == BrickOptions::kAutoSize ? kLocalGridBrick : options.bricks.size;
   LocalBricksStats stats;
   // Adaptivity merges over the contact points: the bricks hand theirs on.
   lb.keep_contact_points = options.adaptivity.tolerance > 0;
