@@ -1,0 +1,107 @@
+"""Where the sharp-edge distance of bench/local.py comes from: for one shared mesh and grid, the
+mean distance from the ground truth's sharp-edge points (dihedral > 30 degrees, every h/4) to MC's
+and GCP-local's meshes, by the turn between the two faces and by convexity, the share of points
+on edges shorter than h/2, and the distance to the nearest GCP contact point.
+
+Distances are to a dense sampling of each mesh (spacing h/30, so at most ~h/60 too large).
+
+    /usr/bin/python3 bench/sharp_edges.py hammer 64
+"""
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common import CLI, MESHES  # noqa: E402
+from local import read_ply  # noqa: E402
+
+TURNS = [(30, 45), (45, 100), (100, 180)]
+
+
+def edge_points(V, F, step, angle=30.0):
+    """Points every `step` along the sharp edges (as bench/local.py), with each point's turn
+    (degrees), convexity and edge length."""
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    edges = {}
+    for t, tri in enumerate(F):
+        for k in range(3):
+            a, b = int(tri[k]), int(tri[(k + 1) % 3])
+            edges.setdefault((min(a, b), max(a, b)), []).append(t)
+    cos = np.cos(np.radians(angle))
+    rows = []
+    for (a, b), faces in edges.items():
+        if len(faces) != 2 or n[faces[0]] @ n[faces[1]] >= cos:
+            continue
+        length = np.linalg.norm(V[b] - V[a])
+        other = [v for v in F[faces[1]] if v not in (a, b)][0]
+        convex = n[faces[0]] @ (V[other] - V[a]) < 0
+        turn = np.degrees(np.arccos(np.clip(n[faces[0]] @ n[faces[1]], -1, 1)))
+        m = max(1, int(np.ceil(length / step)))
+        for s in (np.arange(m) + 0.5) / m:
+            rows.append((*(V[a] + s * (V[b] - V[a])), turn, convex, length))
+    return np.array(rows).reshape(-1, 6)
+
+
+def dense_points(V, F, step, rng):
+    """Points spread over the triangles about `step` apart, and the vertices."""
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    area = 0.5 * np.linalg.norm(np.cross(B - A, C - A), axis=1)
+    idx = np.repeat(np.arange(len(F)), np.maximum(1, (2 * area / step ** 2).astype(int)))
+    r1, r2 = np.sqrt(rng.random(len(idx))), rng.random(len(idx))
+    P = (1 - r1)[:, None] * A[idx] + (r1 * (1 - r2))[:, None] * B[idx] + (r1 * r2)[:, None] * C[idx]
+    return np.vstack([P, V])
+
+
+def read_points(path):
+    """x y z of a binary PLY point file as `contour --points` writes it."""
+    with open(path, "rb") as f:
+        header = []
+        while header[-1:] != ["end_header"]:
+            header.append(f.readline().decode().strip())
+        data = f.read()
+    n = next(int(h.split()[2]) for h in header if h.startswith("element vertex"))
+    props = [h.split()[1] for h in header if h.startswith("property")]
+    dt = "<f8" if props[0] in ("double", "float64") else "<f4"
+    return np.frombuffer(data, dtype=dt, count=n * len(props)).reshape(n, -1)[:, :3].astype(float)
+
+
+def main():
+    name, res = sys.argv[1], int(sys.argv[2])
+    h = 2.0 / (res - 1)
+    work = tempfile.mkdtemp()
+    prefix = os.path.join(work, f"{name}{res}")
+    subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
+                    prefix, "--quiet"], check=True, capture_output=True)
+    E = edge_points(*read_ply(prefix + "_mesh.ply"), step=h / 4)
+    rng = np.random.default_rng(0)
+    runs = {"mc": ["--method", "mc"], "local": ["--method", "gcp", "--reconstruction", "local",
+                                                "--points", prefix + "_points.ply"]}
+    dist = {}
+    for method, args in runs.items():
+        subprocess.run([CLI, "contour", prefix + ".npy", "-o", f"{prefix}_{method}.ply", "--quiet",
+                        *args], check=True, capture_output=True)
+        tree = cKDTree(dense_points(*read_ply(f"{prefix}_{method}.ply"), h / 30, rng))
+        dist[method] = tree.query(E[:, :3])[0] / h
+    nearest = cKDTree(read_points(prefix + "_points.ply")).query(E[:, :3])[0] / h
+    print(f"{name} {res}^3: {len(E)} edge points, {int((E[:, 5] < h / 2).sum())} on edges shorter "
+          "than h/2; mean distance in spacings\n")
+    print("| edges | points | GCP-local | MC | nearest contact point (median) |")
+    print("|---|---|---|---|---|")
+    for lo, hi in TURNS:
+        for convex in (True, False):
+            s = (E[:, 3] >= lo) & (E[:, 3] < hi) & (E[:, 4] == convex)
+            if s.any():
+                print(f"| {'convex' if convex else 'concave'}, {lo}-{hi} deg | {int(s.sum())} | "
+                      f"{dist['local'][s].mean():.3f} | {dist['mc'][s].mean():.3f} | "
+                      f"{np.median(nearest[s]):.3f} |")
+    print(f"| all | {len(E)} | {dist['local'].mean():.3f} | {dist['mc'].mean():.3f} | "
+          f"{np.median(nearest):.3f} |")
+
+
+if __name__ == "__main__":
+    main()
