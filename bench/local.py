@@ -59,8 +59,9 @@ def read_ply(path):
     return V, F.astype(np.int64)
 
 
-def sharp_edge_points(V, F, step, angle=30.0):
-    """Points every `step` along the mesh's edges whose faces meet at more than `angle` degrees."""
+def sharp_edges(V, F, angle=30.0):
+    """The mesh's edges whose two faces meet at more than `angle` degrees: (a, b, face0, face1)
+    per edge, and the faces' unit normals."""
     n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     edges = {}
@@ -69,13 +70,18 @@ def sharp_edge_points(V, F, step, angle=30.0):
             a, b = int(tri[k]), int(tri[(k + 1) % 3])
             edges.setdefault((min(a, b), max(a, b)), []).append(t)
     cos = np.cos(np.radians(angle))
+    return [(a, b, *faces) for (a, b), faces in edges.items()
+            if len(faces) == 2 and n[faces[0]] @ n[faces[1]] < cos], n
+
+
+def sharp_edge_points(V, F, step, angle=30.0):
+    """Points every `step` along the mesh's edges whose faces meet at more than `angle` degrees."""
     pts = []
-    for (a, b), faces in edges.items():
-        if len(faces) == 2 and n[faces[0]] @ n[faces[1]] < cos:
-            length = np.linalg.norm(V[b] - V[a])
-            m = max(1, int(np.ceil(length / step)))
-            for s in (np.arange(m) + 0.5) / m:
-                pts.append(V[a] + s * (V[b] - V[a]))
+    for a, b, _, _ in sharp_edges(V, F, angle)[0]:
+        length = np.linalg.norm(V[b] - V[a])
+        m = max(1, int(np.ceil(length / step)))
+        for s in (np.arange(m) + 0.5) / m:
+            pts.append(V[a] + s * (V[b] - V[a]))
     return np.array(pts).reshape(-1, 3)
 
 

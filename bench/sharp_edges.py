@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import CLI, MESHES  # noqa: E402
-from local import read_ply  # noqa: E402
+from local import read_ply, sharp_edges  # noqa: E402
 
 TURNS = [(30, 45), (45, 100), (100, 180)]
 
@@ -25,22 +25,13 @@ TURNS = [(30, 45), (45, 100), (100, 180)]
 def edge_points(V, F, step, angle=30.0):
     """Points every `step` along the sharp edges (as bench/local.py), with each point's turn
     (degrees), convexity and edge length."""
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    edges = {}
-    for t, tri in enumerate(F):
-        for k in range(3):
-            a, b = int(tri[k]), int(tri[(k + 1) % 3])
-            edges.setdefault((min(a, b), max(a, b)), []).append(t)
-    cos = np.cos(np.radians(angle))
+    edges, n = sharp_edges(V, F, angle)
     rows = []
-    for (a, b), faces in edges.items():
-        if len(faces) != 2 or n[faces[0]] @ n[faces[1]] >= cos:
-            continue
+    for a, b, f0, f1 in edges:
         length = np.linalg.norm(V[b] - V[a])
-        other = [v for v in F[faces[1]] if v not in (a, b)][0]
-        convex = n[faces[0]] @ (V[other] - V[a]) < 0
-        turn = np.degrees(np.arccos(np.clip(n[faces[0]] @ n[faces[1]], -1, 1)))
+        other = [v for v in F[f1] if v not in (a, b)][0]
+        convex = n[f0] @ (V[other] - V[a]) < 0
+        turn = np.degrees(np.arccos(np.clip(n[f0] @ n[f1], -1, 1)))
         m = max(1, int(np.ceil(length / step)))
         for s in (np.arange(m) + 0.5) / m:
             rows.append((*(V[a] + s * (V[b] - V[a])), turn, convex, length))
