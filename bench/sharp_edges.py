@@ -5,7 +5,10 @@ on edges shorter than h/2, and the distance to the nearest GCP contact point.
 
 Distances are to a dense sampling of each mesh (spacing h/30, so at most ~h/60 too large).
 
-    /usr/bin/python3 bench/sharp_edges.py hammer 64
+    /usr/bin/python3 bench/sharp_edges.py hammer 64 [--png docs/img/sharp_edges_hammer64.png]
+
+With --png, a picture of the edge points coloured by their distance to each mesh (MC, GCP-local),
+concave ones as triangles.
 """
 import os
 import subprocess
@@ -61,8 +64,37 @@ def read_points(path):
     return np.frombuffer(data, dtype=dt, count=n * len(props)).reshape(n, -1)[:, :3].astype(float)
 
 
+def plot(E, dist, h, title, path):
+    """Edge points coloured by their distance (in spacings) to MC's and GCP-local's meshes."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    # View along the axis with the smallest extent, so the part is seen flat on.
+    axes = np.argsort(np.ptp(E[:, :3], axis=0))[::-1][:2]
+    # Framed on the far points (the worst fifth for GCP-local), where the two meshes differ.
+    far = E[dist["local"] >= np.percentile(dist["local"], 80)][:, axes]
+    lo, hi = far.min(axis=0) - 2 * h, far.max(axis=0) + 2 * h
+    fig, panels = plt.subplots(1, 2, figsize=(11, 5.5), constrained_layout=True)
+    for ax, method in zip(panels, ("mc", "local")):
+        for convex, marker in ((True, "o"), (False, "^")):
+            s = E[:, 4] == convex
+            art = ax.scatter(E[s, axes[0]], E[s, axes[1]], c=dist[method][s], s=14, marker=marker,
+                             cmap="viridis", vmin=0, vmax=0.5)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_title(f"{'MC' if method == 'mc' else 'GCP-local'}: mean {dist[method].mean():.3f} h "
+                     f"(concave {dist[method][E[:, 4] == 0].mean():.3f} h)")
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.colorbar(art, ax=panels, label="distance to the mesh (spacings); triangles: concave")
+    fig.suptitle(title)
+    fig.savefig(path, dpi=110)
+
+
 def main():
     name, res = sys.argv[1], int(sys.argv[2])
+    png = sys.argv[sys.argv.index("--png") + 1] if "--png" in sys.argv else ""
     h = 2.0 / (res - 1)
     work = tempfile.mkdtemp()
     prefix = os.path.join(work, f"{name}{res}")
@@ -92,6 +124,9 @@ def main():
                       f"{np.median(nearest[s]):.3f} |")
     print(f"| all | {len(E)} | {dist['local'].mean():.3f} | {dist['mc'].mean():.3f} | "
           f"{np.median(nearest):.3f} |")
+    if png:
+        plot(E, dist, h, f"{name} at {res}^3: sharp-edge points (dihedral > 30 deg) where the meshes "
+             "differ most", png)
 
 
 if __name__ == "__main__":
