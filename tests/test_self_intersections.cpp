@@ -82,6 +82,31 @@ TEST(SelfIntersections, TheSamePairsAsCgal) {
   EXPECT_THROW(self_intersecting_triangles(mesh, &watch), Error);
 }
 
+// Two triangles that share one vertex cross where an opposite edge cuts the other triangle, as
+// CGAL counts them: pierced, or coplanar and overlapping; not where one lies on one side of the
+// other's plane (the shortcut most neighbours take).
+TEST(SelfIntersections, TrianglesSharingAVertex) {
+  auto pair_with = [](double x1, double y1, double z1, double x2, double y2, double z2) {
+    Mesh m;
+    m.vertices.resize(5, 3);
+    m.vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0, x1, y1, z1, x2, y2, z2;
+    m.triangles.resize(2, 3);
+    m.triangles << 0, 1, 2, 0, 3, 4;
+    return m;
+  };
+  const std::vector<std::pair<int, int>> both{{0, 1}}, none;
+  const Mesh pierced = pair_with(0.3, 0.3, -1, 0.3, 0.3, 1);
+  const Mesh above = pair_with(0.3, 0.3, 0.5, 0.2, 0.6, 1);
+  const Mesh overlapping = pair_with(0.5, 0.2, 0, 0.2, 0.5, 0);
+  const Mesh beside = pair_with(-0.5, 0.2, 0, -0.2, -0.5, 0);
+  EXPECT_EQ(self_intersecting_triangles(pierced), both);
+  EXPECT_EQ(self_intersecting_triangles(above), none);
+  EXPECT_EQ(self_intersecting_triangles(overlapping), both);
+  EXPECT_EQ(self_intersecting_triangles(beside), none);
+  for (const Mesh* m : {&pierced, &above, &overlapping, &beside})
+    EXPECT_EQ(self_intersecting_triangles(*m), cgal_pairs(*m));
+}
+
 // Two triangles that share an edge overlap when they fold onto each other (coplanar, on the same
 // side of the edge), as CGAL counts them; unfolded, or bent out of the plane, they do not.
 TEST(SelfIntersections, TrianglesFoldedOntoTheirSharedEdgeOverlap) {
