@@ -188,10 +188,12 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
     } else {
       out = candidate(g) ? Outcome::Kept : Outcome::Discarded;
     }
+    // Where the averaged gradient puts the point (discarded ones only: their g is not zero).
+    auto gradient_point = [&] { return Eigen::Vector3d(p - values[i] * g.normalized()); };
     // Pushed out of the spheres it lies in and back onto its own (sphere_slide_rounds).
     auto slide = [&] {
       if (!(options.sphere_slide_rounds > 0) || values[i] == 0) return false;
-      const Eigen::Vector3d start = p - values[i] * g.normalized();
+      const Eigen::Vector3d start = gradient_point();
       const Eigen::Vector3d slid =
           slide_out_of_spheres(points, values, tri, int(i), start, options.sphere_slide_rounds);
       // (Farther than the radius, the gradient said little about where the point lies.)
@@ -209,7 +211,7 @@ ContactPoints gradient_contact_points(const PointMatrix& points, const Eigen::Ve
       // vertex is left, a candidate discarded by a hair takes its place.
       if (power_vertex(std::min(kExactMeeting, options.power_vertex_tolerance)) || slide()) return;
       if (!power_vertex(options.power_vertex_tolerance)) return;
-      const Eigen::Vector3d point = p - values[i] * g.normalized();
+      const Eigen::Vector3d point = gradient_point();
       if (neighbour_sphere_depth(points, values, tri, int(i), point) <=
           options.near_miss_tolerance * std::abs(values[i])) {
         c.row(i) = point.transpose();

@@ -130,19 +130,17 @@ bool cross(const Mesh& mesh, int s, int t) {
   }
   const K::Triangle_3 a(at(S[0]), at(S[1]), at(S[2])), b(at(T[0]), at(T[1]), at(T[2]));
   if (shared == 0) return CGAL::do_intersect(a, b);
-  // One shared vertex: where one triangle's other two vertices lie strictly on one side of the
-  // other's plane, the two meet in that vertex alone (most neighbours on a mesh; two
-  // orientations instead of two segment-triangle tests).
-  auto apart = [&](const K::Triangle_3& x, const Point& p, const Point& q) {
-    const CGAL::Orientation side = CGAL::orientation(x[0], x[1], x[2], p);
-    return side != CGAL::COPLANAR && CGAL::orientation(x[0], x[1], x[2], q) == side;
-  };
-  if (apart(a, at(T[(shared_t + 1) % 3]), at(T[(shared_t + 2) % 3])) ||
-      apart(b, at(S[(shared_s + 1) % 3]), at(S[(shared_s + 2) % 3])))
-    return false;
-  // Otherwise they cross elsewhere iff an edge opposite the shared vertex cuts the other.
+  // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.
   const K::Segment_3 opposite_s(at(S[(shared_s + 1) % 3]), at(S[(shared_s + 2) % 3])),
       opposite_t(at(T[(shared_t + 1) % 3]), at(T[(shared_t + 2) % 3]));
+  // An edge with both ends strictly on one side of the other's plane cuts neither triangle, and
+  // then the two meet in the shared vertex alone (most neighbours on a mesh: two orientations
+  // instead of two segment-triangle tests).
+  auto apart = [](const K::Triangle_3& x, const K::Segment_3& e) {
+    const CGAL::Orientation side = CGAL::orientation(x[0], x[1], x[2], e.source());
+    return side != CGAL::COPLANAR && CGAL::orientation(x[0], x[1], x[2], e.target()) == side;
+  };
+  if (apart(a, opposite_t) || apart(b, opposite_s)) return false;
   return CGAL::do_intersect(opposite_s, b) || CGAL::do_intersect(opposite_t, a);
 }
 
