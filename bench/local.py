@@ -27,7 +27,8 @@ METHODS = {
 
 
 def read_ply(path):
-    """Vertices (n x 3) and triangles (f x 3) of a binary little-endian PLY as sdfcontour writes."""
+    """Vertices (n x 3) and triangles (f x 3, none for a point file) of a binary little-endian PLY
+    as sdfcontour writes."""
     with open(path, "rb") as f:
         header = []
         while True:
@@ -54,9 +55,23 @@ def read_ply(path):
     vt = np.dtype([(f"p{i}", kinds[t]) for i, t in enumerate(vprops)])
     v = np.frombuffer(data[:nv * vt.itemsize], dtype=vt)
     V = np.stack([v["p0"], v["p1"], v["p2"]], axis=1).astype(float)
+    if face_list is None:  # a point file (contour --points): no triangles
+        return V, np.zeros((0, 3), dtype=np.int64)
     ft = np.dtype([("n", kinds[face_list[0]]), ("i", kinds[face_list[1]], 3)])
     F = np.frombuffer(data[nv * vt.itemsize:nv * vt.itemsize + nf * ft.itemsize], dtype=ft)["i"]
     return V, F.astype(np.int64)
+
+
+def area_samples(V, F, count=200000, seed=1):
+    """`count` points spread uniformly over the triangles' area."""
+    rng = np.random.default_rng(seed)
+    A = V[F]
+    area = 0.5 * np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1)
+    t = rng.choice(len(F), count, p=area / area.sum())
+    u = rng.random((count, 2))
+    flip = u.sum(axis=1) > 1
+    u[flip] = 1 - u[flip]
+    return A[t, 0] + u[:, :1] * (A[t, 1] - A[t, 0]) + u[:, 1:] * (A[t, 2] - A[t, 0])
 
 
 def sharp_edges(V, F, angle=30.0):

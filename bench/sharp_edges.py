@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import CLI, MESHES  # noqa: E402
-from local import read_ply, sharp_edges  # noqa: E402
+from local import area_samples, read_ply, sharp_edges  # noqa: E402
 
 TURNS = [(30, 45), (45, 100), (100, 180)]
 
@@ -41,27 +41,11 @@ def edge_points(V, F, step, angle=30.0):
     return np.array(rows).reshape(-1, 6)
 
 
-def dense_points(V, F, step, rng):
-    """Points spread over the triangles about `step` apart, and the vertices."""
-    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    area = 0.5 * np.linalg.norm(np.cross(B - A, C - A), axis=1)
-    idx = np.repeat(np.arange(len(F)), np.maximum(1, (2 * area / step ** 2).astype(int)))
-    r1, r2 = np.sqrt(rng.random(len(idx))), rng.random(len(idx))
-    P = (1 - r1)[:, None] * A[idx] + (r1 * (1 - r2))[:, None] * B[idx] + (r1 * r2)[:, None] * C[idx]
-    return np.vstack([P, V])
-
-
-def read_points(path):
-    """x y z of a binary PLY point file as `contour --points` writes it."""
-    with open(path, "rb") as f:
-        header = []
-        while header[-1:] != ["end_header"]:
-            header.append(f.readline().decode().strip())
-        data = f.read()
-    n = next(int(h.split()[2]) for h in header if h.startswith("element vertex"))
-    props = [h.split()[1] for h in header if h.startswith("property")]
-    dt = "<f8" if props[0] in ("double", "float64") else "<f4"
-    return np.frombuffer(data, dtype=dt, count=n * len(props)).reshape(n, -1)[:, :3].astype(float)
+def dense_points(V, F, step):
+    """Points over the triangles' area, about `step` apart on average, and the vertices."""
+    A = V[F]
+    area = 0.5 * np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum()
+    return np.vstack([area_samples(V, F, count=int(2 * area / step ** 2)), V])
 
 
 def plot(E, dist, h, title, path):
@@ -101,16 +85,15 @@ def main():
     subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
                     prefix, "--quiet"], check=True, capture_output=True)
     E = edge_points(*read_ply(prefix + "_mesh.ply"), step=h / 4)
-    rng = np.random.default_rng(0)
     runs = {"mc": ["--method", "mc"], "local": ["--method", "gcp", "--reconstruction", "local",
                                                 "--points", prefix + "_points.ply"]}
     dist = {}
     for method, args in runs.items():
         subprocess.run([CLI, "contour", prefix + ".npy", "-o", f"{prefix}_{method}.ply", "--quiet",
                         *args], check=True, capture_output=True)
-        tree = cKDTree(dense_points(*read_ply(f"{prefix}_{method}.ply"), h / 30, rng))
+        tree = cKDTree(dense_points(*read_ply(f"{prefix}_{method}.ply"), h / 30))
         dist[method] = tree.query(E[:, :3])[0] / h
-    nearest = cKDTree(read_points(prefix + "_points.ply")).query(E[:, :3])[0] / h
+    nearest = cKDTree(read_ply(prefix + "_points.ply")[0]).query(E[:, :3])[0] / h
     print(f"{name} {res}^3: {len(E)} edge points, {int((E[:, 5] < h / 2).sum())} on edges shorter "
           "than h/2; mean distance in spacings\n")
     print("| edges | points | GCP-local | MC | nearest contact point (median) |")

@@ -16,7 +16,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import CLI, keep, timed  # noqa: E402
-from local import read_ply  # noqa: E402
+from local import area_samples, read_ply  # noqa: E402
 
 METHODS = {
     "mc": ["--method", "mc"],
@@ -31,18 +31,6 @@ def distance(shape, x):
         return np.linalg.norm(x, axis=1) - 0.6
     ring = np.stack([np.hypot(x[:, 0], x[:, 1]) - 0.55, x[:, 2]], axis=1)
     return np.linalg.norm(ring, axis=1) - 0.25
-
-
-def area_samples(V, F, count=200000, seed=1):
-    """`count` points spread uniformly over the triangles' area."""
-    rng = np.random.default_rng(seed)
-    A = V[F]
-    area = 0.5 * np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1)
-    t = rng.choice(len(F), count, p=area / area.sum())
-    u = rng.random((count, 2))
-    flip = u.sum(axis=1) > 1
-    u[flip] = 1 - u[flip]
-    return A[t, 0] + u[:, :1] * (A[t, 1] - A[t, 0]) + u[:, 1:] * (A[t, 2] - A[t, 0])
 
 
 def main():
