@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "reconstruction/carving_internal.h"
+#include "reconstruction/nearest_triangles.h"
 
 namespace sdfcontour::detail {
 
@@ -257,22 +258,9 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
   out.moves = PointMatrix::Zero(mesh.vertices.rows(), 3);
   if (mesh.triangles.rows() == 0 || which.empty()) return out;
   const PointMatrix& V = mesh.vertices;
-  const TriangleMatrix& F = mesh.triangles;
-  std::vector<Triangle> triangles;
-  std::vector<int> index;  // the mesh's triangle of each tree triangle
-  if (among) {
-    index = *among;
-  } else {
-    index.resize(std::size_t(F.rows()));
-    std::iota(index.begin(), index.end(), 0);
-  }
-  if (index.empty()) return out;
-  triangles.reserve(index.size());
-  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
-  for (int t : index) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
-  Tree tree(triangles.begin(), triangles.end());
-  // The kd-tree of hints pays off over many queries, not over the few of later rounds.
-  if (which.size() > kManyQueries) tree.accelerate_distance_queries();
+  if (among && among->empty()) return out;
+  // The kd-trees of hints pay off over many queries, not over the few of later rounds.
+  const NearestTriangles tree(mesh, among, which.size() > kManyQueries);
   // Per checked sample: the feature's vertices and the move asked of them (empty if none).
   std::vector<std::vector<int>> features(which.size());
   std::vector<Eigen::Vector3d> asked(which.size());
@@ -284,12 +272,10 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
     const double r = std::abs(values[s]);
     if (!(r > 0)) return;
     const Eigen::Vector3d p = points.row(s).transpose();
-    const auto [nearest, primitive] =
-        tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
-    const int t = index[std::size_t(primitive - triangles.cbegin())];
+    const NearestTriangles::Hit nearest = tree.closest(p);
+    const int t = nearest.triangle;
     out.nearest[w] = t;
-    NearestFeature at =
-        feature_at(mesh, around, t, Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z()), p);
+    NearestFeature at = feature_at(mesh, around, t, nearest.point, p);
     const Eigen::Vector3d q = at.point, n = at.normal;
     std::vector<int>& feature = at.vertices;
     const double side = values[s] > 0 ? 1 : -1, height = at.height;

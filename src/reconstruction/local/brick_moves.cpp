@@ -1,6 +1,8 @@
 // A brick's moves of its mesh after the projection (brick_moves.h).
 #include "reconstruction/local/brick_moves.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -54,14 +56,14 @@ std::vector<char> samples_near(const PointMatrix& samples, const PointMatrix& V,
   std::sort(cubes.begin(), cubes.end());
   cubes.erase(std::unique(cubes.begin(), cubes.end()), cubes.end());
   std::vector<char> out(std::size_t(samples.rows()), 0);
-  for (Eigen::Index i = 0; i < samples.rows(); ++i) {
+  tbb::parallel_for(Eigen::Index(0), samples.rows(), [&](Eigen::Index i) {
     const auto c = cube(samples.row(i).transpose());
     for (long dx = -1; dx <= 1 && !out[std::size_t(i)]; ++dx)
       for (long dy = -1; dy <= 1 && !out[std::size_t(i)]; ++dy)
         for (long dz = -1; dz <= 1 && !out[std::size_t(i)]; ++dz)
           out[std::size_t(i)] = std::binary_search(
               cubes.begin(), cubes.end(), std::array<long, 3>{c[0] + dx, c[1] + dy, c[2] + dz});
-  }
+  });
   return out;
 }
 

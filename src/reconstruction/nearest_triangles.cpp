@@ -1,0 +1,122 @@
+// Nearest-triangle queries over chunks of a mesh, each chunk one CGAL AABB tree
+// (nearest_triangles.h).
+#include "reconstruction/nearest_triangles.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+
+namespace sdfcontour::detail {
+
+namespace {
+
+using K = CGAL::Simple_cartesian<double>;
+using Triangle = K::Triangle_3;
+using Iterator = std::vector<Triangle>::const_iterator;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, CGAL::AABB_triangle_primitive<K, Iterator>>>;
+
+// Chunks hold at least this many triangles, and there are at most kMostChunks of them: enough
+// chunks to build on every core, few enough that a query's walk over their boxes stays cheap.
+constexpr std::size_t kLeastChunk = 32768;
+constexpr std::size_t kMostChunks = 64;
+
+// The 30-bit Morton code of a point quantised to 1024 steps per axis of `box`.
+std::uint32_t morton(const Eigen::Vector3d& p, const Eigen::AlignedBox3d& box) {
+  const Eigen::Vector3d extent = (box.max() - box.min()).cwiseMax(1e-300);
+  std::uint32_t code = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double unit = (p[a] - box.min()[a]) / extent[a];
+    const auto q = std::uint32_t(std::clamp(unit * 1024.0, 0.0, 1023.0));
+    for (int bit = 0; bit < 10; ++bit) code |= ((q >> bit) & 1u) << (3 * bit + a);
+  }
+  return code;
+}
+
+}  // namespace
+
+struct NearestTriangles::Chunk {
+  std::vector<Triangle> triangles;
+  std::vector<int> index;  // the mesh's triangle of each of `triangles`
+  Eigen::AlignedBox3d box;
+  std::unique_ptr<Tree> tree;
+};
+
+NearestTriangles::NearestTriangles(const Mesh& mesh, const std::vector<int>* among,
+                                   bool many_queries) {
+  std::vector<int> all;
+  if (!among) {
+    all.resize(std::size_t(mesh.triangles.rows()));
+    std::iota(all.begin(), all.end(), 0);
+  }
+  const std::vector<int>& which = among ? *among : all;
+  if (which.empty()) return;
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto centroid = [&](int t) {
+    return ((V.row(F(t, 0)) + V.row(F(t, 1)) + V.row(F(t, 2))) / 3.0).transpose().eval();
+  };
+  Eigen::AlignedBox3d bounds;
+  for (int t : which) bounds.extend(centroid(t));
+  std::vector<std::pair<std::uint32_t, int>> order(which.size());
+  tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
+    order[i] = {morton(centroid(which[i]), bounds), which[i]};
+  });
+  tbb::parallel_sort(order.begin(), order.end());
+  const std::size_t size = std::max(kLeastChunk, (which.size() + kMostChunks - 1) / kMostChunks);
+  const std::size_t count = (which.size() + size - 1) / size;
+  chunks_.resize(count);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t c) {
+    auto chunk = std::make_unique<Chunk>();
+    const std::size_t end = std::min(which.size(), (c + 1) * size);
+    auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+    for (std::size_t i = c * size; i < end; ++i) {
+      const int t = order[i].second;
+      chunk->index.push_back(t);
+      chunk->triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+      for (int k = 0; k < 3; ++k) chunk->box.extend(V.row(F(t, k)).transpose());
+    }
+    chunk->tree = std::make_unique<Tree>(chunk->triangles.begin(), chunk->triangles.end());
+    chunk->tree->build();
+    if (many_queries)
+      chunk->tree->accelerate_distance_queries();
+    else
+      chunk->tree->do_not_accelerate_distance_queries();
+    chunks_[c] = std::move(chunk);
+  });
+}
+
+NearestTriangles::~NearestTriangles() = default;
+
+NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const {
+  Hit hit;
+  if (chunks_.empty()) return hit;
+  // Chunks by the distance to their boxes (ties: the lower chunk).
+  std::vector<std::pair<double, std::size_t>> near(chunks_.size());
+  for (std::size_t c = 0; c < chunks_.size(); ++c)
+    near[c] = {chunks_[c]->box.squaredExteriorDistance(p), c};
+  std::sort(near.begin(), near.end());
+  double best = std::numeric_limits<double>::infinity();
+  const K::Point_3 q(p[0], p[1], p[2]);
+  for (const auto& [box_distance, c] : near) {
+    if (box_distance >= best) break;
+    const Chunk& chunk = *chunks_[c];
+    const auto [point, primitive] = chunk.tree->closest_point_and_primitive(q);
+    const double d = CGAL::squared_distance(q, point);
+    if (d < best) {
+      best = d;
+      hit.triangle = chunk.index[std::size_t(primitive - chunk.triangles.cbegin())];
+      hit.point = Eigen::Vector3d(point.x(), point.y(), point.z());
+    }
+  }
+  return hit;
+}
+
+}  // namespace sdfcontour::detail

@@ -1,0 +1,89 @@
+// Nearest-triangle queries over chunked trees (nearest_triangles.h) against a brute-force scan.
+#include <CGAL/Simple_cartesian.h>
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <random>
+
+#include "reconstruction/nearest_triangles.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+
+namespace {
+
+using K = CGAL::Simple_cartesian<double>;
+
+// m small random triangles in [-1, 1]^3: enough of them for several chunks.
+Mesh random_triangles(int m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> where(-1, 1), offset(-0.02, 0.02);
+  Mesh mesh;
+  mesh.vertices.resize(3 * m, 3);
+  mesh.triangles.resize(m, 3);
+  for (int t = 0; t < m; ++t) {
+    const Eigen::RowVector3d c(where(rng), where(rng), where(rng));
+    for (int k = 0; k < 3; ++k) {
+      mesh.vertices.row(3 * t + k) = c + Eigen::RowVector3d(offset(rng), offset(rng), offset(rng));
+      mesh.triangles(t, k) = 3 * t + k;
+    }
+  }
+  return mesh;
+}
+
+double squared_distance(const Mesh& mesh, int t, const Eigen::Vector3d& p) {
+  auto point = [&](int c) {
+    const auto v = mesh.vertices.row(mesh.triangles(t, c));
+    return K::Point_3(v[0], v[1], v[2]);
+  };
+  return CGAL::squared_distance(K::Point_3(p[0], p[1], p[2]),
+                                K::Triangle_3(point(0), point(1), point(2)));
+}
+
+}  // namespace
+
+TEST(NearestTriangles, AgreesWithABruteForceScan) {
+  const Mesh mesh = random_triangles(100000, 3);  // 4 chunks
+  std::vector<int> among;
+  for (int t = 0; t < mesh.triangles.rows(); t += 3) among.push_back(t);
+  const PointMatrix queries = test::random_points(150, 11) * 1.2;  // some outside the triangles
+  const std::vector<int>* subsets[] = {nullptr, &among};
+  for (const std::vector<int>* subset : subsets) {
+    const detail::NearestTriangles tree(mesh, subset, true);
+    for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+      const Eigen::Vector3d p = queries.row(q).transpose();
+      double best = INFINITY;
+      const int count = subset ? int(subset->size()) : int(mesh.triangles.rows());
+      for (int i = 0; i < count; ++i)
+        best = std::min(best, squared_distance(mesh, subset ? (*subset)[std::size_t(i)] : i, p));
+      const detail::NearestTriangles::Hit hit = tree.closest(p);
+      ASSERT_GE(hit.triangle, 0);
+      if (subset) {
+        EXPECT_EQ(hit.triangle % 3, 0) << "a triangle outside the subset";
+      }
+      EXPECT_NEAR(squared_distance(mesh, hit.triangle, p), best, 1e-15);
+      EXPECT_NEAR((hit.point - p).squaredNorm(), best, 1e-12);
+    }
+  }
+}
+
+TEST(NearestTriangles, TheSameAnswerForAnyThreadCount) {
+  const Mesh mesh = random_triangles(70000, 5);
+  const PointMatrix queries = test::random_points(400, 7);
+  std::vector<int> found[2];
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    const detail::NearestTriangles tree(mesh, nullptr, threads == 2);
+    for (Eigen::Index q = 0; q < queries.rows(); ++q)
+      found[threads - 1].push_back(tree.closest(queries.row(q).transpose()).triangle);
+  }
+  EXPECT_EQ(found[0], found[1]);
+}
+
+TEST(NearestTriangles, NoTrianglesNoHit) {
+  const Mesh mesh = random_triangles(10, 1);
+  const std::vector<int> none;
+  const detail::NearestTriangles tree(mesh, &none, false);
+  EXPECT_TRUE(tree.empty());
+  EXPECT_EQ(tree.closest(Eigen::Vector3d::Zero()).triangle, -1);
+}
