@@ -149,15 +149,16 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
 /// key two positions.
 Mesh join_local_pieces(const std::vector<LocalPiece>& pieces);
 
-/// The whole grid's mesh from bricks of `brick` samples per side (0: one brick), computed in
-/// parallel and joined; each brick's halo doubles until its stars fit. The mesh does not depend
-/// on `brick` or the thread count.
+/// The whole grid's mesh from bricks of `brick` samples per side (0: one brick), computed one
+/// after another, each in parallel inside (so memory holds one brick's work and the pieces so
+/// far), and joined; each brick's halo doubles until its stars fit. The mesh does not depend on
+/// `brick` or the thread count.
 struct LocalBricksStats {
   int bricks = 0;                   ///< bricks with a piece of the surface
   int wider_halos = 0;              ///< bricks read again with a wider halo
   long contact_points = 0;          ///< over all bricks (a halo's samples counted again)
   LocalReconstructionStats local;   ///< summed over the bricks' owned cells
-  std::array<double, 6> seconds{};  ///< LocalPiece::seconds summed over the bricks (CPU time)
+  std::array<double, 6> seconds{};  ///< LocalPiece::seconds summed over the bricks
 };
 
 /// `contact_points` (optional, with options.keep_contact_points): every brick's owned contact
