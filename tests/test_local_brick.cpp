@@ -45,6 +45,35 @@ TEST(LocalBrick, BricksEqualOneBrickBitForBit) {
   }
 }
 
+TEST(LocalBrick, Float32GridsInBricksEqualOneBrickAndReportTheirReads) {
+  // Float32 values (a mapped .npy's) are copied into bricks as float32: the same mesh as one
+  // brick, and each brick reports when it stops reading the grid (twice: after its copy, after
+  // its piece).
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 40, Bounds{});
+  std::vector<float> values(g.values.data(), g.values.data() + g.values.size());
+  GridView view = view_of(g);
+  view.data = values.data();
+  view.type = ScalarType::Float32;
+  LocalBrickOptions o;
+  // A narrow band and no untangling or carving: halos of 12 samples, so that bricks of 14 copy
+  // blocks out of the 40^3 grid.
+  o.untangle = false;
+  o.carve = false;
+  o.band.band = 1;
+  o.band.margin = 0;
+  int reads = 0;
+  o.grid_read = [&] { ++reads; };
+  const Mesh whole = local_mesh_in_bricks(view, o, 0);
+  EXPECT_EQ(reads, 1);
+  reads = 0;
+  ASSERT_LT(14 + 2 * local_brick_halo(o, g.dims), 40);
+  const Mesh pieces = local_mesh_in_bricks(view, o, 14);
+  EXPECT_GE(reads, 2 * 27);  // more where a brick reads a wider halo again
+  ASSERT_GT(whole.triangles.rows(), 2000);
+  EXPECT_EQ(pieces.vertices, whole.vertices);
+  EXPECT_EQ(pieces.triangles, whole.triangles);
+}
+
 TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
   const Grid g = shared_mesh_grid("wingnut", 48);
   LocalBrickOptions o;

@@ -182,7 +182,9 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   }
   const bool bricked = detail::bricked_local(grid.dense, options);
   if (bricked) {
-    detail::reconstruct_in_bricks(*grid.dense, band_options, options, result, stages);
+    // A file-mapped grid is held a block at a time: its pages go once a brick has its block.
+    detail::reconstruct_in_bricks(*grid.dense, band_options, options, result, stages,
+                                  [&] { release_resident_pages(input); });
     if (!options.want_points) return result;
   }
   BandSamples band = band_stage(grid, scattered, band_options, stages);

@@ -113,9 +113,11 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
 bool bricked_local(const GridView* grid, const ContourOptions& options);
 
 /// GCP's local reconstruction from `grid` brick by brick (local_mesh_in_bricks), values scaled
-/// by `band`'s value_scale: result.mesh, .local, .local_bricks.
+/// by `band`'s value_scale: result.mesh, .local, .local_bricks. `grid_read` (optional): see
+/// LocalBrickOptions::grid_read.
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
-                           const ContourOptions& options, ContourResult& result, Stages& stages);
+                           const ContourOptions& options, ContourResult& result, Stages& stages,
+                           const std::function<void()>& grid_read = {});
 
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
                          const ContourOptions& options, ContourResult& result, Stages& stages);

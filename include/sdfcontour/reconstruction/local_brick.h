@@ -94,6 +94,10 @@ struct LocalBrickOptions {
   const std::atomic<bool>* cancel = nullptr;
   /// local_mesh_in_bricks: called as bricks finish (done, total), serialised; empty for silence.
   std::function<void(int, int)> progress;
+  /// local_mesh_in_bricks: called whenever a brick stops reading the grid (once its block is
+  /// copied out, and after each brick). The pipeline drops a file-mapped grid's resident pages
+  /// there, so that no more than a brick's block of the grid is held at a time.
+  std::function<void()> grid_read;
   /// Keep the owned samples' contact points in LocalPiece (for adaptivity after the join).
   bool keep_contact_points = false;
 };

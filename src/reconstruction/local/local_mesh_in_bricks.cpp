@@ -2,9 +2,12 @@
 // out with a halo, one brick after another (each parallel inside), the pieces joined by their
 // vertices' keys.
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <string>
 #include <tuple>
+#include <type_traits>
 
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/reconstruction/local_brick.h"
@@ -15,28 +18,33 @@ namespace {
 
 using Index3 = std::array<int, 3>;
 
-// The block of `grid` with global samples [lo, hi), copied out as doubles (`values` keeps them).
+// The block of `grid` with global samples [lo, hi), copied out in the grid's own type (`values`
+// keeps them; float32 grids stay float32, half the memory of a brick of doubles).
+template <class T>
 GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
-                    std::vector<double>& values) {
+                    std::vector<T>& values) {
   GridView block;
   block.bounds = grid.bounds;
   block.first = lo;
   block.whole = grid.dims;
   for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
   values.resize(block.size());
-  std::size_t at = 0;
-  for (int i = lo[0]; i < hi[0]; ++i)
+  const std::size_t plane = std::size_t(block.dims[1]) * std::size_t(block.dims[2]);
+  tbb::parallel_for(lo[0], hi[0], [&](int i) {
+    std::size_t at = std::size_t(i - lo[0]) * plane;
     for (int j = lo[1]; j < hi[1]; ++j)
-      for (int k = lo[2]; k < hi[2]; ++k) values[at++] = grid.value(grid.index(i, j, k));
+      for (int k = lo[2]; k < hi[2]; ++k) values[at++] = T(grid.value(grid.index(i, j, k)));
+  });
   block.data = values.data();
-  block.type = ScalarType::Float64;
+  block.type = std::is_same_v<T, float> ? ScalarType::Float32 : ScalarType::Float64;
   return block;
 }
 
 LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Index3& own_end,
                        const LocalBrickOptions& options, int& wider) {
   int halo = local_brick_halo(options, grid.dims);
-  std::vector<double> values;
+  std::vector<float> floats;
+  std::vector<double> doubles;
   for (;;) {
     Index3 lo, hi;
     bool whole = true;
@@ -47,8 +55,11 @@ LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Inde
     }
     try {
       // A block that is the whole grid is the grid itself (no copy).
-      return local_brick_piece(whole ? grid : copy_block(grid, lo, hi, values), own_first, own_end,
-                               options);
+      if (whole) return local_brick_piece(grid, own_first, own_end, options);
+      const GridView block = grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
+                                                              : copy_block(grid, lo, hi, doubles);
+      if (options.grid_read) options.grid_read();
+      return local_brick_piece(block, own_first, own_end, options);
     } catch (const HaloTooSmall&) {
       if (whole) throw InternalError("a block holding the whole grid reported too small a halo");
       halo *= 2;
@@ -152,6 +163,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
     }
     check_cancel(options.cancel);
     pieces[std::size_t(b)] = brick_piece(grid, first, end, options, wider[std::size_t(b)]);
+    if (options.grid_read) options.grid_read();
     if (options.progress) options.progress(b + 1, total);
   }
   if (stats) {

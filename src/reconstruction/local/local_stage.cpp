@@ -70,7 +70,8 @@ bool bricked_local(const GridView* grid, const ContourOptions& options) {
 }
 
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
-                           const ContourOptions& options, ContourResult& result, Stages& stages) {
+                           const ContourOptions& options, ContourResult& result, Stages& stages,
+                           const std::function<void()>& grid_read) {
   if (options.carve_sides == Switch::On || options.side_repair == Switch::On)
     throw Error(
         "carving's triangle rounds and side repair are whole-mesh stages: the local "
@@ -78,6 +79,7 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
         "--reconstruction poisson)");
   LocalBrickOptions lb = local_brick_options(options);
   lb.band = band;
+  lb.grid_read = grid_read;
   if (options.progress_fraction)
     lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
   // One brick up to 512 samples per axis (its stages run in parallel inside it); beyond, bricks
