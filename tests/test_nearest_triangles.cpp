@@ -1,4 +1,5 @@
-// Nearest-triangle queries over chunked trees (nearest_triangles.h) against a brute-force scan.
+// Nearest-triangle and ball queries over chunked trees (nearest_triangles.h) against a
+// brute-force scan.
 #include <CGAL/Simple_cartesian.h>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -63,6 +64,8 @@ TEST(NearestTriangles, AgreesWithABruteForceScan) {
       }
       EXPECT_NEAR(squared_distance(mesh, hit.triangle, p), best, 1e-15);
       EXPECT_NEAR((hit.point - p).squaredNorm(), best, 1e-12);
+      EXPECT_TRUE(tree.meets_ball(p, std::sqrt(best) * 1.001 + 1e-12));
+      EXPECT_FALSE(tree.meets_ball(p, std::sqrt(best) * 0.999));
     }
   }
 }

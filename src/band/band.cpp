@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "input/windowed_passes.h"
 #include "sdfcontour/band/point_clusters.h"
 
 namespace sdfcontour {
@@ -74,13 +75,16 @@ bool Truncation::truncated(double value) const {
 
 namespace {
 
+// `drop_pages`: the grid's page dropper (GridView::drop_pages), or null.
 template <class T>
-Truncation detect_in(const T* values, std::size_t n, double min_fraction) {
+Truncation detect_in(const T* values, std::size_t n, double min_fraction,
+                     const std::function<void(const void*, std::size_t)>* drop_pages) {
+  auto never = [](const auto&) { return false; };
   struct Extremes {
     double most_negative = 0, most_positive = 0;
   };
-  const Extremes e = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Extremes{},
+  const Extremes e = detail::windowed_reduce(
+      drop_pages, values, n, Extremes{},
       [&](const tbb::blocked_range<std::size_t>& r, Extremes x) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           x.most_negative = std::min(x.most_negative, double(values[i]));
@@ -91,14 +95,15 @@ Truncation detect_in(const T* values, std::size_t n, double min_fraction) {
       [](Extremes a, Extremes b) {
         return Extremes{std::min(a.most_negative, b.most_negative),
                         std::max(a.most_positive, b.most_positive)};
-      });
+      },
+      never);
   const double lo = -e.most_negative * (1 - kTruncationTolerance),
                hi = e.most_positive * (1 - kTruncationTolerance);
   struct Counts {
     long at_inside = 0, at_outside = 0, negatives = 0;
   };
-  const Counts c = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Counts{},
+  const Counts c = detail::windowed_reduce(
+      drop_pages, values, n, Counts{},
       [&](const tbb::blocked_range<std::size_t>& r, Counts x) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           const double v = values[i];
@@ -111,7 +116,8 @@ Truncation detect_in(const T* values, std::size_t n, double min_fraction) {
       [](Counts a, Counts b) {
         return Counts{a.at_inside + b.at_inside, a.at_outside + b.at_outside,
                       a.negatives + b.negatives};
-      });
+      },
+      never);
   auto clamped = [&](long at_extreme, long of_sign) {
     return at_extreme >= kMinTruncatedSamples &&
            double(at_extreme) >= min_fraction * double(of_sign);
@@ -126,11 +132,12 @@ Truncation detect_in(const T* values, std::size_t n, double min_fraction) {
 }  // namespace
 
 Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction) {
-  return detect_in(values.data(), std::size_t(values.size()), min_fraction);
+  return detect_in(values.data(), std::size_t(values.size()), min_fraction, nullptr);
 }
 
 Truncation detect_truncation(const GridView& grid, double min_fraction) {
-  return grid.visit([&](const auto* f) { return detect_in(f, grid.size(), min_fraction); });
+  return grid.visit(
+      [&](const auto* f) { return detect_in(f, grid.size(), min_fraction, grid.drop_pages); });
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "input/windowed_passes.h"
 #include "sdfcontour/band/band.h"
 
 namespace sdfcontour {
@@ -26,7 +27,7 @@ std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncati
                                  std::size_t(grid.dims[2]), 1};
   std::vector<std::vector<double>> per_slab(std::size_t(to[0] - from[0]));
   grid.visit([&](const auto* f) {
-    tbb::parallel_for(from[0], to[0], [&](int i) {
+    detail::windowed_slabs(grid, f, from[0], to[0], 2, [&](int i) {
       for (int j = from[1]; j < to[1]; ++j)
         for (int k = from[2]; k < to[2]; ++k) {
           const std::size_t p = grid.index(i, j, k);

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <vector>
 
+#include "input/windowed_passes.h"
+
 namespace sdfcontour {
 
 double noise_level(const GridView& grid, const Truncation& truncation) {
@@ -19,7 +21,7 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
   constexpr double kWeights[5] = {1, -4, 6, -4, 1};
   std::vector<std::vector<double>> per_slab(static_cast<std::size_t>(nx));
   grid.visit([&](const auto* f) {
-    tbb::parallel_for(2, nx - 2, [&](int i) {
+    detail::windowed_slabs(grid, f, 2, nx - 2, 2, [&](int i) {
       for (int j = 2; j + 2 < ny; ++j)
         for (int k = 2; k + 2 < nz; ++k) {
           const long p = long(grid.index(i, j, k));

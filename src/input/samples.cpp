@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "input/windowed_passes.h"
 #include "sdfcontour/input/coordinates.h"
 
 namespace sdfcontour {
@@ -57,24 +58,27 @@ GridView view_of(const Grid& grid) {
 
 namespace {
 
-// The first non-finite value's index, or size: chunks in parallel, the smallest index wins.
+// The first non-finite value's index, or n: chunks in parallel, the smallest index wins
+// (windows of a mapped grid dropped behind the pass).
 template <class T>
-std::size_t first_non_finite(const T* f, std::size_t n) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 1 << 16), n,
+std::size_t first_non_finite(const T* f, std::size_t n,
+                             const std::function<void(const void*, std::size_t)>* drop_pages) {
+  return detail::windowed_reduce(
+      drop_pages, f, n, n,
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
         for (std::size_t i = r.begin(); i < r.end() && i < found; ++i)
           if (!(std::abs(double(f[i])) <= kLargestValue)) return i;
         return found;
       },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+      [](std::size_t a, std::size_t b) { return std::min(a, b); },
+      [&](std::size_t found) { return found < n; });
 }
 
 }  // namespace
 
 std::optional<std::array<int, 3>> first_non_finite(const GridView& grid) {
   const std::size_t bad =
-      grid.visit([&](const auto* f) { return first_non_finite(f, grid.size()); });
+      grid.visit([&](const auto* f) { return first_non_finite(f, grid.size(), grid.drop_pages); });
   if (bad == grid.size()) return std::nullopt;
   // Named by its (i, j, k), as the user's array indexes it (C order), in its whole grid.
   const std::size_t nz = std::size_t(grid.dims[2]), nyz = std::size_t(grid.dims[1]) * nz;
@@ -112,8 +116,8 @@ void validate_grid(const Grid& grid) {
 
 void require_sign_change(const GridView& grid) {
   const auto [inside, outside] = grid.visit([&](const auto* f) {
-    return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, grid.size(), 1 << 16), std::pair<bool, bool>{},
+    return detail::windowed_reduce(
+        grid.drop_pages, f, grid.size(), std::pair<bool, bool>{},
         [&](const tbb::blocked_range<std::size_t>& r, std::pair<bool, bool> s) {
           for (std::size_t i = r.begin(); i < r.end() && !(s.first && s.second); ++i)
             (f[i] < 0 ? s.first : s.second) = true;
@@ -121,7 +125,8 @@ void require_sign_change(const GridView& grid) {
         },
         [](std::pair<bool, bool> a, std::pair<bool, bool> b) {
           return std::pair<bool, bool>{a.first || b.first, a.second || b.second};
-        });
+        },
+        [](std::pair<bool, bool> s) { return s.first && s.second; });
   });
   if (!(inside && outside))
     throw Error(std::string("no surface: every value is ") +

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -300,18 +301,38 @@ void write_npy(const std::string& path, const std::vector<std::size_t>& shape,
   write_npy(path, shape, data.data(), data.size(), ScalarType::Float64);
 }
 
+namespace {
+
+// Drops the pages of [address, address + bytes) clipped to the mapped values [values,
+// values + size): whole pages, rounded outwards (the mapping is page-aligned and covers the
+// values, so the rounded range stays inside it). MADV_DONTNEED on a private, never-written file
+// mapping only drops clean pages, read from the file again when used (advice, so a failure
+// changes nothing).
+void drop_mapped_pages(const char* values, std::size_t size, const void* address,
+                       std::size_t bytes) {
+  const auto lo = std::max(reinterpret_cast<std::uintptr_t>(address),
+                           reinterpret_cast<std::uintptr_t>(values)),
+             hi = std::min(reinterpret_cast<std::uintptr_t>(address) + bytes,
+                           reinterpret_cast<std::uintptr_t>(values) + size);
+  if (lo >= hi) return;
+  const auto page = std::uintptr_t(::sysconf(_SC_PAGESIZE));
+  const std::uintptr_t first = lo / page * page, last = (hi + page - 1) / page * page;
+  ::madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
+}
+
+// A mapped .npy's grid and the page dropper its view points to (GridView::drop_pages).
+struct MappedGrid {
+  std::shared_ptr<const MappedNpy> array;
+  std::function<void(const void*, std::size_t)> drop;
+};
+
+}  // namespace
+
 void release_resident_pages(const SdfInput& input) {
   const GridInput* grid = std::get_if<GridInput>(&input);
-  if (!grid || !grid->file_mapped || !grid->view.data) return;
-  // Whole pages only; the mapping is page-aligned and covers the view, so the rounded range
-  // stays inside it. MADV_DONTNEED on a private, never-written file mapping only drops clean
-  // pages (advice, so a failure changes nothing).
-  const auto page = std::uintptr_t(::sysconf(_SC_PAGESIZE));
+  if (!grid || !grid->file_mapped || !grid->view.data || !grid->view.drop_pages) return;
   const std::size_t item = grid->view.type == ScalarType::Float32 ? 4 : 8;
-  const auto begin = reinterpret_cast<std::uintptr_t>(grid->view.data);
-  const std::uintptr_t first = begin / page * page,
-                       last = (begin + grid->view.size() * item + page - 1) / page * page;
-  ::madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
+  (*grid->view.drop_pages)(grid->view.data, grid->view.size() * item);
 }
 
 SdfInput grid_input(Grid grid) {
@@ -387,7 +408,14 @@ SdfInput sdf_input_from_npy(std::shared_ptr<const MappedNpy> array, const Bounds
     input.view.bounds = bounds;
     input.view.data = array->data;
     input.view.type = array->type;
-    input.storage = array;
+    auto mapped = std::make_shared<MappedGrid>();
+    mapped->array = array;
+    mapped->drop = [values = array->data, size = array->count * item](const void* address,
+                                                                      std::size_t bytes) {
+      drop_mapped_pages(values, size, address, bytes);
+    };
+    input.view.drop_pages = &mapped->drop;
+    input.storage = mapped;
     input.file_mapped = true;
     validate_grid(input.view);
     return input;

@@ -1,9 +1,5 @@
 // The triangle phase of sphere carving: samples whose ball a triangle cuts (not only a vertex),
 // or that lie on the wrong side of the mesh, push the nearest feature of the mesh away.
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Simple_cartesian.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -18,11 +14,6 @@
 namespace sdfcontour::detail {
 
 namespace {
-
-using K = CGAL::Simple_cartesian<double>;
-using Triangle = K::Triangle_3;
-using Iterator = std::vector<Triangle>::const_iterator;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, CGAL::AABB_triangle_primitive<K, Iterator>>>;
 
 Eigen::Vector3d triangle_normal(const PointMatrix& V, const TriangleMatrix& F, Eigen::Index t) {
   const Eigen::Vector3d a = V.row(F(t, 0)).transpose();
@@ -159,19 +150,12 @@ std::vector<int> samples_near_vertices(const Mesh& mesh, const VertexTriangles& 
   std::sort(seeds.begin(), seeds.end());
   seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
   if (seeds.empty()) return {};
-  const PointMatrix& V = mesh.vertices;
-  const TriangleMatrix& F = mesh.triangles;
-  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
-  std::vector<Triangle> triangles;
-  for (int t : seeds) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
-  const Tree tree(triangles.begin(), triangles.end());
+  const NearestTriangles tree(mesh, &seeds, false);
   std::vector<char> near(std::size_t(values.size()), 0);
   tbb::parallel_for(Eigen::Index(0), values.size(), [&](Eigen::Index s) {
     const double r = std::abs(values[s]);
     if (!(r <= reach)) return;
-    const K::Point_3 p(points(s, 0), points(s, 1), points(s, 2));
-    const double radius = ball * r + grow;
-    near[std::size_t(s)] = tree.do_intersect(K::Sphere_3(p, radius * radius));
+    near[std::size_t(s)] = tree.meets_ball(points.row(s).transpose(), ball * r + grow);
   });
   std::vector<int> out;
   for (std::size_t s = 0; s < near.size(); ++s)
@@ -237,17 +221,8 @@ static NearestFeature feature_at(const Mesh& mesh, const VertexTriangles& around
 NearestFeature nearest_feature(const Mesh& mesh, const VertexTriangles& around,
                                const Eigen::Vector3d& p, const std::vector<int>& among) {
   if (among.empty()) return {};
-  const PointMatrix& V = mesh.vertices;
-  const TriangleMatrix& F = mesh.triangles;
-  auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
-  std::vector<Triangle> triangles;
-  triangles.reserve(among.size());
-  for (int t : among) triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
-  Tree tree(triangles.begin(), triangles.end());
-  tree.do_not_accelerate_distance_queries();  // one query: no kd-tree of hints
-  const auto [nearest, primitive] = tree.closest_point_and_primitive(K::Point_3(p[0], p[1], p[2]));
-  return feature_at(mesh, around, among[std::size_t(primitive - triangles.cbegin())],
-                    Eigen::Vector3d(nearest.x(), nearest.y(), nearest.z()), p);
+  const NearestTriangles::Hit nearest = NearestTriangles(mesh, &among, false).closest(p);
+  return feature_at(mesh, around, nearest.triangle, nearest.point, p);
 }
 
 SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,

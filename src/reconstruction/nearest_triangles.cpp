@@ -119,4 +119,12 @@ NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const 
   return hit;
 }
 
+bool NearestTriangles::meets_ball(const Eigen::Vector3d& c, double radius) const {
+  const K::Sphere_3 ball(K::Point_3(c[0], c[1], c[2]), radius * radius);
+  for (const auto& chunk : chunks_)
+    if (chunk->box.squaredExteriorDistance(c) <= radius * radius && chunk->tree->do_intersect(ball))
+      return true;
+  return false;
+}
+
 }  // namespace sdfcontour::detail

@@ -1,4 +1,5 @@
-// The nearest triangle of a mesh to many query points, with an index built in parallel.
+// The nearest triangle of a mesh to many query points (and whether any meets a ball), with an
+// index built in parallel.
 #pragma once
 
 #include <memory>
@@ -31,6 +32,10 @@ class NearestTriangles {
   /// The nearest triangle to p (ties: the lower chunk, then CGAL's choice within one); safe to
   /// call from many threads at once.
   Hit closest(const Eigen::Vector3d& p) const;
+
+  /// Whether any of the triangles meets the closed ball of centre c and radius `radius`; safe to
+  /// call from many threads at once.
+  bool meets_ball(const Eigen::Vector3d& c, double radius) const;
 
   bool empty() const { return chunks_.empty(); }
 

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -73,6 +74,11 @@ enum class ScalarType { Float32, Float64 };
 struct GridView : GridGeometry {
   const void* data = nullptr;  ///< size() values of `type` in C order
   ScalarType type = ScalarType::Float64;
+  /// Set where the values lie in a file mapping (a mapped .npy): whole-grid passes hand it the
+  /// values they are done with, (*drop_pages)(address, bytes), and it drops those pages from
+  /// memory (read from the file again if used), so a pass over a grid larger than memory holds a
+  /// window of it. It ignores whatever lies outside its mapping. Null: the values stay.
+  const std::function<void(const void*, std::size_t)>* drop_pages = nullptr;
 
   double value(std::size_t p) const {
     return type == ScalarType::Float32 ? double(static_cast<const float*>(data)[p])
