@@ -330,7 +330,7 @@ struct MappedGrid {
 
 void release_resident_pages(const SdfInput& input) {
   const GridInput* grid = std::get_if<GridInput>(&input);
-  if (!grid || !grid->file_mapped || !grid->view.data || !grid->view.drop_pages) return;
+  if (!grid || !grid->view.data || !grid->view.drop_pages) return;
   const std::size_t item = grid->view.type == ScalarType::Float32 ? 4 : 8;
   (*grid->view.drop_pages)(grid->view.data, grid->view.size() * item);
 }
@@ -416,7 +416,6 @@ SdfInput sdf_input_from_npy(std::shared_ptr<const MappedNpy> array, const Bounds
     };
     input.view.drop_pages = &mapped->drop;
     input.storage = mapped;
-    input.file_mapped = true;
     validate_grid(input.view);
     return input;
   }

@@ -10,11 +10,10 @@
 namespace sdfcontour {
 
 /// A grid viewed in place (float32 or float64, never copied or widened), with whatever owns or
-/// maps the memory the view reads.
+/// maps the memory the view reads. A view of a file mapping (map_npy) has view.drop_pages set.
 struct GridInput {
   GridView view;
-  std::shared_ptr<const void> storage;  ///< keeps view.data alive
-  bool file_mapped = false;  ///< view.data lies in a read-only mapping of a file (map_npy)
+  std::shared_ptr<const void> storage;  ///< keeps view.data (and view.drop_pages) alive
 };
 
 /// Scattered samples: points (n x 3) and their values (n).
