@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "sdfcontour/extraction/marching.h"
@@ -47,8 +48,8 @@ TEST(LocalBrick, BricksEqualOneBrickBitForBit) {
 
 TEST(LocalBrick, Float32GridsInBricksEqualOneBrickAndReportTheirReads) {
   // Float32 values (a mapped .npy's) are copied into bricks as float32: the same mesh as one
-  // brick, and each brick reports when it stops reading the grid (twice: after its copy, after
-  // its piece).
+  // brick, and each brick reports when it stops reading the grid (after its copy, and after its
+  // piece; one brick that is the whole grid: before its side checks, and after its piece).
   const Grid g = sample_grid(*make_builtin_shape("csg"), 40, Bounds{});
   std::vector<float> values(g.values.data(), g.values.data() + g.values.size());
   GridView view = view_of(g);
@@ -64,7 +65,7 @@ TEST(LocalBrick, Float32GridsInBricksEqualOneBrickAndReportTheirReads) {
   int reads = 0;
   o.grid_read = [&] { ++reads; };
   const Mesh whole = local_mesh_in_bricks(view, o, 0);
-  EXPECT_EQ(reads, 1);
+  EXPECT_EQ(reads, 2);
   reads = 0;
   ASSERT_LT(14 + 2 * local_brick_halo(o, g.dims), 40);
   const Mesh pieces = local_mesh_in_bricks(view, o, 14);
@@ -72,6 +73,24 @@ TEST(LocalBrick, Float32GridsInBricksEqualOneBrickAndReportTheirReads) {
   ASSERT_GT(whole.triangles.rows(), 2000);
   EXPECT_EQ(pieces.vertices, whole.vertices);
   EXPECT_EQ(pieces.triangles, whole.triangles);
+}
+
+TEST(LocalBrick, NothingReadsTheGridAfterABrickSaysItIsDone) {
+  // Values spoilt (NaN) from the first grid_read on change nothing: the bricks free their
+  // copied blocks there. Default options, so the carving reads the grid before it.
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 32, Bounds{});
+  const Mesh clean = local_mesh_in_bricks(view_of(g), LocalBrickOptions(), 0);
+  Grid spoilt = g;
+  LocalBrickOptions o;
+  int reads = 0;
+  o.grid_read = [&] {
+    if (reads++ == 0) spoilt.values.setConstant(std::numeric_limits<double>::quiet_NaN());
+  };
+  const Mesh after = local_mesh_in_bricks(view_of(spoilt), o, 0);
+  EXPECT_EQ(reads, 2);
+  ASSERT_GT(clean.triangles.rows(), 1000);
+  EXPECT_EQ(after.vertices, clean.vertices);
+  EXPECT_EQ(after.triangles, clean.triangles);
 }
 
 TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
@@ -166,4 +185,60 @@ TEST(LocalBrick, RejectsBadBlocks) {
   EXPECT_THROW(local_brick_piece(block, {0, 0, 0}, {12, 12, 12}, automatic), Error);
   o.subdivisions = 7;
   EXPECT_THROW(local_brick_piece(block, {0, 0, 0}, {12, 12, 12}, o), Error);
+}
+
+namespace {
+
+// A piece of `keys` (ascending), vertex k at (key[0], key[1], `z`), and triangles over them.
+LocalPiece piece_of(const std::vector<VertexKey>& keys, double z,
+                    const std::vector<std::array<int, 3>>& triangles,
+                    const std::vector<std::uint64_t>& names) {
+  LocalPiece p;
+  p.keys = keys;
+  p.vertices.resize(Eigen::Index(keys.size()), 3);
+  for (std::size_t k = 0; k < keys.size(); ++k)
+    p.vertices.row(Eigen::Index(k)) << double(keys[k][0]), double(keys[k][1]), z;
+  p.triangles.resize(Eigen::Index(triangles.size()), 3);
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    p.triangles.row(Eigen::Index(t)) << triangles[t][0], triangles[t][1], triangles[t][2];
+  p.triangle_names = names;
+  return p;
+}
+
+}  // namespace
+
+TEST(LocalBrick, JoinMergesSharedKeysAndOrdersTrianglesByName) {
+  // Keys {0,5} and {1,0} are in both pieces; names interleave between them.
+  std::vector<LocalPiece> pieces;
+  pieces.push_back(piece_of({{0, 2}, {0, 5}, {1, 0}}, 0, {{0, 1, 2}, {2, 1, 0}}, {3, 10}));
+  pieces.push_back(
+      piece_of({{0, 5}, {1, 0}, {2, 7}, {3, 1}}, 0, {{0, 1, 2}, {1, 3, 2}, {3, 2, 0}}, {1, 4, 12}));
+  const Mesh kept = join_local_pieces(pieces);
+  // Vertices in ascending key order, each key once: {0,2} {0,5} {1,0} {2,7} {3,1}.
+  ASSERT_EQ(kept.vertices.rows(), 5);
+  const std::vector<std::array<double, 2>> expected{{0, 2}, {0, 5}, {1, 0}, {2, 7}, {3, 1}};
+  for (Eigen::Index v = 0; v < 5; ++v) {
+    EXPECT_EQ(kept.vertices(v, 0), expected[std::size_t(v)][0]);
+    EXPECT_EQ(kept.vertices(v, 1), expected[std::size_t(v)][1]);
+  }
+  // Triangles by name 1, 3, 4, 10, 12, written in the joined vertices' numbers.
+  TriangleMatrix want(5, 3);
+  want << 1, 2, 3,  // name 1: second piece's (0, 1, 2)
+      0, 1, 2,      // 3
+      2, 4, 3,      // 4
+      2, 1, 0,      // 10
+      4, 3, 1;      // 12
+  EXPECT_EQ(kept.triangles, want);
+  // The overload that frees the pieces gives the same arrays.
+  const Mesh freed = join_local_pieces(std::move(pieces));
+  EXPECT_EQ(freed.vertices, kept.vertices);
+  EXPECT_EQ(freed.triangles, kept.triangles);
+  EXPECT_TRUE(pieces.empty());
+}
+
+TEST(LocalBrick, JoinRejectsOneKeyPlacedTwice) {
+  std::vector<LocalPiece> pieces;
+  pieces.push_back(piece_of({{0, 1}, {0, 2}, {0, 3}}, 0, {{0, 1, 2}}, {0}));
+  pieces.push_back(piece_of({{0, 3}, {0, 4}, {0, 5}}, 1, {{0, 1, 2}}, {1}));
+  EXPECT_THROW(join_local_pieces(pieces), InternalError);
 }

@@ -4,7 +4,6 @@
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -19,9 +18,35 @@ namespace sdfcontour::detail {
 namespace {
 
 using K = CGAL::Simple_cartesian<double>;
-using Triangle = K::Triangle_3;
-using Iterator = std::vector<Triangle>::const_iterator;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, CGAL::AABB_triangle_primitive<K, Iterator>>>;
+
+// A mesh triangle by its index (CGAL's AABBPrimitiveWithSharedData): the tree keeps the index
+// alone and reads the corners from the mesh, where a copied K::Triangle_3 per primitive was 72
+// bytes more per triangle (the side checks build these trees over a brick's whole mesh).
+class MeshTriangle {
+ public:
+  using Id = int;
+  using Point = K::Point_3;
+  using Datum = K::Triangle_3;
+  using Shared_data = const Mesh*;
+
+  MeshTriangle() = default;
+  MeshTriangle(std::vector<int>::const_iterator t, const Mesh*) : id_(*t) {}
+  Id id() const { return id_; }
+  Datum datum(const Mesh* mesh) const {
+    return Datum(corner(mesh, 0), corner(mesh, 1), corner(mesh, 2));
+  }
+  Point reference_point(const Mesh* mesh) const { return corner(mesh, 0); }
+  static Shared_data construct_shared_data(const Mesh* mesh) { return mesh; }
+
+ private:
+  Point corner(const Mesh* mesh, int c) const {
+    const auto v = mesh->vertices.row(mesh->triangles(id_, c));
+    return Point(v[0], v[1], v[2]);
+  }
+  Id id_ = -1;
+};
+
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, MeshTriangle>>;
 
 // Chunks hold at least this many triangles, and there are at most kMostChunks of them: enough
 // chunks to build on every core, few enough that a query's walk over their boxes stays cheap.
@@ -43,8 +68,6 @@ std::uint32_t morton(const Eigen::Vector3d& p, const Eigen::AlignedBox3d& box) {
 }  // namespace
 
 struct NearestTriangles::Chunk {
-  std::vector<Triangle> triangles;
-  std::vector<int> index;  // the mesh's triangle of each of `triangles`
   Eigen::AlignedBox3d box;
   std::unique_ptr<Tree> tree;
 };
@@ -76,14 +99,13 @@ NearestTriangles::NearestTriangles(const Mesh& mesh, const std::vector<int>* amo
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t c) {
     auto chunk = std::make_unique<Chunk>();
     const std::size_t end = std::min(which.size(), (c + 1) * size);
-    auto point = [&](int v) { return K::Point_3(V(v, 0), V(v, 1), V(v, 2)); };
+    std::vector<int> triangles;
     for (std::size_t i = c * size; i < end; ++i) {
       const int t = order[i].second;
-      chunk->index.push_back(t);
-      chunk->triangles.emplace_back(point(F(t, 0)), point(F(t, 1)), point(F(t, 2)));
+      triangles.push_back(t);
       for (int k = 0; k < 3; ++k) chunk->box.extend(V.row(F(t, k)).transpose());
     }
-    chunk->tree = std::make_unique<Tree>(chunk->triangles.begin(), chunk->triangles.end());
+    chunk->tree = std::make_unique<Tree>(triangles.cbegin(), triangles.cend(), &mesh);
     chunk->tree->build();
     if (many_queries)
       chunk->tree->accelerate_distance_queries();
@@ -112,7 +134,7 @@ NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const 
     const double d = CGAL::squared_distance(q, point);
     if (d < best) {
       best = d;
-      hit.triangle = chunk.index[std::size_t(primitive - chunk.triangles.cbegin())];
+      hit.triangle = primitive;
       hit.point = Eigen::Vector3d(point.x(), point.y(), point.z());
     }
   }

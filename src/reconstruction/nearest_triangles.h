@@ -17,7 +17,8 @@ namespace sdfcontour::detail {
 /// and stops at the first box farther than the nearest triangle found: the answer is exact.
 class NearestTriangles {
  public:
-  /// mesh: the triangles' vertices and indices; among: the triangles searched (all if null).
+  /// mesh: the triangles' vertices and indices, read by the queries (it must outlive the index,
+  /// unchanged); among: the triangles searched (all if null).
   /// many_queries: whether each chunk also builds CGAL's kd-tree of hints (pays off over
   /// thousands of queries).
   NearestTriangles(const Mesh& mesh, const std::vector<int>* among, bool many_queries);

@@ -94,9 +94,11 @@ struct LocalBrickOptions {
   const std::atomic<bool>* cancel = nullptr;
   /// local_mesh_in_bricks: called as bricks finish (done, total), serialised; empty for silence.
   std::function<void(int, int)> progress;
-  /// local_mesh_in_bricks: called whenever a brick stops reading the grid (once its block is
-  /// copied out, and after each brick). The pipeline drops a file-mapped grid's resident pages
-  /// there, so that no more than a brick's block of the grid is held at a time.
+  /// Called whenever a brick stops reading the grid: by local_brick_piece once it has read all
+  /// it needs of its block (before the side checks; the caller may free the block's values
+  /// then), and by local_mesh_in_bricks once a brick's block is copied out and after each brick.
+  /// The pipeline drops a file-mapped grid's resident pages there, so that no more than a
+  /// brick's block of the grid is held at a time.
   std::function<void()> grid_read;
   /// Keep the owned samples' contact points in LocalPiece (for adaptivity after the join).
   bool keep_contact_points = false;
@@ -152,6 +154,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
 /// their names: the same arrays whatever the bricks. Throws InternalError if two pieces give one
 /// key two positions.
 Mesh join_local_pieces(const std::vector<LocalPiece>& pieces);
+/// The same, freeing each piece's arrays as soon as they are read (`pieces` is left empty).
+Mesh join_local_pieces(std::vector<LocalPiece>&& pieces);
 
 /// The whole grid's mesh from bricks of `brick` samples per side (0: one brick), computed one
 /// after another, each in parallel inside (so memory holds one brick's work and the pieces so

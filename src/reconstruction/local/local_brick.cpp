@@ -12,6 +12,7 @@
 #include <string>
 
 #include "reconstruction/carving_internal.h"
+#include "reconstruction/free_memory.h"
 #include "reconstruction/local/brick_moves.h"
 #include "reconstruction/local/keyed_local_mesh.h"
 #include "reconstruction/local/lattice_subdivision.h"
@@ -227,6 +228,36 @@ void keep_owned_contact_points(const GridView& block, const BandSamples& band,
   }
 }
 
+// The owned triangles of the subdivided brick mesh and their vertices (keys stay ascending),
+// into `piece`.
+void take_owned_part(const detail::SubdividedMesh& sub, int levels, const Index3& n,
+                     const Index3& own_first, const Index3& own_end, LocalPiece& piece) {
+  std::vector<Eigen::Index> owned;
+  for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
+    if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
+      owned.push_back(t);
+  std::vector<int> id(std::size_t(sub.mesh.vertices.rows()), -1);
+  for (Eigen::Index t : owned)
+    for (int c = 0; c < 3; ++c) id[std::size_t(sub.mesh.triangles(t, c))] = 0;
+  int next = 0;
+  for (int& v : id)
+    if (v == 0) v = next++;
+  piece.vertices.resize(next, 3);
+  piece.keys.resize(std::size_t(next));
+  for (std::size_t v = 0; v < id.size(); ++v)
+    if (id[v] >= 0) {
+      piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
+      piece.keys[std::size_t(id[v])] = sub.keys[v];
+    }
+  piece.triangles.resize(Eigen::Index(owned.size()), 3);
+  const Eigen::Index children = Eigen::Index(1) << (2 * levels);
+  for (const Eigen::Index t : owned)
+    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 + std::uint64_t(t % children));
+  for (std::size_t r = 0; r < owned.size(); ++r)
+    for (int c = 0; c < 3; ++c)
+      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
+}
+
 }  // namespace
 
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
@@ -295,19 +326,24 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     cp = brick_contact_points(band.samples, h, options.gradient, options.contact, bricks, nullptr,
                               {}, &flagged);
   piece.contact_points = cp.size();
+  detail::return_free_memory();  // the triangulation's bricks, freed in every thread's arena
   if (options.keep_contact_points)
     keep_owned_contact_points(block, band, cp, own_first, own_end, piece);
   Eigen::VectorXd depths(cp.size());
   for (int q = 0; q < cp.size(); ++q)
     depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
   clock.next(1);
-  const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
-      block, cp.points, cp.normals, options.local, nullptr, depths);
-  piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
-  // The owned edges and the ring around them (their vertices' normals need every triangle).
+  // The owned edges and the ring around them (their vertices' normals need every triangle); the
+  // block's whole dual mesh goes once they are taken.
   PointMatrix crossing_means;
-  detail::KeyedTriangles near = triangles_of_edges(keyed, n, shifted(own_first, -ring(options)),
-                                                   shifted(own_end, ring(options)), crossing_means);
+  detail::KeyedTriangles near;
+  {
+    const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
+        block, cp.points, cp.normals, options.local, nullptr, depths);
+    piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
+    near = triangles_of_edges(keyed, n, shifted(own_first, -ring(options)),
+                              shifted(own_end, ring(options)), crossing_means);
+  }
   if (options.untangle) {
     // The quadrics can place two nearby cells' vertices (at features) so that their triangles
     // cross: those vertices go to their crossings' mean, as an untangling of the dual mesh.
@@ -320,12 +356,15 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                          ? options.subdivisions
                          : auto_subdivisions(*std::max_element(n.begin(), n.end()));
   detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
+  near = detail::KeyedTriangles();
   const PointMatrix reconstructed = sub.mesh.vertices;
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
   const std::vector<char>* fixed = options.keep_features ? &sub.on_feature : nullptr;
   if (options.project && cp.size() > 0)
     project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection,
                               fixed);
+  cp = ContactPoints();
+  depths = Eigen::VectorXd();
   clock.next(3);
   if (options.carve && options.carve_passes > 0) {
     const Samples balls = detail::carving_samples(block, band, options);
@@ -333,8 +372,14 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
                                    options.carve_passes, kMaxCarveMove, fixed);
   }
-  if (options.side_rounds > 0)
+  // The rest reads the band alone: the block's values may go (a copied block of 567³ floats is
+  // 0.73 GB, and the side checks and the untangling are a brick's largest stages).
+  if (options.grid_read) options.grid_read();
+  detail::return_free_memory();
+  if (options.side_rounds > 0) {
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
+    detail::return_free_memory();
+  }
   clock.next(4);
   if (options.untangle) {
     std::vector<char> reverted;
@@ -349,31 +394,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     }
   }
   clock.next(5);
-  // The owned triangles and their vertices (keys stay ascending).
-  std::vector<Eigen::Index> owned;
-  for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
-    if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
-      owned.push_back(t);
-  std::vector<int> id(std::size_t(sub.mesh.vertices.rows()), -1);
-  for (Eigen::Index t : owned)
-    for (int c = 0; c < 3; ++c) id[std::size_t(sub.mesh.triangles(t, c))] = 0;
-  int next = 0;
-  for (int& v : id)
-    if (v == 0) v = next++;
-  piece.vertices.resize(next, 3);
-  piece.keys.resize(std::size_t(next));
-  for (std::size_t v = 0; v < id.size(); ++v)
-    if (id[v] >= 0) {
-      piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
-      piece.keys[std::size_t(id[v])] = sub.keys[v];
-    }
-  piece.triangles.resize(Eigen::Index(owned.size()), 3);
-  const Eigen::Index children = Eigen::Index(1) << (2 * levels);
-  for (const Eigen::Index t : owned)
-    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 + std::uint64_t(t % children));
-  for (std::size_t r = 0; r < owned.size(); ++r)
-    for (int c = 0; c < 3; ++c)
-      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
+  take_owned_part(sub, levels, n, own_first, own_end, piece);
   return piece;
 }
 

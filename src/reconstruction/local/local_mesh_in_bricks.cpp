@@ -5,10 +5,14 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <functional>
+#include <queue>
 #include <string>
 #include <tuple>
 #include <type_traits>
+#include <utility>
 
+#include "reconstruction/free_memory.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/reconstruction/local_brick.h"
 
@@ -59,7 +63,13 @@ LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Inde
       const GridView block = grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
                                                               : copy_block(grid, lo, hi, doubles);
       if (options.grid_read) options.grid_read();
-      return local_brick_piece(block, own_first, own_end, options);
+      // The copy goes as soon as the brick has read what it needs of it.
+      LocalBrickOptions inner = options;
+      inner.grid_read = [&] {
+        std::vector<float>().swap(floats);
+        std::vector<double>().swap(doubles);
+      };
+      return local_brick_piece(block, own_first, own_end, inner);
     } catch (const HaloTooSmall&) {
       if (whole) throw InternalError("a block holding the whole grid reported too small a halo");
       halo *= 2;
@@ -70,51 +80,87 @@ LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Inde
 
 }  // namespace
 
-Mesh join_local_pieces(const std::vector<LocalPiece>& pieces) {
-  struct Entry {
-    VertexKey key;
-    std::size_t piece;
-    Eigen::Index row;
-  };
-  std::vector<Entry> entries;
-  for (std::size_t p = 0; p < pieces.size(); ++p)
-    for (std::size_t r = 0; r < pieces[p].keys.size(); ++r)
-      entries.push_back({pieces[p].keys[r], p, Eigen::Index(r)});
-  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-    return a.key != b.key ? a.key < b.key : a.piece < b.piece;
-  });
+namespace {
+
+// Calls visit(list, row) for every entry of the ascending `lists` in ascending (value, list)
+// order: a k-way merge, so joining needs no sorted copy of the pieces' entries.
+template <class Key, class Visit>
+void merge_ascending(const std::vector<const std::vector<Key>*>& lists, Visit visit) {
+  using Head = std::pair<Key, std::size_t>;
+  std::priority_queue<Head, std::vector<Head>, std::greater<Head>> heads;
+  std::vector<std::size_t> next(lists.size(), 0);
+  for (std::size_t l = 0; l < lists.size(); ++l)
+    if (!lists[l]->empty()) heads.push({lists[l]->front(), l});
+  while (!heads.empty()) {
+    const std::size_t l = heads.top().second;
+    heads.pop();
+    visit(l, next[l]);
+    if (++next[l] < lists[l]->size()) heads.push({(*lists[l])[next[l]], l});
+  }
+}
+
+// join_local_pieces; with `owned` (the same pieces), each piece's arrays are freed once read, so
+// the join holds little beyond the output mesh (23 M triangles at 1024³).
+Mesh join_pieces(const std::vector<LocalPiece>& pieces, std::vector<LocalPiece>* owned) {
+  std::vector<const std::vector<VertexKey>*> keys;
+  std::vector<const std::vector<std::uint64_t>*> names;
+  for (const LocalPiece& p : pieces) {
+    keys.push_back(&p.keys);
+    names.push_back(&p.triangle_names);
+  }
+  // Each key's vertex number, ascending; a key in several pieces is one vertex.
   std::vector<std::vector<int>> id(pieces.size());
   for (std::size_t p = 0; p < pieces.size(); ++p) id[p].resize(pieces[p].keys.size());
+  int count = 0;
+  bool first = true;
+  VertexKey last{};
+  merge_ascending(keys, [&](std::size_t p, std::size_t row) {
+    const VertexKey key = pieces[p].keys[row];
+    if (first || key != last) ++count;
+    first = false;
+    last = key;
+    id[p][row] = count - 1;
+  });
   Mesh mesh;
-  std::vector<Eigen::Index> source_piece, source_row;
-  int next = -1;
-  for (std::size_t e = 0; e < entries.size(); ++e) {
-    const Entry& x = entries[e];
-    if (e == 0 || x.key != entries[e - 1].key) {
-      ++next;
-      source_piece.push_back(Eigen::Index(x.piece));
-      source_row.push_back(x.row);
-    } else if (pieces[x.piece].vertices.row(x.row) !=
-               pieces[std::size_t(source_piece.back())].vertices.row(source_row.back())) {
-      throw InternalError("two bricks placed one vertex differently");
+  mesh.vertices.resize(count, 3);
+  std::vector<bool> placed(std::size_t(count), false);
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    for (std::size_t row = 0; row < pieces[p].keys.size(); ++row) {
+      const int v = id[p][row];
+      const auto position = pieces[p].vertices.row(Eigen::Index(row));
+      if (!placed[std::size_t(v)]) {
+        mesh.vertices.row(v) = position;
+        placed[std::size_t(v)] = true;
+      } else if (mesh.vertices.row(v) != position) {
+        throw InternalError("two bricks placed one vertex differently");
+      }
     }
-    id[x.piece][std::size_t(x.row)] = next;
+    if (owned) {
+      (*owned)[p].vertices = PointMatrix();
+      (*owned)[p].keys = {};
+    }
   }
-  mesh.vertices.resize(next + 1, 3);
-  for (int v = 0; v <= next; ++v)
-    mesh.vertices.row(v) =
-        pieces[std::size_t(source_piece[std::size_t(v)])].vertices.row(source_row[std::size_t(v)]);
-  std::vector<std::tuple<std::uint64_t, std::size_t, Eigen::Index>> faces;
-  for (std::size_t p = 0; p < pieces.size(); ++p)
-    for (Eigen::Index t = 0; t < pieces[p].triangles.rows(); ++t)
-      faces.emplace_back(pieces[p].triangle_names[std::size_t(t)], p, t);
-  std::sort(faces.begin(), faces.end());
-  mesh.triangles.resize(Eigen::Index(faces.size()), 3);
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const auto& [name, p, t] = faces[f];
+  Eigen::Index rows = 0;
+  for (const LocalPiece& p : pieces) rows += p.triangles.rows();
+  mesh.triangles.resize(rows, 3);
+  Eigen::Index f = 0;
+  merge_ascending(names, [&](std::size_t p, std::size_t t) {
     for (int c = 0; c < 3; ++c)
-      mesh.triangles(Eigen::Index(f), c) = id[p][std::size_t(pieces[p].triangles(t, c))];
-  }
+      mesh.triangles(f, c) = id[p][std::size_t(pieces[p].triangles(Eigen::Index(t), c))];
+    ++f;
+  });
+  return mesh;
+}
+
+}  // namespace
+
+Mesh join_local_pieces(const std::vector<LocalPiece>& pieces) {
+  return join_pieces(pieces, nullptr);
+}
+
+Mesh join_local_pieces(std::vector<LocalPiece>&& pieces) {
+  Mesh mesh = join_pieces(pieces, &pieces);
+  pieces.clear();
   return mesh;
 }
 
@@ -164,6 +210,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
     check_cancel(options.cancel);
     pieces[std::size_t(b)] = brick_piece(grid, first, end, options, wider[std::size_t(b)]);
     if (options.grid_read) options.grid_read();
+    detail::return_free_memory();
     if (options.progress) options.progress(b + 1, total);
   }
   if (stats) {
@@ -182,7 +229,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
     }
   }
   if (contact_points) *contact_points = join_owned_contact_points(pieces);
-  return join_local_pieces(pieces);
+  return join_local_pieces(std::move(pieces));
 }
 
 }  // namespace sdfcontour

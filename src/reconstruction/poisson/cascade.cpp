@@ -4,10 +4,10 @@
 #include <cmath>
 #include <sstream>
 
+#include "reconstruction/free_memory.h"
 #include "reconstruction/poisson/bspline.h"
 #include "reconstruction/poisson/conjugate_gradients.h"
 #include "reconstruction/poisson/deterministic_sum.h"
-#include "reconstruction/poisson/free_memory.h"
 #include "reconstruction/poisson/indicator.h"
 #include "reconstruction/poisson/system.h"
 
@@ -147,12 +147,12 @@ CascadeResult solve_coarse_to_fine(Octree& tree, NormalField& field,
                 : splat_divergence(L, solved, grid, coarser, std::move(finer));
       }
       if (d > tree.min_depth) release_field();
-      return_free_memory();
+      detail::return_free_memory();
       LevelSystem system = assemble_system(L, solved, std::move(b), field.runs[std::size_t(d)],
                                            screening, points, runs);
       if (d > tree.min_depth) field.runs[std::size_t(d)] = CellRuns();
       const double assembly = seconds_since(start);
-      return_free_memory();
+      detail::return_free_memory();
       const auto solve_start = Clock::now();
       const CgState state =
           conjugate_gradients(L, solved, std::move(system), x, d == tree.finest ? cg_finest : cg);
