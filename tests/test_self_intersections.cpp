@@ -82,6 +82,24 @@ TEST(SelfIntersections, TheSamePairsAsCgal) {
   EXPECT_THROW(self_intersecting_triangles(mesh, &watch), Error);
 }
 
+// Parts far apart against their triangles' size (more cubes than a 64-bit key holds at the
+// triangles' scale): the same pairs as CGAL's, in each of three copies of the noisy torus.
+TEST(SelfIntersections, PartsFarApartFindTheSamePairs) {
+  const Mesh one = noisy_mesh("torus", 16, 0.6, 5);
+  Mesh far;
+  const Eigen::Index v = one.vertices.rows(), t = one.triangles.rows();
+  far.vertices.resize(3 * v, 3);
+  far.triangles.resize(3 * t, 3);
+  for (int c = 0; c < 3; ++c) {
+    far.vertices.middleRows(c * v, v) = one.vertices;
+    far.vertices.middleRows(c * v, v).col(c) += Eigen::VectorXd::Constant(v, 1e14);
+    far.triangles.middleRows(c * t, t) = one.triangles.array() + int(c * v);
+  }
+  const auto pairs = self_intersecting_triangles(far);
+  EXPECT_GT(pairs.size(), 30u);
+  EXPECT_EQ(pairs, cgal_pairs(far));
+}
+
 // Two triangles that share one vertex cross where an opposite edge cuts the other triangle, as
 // CGAL counts them: pierced, or coplanar and overlapping; not where one lies on one side of the
 // other's plane (the shortcut most neighbours take).

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "pipeline/work_counter.h"
@@ -46,7 +47,11 @@ class TriangleCubes {
       return sum;
     };
     while (entries() > 64.0 * double(boxes.size()) + 1e6) cell_ *= 2;
-    for (int a = 0; a < 3; ++a) size_[a] = long(std::min(extent[a] / cell_, 1e15)) + 1;
+    // One 64-bit key per cube: coarser cubes where the parts spread over more than 2^62 of them.
+    for (;; cell_ *= 2) {
+      for (int a = 0; a < 3; ++a) size_[a] = std::uint64_t(std::min(extent[a] / cell_, 1e15)) + 1;
+      if (double(size_[0]) * double(size_[1]) * double(size_[2]) < 0x1p62) break;
+    }
     std::vector<long> offsets(boxes.size() + 1, 0);
     tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
       const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
@@ -91,16 +96,16 @@ class TriangleCubes {
     std::array<long, 3> c;
     for (int a = 0; a < 3; ++a)
       c[std::size_t(a)] =
-          std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), 0L, size_[a] - 1);
+          std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), 0L, long(size_[a]) - 1);
     return c;
   }
-  // z slowest, x fastest; three longs, so no spread of the parts can overflow a key.
-  using Key = std::array<long, 3>;
-  static Key key(long i, long j, long k) { return {k, j, i}; }
+  // z slowest, x fastest: half the bytes of three longs to sort and search.
+  using Key = std::uint64_t;
+  Key key(long i, long j, long k) const { return (Key(k) * size_[1] + Key(j)) * size_[0] + Key(i); }
 
   double cell_ = 1;
   Eigen::Vector3d origin_;
-  long size_[3] = {1, 1, 1};
+  std::uint64_t size_[3] = {1, 1, 1};
   std::vector<std::pair<Key, int>> keyed_;  // (cube key, triangle), sorted
 };
 
