@@ -1,16 +1,14 @@
 // sdfcontour contour: SDF samples (a grid, scattered samples, a .vdb level set or a built-in
 // shape) -> a mesh and/or contact points, with a JSON summary.
 #include <cmath>
-#include <iomanip>
 #include <iostream>
-#include <limits>
 
 #include "cli_options.h"
 #include "commands.h"
+#include "contour_summary.h"
 #include "io/atomic_file.h"
 #include "io/file_checks.h"
 #include "pipeline/progress_bar.h"
-#include "sdfcontour/contact_points/contact_point_errors.h"
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/io/io.h"
 #include "sdfcontour/io/npy.h"
@@ -21,40 +19,6 @@
 namespace sdfcontour::cli {
 
 namespace {
-
-struct ContourArgs {
-  std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
-                                     weights = "james", band = "auto", truncation = "auto", grid,
-                                     brick_size = "auto", side_passes = "auto", projection = "auto",
-                                     reconstruction = "auto", subdivisions = "auto";
-  int knn = 18;
-  double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
-  double adaptivity = 0;
-  int adaptivity_bricks = AdaptivityOptions{}.brick_spacings;
-  double james_epsilon = GradientOptions{}.james_epsilon,
-         tie_tolerance = ContactPointOptions{}.tie_tolerance;
-  bool fn = false, serial_triangulation = false, no_sign_constraints = false,
-       sign_constraints = false, no_carve = false, no_side_repair = false;
-  double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
-         sign_margin = SignConstraintOptions{}.margin,
-         sign_trigger = SignConstraintOptions{}.trigger;
-  ContactProjectionOptions projection_options;
-  LocalReconstructionOptions local;
-  std::uint64_t seed = 0;
-  RunOptions run;
-  PoissonArgs poisson = [] {
-    PoissonArgs p;
-    p.depth = "auto";
-    p.dilation = "auto";
-    return p;
-  }();
-};
-
-struct LoadedInput {
-  SdfInput input;
-  std::unique_ptr<AnalyticShape> shape;  // for built-in shapes
-  double vdb_background = 0;             // for OpenVDB level sets: the truncation distance
-};
 
 LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint64_t seed,
                        const std::string& grid_name) {
@@ -174,176 +138,6 @@ ContourOptions contour_options(const ContourArgs& a) {
   return opt;
 }
 
-// |value| and normal alignment of contact points against an exact SDF.
-nlohmann::json errors_json(const ContactPoints& cp, const AnalyticShape& shape, double spacing) {
-  const ContactPointErrors e = contact_point_errors(cp.points, cp.normals, shape);
-  const Summary value = summarize(e.abs_value), alignment = summarize(e.alignment);
-  nlohmann::json j;
-  j["abs_value_median"] = value.median;
-  j["abs_value_p95"] = value.p95;
-  j["abs_value_mean"] = value.mean;
-  j["normal_alignment_median"] = alignment.median;
-  j["normal_alignment_mean"] = alignment.mean;
-  if (spacing > 0) {
-    j["spacing"] = spacing;
-    j["abs_value_median_in_spacing"] = value.median / spacing;
-    j["abs_value_p95_in_spacing"] = value.p95 / spacing;
-  }
-  return j;
-}
-
-nlohmann::json summary_json(const ContourArgs& a, const ContourOptions& opt, const LoadedInput& in,
-                            const ContourResult& r) {
-  nlohmann::json j;
-  j["input"] = a.input;
-  j["method"] = a.method;
-  j["samples"] = r.samples;
-  const GridView* grid = grid_view_of(in.input);
-  if (grid) j["grid"] = grid->dims;
-  if (r.band_samples > 0) {
-    nlohmann::json band = {{"band", a.band},
-                           {"band_spacings", r.band_spacings},
-                           {"spacing", r.band_spacing},
-                           {"samples", r.band_samples},
-                           {"isolated_samples_dropped", r.isolated_samples},
-                           {"truncation_detected", r.truncation.detected()}};
-    if (r.truncation.inside < std::numeric_limits<double>::infinity())
-      band["truncation_inside"] = r.truncation.inside;
-    if (r.truncation.outside < std::numeric_limits<double>::infinity())
-      band["truncation_outside"] = r.truncation.outside;
-    j["band"] = band;
-  }
-  if (r.bricks)
-    j["bricks"] = {{"size", r.bricks->size},
-                   {"count", r.bricks->bricks},
-                   {"retries", r.bricks->retries},
-                   {"samples_triangulated", r.bricks->triangulated},
-                   {"largest_brick_samples", r.bricks->largest_brick}};
-  if (r.hidden >= 0) j["hidden_samples"] = r.hidden;
-  if (r.gradient_norm > 0) {
-    j["gradient_norm"] = r.gradient_norm;
-    j["gradient_norm_percentiles"] = {r.gradient_norms.low, r.gradient_norms.median,
-                                      r.gradient_norms.high};
-  }
-  if (r.fallback.empty() && a.method == "gcp") {
-    j["off_zero_set"] = r.off_zero_set;
-    j["clipped_to_grid"] = r.clipped_to_grid;
-  }
-  if (r.noise_level > 0) j["noise_level"] = r.noise_level;
-  if (r.fallback.empty() && (a.method == "gcp" || a.method == "gtcp"))
-    j["pieces_removed"] = r.pieces_removed;
-  if (r.fallback.empty() && a.method == "gcp") {
-    j["sign_constraints"] = r.sign_constraints;
-    j["sign_violations"] = r.sign_violations;
-    j["sign_violations_left"] = r.sign_violations_left;
-    j["sign_constraints_dropped"] = r.sign_constraints_dropped;
-  }
-  if (r.local_bricks)
-    j["local_bricks"] = {{"bricks", r.local_bricks->bricks},
-                         {"wider_halos", r.local_bricks->wider_halos},
-                         {"contact_points", r.local_bricks->contact_points}};
-  if (r.local)
-    j["local"] = {{"cells", r.local->cells},
-                  {"vertices", r.local->vertices},
-                  {"split_cells", r.local->split_cells},
-                  {"crossing_cells", r.local->crossing_cells},
-                  {"feature_vertices", r.local->feature_vertices},
-                  {"field_misses", r.local->field_misses},
-                  {"clamped", r.local->clamped}};
-  if (r.mesh && (opt.method == Method::Gcp || opt.method == Method::Gtcp))
-    j["reconstruction"] = reconstruction_name(r.reconstruction);
-  if (r.projection)
-    j["projection"] = {{"vertices_moved", r.projection->vertices_moved},
-                       {"largest_move", r.projection->largest_move}};
-  if (r.carving)
-    j["carving"] = {{"vertices_moved", r.carving->vertices_moved},
-                    {"largest_move", r.carving->largest_move},
-                    {"held_back", r.carving->held_back},
-                    {"passes", r.carving->passes},
-                    {"side_violations", r.carving->side_violations},
-                    {"side_violations_left", r.carving->side_violations_left},
-                    {"wrong_side_left", r.carving->wrong_side_left},
-                    {"side_passes", r.carving->side_passes}};
-  if (r.adaptivity)
-    j["adaptivity"] = {{"triangles_before", r.adaptivity->triangles_before},
-                       {"triangles_after", r.adaptivity->triangles_after},
-                       {"merges", r.adaptivity->merges},
-                       {"freeze_rounds", r.adaptivity->freeze_rounds}};
-  if (r.untangling)
-    j["untangling"] = {{"rounds", r.untangling->rounds},
-                       {"vertices_reverted", r.untangling->vertices_reverted},
-                       {"intersections_found", r.untangling->intersections_found},
-                       {"intersections_left", r.untangling->intersections_left}};
-  if (r.side_repair)
-    j["side_repair"] = {{"wrong_side", r.side_repair->wrong_side},
-                        {"repaired", r.side_repair->repaired},
-                        {"left", r.side_repair->left},
-                        {"vertices_moved", r.side_repair->vertices_moved}};
-  if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
-  if (r.value_scale != 1) j["value_scale"] = r.value_scale;
-  if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
-  if (!r.rescale_dropped.empty()) j["rescale_dropped"] = r.rescale_dropped;
-  if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;
-  if (r.mesh)
-    j["mesh"] = {{"vertices", r.mesh->vertices.rows()},
-                 {"triangles", r.mesh->triangles.rows()},
-                 {"file", a.output}};
-  if (r.contact_points && !r.local_bricks) {  // (the bricks' are in "local_bricks")
-    const ContactPoints& cp = *r.contact_points;
-    nlohmann::json c = {{"kept", cp.size()},
-                        {"hidden", cp.hidden},
-                        {"zero_gradient", cp.zero_gradient},
-                        {"discarded", cp.discarded},
-                        {"rescued_fn", cp.rescued},
-                        {"file", a.points}};
-    if (opt.method != Method::Gtcp) {
-      c["gradient"] =
-          a.gradient == "knn" ? "knn" + std::to_string(a.knn) : a.gradient + "/" + a.weights;
-      c["tie_tolerance"] = a.tie_tolerance;
-      c["fn"] = a.fn;
-    }
-    if (in.shape) c["error"] = errors_json(cp, *in.shape, grid ? grid->spacing().maxCoeff() : 0.0);
-    j["contact_points"] = c;
-  }
-  double total = 0;
-  nlohmann::json stage_json = nlohmann::json::object();
-  for (const auto& s : r.stages) {  // a stage that runs twice (untangling) sums its runs
-    stage_json[s.name] = stage_json.value(s.name, 0.0) + s.seconds;
-    total += s.seconds;
-  }
-  j["seconds"] = stage_json;
-  if (!r.poisson_stages.empty()) {
-    nlohmann::json poisson_json = nlohmann::json::object();
-    for (const auto& s : r.poisson_stages) poisson_json[s.name] = s.seconds;
-    j["poisson_seconds"] = poisson_json;
-  }
-  if (!r.local_stages.empty()) {
-    nlohmann::json local_json = nlohmann::json::object();
-    for (const auto& s : r.local_stages) local_json[s.name] = s.seconds;
-    j["local_seconds"] = local_json;  // summed over the bricks: CPU seconds
-  }
-  j["seconds_total"] = total;
-  return j;
-}
-
-void print_summary(const ContourResult& r, double total) {
-  std::cout << "samples " << r.samples;
-  if (r.band_samples > 0) std::cout << ", in band " << r.band_samples;
-  if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
-  // (The bricks' contact points, kept for adaptivity, name no samples: the bricks' line counts.)
-  if (r.contact_points && !r.local_bricks)
-    std::cout << ", contact points kept " << r.contact_points->size();
-  if (r.local_bricks)
-    std::cout << ", contact points " << r.local_bricks->contact_points << " (over "
-              << r.local_bricks->bricks << " bricks)";
-  if (r.mesh)
-    std::cout << ", mesh " << r.mesh->vertices.rows() << " vertices / " << r.mesh->triangles.rows()
-              << " triangles";
-  std::cout << "\nseconds:" << std::fixed << std::setprecision(3);
-  for (const auto& s : r.stages) std::cout << " " << s.name << " " << s.seconds;
-  std::cout << " (total " << total << ")" << std::endl;
-}
-
 int run_contour(const ContourArgs& a) {
   if (a.output.empty() && a.points.empty())
     throw Error("nothing to write: give -o OUT and/or --points FILE");
@@ -395,11 +189,176 @@ int run_contour(const ContourArgs& a) {
                           format);
   }
   r.stages.push_back({"output", seconds_since(tw)});
-  const nlohmann::json summary = summary_json(a, opt, in, r);
+  const nlohmann::json summary = contour_summary_json(a, opt, in, r);
   if (!a.run.stats.empty()) write_json(summary, a.run.stats);
   outputs.commit();
-  print_summary(r, summary["seconds_total"].get<double>());
+  print_contour_summary(r, summary["seconds_total"].get<double>());
   return 0;
+}
+
+// GCP's gradients, contact points and band.
+void add_contact_point_options(CLI::App* c, ContourArgs& a) {
+  c->add_option("--gradient", a.gradient,
+                "GCP gradients from the regular or delaunay triangulation, or knn least squares")
+      ->capture_default_str();
+  c->add_option("--weights", a.weights, "Averaging of tet gradients: uniform, volume or james")
+      ->capture_default_str();
+  c->add_option("--knn", a.knn, "k for --gradient knn (the paper uses 6, 18, 26)")
+      ->capture_default_str();
+  c->add_option("--james-epsilon", a.james_epsilon,
+                "Regularisation of the James weights' linear system")
+      ->capture_default_str();
+  c->add_option("--tie-tolerance", a.tie_tolerance,
+                "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; "
+                "0 is the strict test")
+      ->capture_default_str();
+  c->add_option("--band", a.band,
+                "Triangulation methods (all but mc) use only samples with |value| <= BAND "
+                "grid spacings (scattered samples: the side of a cube holding one sample); "
+                "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
+                "axis, 4 from 128, 3 from 256")
+      ->capture_default_str();
+}
+
+// The Poisson path's sign constraints, carving and side rounds.
+void add_carving_options(CLI::App* c, ContourArgs& a) {
+  c->add_flag("--sign-constraints", a.sign_constraints,
+              "GCP: correct the indicator where samples next to the surface would end on the "
+              "wrong side of the mesh (default: below 128 samples per axis, where it is more "
+              "accurate; finer grids are more accurate without)");
+  c->add_flag("--no-sign-constraints", a.no_sign_constraints,
+              "GCP: do not correct the indicator (the paper's reconstruction)");
+  c->add_flag("--no-carve", a.no_carve,
+              "GCP: keep the reconstruction's vertices where they are; by default a vertex "
+              "inside a sample's sphere (which holds no surface) moves onto it: the band's "
+              "samples, or below 128 samples per axis with --band auto every sample within 16 "
+              "spacings; not on values smoothed for noise");
+  c->add_flag("--no-side-repair", a.no_side_repair,
+              "GCP carving: leave the samples that carving's untangling left on the wrong side of "
+              "the mesh; by default (where --side-passes runs) each dents the nearest sheet onto "
+              "its side where that crosses and folds nothing and moves no other sample's side");
+  c->add_option("--side-passes", a.side_passes,
+                "GCP carving: rounds in which each sample within a spacing of the surface that a "
+                "triangle cuts, or that lies on the wrong side of the mesh, moves the nearest "
+                "triangle, edge or vertex behind its sphere; 0: vertices only; auto: 12 below 128 "
+                "samples per axis (a .vdb's or scattered samples' band: its extent in spacings), "
+                "0 above (bunny 256^3: 11% lower L1 for 2.3-2.8x the run's time)")
+      ->capture_default_str();
+}
+
+// The reconstruction: local or Poisson, adaptivity, subdivisions, the local options.
+void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
+  c->add_option("--reconstruction", a.reconstruction,
+                "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
+                "crosses, from the contact points near it; topology from the samples' signs; "
+                "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
+                "and carving), or 'auto' (local for grids from 256 samples per axis, more "
+                "accurate there; poisson below, whose worst vertex on mirror-symmetric analytic "
+                "shapes stays within marching cubes' (local is more accurate on average there "
+                "too, docs/local.md); "
+                "Python's callables get local). Scattered samples and "
+                ".vdb level sets always take poisson")
+      ->capture_default_str();
+  c->add_option("--adaptivity", a.adaptivity,
+                "Merge the mesh where the surface is flat enough: edges collapse while the merged "
+                "vertex's squared distances to the tangent planes its region gathers (GCP's "
+                "contact points, or the mesh's own planes for the other methods), summed, stay "
+                "under this many spacings squared; creases and corners stay. 0 (default): the "
+                "mesh as reconstructed")
+      ->capture_default_str();
+  c->add_option("--adaptivity-bricks", a.adaptivity_bricks,
+                "Adaptivity merges brick by brick, in parallel: bricks of this many spacings, "
+                "then again on bricks shifted by half a brick (across the first pass's seams). "
+                "0: the whole mesh as one brick, sequential (the same mesh for any thread count "
+                "either way)")
+      ->capture_default_str();
+  c->add_option(
+       "--subdivisions", a.subdivisions,
+       "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
+       "the contact points (auto: 2 below 96 samples per axis, else 1)")
+      ->capture_default_str();
+  c->add_option("--local-reach", a.local.reach,
+                "GCP local reconstruction: contact points within this many spacings of a cell "
+                "feed its vertex")
+      ->capture_default_str();
+  c->add_option("--local-feature-ratio", a.local.feature_ratio,
+                "GCP local reconstruction: a cell's planes make an edge or corner where the "
+                "quadric's smaller eigenvalues exceed this fraction of its largest")
+      ->capture_default_str();
+  c->add_option("--local-robust-rounds", a.local.robust_rounds,
+                "GCP local reconstruction: reweighting rounds that discount planes missing the "
+                "vertex")
+      ->capture_default_str();
+  c->add_option("--local-min-points", a.local.min_points,
+                "GCP local reconstruction: a cell with fewer contact points places its vertex "
+                "from its edge crossings")
+      ->capture_default_str();
+  c->add_option("--local-max-field-miss", a.local.max_field_miss,
+                "GCP local reconstruction: a vertex farther than this many spacings from the "
+                "cell's interpolated zero set falls back to the edge crossings (0: no check)")
+      ->capture_default_str();
+  c->add_option("--local-depth-scale", a.local.depth_scale,
+                "GCP local reconstruction: a contact point from a sample |value| away weighs "
+                "1 / (1 + (|value| / (this many spacings))^2), in the cell quadrics and the "
+                "projection (0: all alike)")
+      ->capture_default_str();
+}
+
+// The projection onto the contact points and the sign constraints' options.
+void add_projection_options(CLI::App* c, ContourArgs& a) {
+  c->add_option("--projection", a.projection,
+                "GCP: move each vertex along its normal onto a quadric fitted to the contact "
+                "points within --projection-radius spacings whose normals agree with it (on, off; "
+                "auto: on)")
+      ->capture_default_str();
+  for (const ProjectionOption& p : kProjectionOptions)
+    c->add_option(p.name, a.projection_options.*p.field, p.help)->capture_default_str();
+  const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a.sign_band},
+                                                          {"--sign-radius", &a.sign_radius},
+                                                          {"--sign-margin", &a.sign_margin},
+                                                          {"--sign-trigger", &a.sign_trigger}};
+  const char* sign_help[] = {
+      "GCP: samples within this many spacings of the surface keep their side",
+      "GCP: a correction is a smooth bump of this many spacings around the sample",
+      "GCP: and lie at least this fraction of their distance inside (outside) the mesh, as the "
+      "indicator's slope there measures it",
+      "GCP: a sample is corrected once it keeps less than this fraction of that margin (0: only "
+      "samples on the wrong side)"};
+  for (int i = 0; i < 4; ++i)
+    c->add_option(sign_options[i].first, *sign_options[i].second, sign_help[i])
+        ->capture_default_str();
+}
+
+// Reading the input: the .vdb grid, truncation, margin, bricks, --fn, --seed.
+void add_input_options(CLI::App* c, ContourArgs& a) {
+  c->add_option("--grid", a.grid,
+                "For a .vdb input: the float level set grid to read (default: the first)");
+  c->add_option("--margin", a.margin,
+                "Samples up to this many spacings beyond the band are triangulated but give "
+                "no contact point: they close the band's stars")
+      ->capture_default_str();
+  c->add_option("--truncation", a.truncation,
+                "Values clamped at +-T carry no distance and are left out: T, 'none', or "
+                "'auto' (a sign is truncated at its largest |value| when >= 64 samples, and "
+                ">= 1% of that sign's samples, sit there)")
+      ->capture_default_str();
+  c->add_option(
+       "--brick-size", a.brick_size,
+       "GCP triangulates the band in bricks of this many spacings, each with a halo, "
+       "in parallel; memory follows a brick, the result equals one global "
+       "triangulation's; 0 triangulates the whole band at once (so does --band all); "
+       "'auto': the largest of 256 down to 96 that makes >= 4 bricks per thread of <= 1.5M "
+       "samples each, else 64. The local reconstruction runs in bricks of this many cells "
+       "(auto: one brick up to 512 samples per axis, bricks of 512 beyond)")
+      ->capture_default_str();
+  c->add_option("--brick-halo", a.brick_halo,
+                "First halo around a brick, in spacings (grown where it does not suffice); "
+                "0: the largest |value| in the band and its margin, plus 2")
+      ->capture_default_str();
+  c->add_flag("--fn", a.fn,
+              "+FN: if the averaged gradient's point is discarded, try each incident tet's "
+              "gradient");
+  c->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
 }
 
 }  // namespace
@@ -425,151 +384,11 @@ Command add_contour_command(CLI::App& app) {
                 "Grid bounds (positions of the first and last samples) MIN,MAX or "
                 "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX; also the box for random built-in samples")
       ->capture_default_str();
-  c->add_option("--gradient", a->gradient,
-                "GCP gradients from the regular or delaunay triangulation, or knn least squares")
-      ->capture_default_str();
-  c->add_option("--weights", a->weights, "Averaging of tet gradients: uniform, volume or james")
-      ->capture_default_str();
-  c->add_option("--knn", a->knn, "k for --gradient knn (the paper uses 6, 18, 26)")
-      ->capture_default_str();
-  c->add_option("--james-epsilon", a->james_epsilon,
-                "Regularisation of the James weights' linear system")
-      ->capture_default_str();
-  c->add_option("--tie-tolerance", a->tie_tolerance,
-                "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; "
-                "0 is the strict test")
-      ->capture_default_str();
-  c->add_option("--band", a->band,
-                "Triangulation methods (all but mc) use only samples with |value| <= BAND "
-                "grid spacings (scattered samples: the side of a cube holding one sample); "
-                "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
-                "axis, 4 from 128, 3 from 256")
-      ->capture_default_str();
-  c->add_flag("--sign-constraints", a->sign_constraints,
-              "GCP: correct the indicator where samples next to the surface would end on the "
-              "wrong side of the mesh (default: below 128 samples per axis, where it is more "
-              "accurate; finer grids are more accurate without)");
-  c->add_flag("--no-sign-constraints", a->no_sign_constraints,
-              "GCP: do not correct the indicator (the paper's reconstruction)");
-  c->add_flag("--no-carve", a->no_carve,
-              "GCP: keep the reconstruction's vertices where they are; by default a vertex "
-              "inside a sample's sphere (which holds no surface) moves onto it: the band's "
-              "samples, or below 128 samples per axis with --band auto every sample within 16 "
-              "spacings; not on values smoothed for noise");
-  c->add_flag("--no-side-repair", a->no_side_repair,
-              "GCP carving: leave the samples that carving's untangling left on the wrong side of "
-              "the mesh; by default (where --side-passes runs) each dents the nearest sheet onto "
-              "its side where that crosses and folds nothing and moves no other sample's side");
-  c->add_option("--side-passes", a->side_passes,
-                "GCP carving: rounds in which each sample within a spacing of the surface that a "
-                "triangle cuts, or that lies on the wrong side of the mesh, moves the nearest "
-                "triangle, edge or vertex behind its sphere; 0: vertices only; auto: 12 below 128 "
-                "samples per axis (a .vdb's or scattered samples' band: its extent in spacings), "
-                "0 above (bunny 256^3: 11% lower L1 for 2.3-2.8x the run's time)")
-      ->capture_default_str();
-  c->add_option("--reconstruction", a->reconstruction,
-                "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
-                "crosses, from the contact points near it; topology from the samples' signs; "
-                "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
-                "and carving), or 'auto' (local for grids from 256 samples per axis, more "
-                "accurate there; poisson below, whose worst vertex on mirror-symmetric analytic "
-                "shapes stays within marching cubes' (local is more accurate on average there "
-                "too, docs/local.md); "
-                "Python's callables get local). Scattered samples and "
-                ".vdb level sets always take poisson")
-      ->capture_default_str();
-  c->add_option("--adaptivity", a->adaptivity,
-                "Merge the mesh where the surface is flat enough: edges collapse while the merged "
-                "vertex's squared distances to the tangent planes its region gathers (GCP's "
-                "contact points, or the mesh's own planes for the other methods), summed, stay "
-                "under this many spacings squared; creases and corners stay. 0 (default): the "
-                "mesh as reconstructed")
-      ->capture_default_str();
-  c->add_option("--adaptivity-bricks", a->adaptivity_bricks,
-                "Adaptivity merges brick by brick, in parallel: bricks of this many spacings, "
-                "then again on bricks shifted by half a brick (across the first pass's seams). "
-                "0: the whole mesh as one brick, sequential (the same mesh for any thread count "
-                "either way)")
-      ->capture_default_str();
-  c->add_option(
-       "--subdivisions", a->subdivisions,
-       "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
-       "the contact points (auto: 2 below 96 samples per axis, else 1)")
-      ->capture_default_str();
-  c->add_option("--local-reach", a->local.reach,
-                "GCP local reconstruction: contact points within this many spacings of a cell "
-                "feed its vertex")
-      ->capture_default_str();
-  c->add_option("--local-feature-ratio", a->local.feature_ratio,
-                "GCP local reconstruction: a cell's planes make an edge or corner where the "
-                "quadric's smaller eigenvalues exceed this fraction of its largest")
-      ->capture_default_str();
-  c->add_option("--local-robust-rounds", a->local.robust_rounds,
-                "GCP local reconstruction: reweighting rounds that discount planes missing the "
-                "vertex")
-      ->capture_default_str();
-  c->add_option("--local-min-points", a->local.min_points,
-                "GCP local reconstruction: a cell with fewer contact points places its vertex "
-                "from its edge crossings")
-      ->capture_default_str();
-  c->add_option("--local-max-field-miss", a->local.max_field_miss,
-                "GCP local reconstruction: a vertex farther than this many spacings from the "
-                "cell's interpolated zero set falls back to the edge crossings (0: no check)")
-      ->capture_default_str();
-  c->add_option("--local-depth-scale", a->local.depth_scale,
-                "GCP local reconstruction: a contact point from a sample |value| away weighs "
-                "1 / (1 + (|value| / (this many spacings))^2), in the cell quadrics and the "
-                "projection (0: all alike)")
-      ->capture_default_str();
-  c->add_option("--projection", a->projection,
-                "GCP: move each vertex along its normal onto a quadric fitted to the contact "
-                "points within --projection-radius spacings whose normals agree with it (on, off; "
-                "auto: on)")
-      ->capture_default_str();
-  for (const ProjectionOption& p : kProjectionOptions)
-    c->add_option(p.name, a->projection_options.*p.field, p.help)->capture_default_str();
-  const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a->sign_band},
-                                                          {"--sign-radius", &a->sign_radius},
-                                                          {"--sign-margin", &a->sign_margin},
-                                                          {"--sign-trigger", &a->sign_trigger}};
-  const char* sign_help[] = {
-      "GCP: samples within this many spacings of the surface keep their side",
-      "GCP: a correction is a smooth bump of this many spacings around the sample",
-      "GCP: and lie at least this fraction of their distance inside (outside) the mesh, as the "
-      "indicator's slope there measures it",
-      "GCP: a sample is corrected once it keeps less than this fraction of that margin (0: only "
-      "samples on the wrong side)"};
-  for (int i = 0; i < 4; ++i)
-    c->add_option(sign_options[i].first, *sign_options[i].second, sign_help[i])
-        ->capture_default_str();
-  c->add_option("--grid", a->grid,
-                "For a .vdb input: the float level set grid to read (default: the first)");
-  c->add_option("--margin", a->margin,
-                "Samples up to this many spacings beyond the band are triangulated but give "
-                "no contact point: they close the band's stars")
-      ->capture_default_str();
-  c->add_option("--truncation", a->truncation,
-                "Values clamped at +-T carry no distance and are left out: T, 'none', or "
-                "'auto' (a sign is truncated at its largest |value| when >= 64 samples, and "
-                ">= 1% of that sign's samples, sit there)")
-      ->capture_default_str();
-  c->add_option(
-       "--brick-size", a->brick_size,
-       "GCP triangulates the band in bricks of this many spacings, each with a halo, "
-       "in parallel; memory follows a brick, the result equals one global "
-       "triangulation's; 0 triangulates the whole band at once (so does --band all); "
-       "'auto': the largest of 256 down to 96 that makes >= 4 bricks per thread of <= 1.5M "
-       "samples each, else 64. The local reconstruction runs in bricks of this many cells "
-       "(auto: one brick up to 512 samples per axis, bricks of 512 beyond)")
-      ->capture_default_str();
-  c->add_option("--brick-halo", a->brick_halo,
-                "First halo around a brick, in spacings (grown where it does not suffice); "
-                "0: the largest |value| in the band and its margin, plus 2")
-      ->capture_default_str();
-  c->add_flag("--fn", a->fn,
-              "+FN: if the averaged gradient's point is discarded, try each incident tet's "
-              "gradient");
-  c->add_option("--seed", a->seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
+  add_contact_point_options(c, *a);
+  add_carving_options(c, *a);
+  add_reconstruction_options(c, *a);
+  add_projection_options(c, *a);
+  add_input_options(c, *a);
   a->run.add_to(
       c, "Write a JSON summary (counts, per-stage seconds, contact point errors for built-ins)");
   c->add_flag("--serial-triangulation", a->serial_triangulation,

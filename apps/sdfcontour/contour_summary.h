@@ -1,0 +1,57 @@
+// Internal to the CLI: sdfcontour contour's arguments and loaded input, and its summary (the
+// --stats JSON and the lines on stdout).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_options.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/pipeline/pipeline.h"
+
+namespace sdfcontour::cli {
+
+struct ContourArgs {
+  std::string input, output, points, method = "gcp", bounds = "-1,1", gradient = "regular",
+                                     weights = "james", band = "auto", truncation = "auto", grid,
+                                     brick_size = "auto", side_passes = "auto", projection = "auto",
+                                     reconstruction = "auto", subdivisions = "auto";
+  int knn = 18;
+  double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
+  double adaptivity = 0;
+  int adaptivity_bricks = AdaptivityOptions{}.brick_spacings;
+  double james_epsilon = GradientOptions{}.james_epsilon,
+         tie_tolerance = ContactPointOptions{}.tie_tolerance;
+  bool fn = false, serial_triangulation = false, no_sign_constraints = false,
+       sign_constraints = false, no_carve = false, no_side_repair = false;
+  double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,
+         sign_margin = SignConstraintOptions{}.margin,
+         sign_trigger = SignConstraintOptions{}.trigger;
+  ContactProjectionOptions projection_options;
+  LocalReconstructionOptions local;
+  std::uint64_t seed = 0;
+  RunOptions run;
+  PoissonArgs poisson = [] {
+    PoissonArgs p;
+    p.depth = "auto";
+    p.dilation = "auto";
+    return p;
+  }();
+};
+
+struct LoadedInput {
+  SdfInput input;
+  std::unique_ptr<AnalyticShape> shape;  // for built-in shapes
+  double vdb_background = 0;             // for OpenVDB level sets: the truncation distance
+};
+
+/// The summary of one run: its input, options' effects, stage statistics and seconds.
+nlohmann::json contour_summary_json(const ContourArgs& a, const ContourOptions& opt,
+                                    const LoadedInput& in, const ContourResult& r);
+
+/// The run's counts and seconds on stdout (`total`: the summary's seconds_total).
+void print_contour_summary(const ContourResult& r, double total);
+
+}  // namespace sdfcontour::cli
