@@ -19,7 +19,8 @@ import time
 
 import numpy as np
 
-from . import _bounds, _checks, _sdfcontour
+from . import _checks, _sdfcontour
+from ._arguments import _bounds
 from ._bricks import BrickError, brick_piece, bricks, canonical_mesh, gcp_brick_piece
 from ._io_join import join_pieces, write_pieces_as_ply
 
@@ -362,7 +363,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     _checks.choice("method", method, ("mc", "gcp"))
     options = None
     if method == "gcp":
-        from . import _count_or_auto, _options, _switch
+        from ._arguments import _count_or_auto, _options, _switch
         options = _options("gcp", band, 1.0, truncation, "regular", "james", 18, False, 1e-6,
                            "auto", 0.0, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, False)
         options["reconstruction"] = "local"
