@@ -137,7 +137,7 @@ Mesh join_pieces(const std::vector<LocalPiece>& pieces, std::vector<LocalPiece>*
     }
     if (owned) {
       (*owned)[p].vertices = PointMatrix();
-      (*owned)[p].keys = {};
+      std::vector<VertexKey>().swap((*owned)[p].keys);
     }
   }
   Eigen::Index rows = 0;
