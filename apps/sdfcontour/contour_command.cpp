@@ -132,6 +132,9 @@ ContourOptions contour_options(const ContourArgs& a) {
   require_range("--local-max-field-miss", a.local.max_field_miss, 0, 1e6);
   opt.local = a.local;
   opt.project = parse_switch("--projection", a.projection);
+  opt.zero_set = parse_switch("--zero-set", a.zero_set);
+  require_range("--zero-set-mismatch", a.zero_set_mismatch, 0, 1e6);
+  opt.zero_set_options.mismatch = a.zero_set_mismatch;
   for (const ProjectionOption& p : kProjectionOptions)
     require_range(p.name, a.projection_options.*p.field, p.lo, p.hi);
   opt.projection = a.projection_options;
@@ -301,6 +304,15 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                 "GCP local reconstruction: a contact point from a sample |value| away weighs "
                 "1 / (1 + (|value| / (this many spacings))^2), in the cell quadrics and the "
                 "projection (0: all alike)")
+      ->capture_default_str();
+  c->add_option("--zero-set", a.zero_set,
+                "GCP local reconstruction: move each vertex whose band samples are no distances "
+                "to the mesh (a neural SDF, a TSDF) onto the zero set of the grid's tricubic "
+                "interpolant, uncarved (auto; on: every vertex; off)")
+      ->capture_default_str();
+  c->add_option("--zero-set-mismatch", a.zero_set_mismatch,
+                "GCP --zero-set auto: a vertex moves where the samples 1-2.5 spacings from the "
+                "mesh near it have a mean | |value| / distance - 1 | above this")
       ->capture_default_str();
 }
 

@@ -56,7 +56,12 @@ void add_input_checks(nlohmann::json& j, const ContourArgs& a, const ContourResu
     j["gradient_norm"] = r.gradient_norm;
     j["gradient_norm_percentiles"] = {r.gradient_norms.low, r.gradient_norms.median,
                                       r.gradient_norms.high};
+    if (std::isfinite(r.gradient_norms.smooth_spread)) {
+      j["gradient_norm_smooth_spread"] = r.gradient_norms.smooth_spread;
+      j["gradient_norm_smooth_fraction"] = r.gradient_norms.smooth_fraction;
+    }
   }
+  if (r.approximate_distances) j["approximate_distances"] = true;
   if (r.fallback.empty() && a.method == "gcp") {
     j["off_zero_set"] = r.off_zero_set;
     j["clipped_to_grid"] = r.clipped_to_grid;

@@ -10,9 +10,12 @@
 
 namespace sdfcontour {
 
-std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
-                                            std::array<int, 3> own_first,
-                                            std::array<int, 3> own_end) {
+namespace {
+
+// crossing_gradient_norms, with the norms where the field is smooth also in `smooth` (if given).
+std::vector<double> crossing_norms(const GridView& grid, const Truncation& truncation,
+                                   std::array<int, 3> own_first, std::array<int, 3> own_end,
+                                   std::vector<double>* smooth) {
   const std::array<int, 3> whole = grid.whole_dims();
   std::array<int, 3> from{}, to{};  // block indices of the owned samples measured
   for (int a = 0; a < 3; ++a) {
@@ -26,6 +29,7 @@ std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncati
   const std::size_t stride[3] = {std::size_t(grid.dims[1]) * std::size_t(grid.dims[2]),
                                  std::size_t(grid.dims[2]), 1};
   std::vector<std::vector<double>> per_slab(std::size_t(to[0] - from[0]));
+  std::vector<std::vector<double>> smooth_per_slab(per_slab.size());
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, from[0], to[0], 2, [&](int i) {
       for (int j = from[1]; j < to[1]; ++j)
@@ -44,20 +48,37 @@ std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncati
           if (clamped) continue;
           // Central differences with steps h and 2h, extrapolated (Richardson): the curvature's
           // O(h^2) bias cancels, so an exact distance measures 1 to O(h^4).
-          double near = 0, far = 0;
+          double near = 0, far = 0, bend = 0;
           for (int a = 0; a < 3; ++a) {
-            const double d1 = (double(f[p + stride[a]]) - double(f[p - stride[a]])) / (2 * h[a]);
-            const double d2 =
-                (double(f[p + 2 * stride[a]]) - double(f[p - 2 * stride[a]])) / (4 * h[a]);
+            const double minus1 = double(f[p - stride[a]]), plus1 = double(f[p + stride[a]]);
+            const double minus2 = double(f[p - 2 * stride[a]]),
+                         plus2 = double(f[p + 2 * stride[a]]);
+            const double d1 = (plus1 - minus1) / (2 * h[a]);
+            const double d2 = (plus2 - minus2) / (4 * h[a]);
             near += d1 * d1, far += d2 * d2;
+            const double centre = 2 * double(f[p]);
+            bend = std::max({bend, std::abs(plus1 - centre + minus1) / h[a],
+                             std::abs(plus2 - centre + minus2) / (4 * h[a])});
           }
-          per_slab[std::size_t(i - from[0])].push_back((4 * std::sqrt(near) - std::sqrt(far)) / 3);
+          const double norm = (4 * std::sqrt(near) - std::sqrt(far)) / 3;
+          per_slab[std::size_t(i - from[0])].push_back(norm);
+          if (bend < kSmoothCurvature) smooth_per_slab[std::size_t(i - from[0])].push_back(norm);
         }
     });
   });
   std::vector<double> norms;
   for (const auto& s : per_slab) norms.insert(norms.end(), s.begin(), s.end());
+  if (smooth)
+    for (const auto& s : smooth_per_slab) smooth->insert(smooth->end(), s.begin(), s.end());
   return norms;
+}
+
+}  // namespace
+
+std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                            std::array<int, 3> own_first,
+                                            std::array<int, 3> own_end) {
+  return crossing_norms(grid, truncation, own_first, own_end, nullptr);
 }
 
 GradientNormSummary summarize_gradient_norms(std::vector<double> norms) {
@@ -77,7 +98,18 @@ GradientNormSummary summarize_gradient_norms(std::vector<double> norms) {
 
 GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation& truncation) {
   const std::array<int, 3> end = grid.whole_dims();
-  return summarize_gradient_norms(crossing_gradient_norms(grid, truncation, grid.first, end));
+  std::vector<double> smooth;
+  GradientNormSummary summary =
+      summarize_gradient_norms(crossing_norms(grid, truncation, grid.first, end, &smooth));
+  if (summary.count > 0) summary.smooth_fraction = double(smooth.size()) / double(summary.count);
+  if (smooth.size() >= 16) {
+    const double scale = distance_value_scale(summary.median);
+    for (double& n : smooth) n = std::abs(n * scale - 1);
+    const auto middle = smooth.begin() + long(smooth.size() / 2);
+    std::nth_element(smooth.begin(), middle, smooth.end());
+    summary.smooth_spread = *middle;
+  }
+  return summary;
 }
 
 double distance_value_scale(double median_norm) {

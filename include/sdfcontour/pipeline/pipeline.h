@@ -138,6 +138,12 @@ struct ContourOptions {
   /// armadillo, 0.91x on bunny 256^3, 0.70x on bunny 512^3; docs/scale.md).
   Switch project = Switch::Auto;
   ContactProjectionOptions projection;
+  /// GCP's local reconstruction: move the vertices whose band samples are no distances to the
+  /// mesh (zero_set_refinement.h: a neural SDF, a TSDF) onto the grid's tricubic zero set, and
+  /// carve them not. Auto: where zero_set.mismatch says so; On: every vertex the interpolant
+  /// reaches; Off: none.
+  Switch zero_set = Switch::Auto;
+  ZeroSetRefinementOptions zero_set_options;
   bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)
   /// Called with a short message as each stage starts; empty for silence.
   std::function<void(const std::string&)> progress;
@@ -163,6 +169,12 @@ struct ContourOptions {
   /// smoothed grid (ContourResult::noise_level, smoothed). Noise of 0.1 h already leaves GCP
   /// almost no contact point, and 0.5 h gives marching cubes ~60 bubbles on a sphere.
   bool smooth_noise = true;
+  /// GCP on a grid whose values are no exact distances where the field is smooth
+  /// (GradientNormSummary::smooth_spread over kApproximateSpread: a neural SDF, a TSDF): the
+  /// contact points miss by their samples' depth times the slope's error and the spheres are not
+  /// empty, so the automatic choices become the local reconstruction with every vertex on the
+  /// grid's tricubic zero set (zero_set), without carving (ContourResult::approximate_distances).
+  bool detect_approximate = true;
   /// Merging the mesh where the surface is flat enough (reconstruction/adaptivity.h), after
   /// everything else: over the contact points for GCP and GTCP, the mesh's own planes otherwise.
   /// Tolerance 0 (the default): the mesh as it is.
@@ -220,7 +232,9 @@ struct ContourResult {
   /// gcp, when carving's triangle phase ran: the samples still on the wrong side after the
   /// untangling, dented onto their sides (side_repair.h)
   std::optional<SideRepairStats> side_repair;
-  bool smoothed = false;   ///< the values were smoothed (see ContourOptions::smooth_noise)
+  bool smoothed = false;  ///< the values were smoothed (see ContourOptions::smooth_noise)
+  /// The values were found no exact distances (ContourOptions::detect_approximate)
+  bool approximate_distances = false;
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
   /// Why GCP ran again on the values as given after the rescaled values failed (empty: it did

@@ -26,6 +26,7 @@
 #include "sdfcontour/input/samples.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 #include "sdfcontour/reconstruction/local_reconstruction.h"
+#include "sdfcontour/reconstruction/zero_set_refinement.h"
 
 namespace sdfcontour {
 
@@ -87,6 +88,11 @@ struct LocalBrickOptions {
   /// grid a curved patch's cells read as features and stay chords (torus 32³: L1 0.176 -> 0.208
   /// of MC's, spot 0.236 -> 0.288).
   bool keep_features = false;
+  /// Where the band's values near a vertex are no distances to the mesh (a neural SDF, a TSDF:
+  /// the contact points then miss), the vertex moves onto the zero set of the block's tricubic
+  /// interpolant and is not carved (zero_set_refinement.h).
+  bool refine_zero_set = true;
+  ZeroSetRefinementOptions zero_set;
   /// Undo the projection's and carving's moves of the vertices of triangles that then cross
   /// another, in kUntangleRounds rounds (each over the triangles the last one changed).
   bool untangle = true;

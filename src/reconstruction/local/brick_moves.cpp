@@ -90,4 +90,37 @@ void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, i
   }
 }
 
+// The vertices of `mesh` whose band samples are no distances to it, moved onto the block's
+// tricubic zero set; `stay` (if given: empty or one flag per vertex) gains them. With
+// `fallback` (one position per vertex), those that the interpolant could not move start again
+// from there.
+void refine_vertices_on_zero_set(const GridView& block, const BandSamples& band,
+                                 const LocalBrickOptions& options, Mesh& mesh,
+                                 const std::vector<char>* fixed, std::vector<char>* stay,
+                                 const PointMatrix* fallback) {
+  ZeroSetRefinementOptions zero_set = options.zero_set;
+  // The band's values are scaled into distances; the block's are as given.
+  zero_set.truncation =
+      std::min({zero_set.truncation, band.truncation.inside, band.truncation.outside}) /
+      options.band.value_scale;
+  std::vector<char> moved, flagged;
+  const ZeroSetRefinementStats stats = refine_where_values_are_no_distances(
+      mesh, band.samples, block, zero_set, fixed, &moved, &flagged);
+  if (fallback && stats.moved < stats.flagged) {
+    std::vector<char> again(flagged.size(), 0), moved_again;
+    PointMatrix starts = *fallback;
+    for (std::size_t v = 0; v < flagged.size(); ++v)
+      again[v] = char(flagged[v] && !moved[v] && starts.row(Eigen::Index(v)).allFinite());
+    refine_on_zero_set(starts, again, block, zero_set, &moved_again);
+    for (std::size_t v = 0; v < moved.size(); ++v)
+      if (moved_again[v]) {
+        mesh.vertices.row(Eigen::Index(v)) = starts.row(Eigen::Index(v));
+        moved[v] = 1;
+      }
+  }
+  if (!stay || std::none_of(moved.begin(), moved.end(), [](char m) { return m != 0; })) return;
+  if (stay->empty()) stay->assign(moved.size(), 0);
+  for (std::size_t v = 0; v < moved.size(); ++v) (*stay)[v] = char((*stay)[v] || moved[v]);
+}
+
 }  // namespace sdfcontour::detail

@@ -1,6 +1,6 @@
-// Internal: a brick's moves of its mesh after the projection (local_brick.cpp), each with bounded
-// reach: carving vertex by vertex and the samples' side rounds (the undoing of crossing moves is
-// revert_self_intersections with a round limit).
+// Internal: a brick's moves of its mesh (local_brick.cpp), each with bounded reach: onto the
+// grid's zero set where its values are no distances, carving vertex by vertex and the samples'
+// side rounds (the undoing of crossing moves is revert_self_intersections with a round limit).
 #pragma once
 
 #include <array>
@@ -25,5 +25,14 @@ Samples carving_samples(const GridView& block, const BandSamples& band,
 /// With `near_vertices` (a flag per vertex), only the samples within 2 h of a flagged vertex.
 void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds,
                                 const std::vector<char>* near_vertices = nullptr);
+
+/// The vertices of `mesh` whose band samples are no distances to it (zero_set_refinement.h),
+/// moved onto the tricubic zero set of `block`; `stay` (if given: empty, or one flag per
+/// vertex) gains them. With `fallback` (one position per vertex, NaN for none), a vertex the
+/// interpolant could not move tries again from there.
+void refine_vertices_on_zero_set(const GridView& block, const BandSamples& band,
+                                 const LocalBrickOptions& options, Mesh& mesh,
+                                 const std::vector<char>* fixed, std::vector<char>* stay,
+                                 const PointMatrix* fallback = nullptr);
 
 }  // namespace sdfcontour::detail

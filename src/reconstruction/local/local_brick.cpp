@@ -344,6 +344,14 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     near = triangles_of_edges(keyed, n, shifted(own_first, -ring(options)),
                               shifted(own_end, ring(options)), crossing_means);
   }
+  if (options.refine_zero_set) {
+    // First the cells' own vertices: the subdivision's then start near the zero set, and so do
+    // the positions that the untangling goes back to.
+    Mesh dual{std::move(near.vertices), near.triangles};
+    detail::refine_vertices_on_zero_set(block, band, options, dual, nullptr, nullptr,
+                                        &crossing_means);
+    near.vertices = std::move(dual.vertices);
+  }
   if (options.untangle) {
     // The quadrics can place two nearby cells' vertices (at features) so that their triangles
     // cross: those vertices go to their crossings' mean, as an untangling of the dual mesh.
@@ -365,12 +373,18 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                               fixed);
   cp = ContactPoints();
   depths = Eigen::VectorXd();
+  // Where the values are no distances, their spheres are not empty either: those vertices go
+  // onto the grid's own zero set and are not carved.
+  std::vector<char> stay = fixed ? *fixed : std::vector<char>();
+  if (options.refine_zero_set)
+    detail::refine_vertices_on_zero_set(block, band, options, sub.mesh, fixed, &stay);
   clock.next(3);
   if (options.carve && options.carve_passes > 0) {
     const Samples balls = detail::carving_samples(block, band, options);
     if (balls.points.rows() > 0)
       detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
-                                   options.carve_passes, kMaxCarveMove, fixed);
+                                   options.carve_passes, kMaxCarveMove,
+                                   stay.empty() ? nullptr : &stay);
   }
   // The rest reads the band alone: the block's values may go (a copied block of 567³ floats is
   // 0.73 GB, and the side checks and the untangling are a brick's largest stages).
