@@ -306,13 +306,13 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                 "projection (0: all alike)")
       ->capture_default_str();
   c->add_option("--zero-set", a.zero_set,
-                "GCP local reconstruction: move each vertex whose band samples are no distances "
-                "to the mesh (a neural SDF, a TSDF) onto the zero set of the grid's tricubic "
-                "interpolant, uncarved (auto; on: every vertex; off)")
+                "GCP local reconstruction: move the vertices onto the zero set of the grid's "
+                "tricubic interpolant, uncarved (auto: where the values are no exact distances, "
+                "as a neural SDF's; on; off)")
       ->capture_default_str();
   c->add_option("--zero-set-mismatch", a.zero_set_mismatch,
-                "GCP --zero-set auto: a vertex moves where the samples 1-2.5 spacings from the "
-                "mesh near it have a mean | |value| / distance - 1 | above this")
+                "GCP --zero-set: only the vertices whose samples 1-2.5 spacings from the mesh "
+                "have a mean | |value| / distance - 1 | above this (0: every vertex)")
       ->capture_default_str();
 }
 

@@ -163,12 +163,14 @@ ZeroSetRefinementStats refine_where_values_are_no_distances(
     const std::vector<char>* fixed, std::vector<char>* moved, std::vector<char>* flagged) {
   ZeroSetRefinementStats stats;
   const double h = grid.spacing().maxCoeff();
-  const std::vector<double> mismatch = distance_mismatch(mesh, samples, h, o);
-  std::vector<char> which(mismatch.size(), 0);
+  const Eigen::Index n = mesh.vertices.rows();
+  std::vector<char> which(std::size_t(n), 0);
+  const std::vector<double> mismatch = o.mismatch > 0 ? distance_mismatch(mesh, samples, h, o)
+                                                      : std::vector<double>(std::size_t(n), 0.0);
   for (std::size_t v = 0; v < mismatch.size(); ++v) {
     if (!std::isfinite(mismatch[v])) continue;
     ++stats.measured;
-    if (mismatch[v] > o.mismatch && !(fixed && (*fixed)[v])) {
+    if ((o.mismatch <= 0 || mismatch[v] > o.mismatch) && !(fixed && (*fixed)[v])) {
       which[v] = 1;
       ++stats.flagged;
     }

@@ -138,10 +138,12 @@ struct ContourOptions {
   /// armadillo, 0.91x on bunny 256^3, 0.70x on bunny 512^3; docs/scale.md).
   Switch project = Switch::Auto;
   ContactProjectionOptions projection;
-  /// GCP's local reconstruction: move the vertices whose band samples are no distances to the
-  /// mesh (zero_set_refinement.h: a neural SDF, a TSDF) onto the grid's tricubic zero set, and
-  /// carve them not. Auto: where zero_set.mismatch says so; On: every vertex the interpolant
-  /// reaches; Off: none.
+  /// GCP's local reconstruction: move the vertices (all, or those whose band samples mismatch
+  /// distances to the mesh by more than zero_set_options.mismatch) onto the grid's tricubic
+  /// zero set, uncarved (zero_set_refinement.h). Auto: on where the values are found no exact
+  /// distances (detect_approximate), off elsewhere: on exact distances the contact points are
+  /// the more accurate (every vertex refined where its samples mismatch by over 0.02: 0.300x ->
+  /// 0.316x MC's L1 at 32^3, 0.267x -> 0.275x at 64^3, sharp edges farther).
   Switch zero_set = Switch::Auto;
   ZeroSetRefinementOptions zero_set_options;
   bool parallel = true;  ///< parallel triangulation (other stages follow TBB's thread limit)

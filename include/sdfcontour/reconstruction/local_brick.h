@@ -88,10 +88,11 @@ struct LocalBrickOptions {
   /// grid a curved patch's cells read as features and stay chords (torus 32³: L1 0.176 -> 0.208
   /// of MC's, spot 0.236 -> 0.288).
   bool keep_features = false;
-  /// Where the band's values near a vertex are no distances to the mesh (a neural SDF, a TSDF:
-  /// the contact points then miss), the vertex moves onto the zero set of the block's tricubic
-  /// interpolant and is not carved (zero_set_refinement.h).
-  bool refine_zero_set = true;
+  /// Values that are no exact distances (a neural SDF, a TSDF: the contact points then miss):
+  /// the vertices (those whose samples' mismatch exceeds zero_set.mismatch, if positive) move
+  /// onto the zero set of the block's tricubic interpolant and are not carved
+  /// (zero_set_refinement.h).
+  bool refine_zero_set = false;
   ZeroSetRefinementOptions zero_set;
   /// Undo the projection's and carving's moves of the vertices of triangles that then cross
   /// another, in kUntangleRounds rounds (each over the triangles the last one changed).

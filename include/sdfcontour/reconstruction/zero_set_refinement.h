@@ -24,9 +24,10 @@ struct ZeroSetRefinementOptions {
   double shell_outer = 2.5;
   /// A vertex reads the samples whose nearest mesh point lies within this many spacings of it.
   double gather_radius = 1.5;
-  /// A vertex moves where its samples' mean | |value| / distance to the mesh - 1 | exceeds this
-  /// (exact distances to the shared meshes: a median of 0.001 at 64^3; the neural bunny 0.05).
-  double mismatch = 0.02;
+  /// Positive: only the vertices whose samples' mean | |value| / distance to the mesh - 1 |
+  /// exceeds this move (exact distances to the shared meshes: a median of 0.003-0.013 at 64^3 on
+  /// the local reconstruction's cells; the neural bunny 0.05). 0: every vertex, unmeasured.
+  double mismatch = 0;
   /// Fewer samples than this leave a vertex as it is.
   int min_samples = 3;
   int newton_steps = 4;
@@ -65,8 +66,8 @@ long refine_on_zero_set(PointMatrix& V, const std::vector<char>& which, const Gr
                         const ZeroSetRefinementOptions& options,
                         std::vector<char>* moved = nullptr);
 
-/// Both: the vertices of `mesh` (not `fixed`, if given) whose samples are no distances, moved;
-/// `flagged` (if given) marks all those, `moved` those moved.
+/// Both: the vertices of `mesh` (not `fixed`, if given) whose samples are no distances (every
+/// vertex for mismatch 0), moved; `flagged` (if given) marks all those, `moved` those moved.
 ZeroSetRefinementStats refine_where_values_are_no_distances(
     Mesh& mesh, const Samples& samples, const GridView& grid,
     const ZeroSetRefinementOptions& options, const std::vector<char>* fixed = nullptr,

@@ -51,12 +51,8 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.projection = options.local_projection;
   lb.carve = options.carve != Switch::Off;
   lb.carve_passes = options.carving.passes;
-  lb.refine_zero_set = options.zero_set != Switch::Off;
+  lb.refine_zero_set = options.zero_set == Switch::On;
   lb.zero_set = options.zero_set_options;
-  if (options.zero_set == Switch::On) {  // every vertex, measured or not
-    lb.zero_set.mismatch = -1;
-    lb.zero_set.min_samples = 0;
-  }
   lb.cancel = options.cancel;
   return lb;
 }
