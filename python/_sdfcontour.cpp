@@ -235,6 +235,7 @@ ContourOptions contour_options(const py::dict& o) {
     c.carve_sides = rounds > 0 ? Switch::On : Switch::Off;
   }
   c.project = parse_switch("projection", get<std::string>(o, "projection", "auto"));
+  c.zero_set = parse_switch("zero_set", get<std::string>(o, "zero_set", "auto"));
   c.reconstruction = parse_reconstruction(get<std::string>(o, "reconstruction", "auto"));
   c.fallback_to_mc = get<bool>(o, "fallback_to_mc", c.fallback_to_mc);
   c.subdivisions = get<int>(o, "subdivisions", -1);
@@ -496,6 +497,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   if (!r.rescale_dropped.empty()) stats["rescale_dropped"] = r.rescale_dropped;
   stats["noise_level"] = r.noise_level;
   stats["smoothed"] = r.smoothed;
+  stats["approximate_distances"] = r.approximate_distances;
   stats["pieces_removed"] = r.pieces_removed;
   stats["clipped_to_grid"] = r.clipped_to_grid;
   stats["sign_constraints"] = r.sign_constraints;

@@ -140,15 +140,30 @@ TEST(Approximate, MeshesOffTheZeroSetFallBack) {
         g.values[Eigen::Index(g.index(i, j, k))] =
             q * q - 4 * R * R * (p.x() * p.x() + p.y() * p.y());
       }
-  const ContourResult r1 = contour(grid_input(g), nullptr, gcp_options());
+  // The torus's quartic implicit: its slope varies along the surface, so GCP's contact points
+  // miss and its mesh lies off the zero set; taken for distances, it falls back to marching
+  // cubes.
+  ContourOptions as_distances = gcp_options();
+  as_distances.detect_approximate = false;
+  const ContourResult r1 = contour(grid_input(g), nullptr, as_distances);
   EXPECT_NE(r1.fallback.find("off the field's zero set"), std::string::npos) << r1.fallback;
   EXPECT_EQ(connected_components(*r1.mesh), 1);
   EXPECT_TRUE(r1.mesh->vertices == marching_cubes(g).vertices);
+  // Found no exact distance (the default), its vertices go onto the grid's zero set: closer to
+  // the torus than marching cubes'.
+  const ContourResult found = contour(grid_input(g), nullptr, gcp_options());
+  EXPECT_TRUE(found.fallback.empty()) << found.fallback;
+  EXPECT_TRUE(found.approximate_distances);
+  EXPECT_EQ(found.reconstruction, Reconstruction::Local);
+  EXPECT_EQ(connected_components(*found.mesh), 1);
+  test::expect_closed_and_outward(*found.mesh);
+  EXPECT_LT(2 * worst_distance(*found.mesh, "torus"), worst_distance(marching_cubes(g), "torus"));
   // Exact distances stay on it.
   const Grid exact = transformed("torus", 40, [](double v, double, double) { return v; });
   const ContourResult r2 = contour(grid_input(exact), nullptr, gcp_options());
   EXPECT_TRUE(r2.fallback.empty());
   EXPECT_EQ(r2.off_zero_set, 0.0);
+  EXPECT_FALSE(r2.approximate_distances);
 }
 
 TEST(Approximate, ExactDistancesAreLeftAlone) {

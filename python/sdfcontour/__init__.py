@@ -64,7 +64,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
             refine="auto", strict=False, progress=False, return_stats=False, level=0.0,
             spacing=None, origin=None, return_normals=False, grid_name=None, lipschitz=1.0,
-            adaptivity=0.0):
+            adaptivity=0.0, zero_set="auto"):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -137,6 +137,14 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
         (0 to 4; "auto": 2 below 96 samples per axis, else 1).
+    zero_set : bool or "auto"
+        Local reconstruction: move the vertices onto the zero set of the grid's tricubic
+        interpolant, uncarved. "auto" (default): where the values are found no exact distances
+        (their slope off 1 where the field is smooth, as a neural SDF's grid:
+        ``stats["approximate_distances"]``; GCP then takes the local reconstruction and no
+        carving: 0.10x / 0.16x marching cubes' L1 to a neural SDF's zero set on its 64^3 / 128^3
+        grid, where GCP made 4.4x / 7.3x before); off on exact distances, whose contact points
+        are the more accurate. CLI ``--zero-set``.
     adaptivity : float
         Merge the mesh where the surface is flat enough: edges collapse while the merged
         vertex's squared distances to the tangent planes its region gathers (GCP's contact
@@ -261,6 +269,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         reconstruction = "local"
     o["reconstruction"] = reconstruction
     o["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
+    o["zero_set"] = _switch("zero_set", zero_set)
     o["adaptivity"] = _checks.in_range("adaptivity", adaptivity)
     if isinstance(refine_dilation, str) and refine_dilation == "auto":
         o["refine_dilation_text"] = "auto"

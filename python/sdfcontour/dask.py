@@ -303,7 +303,8 @@ def _one_line(error):
 
 def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
             resolution=None, dataset=None, batch_size=65536, band="auto", truncation="auto",
-            subdivisions="auto", projection="auto", progress=False, return_stats=False):
+            subdivisions="auto", projection="auto", zero_set="auto", progress=False,
+            return_stats=False):
     """Contour a grid too large for one process, brick by brick on Dask.
 
     Parameters
@@ -336,6 +337,11 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
     band, subdivisions, projection
         GCP: as in :func:`sdfcontour.contour`.
+    zero_set : bool or "auto"
+        GCP: True moves the vertices onto each brick's tricubic zero set, uncarved: for values
+        that are no exact distances (a neural SDF's grid), which :func:`sdfcontour.contour` finds
+        by itself. "auto" and False: the values are taken as distances (no pass measures them
+        here).
     truncation : "auto", "none" or a number as text
         GCP: values clamped at +-T carry no distance. "auto" finds T as the single process does,
         in a first pass over the bricks (one more read of the grid; a ``.vdb``'s background is
@@ -369,6 +375,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         options["reconstruction"] = "local"
         options["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
         options["projection"] = _switch("projection", projection)
+        options["zero_set"] = _switch("zero_set", zero_set)
     brick = _checks.whole_in("brick", brick, 1, 2**20)
     batch_size = _checks.whole_in("batch_size", batch_size, 1, 2**26)
     progress = _checks.flag("progress", progress)
