@@ -189,13 +189,17 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
     # A smooth implicit, no distance: (x^2+y^2+z^2+R^2-r^2)^2 - 4R^2(x^2+y^2).
     implicit = (X**2 + Y**2 + Z**2 + 0.55**2 - 0.25**2) ** 2 - 4 * 0.55**2 * (X**2 + Y**2)
+    # Found no exact distance, its mesh lies on the grid's zero set: no fallback.
+    V, F, stats = sdfcontour.contour(implicit, return_stats=True)
+    assert stats["approximate_distances"] and "fallback" not in stats and stats["closed"]
+    # Poisson's mesh of its contact points lies off the zero set: marching cubes' instead.
     with pytest.warns(sdfcontour.FallbackWarning, match="marching cubes"):
-        V, F, stats = sdfcontour.contour(implicit, return_stats=True)
+        V, F, stats = sdfcontour.contour(implicit, reconstruction="poisson", return_stats=True)
     assert stats["fallback"]
     # The discarded GCP run's time is accounted for, beside marching cubes'.
     assert stats["seconds"]["gcp (discarded)"] > 0 and "marching" in stats["seconds"]
     with pytest.raises(ValueError, match="distances"):
-        sdfcontour.contour(implicit, strict=True)
+        sdfcontour.contour(implicit, reconstruction="poisson", strict=True)
     # An exact distance whose thin parts make its measured gradient norm 0.77 (the plane at
     # 16^3): GCP fails on the rescaled values, runs again on the values as given, and says so.
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
