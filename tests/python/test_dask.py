@@ -196,6 +196,25 @@ def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
     assert_same_mesh((V, F), single)
 
 
+def test_gcp_onto_the_zero_set_in_bricks_is_the_single_process_mesh(client):
+    # zero_set=True (for values that are no exact distances, which no pass measures on Dask):
+    # the bricks' vertices go onto their blocks' tricubic zero set, as in one process.
+    x = np.linspace(-1, 1, 48)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    torus = np.sqrt((np.sqrt(X ** 2 + Y ** 2) - 0.5) ** 2 + Z ** 2) - 0.2
+    single = sdfcontour.contour(torus, reconstruction="local", zero_set=True)
+    V, F = sdfcontour.dask.contour(torus, method="gcp", brick=24, client=client, zero_set=True)
+    assert_same_mesh((V, F), single)
+    # A distance times a factor in [0.8, 1.2]: closer to the torus than marching cubes.
+    values = torus * (1 + 0.2 * np.sin(2 * X + 1) * np.cos(3 * Y))
+    V, F = sdfcontour.dask.contour(values, method="gcp", brick=24, client=client, zero_set=True)
+    assert_closed_manifold(F)
+    def error(V):
+        return np.abs(np.sqrt((np.sqrt(V[:, 0] ** 2 + V[:, 1] ** 2) - 0.5) ** 2 + V[:, 2] ** 2)
+                      - 0.2).mean()
+    assert 4 * error(V) < error(sdfcontour.contour(values, method="mc")[0])
+
+
 @pytest.mark.parametrize("call, kind, words", [
     (lambda c: sdfcontour.dask.contour(np.zeros((8, 8, 8)) + 1j, client=c), TypeError,
      "real numbers"),
