@@ -108,7 +108,8 @@ def main():
                         did = "rescaled x%.3g" % s["value_scale"]
                     if s.get("approximate_distances"):
                         did = ("no exact distances (slope off 1 by %.3f): on the zero set"
-                               % s["gradient_norm_smooth_spread"] + ("; " + did if did else ""))
+                               % s.get("gradient_norm_smooth_spread", float("nan"))
+                               + ("; " + did if did else ""))
                     rows.append((shape, name, method, did or "-", comps, "yes" if closed else "no",
                                  "%.3f" % e.max(), "%.4f" % e.mean()))
                     print(*rows[-1], sep=" | ", flush=True)

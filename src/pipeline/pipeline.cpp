@@ -384,6 +384,10 @@ ContourResult contour_before_adaptivity(const SdfInput& input, const AnalyticSha
     ContourResult result = contour_with_fallback(input, shape, chosen, &measured);
     result.noise_level = measured.noise;
     result.approximate_distances = approximate;
+    if (!(result.gradient_norm > 0)) {  // a run on the values as given: what was measured
+      result.gradient_norms = measured.gradient_norms;
+      result.gradient_norm = measured.gradient_norms.median;
+    }
     return result;
   }
   if (options.progress) {
