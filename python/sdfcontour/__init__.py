@@ -127,12 +127,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         contact points near it; topology from the samples' signs; then subdivision, projection
         and carving vertex by vertex; brick by brick, as :func:`sdfcontour.dask.contour` runs it;
         grids and callables only), or
-        "auto": local for a callable (refined on it, 0.12x / 0.16x marching cubes' L1 on a neural
-        SDF at 64^3 / 128^3, where Poisson falls back to marching cubes or reaches 0.80x), local
-        for grids from 256 samples per axis (more accurate and faster there), poisson for smaller
-        grids (whose worst vertex on mirror-symmetric analytic shapes stays within marching
-        cubes'; local is more accurate on average there too: docs/local.md) and scattered
-        samples. CLI
+        "auto": local for a callable (refined on it, 0.15x / 0.17x marching cubes' L1 on a neural
+        SDF at 64^3 / 128^3; Poisson 0.19x / 0.55x), local for grids from 256 samples per axis
+        (more accurate and faster there) and for grids whose values are no exact distances (see
+        ``zero_set``), poisson for smaller grids (whose worst vertex on mirror-symmetric analytic
+        shapes stays within marching cubes'; local is more accurate on average there too:
+        docs/local.md) and scattered samples. CLI
         ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
@@ -263,7 +263,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         raise ValueError(f"reconstruction must be 'auto', 'poisson' or 'local', "
                          f"got {reconstruction!r}")
     # A callable is most often a neural SDF, only roughly a distance: there the local
-    # reconstruction, refined on the callable, lies 6-8x closer to its zero set than marching
+    # reconstruction, refined on the callable, lies 6-7x closer to its zero set than marching
     # cubes, where Poisson gives up on the whole mesh or gains 20% (bench/neural.py).
     if reconstruction == "auto" and callable(sdf):
         reconstruction = "local"
