@@ -40,6 +40,11 @@ bool auto_carve_sides(double samples_per_axis) {
   return samples_per_axis < 128;
 }
 
+bool auto_approximate_distances(const GradientNormSummary& norms) {
+  constexpr double kApproximateSpread = 0.02, kSmoothShare = 0.2;
+  return norms.smooth_spread > kApproximateSpread && norms.smooth_fraction >= kSmoothShare;
+}
+
 double contour_values_reach(const ContourOptions& options, const std::array<int, 3>& dims) {
   const double samples_per_axis = *std::max_element(dims.begin(), dims.end());
   const BandOptions& band = options.band;

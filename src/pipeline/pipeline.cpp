@@ -57,14 +57,6 @@ namespace {
 using detail::NotDistances;
 using detail::Stages;
 
-// Values whose gradient norm is off 1 by more than this (the median where the field is smooth,
-// GradientNormSummary::smooth_spread), where at least kSmoothShare of the crossings are smooth,
-// are no exact distances (ContourOptions::detect_approximate). Exact distances to the shared
-// meshes at 16^3-128^3 measure at most 0.010 there (the torus at 64^3); the neural bunny 0.032
-// at 64^3, 0.037 at 128^3. Coarser grids, mostly kinks, are not judged.
-constexpr double kApproximateSpread = 0.02;
-constexpr double kSmoothShare = 0.2;
-
 // Noise above this many spacings is smoothed away before GCP (ContourOptions::smooth_noise).
 // Exact distances to the shared meshes measure at most 0.067 (armadillo 16^3), 0.045 at 32^3.
 constexpr double kNoisy = 0.08;
@@ -342,9 +334,7 @@ ContourResult contour_before_adaptivity(const SdfInput& input, const AnalyticSha
 // Where the values are no exact distances, the automatic choices that assume them change
 // (ContourOptions::detect_approximate); true if they did.
 bool choose_for_approximate_distances(const GridMeasures& measured, ContourOptions& options) {
-  const double spread = measured.gradient_norms.smooth_spread;
-  if (!options.detect_approximate || !(spread > kApproximateSpread) ||
-      measured.gradient_norms.smooth_fraction < kSmoothShare)
+  if (!options.detect_approximate || !auto_approximate_distances(measured.gradient_norms))
     return false;
   if (options.reconstruction == Reconstruction::Auto)
     options.reconstruction = Reconstruction::Local;
@@ -353,7 +343,7 @@ bool choose_for_approximate_distances(const GridMeasures& measured, ContourOptio
   if (options.progress) {
     std::ostringstream message;
     message << std::setprecision(2) << "the values are no exact distances (their slope is off 1 by "
-            << spread
+            << measured.gradient_norms.smooth_spread
             << " where the field is smooth): the local reconstruction, its vertices on the "
                "grid's tricubic zero set, no carving";
     options.progress(message.str());

@@ -83,6 +83,13 @@ double auto_carving_band(const BandOptions& given, double samples_per_axis);
 /// 4.15e-5 -> 3.75e-5 and 14 -> 31 s).
 bool auto_carve_sides(double samples_per_axis);
 
+/// Whether a grid's values are no exact distances, by its gradient norms: the slope strays from
+/// 1 by over 0.02 where the field is smooth (GradientNormSummary::smooth_spread), measured on at
+/// least 20% of the crossings. Exact distances to the shared meshes at 16^3-128^3 read at most
+/// 0.010 there (the torus at 64^3); the neural bunny's grid 0.032 (64^3), 0.037 (128^3).
+/// Coarser grids, mostly kinks, are not judged (false).
+bool auto_approximate_distances(const GradientNormSummary& norms);
+
 struct ContourOptions {
   Method method = Method::Gcp;
   bool want_mesh = true;     ///< produce the method's mesh
