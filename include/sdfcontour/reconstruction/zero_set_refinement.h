@@ -6,8 +6,9 @@
 // and the sample's sphere (the carving) is not empty. There the grid's values still say where
 // the zero set is: each such vertex moves onto the zero set of the grid's tricubic interpolant.
 // Where the values are distances, the contact points beat any interpolant (at sharp edges, where
-// the field has kinks), so the vertices stay: each vertex measures how far the samples near it
-// are from distances to the mesh itself.
+// the field has kinks), so the vertices stay: the pipeline judges the whole grid
+// (auto_approximate_distances), or each vertex measures how far the samples near it are from
+// distances to the mesh itself (ZeroSetRefinementOptions::mismatch).
 #pragma once
 
 #include <limits>
