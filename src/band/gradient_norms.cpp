@@ -102,13 +102,9 @@ GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation
   GradientNormSummary summary =
       summarize_gradient_norms(crossing_norms(grid, truncation, grid.first, end, &smooth));
   if (summary.count > 0) summary.smooth_fraction = double(smooth.size()) / double(summary.count);
-  if (smooth.size() >= 16) {
-    const double scale = distance_value_scale(summary.median);
-    for (double& n : smooth) n = std::abs(n * scale - 1);
-    const auto middle = smooth.begin() + long(smooth.size() / 2);
-    std::nth_element(smooth.begin(), middle, smooth.end());
-    summary.smooth_spread = *middle;
-  }
+  const double scale = distance_value_scale(summary.median);
+  for (double& n : smooth) n = std::abs(n * scale - 1);
+  summary.smooth_spread = summarize_gradient_norms(std::move(smooth)).median;
   return summary;
 }
 

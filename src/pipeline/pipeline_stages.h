@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -80,6 +81,9 @@ struct ReconstructionInputs {
   bool carve = false;                   // carve the mesh out of `carving_samples`' spheres
   Samples carving_samples;
   CarvingOptions carving;
+  // The grid's own truncation, which its tricubic interpolant must not read across
+  // (ContourOptions::zero_set).
+  double zero_set_truncation = std::numeric_limits<double>::infinity();
 };
 
 // Throws NotDistances where the contact points are too few for the values to be distances.

@@ -217,6 +217,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
                                             const ContourOptions& options, ContourResult& result) {
   const Method method = options.method;
   ReconstructionInputs in;
+  in.zero_set_truncation = grid_truncation(band.truncation, band_options.value_scale);
   PoissonOptions& popt = in.poisson;
   popt = options.poisson;
   popt.progress = options.progress;
@@ -287,6 +288,7 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
     stages.run("zero set", "moving the mesh onto the grid's zero set", [&] {
       ZeroSetRefinementOptions o;
       o.max_move = 2;
+      o.truncation = inputs.zero_set_truncation;  // as the local reconstruction's bricks refuse
       return refine_on_zero_set(result.mesh->vertices, all, *grid.dense, o);
     });
     untangle(before, result, stages);

@@ -103,6 +103,10 @@ std::vector<double> distance_mismatch(const Mesh& mesh, const Samples& samples, 
   return out;
 }
 
+double grid_truncation(const Truncation& truncation, double value_scale) {
+  return std::min(truncation.inside, truncation.outside) / value_scale;
+}
+
 bool tricubic_value(const GridView& grid, const Eigen::Vector3d& p, double truncation,
                     double& value, Eigen::Vector3d& gradient) {
   const Eigen::Vector3d h = grid.spacing();

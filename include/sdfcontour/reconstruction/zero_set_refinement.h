@@ -14,6 +14,7 @@
 #include <limits>
 #include <vector>
 
+#include "sdfcontour/band/band.h"
 #include "sdfcontour/input/samples.h"
 #include "sdfcontour/types.h"
 
@@ -39,6 +40,11 @@ struct ZeroSetRefinementOptions {
   /// touching one is not used.
   double truncation = std::numeric_limits<double>::infinity();
 };
+
+/// ZeroSetRefinementOptions::truncation for a grid whose band found `truncation` in its values
+/// scaled by `value_scale` (BandOptions::value_scale): the interpolant reads the grid's values as
+/// given.
+double grid_truncation(const Truncation& truncation, double value_scale);
 
 /// Per vertex of `mesh`, the mean of | |value| / distance - 1 | over the `samples` (points (n, 3),
 /// values (n)) with |value| in [shell_inner h, shell_outer h], where distance is the sample's

@@ -99,10 +99,8 @@ void refine_vertices_on_zero_set(const GridView& block, const BandSamples& band,
                                  const std::vector<char>* fixed, std::vector<char>* stay,
                                  const PointMatrix* fallback) {
   ZeroSetRefinementOptions zero_set = options.zero_set;
-  // The band's values are scaled into distances; the block's are as given.
   zero_set.truncation =
-      std::min({zero_set.truncation, band.truncation.inside, band.truncation.outside}) /
-      options.band.value_scale;
+      std::min(zero_set.truncation, grid_truncation(band.truncation, options.band.value_scale));
   std::vector<char> moved, flagged;
   const ZeroSetRefinementStats stats = refine_where_values_are_no_distances(
       mesh, band.samples, block, zero_set, fixed, &moved, &flagged);
