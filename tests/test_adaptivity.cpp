@@ -150,9 +150,10 @@ namespace {
 TEST(Adaptivity, SmallBricksMergeAcrossTheirSeamsAlike) {
   // Bricks of 12 spacings cut the torus (40^3) into 4 per axis: the second pass, shifted by half
   // a brick, merges across the first pass's seams, so the mesh is nearly as compact as one
-  // brick's (measured: 2,984 triangles against 2,558; bricks of 6 spacings, smaller than the
-  // merged triangles, 4,092), closed, manifold, free of crossings, and the same for 1 and 2
-  // threads.
+  // brick's (measured: 2,274 triangles against 1,748; 2,984 against 2,558 when the points
+  // placed every merged vertex, whose triangles were smaller; bricks of 6 spacings, smaller than
+  // the merged triangles, 4,092 then), closed, manifold, free of crossings, and the same for 1
+  // and 2 threads.
   const auto torus = make_builtin_shape("torus");
   const Grid g = sample_grid(*torus, 40, Bounds{});
   const double h = g.spacing().maxCoeff();
@@ -181,7 +182,7 @@ TEST(Adaptivity, SmallBricksMergeAcrossTheirSeamsAlike) {
   EXPECT_EQ(one.vertices, two.vertices);
   EXPECT_EQ(one.triangles, two.triangles);
   EXPECT_LT(20 * one.triangles.rows(), fine.mesh->triangles.rows());
-  EXPECT_LT(one.triangles.rows(), 1.2 * double(one_brick.triangles.rows()));
+  EXPECT_LT(one.triangles.rows(), 1.35 * double(one_brick.triangles.rows()));
   EXPECT_GT(s_bricks.merges, 0);
   test::expect_closed_and_outward(one);
   EXPECT_TRUE(self_intersecting_triangles(one).empty());

@@ -38,7 +38,7 @@ std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& p
   const std::vector<int> nearest = nearest_vertices(mesh.vertices, points, h);
   for (Eigen::Index i = 0; i < points.rows(); ++i)  // in row order: the same sums every run
     if (nearest[std::size_t(i)] >= 0)
-      q[std::size_t(nearest[std::size_t(i)])].add_plane(normals.row(i).transpose(),
+      q[std::size_t(nearest[std::size_t(i)])].points.add_plane(normals.row(i).transpose(),
                                                         points.row(i).transpose(), 1.0);
 
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
@@ -49,7 +49,7 @@ std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& p
     if (n.norm() == 0) continue;
     const double w = kFaceWeight * n.norm() / 6 / (h * h);
     for (int k = 0; k < 3; ++k)
-      q[std::size_t(mesh.triangles(t, k))].add_plane(n.normalized(), a, w);
+      q[std::size_t(mesh.triangles(t, k))].faces.add_plane(n.normalized(), a, w);
   }
   return q;
 }
