@@ -53,11 +53,11 @@ struct PlaneQuadric {
 // with the region. So the cost counts each point at a quarter of its weight, and a
 // merged vertex goes to the points' and triangles' minimiser only while its region holds a few
 // points, to the triangles' alone beyond. Measured at 256^3 against CGAL's Garland-Heckbert
-// decimation at the same triangle count (L1 over TOL 0's): with both at full weight everywhere,
-// penguin 19.9x fewer at 1.124 (GH 1.019), blub 10.8x at 1.117 (GH 1.053); with this split,
-// penguin 16.0x at 1.022 (GH 1.028), blub 13.4x at 1.044 (GH 1.060), armadillo 6.5x at 1.057
-// (GH 1.067). The triangles' planes alone (the mesh's own, as GH) lose the points' pull onto
-// the surface: penguin 17.2x at 1.037.
+// decimation at the same triangle count (L1 over TOL 0's, docs/adaptivity.md): with both at
+// full weight everywhere, penguin 20.3x fewer at 1.119 (GH 1.019), blub 10.9x at 1.117 (GH
+// 1.053); with this split, penguin 16.3x at 1.020 (GH 1.024), blub 13.5x at 1.046 (GH 1.062),
+// armadillo 6.4x at 1.052 (GH 1.067). The triangles' planes alone (the mesh's own, as GH's)
+// lose the points' pull onto the surface: penguin 17.2x at 1.037.
 struct MergeQuadric {
   PlaneQuadric points, faces;
 
