@@ -39,7 +39,7 @@ std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& p
   for (Eigen::Index i = 0; i < points.rows(); ++i)  // in row order: the same sums every run
     if (nearest[std::size_t(i)] >= 0)
       q[std::size_t(nearest[std::size_t(i)])].points.add_plane(normals.row(i).transpose(),
-                                                        points.row(i).transpose(), 1.0);
+                                                               points.row(i).transpose(), 1.0);
 
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
     const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)).transpose();
