@@ -185,7 +185,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     // A file-mapped grid is held a block at a time: its pages go once a brick has its block.
     detail::reconstruct_in_bricks(*grid.dense, band_options, options, result, stages,
                                   [&] { release_resident_pages(input); });
-    if (!options.want_points) return result;
+    if (!options.want_points || result.contact_points) return result;
   }
   BandSamples band = band_stage(grid, scattered, band_options, stages);
   result.band_samples = int(band.samples.values.size());

@@ -89,8 +89,9 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   const int size =
       options.bricks.size == BrickOptions::kAutoSize ? kLocalGridBrick : options.bricks.size;
   LocalBricksStats stats;
-  // Adaptivity merges over the contact points: the bricks hand theirs on.
-  lb.keep_contact_points = options.adaptivity.tolerance > 0;
+  // Adaptivity merges over the contact points, and --points writes the ones the mesh was made
+  // from (the local reconstruction's options differ from the paper's): the bricks hand theirs on.
+  lb.keep_contact_points = options.adaptivity.tolerance > 0 || options.want_points;
   OrientedPoints kept;
   result.mesh = stages.run("local", "local reconstruction in bricks", [&] {
     return local_mesh_in_bricks(grid, lb, size, &stats, lb.keep_contact_points ? &kept : nullptr);
