@@ -280,3 +280,35 @@ TEST(ContactProjection, RejectsBadInput) {
     EXPECT_THROW(project_to_contact_points(m, P, N, {}, kSpacing, o), Error);
   }
 }
+
+TEST(ContactProjection, PointsWhoseNormalsDisagreeWithTheirPlaceLoseTheirPull) {
+  // A face with a strip of points as GCP gives them next to an edge: 0.05 h inside the face,
+  // their normals tilted 20 degrees (gradients blended across the medial axis). Weighed by how
+  // far their normals turn from the fit's, the vertices stay on the face; weighed alike, the
+  // strip pulls them inside (the built-in box at 32^3: 0.146 h at worst, 0.085 h now).
+  const double h = kSpacing;
+  PointMatrix P(0, 3), N(0, 3);
+  add_plane_points(P, N, 4000, 4 * h, 0.0, 1.0, 3);
+  const double tilt = 20 * std::acos(-1.0) / 180;
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> along(-4 * h, 4 * h), across(0.2 * h, 0.9 * h);
+  for (int i = 0; i < 800; ++i) {
+    P.conservativeResize(P.rows() + 1, 3);
+    N.conservativeResize(N.rows() + 1, 3);
+    P.row(P.rows() - 1) << across(rng), along(rng), -0.05 * h;
+    N.row(N.rows() - 1) << std::sin(tilt), 0, std::cos(tilt);
+  }
+  ContactProjectionOptions o = local_projection_options();
+  o.chord_offset = false;
+  const Mesh patch = flat_patch(5, h / 4, 0.02 * h);
+  auto worst_height = [&](const ContactProjectionOptions& options) {
+    Mesh m = patch;
+    project_to_contact_points(m, P, N, {}, h, options);
+    return m.vertices.col(2).cwiseAbs().maxCoeff() / h;
+  };
+  const double weighed = worst_height(o);
+  o.normal_turn_scale = 0;
+  const double alike = worst_height(o);
+  EXPECT_LT(weighed, 0.005);      // measured: 0.0014 h
+  EXPECT_GT(alike, 5 * weighed);  // measured: 0.040 h
+}
