@@ -84,8 +84,8 @@ double normal_turn(const FitRow& f, const Coefficients* c) {
 // Weighted least squares, then robust_rounds refits with each row's weight divided by
 // 1 + (its miss / robust_scale)^2; with normal_turn_scale, every fit also divides it by
 // 1 + (its normal's turn from the fit's / normal_turn_scale)^2, from the vertex's normal in the
-// first fit (the built-in box at 32^3: vertices next to its edges 0.085 h inside a face at worst
-// with the turns from the second fit on, 0.016 h with the first's too). False where the rows
+// first fit (the built-in box at 32^3: vertices next to its edges 0.146 h inside a face at worst
+// without the turns, 0.085 h with them). False where the rows
 // give no reliable height at the vertex: a rank-deficient or one-sided neighbourhood
 // (max_variance_factor), or points too far from any quadric (max_residual). The first fit's
 // spread is judged without the turns: where the surface curves within the radius, its points
