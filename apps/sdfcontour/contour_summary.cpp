@@ -194,7 +194,8 @@ void print_contour_summary(const ContourResult& r, double total) {
   std::cout << "samples " << r.samples;
   if (r.band_samples > 0) std::cout << ", in band " << r.band_samples;
   if (r.hidden >= 0) std::cout << ", hidden " << r.hidden;
-  // (The bricks' contact points, kept for adaptivity, name no samples: the bricks' line counts.)
+  // (The bricks' contact points, kept for adaptivity or --points, name no samples: the bricks'
+  // line counts.)
   if (r.contact_points && !r.local_bricks)
     std::cout << ", contact points kept " << r.contact_points->size();
   if (r.local_bricks)

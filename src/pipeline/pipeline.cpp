@@ -180,12 +180,12 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     result.gradient_norm = sparse->gradient_norm;
     result.value_scale = band_options.value_scale = sparse->value_scale;
   }
-  const bool bricked = detail::bricked_local(grid.dense, options);
-  if (bricked) {
+  if (detail::bricked_local(grid.dense, options)) {
     // A file-mapped grid is held a block at a time: its pages go once a brick has its block.
+    // With want_points the bricks hand on the contact points they made the mesh from.
     detail::reconstruct_in_bricks(*grid.dense, band_options, options, result, stages,
                                   [&] { release_resident_pages(input); });
-    if (!options.want_points || result.contact_points) return result;
+    return result;
   }
   BandSamples band = band_stage(grid, scattered, band_options, stages);
   result.band_samples = int(band.samples.values.size());
@@ -199,8 +199,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 
   detail::SampleTriangulations triangulations =
       detail::contact_point_stage(band, shape, options, result, stages);
-  const bool contact_mesh =
-      (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh && !bricked;
+  const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
   const bool local = contact_mesh && grid.dense && options.reconstruction == Reconstruction::Local;
   if (local) {
     detail::check_contact_point_count(grid, options, *result.contact_points);
