@@ -448,6 +448,7 @@ py::dict adaptivity_stats(const AdaptivityStats& s) {
   a["triangles_after"] = s.triangles_after;
   a["merges"] = s.merges;
   a["freeze_rounds"] = s.freeze_rounds;
+  a["fitted_vertices"] = s.fitted_vertices;
   return a;
 }
 

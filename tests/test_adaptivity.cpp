@@ -14,11 +14,30 @@
 namespace sdfcontour {
 namespace {
 
-ContourResult local_mesh(const Grid& g, double tolerance) {
+ContourResult local_mesh(const Grid& g, double tolerance, int fit_rounds = -1) {
   ContourOptions o;
   o.reconstruction = Reconstruction::Local;
   o.adaptivity.tolerance = tolerance;
+  if (fit_rounds >= 0) o.adaptivity.fit_rounds = fit_rounds;
   return contour(grid_input(g), nullptr, o);
+}
+
+// The mean |distance| to the shape over the triangles (area-weighted), from their centroids and
+// edge midpoints: where chords leave the surface.
+double mean_surface_distance(const AnalyticShape& shape, const Mesh& m) {
+  double sum = 0, area = 0;
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = m.vertices.row(m.triangles(t, 0)).transpose();
+    const Eigen::Vector3d b = m.vertices.row(m.triangles(t, 1)).transpose();
+    const Eigen::Vector3d c = m.vertices.row(m.triangles(t, 2)).transpose();
+    const double w = (b - a).cross(c - a).norm();
+    double d = std::abs(shape.distance((a + b + c) / 3));
+    const Eigen::Vector3d midpoints[] = {(a + b) / 2, (b + c) / 2, (c + a) / 2};
+    for (const Eigen::Vector3d& p : midpoints) d += std::abs(shape.distance(p));
+    sum += w * d / 4;
+    area += w;
+  }
+  return sum / area;
 }
 
 double largest_distance(const AnalyticShape& shape, const Mesh& m) {
@@ -102,6 +121,26 @@ TEST(Adaptivity, CurvedShapeStaysCloseAndTheSameForAnyThreadCount) {
   EXPECT_LT(largest_distance(*torus, *one.mesh), 0.25 * h);
 }
 
+TEST(Adaptivity, FitPutsTheMergedTrianglesThroughTheSurface) {
+  // Merged vertices at their quadrics' minima leave the larger triangles as chords of a curved
+  // surface; the fit to the unmerged vertices lets them straddle it (torus 40^3, TOL 0.1: mean
+  // distance 0.0208 h -> 0.0144 h, measured), with the same triangles, closed, no crossings.
+  const auto torus = make_builtin_shape("torus");
+  const Grid g = sample_grid(*torus, 40, Bounds{});
+  const double h = g.spacing().maxCoeff();
+  const ContourResult fitted = local_mesh(g, 0.1), unfitted = local_mesh(g, 0.1, 0);
+  ASSERT_TRUE(fitted.adaptivity && unfitted.adaptivity);
+  EXPECT_EQ(fitted.mesh->triangles, unfitted.mesh->triangles);
+  EXPECT_GT(fitted.adaptivity->fitted_vertices, fitted.mesh->vertices.rows() / 2);
+  EXPECT_EQ(unfitted.adaptivity->fitted_vertices, 0);
+  const double with = mean_surface_distance(*torus, *fitted.mesh);
+  const double without = mean_surface_distance(*torus, *unfitted.mesh);
+  EXPECT_LT(with, 0.8 * without);
+  EXPECT_LT(with, 0.02 * h);
+  test::expect_closed_and_outward(*fitted.mesh);
+  EXPECT_TRUE(self_intersecting_triangles(*fitted.mesh).empty());
+}
+
 TEST(Adaptivity, MergesThatCrossTheMeshAreMadeAgainWithTheirRegionFrozen) {
   // The plane at 64^3, TOL 0.25: the first merging makes thin parts cross (measured: it needs a
   // second round; the armadillo did until the contact points at corners, the goathead and the
@@ -135,6 +174,9 @@ TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {
   o.brick_spacings = -1;
   EXPECT_THROW(adapt_mesh(m, none, none, 0.1, o), Error);
   o.brick_spacings = AdaptivityOptions{}.brick_spacings;
+  o.fit_rounds = -1;
+  EXPECT_THROW(adapt_mesh(m, none, none, 0.1, o), Error);
+  o.fit_rounds = AdaptivityOptions{}.fit_rounds;
   // Marching cubes' own planes only: still closed and manifold, fewer triangles.
   AdaptivityStats stats;
   const Mesh merged = adapt_mesh(m, none, none, g.spacing().maxCoeff(), o, &stats);

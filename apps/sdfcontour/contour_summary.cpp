@@ -110,7 +110,8 @@ void add_stage_counts(nlohmann::json& j, const ContourOptions& opt, const Contou
     j["adaptivity"] = {{"triangles_before", r.adaptivity->triangles_before},
                        {"triangles_after", r.adaptivity->triangles_after},
                        {"merges", r.adaptivity->merges},
-                       {"freeze_rounds", r.adaptivity->freeze_rounds}};
+                       {"freeze_rounds", r.adaptivity->freeze_rounds},
+                       {"fitted_vertices", r.adaptivity->fitted_vertices}};
   if (r.untangling)
     j["untangling"] = {{"rounds", r.untangling->rounds},
                        {"vertices_reverted", r.untangling->vertices_reverted},

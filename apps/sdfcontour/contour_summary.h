@@ -23,6 +23,7 @@ struct ContourArgs {
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double adaptivity = 0;
   int adaptivity_bricks = AdaptivityOptions{}.brick_spacings;
+  int adaptivity_fit = AdaptivityOptions{}.fit_rounds;
   double james_epsilon = GradientOptions{}.james_epsilon,
          tie_tolerance = ContactPointOptions{}.tie_tolerance;
   bool fn = false, serial_triangulation = false, no_sign_constraints = false,

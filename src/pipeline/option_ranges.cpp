@@ -26,6 +26,7 @@ const std::vector<OptionRange>& option_ranges() {
       {"--subdivisions", "subdivisions", 0, 4},
       {"--adaptivity", "adaptivity", 0, 10},
       {"--adaptivity-bricks", "", 0, 4096},
+      {"--adaptivity-fit", "", 0, 100},
       {"--side-passes", "side_passes", 0, 100},
       {"--res", "resolution", 2, 1024},
       {"--threads", "", 0, 4096},

@@ -17,13 +17,18 @@ struct AdaptivityOptions {
   int brick_spacings = 64;
   /// A merge turns no triangle's normal by more than this many degrees (nor flips one).
   double max_normal_turn = 45;
+  /// Rounds of the last step, a least-squares fit that moves the merged vertices so that their
+  /// triangles pass through the unmerged mesh's vertices (which lie on the surface) instead of
+  /// cutting chords under it; 0: the vertices stay at their quadrics' minima.
+  int fit_rounds = 6;
 };
 
 struct AdaptivityStats {
   long triangles_before = 0;
   long triangles_after = 0;
-  long merges = 0;        ///< edges collapsed (in the last round)
-  int freeze_rounds = 0;  ///< rounds merged again with the vertices around crossings frozen
+  long merges = 0;           ///< edges collapsed (in the last round)
+  int freeze_rounds = 0;     ///< rounds merged again with the vertices around crossings frozen
+  long fitted_vertices = 0;  ///< vertices the fit moved (and kept: no move that crosses stays)
 };
 
 /// `mesh` (closed, 2-manifold, oriented) with its edges collapsed, cheapest first, while the
@@ -37,11 +42,14 @@ struct AdaptivityStats {
 /// condition) and turn no triangle by more than options.max_normal_turn. Where the merged mesh
 /// crosses itself, it is merged again from `mesh` with the vertices within 3 spacings of the
 /// crossing triangles frozen (up to 4 rounds; the regions of the input's own crossings are frozen
-/// from the start): no merge adds a crossing unless 4 rounds do not suffice. Brick by brick
+/// from the start): no merge adds a crossing unless 4 rounds do not suffice. Then the merged
+/// vertices, but those frozen, move so that the merged triangles fit the input's vertices in the
+/// least squares (options.fit_rounds; by at most a quarter spacing; moves that make triangles
+/// cross are undone). Brick by brick
 /// (options.brick_spacings): a vertex merges within its brick while its neighbours lie in it too;
 /// the bricks run in parallel and are joined in order: the same mesh for any thread count.
 /// Throws Error for mismatched sizes, a spacing that is not positive, a tolerance outside
-/// [0, 10] or a negative brick size.
+/// [0, 10], a negative brick size or fit rounds outside [0, 100].
 Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
                 double spacing, const AdaptivityOptions& options, AdaptivityStats* stats = nullptr);
 

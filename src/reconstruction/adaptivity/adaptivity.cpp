@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "reconstruction/adaptivity/brick_merging.h"
+#include "reconstruction/adaptivity/surface_fit.h"
 #include "reconstruction/point_cubes.h"
 #include "sdfcontour/metrics/self_intersections.h"
 
@@ -56,6 +57,8 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
   if (!(options.max_normal_turn > 0 && options.max_normal_turn <= 180))
     throw Error("adaptivity: the normal turn must lie in (0, 180] degrees");
   if (options.brick_spacings < 0) throw Error("adaptivity: the brick size must not be negative");
+  if (options.fit_rounds < 0 || options.fit_rounds > 100)
+    throw Error("adaptivity: the fit's rounds must lie in [0, 100]");
   AdaptivityStats s;
   s.triangles_before = s.triangles_after = long(mesh.triangles.rows());
   if (options.tolerance == 0 || mesh.triangles.rows() == 0) {
@@ -91,6 +94,14 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
     ++s.freeze_rounds;
   }
   Mesh out = std::move(state.mesh);
+  if (options.fit_rounds > 0) {
+    // The frozen regions keep the input's triangles where merging made the mesh cross.
+    std::vector<char> fixed(std::size_t(out.vertices.rows()), 0);
+    for (std::size_t v = 0; v < fixed.size(); ++v) fixed[v] = frozen[std::size_t(state.source[v])];
+    detail::SurfaceFitOptions fit;
+    fit.rounds = options.fit_rounds;
+    s.fitted_vertices = detail::fit_merged_vertices(out, mesh, fixed, spacing, fit);
+  }
   s.triangles_after = long(out.triangles.rows());
   if (stats) *stats = s;
   return out;

@@ -1,0 +1,165 @@
+#include "reconstruction/adaptivity/surface_fit.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "reconstruction/nearest_triangles.h"
+#include "sdfcontour/metrics/self_intersections.h"
+
+namespace sdfcontour::detail {
+
+namespace {
+
+Eigen::Vector3d corner(const Mesh& m, Eigen::Index t, int k) {
+  return m.vertices.row(m.triangles(t, k)).transpose();
+}
+
+Eigen::Vector3d unit_normal(const Mesh& m, Eigen::Index t) {
+  const Eigen::Vector3d a = corner(m, t, 0);
+  const Eigen::Vector3d n = (corner(m, t, 1) - a).cross(corner(m, t, 2) - a);
+  const double length = n.norm();
+  return length > 0 ? Eigen::Vector3d(n / length) : Eigen::Vector3d::Zero();
+}
+
+// Each vertex's normal: its triangles' area-weighted normals, summed (unit; zero if they cancel).
+PointMatrix vertex_normals(const Mesh& m) {
+  PointMatrix n = PointMatrix::Zero(m.vertices.rows(), 3);
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = corner(m, t, 0);
+    const Eigen::Vector3d w = (corner(m, t, 1) - a).cross(corner(m, t, 2) - a);
+    for (int k = 0; k < 3; ++k) n.row(m.triangles(t, k)) += w.transpose();
+  }
+  for (Eigen::Index v = 0; v < n.rows(); ++v)
+    if (n.row(v).norm() > 0) n.row(v).normalize();
+  return n;
+}
+
+// The barycentric coordinates of q (on triangle a b c), clamped to the triangle.
+Eigen::Vector3d barycentric(const Eigen::Vector3d& q, const Eigen::Vector3d& a,
+                            const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d e0 = b - a, e1 = c - a, d = q - a;
+  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1);
+  const double d20 = d.dot(e0), d21 = d.dot(e1), det = d00 * d11 - d01 * d01;
+  if (!(det > 0)) return Eigen::Vector3d::Constant(1.0 / 3);
+  const double v = (d11 * d20 - d01 * d21) / det, w = (d00 * d21 - d01 * d20) / det;
+  Eigen::Vector3d l(1 - v - w, v, w);
+  l = l.cwiseMax(0.0);
+  return l / l.sum();
+}
+
+// A dense vertex's foot: the merged triangle nearest it and its barycentric coordinates there.
+struct Foot {
+  int triangle = -1;
+  Eigen::Vector3d weights = Eigen::Vector3d::Zero();
+};
+
+std::vector<Foot> feet_of(const Mesh& merged, const PointMatrix& samples,
+                          const PointMatrix& normals, double h) {
+  const NearestTriangles nearest(merged, nullptr, true);
+  std::vector<Foot> feet(std::size_t(samples.rows()));
+  tbb::parallel_for(Eigen::Index(0), samples.rows(), [&](Eigen::Index s) {
+    const Eigen::Vector3d p = samples.row(s).transpose();
+    const NearestTriangles::Hit hit = nearest.closest(p);
+    if (hit.triangle < 0 || (hit.point - p).norm() > h) return;
+    // Another sheet (a thin part's far side) is not this sample's surface.
+    if (unit_normal(merged, hit.triangle).dot(normals.row(s).transpose()) < 0.5) return;
+    Foot& f = feet[std::size_t(s)];
+    f.triangle = hit.triangle;
+    f.weights = barycentric(hit.point, corner(merged, hit.triangle, 0),
+                            corner(merged, hit.triangle, 1), corner(merged, hit.triangle, 2));
+  });
+  return feet;
+}
+
+// For each merged vertex, the (sample, corner) pairs whose feet it carries, ascending.
+struct Carried {
+  std::vector<long> first;                   // per vertex, into `entries`
+  std::vector<std::pair<int, int>> entries;  // (sample, corner)
+};
+
+Carried carried_samples(const Mesh& merged, const std::vector<Foot>& feet) {
+  Carried c;
+  c.first.assign(std::size_t(merged.vertices.rows()) + 1, 0);
+  for (const Foot& f : feet)
+    if (f.triangle >= 0)
+      for (int k = 0; k < 3; ++k) ++c.first[std::size_t(merged.triangles(f.triangle, k)) + 1];
+  for (std::size_t v = 1; v < c.first.size(); ++v) c.first[v] += c.first[v - 1];
+  c.entries.resize(std::size_t(c.first.back()));
+  std::vector<long> next(c.first.begin(), c.first.end() - 1);
+  for (std::size_t s = 0; s < feet.size(); ++s)  // in sample order: each run stays ascending
+    if (feet[s].triangle >= 0)
+      for (int k = 0; k < 3; ++k)
+        c.entries[std::size_t(next[std::size_t(merged.triangles(feet[s].triangle, k))]++)] = {
+            int(s), k};
+  return c;
+}
+
+// The fit of `merged` to `samples` (n x 3) with unit `normals` (n x 3).
+long fit_to_samples(Mesh& merged, const PointMatrix& samples, const PointMatrix& normals,
+                    const std::vector<char>& fixed, double h, const SurfaceFitOptions& options) {
+  if (fixed.size() != std::size_t(merged.vertices.rows()))
+    throw InternalError("surface fit: one fixed flag per vertex expected");
+  if (merged.triangles.rows() == 0 || samples.rows() == 0) return 0;
+  const PointMatrix start = merged.vertices;
+  const std::vector<Foot> feet = feet_of(merged, samples, normals, h);
+  const Carried carried = carried_samples(merged, feet);
+  // A vertex that solved alone for its samples' offsets, with its neighbours held, moves about
+  // twice as far as the shift they need together (the barycentric weights' mean over their
+  // mean square, 1/3 over 1/6): half the step.
+  constexpr double kDamping = 0.5;
+  // Along the directions that no sample fixes, a vertex stays (a tenth of the mean weight).
+  constexpr double kTangentHold = 0.1;
+  const double reach = options.max_move * h;
+  for (int round = 0; round < options.rounds; ++round) {
+    std::vector<Eigen::Vector3d> normal(std::size_t(merged.triangles.rows()));
+    tbb::parallel_for(Eigen::Index(0), merged.triangles.rows(),
+                      [&](Eigen::Index t) { normal[std::size_t(t)] = unit_normal(merged, t); });
+    std::vector<double> offset(feet.size(), 0.0);
+    tbb::parallel_for(std::size_t(0), feet.size(), [&](std::size_t s) {
+      const Foot& f = feet[s];
+      if (f.triangle < 0) return;
+      Eigen::Vector3d at = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) at += f.weights[k] * corner(merged, f.triangle, k);
+      offset[s] =
+          normal[std::size_t(f.triangle)].dot(samples.row(Eigen::Index(s)).transpose() - at);
+    });
+    PointMatrix moved = merged.vertices;
+    tbb::parallel_for(Eigen::Index(0), merged.vertices.rows(), [&](Eigen::Index v) {
+      const long b = carried.first[std::size_t(v)], e = carried.first[std::size_t(v) + 1];
+      if (fixed[std::size_t(v)] || b == e) return;
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      for (long i = b; i < e; ++i) {
+        const auto [s, k] = carried.entries[std::size_t(i)];
+        const Foot& f = feet[std::size_t(s)];
+        const Eigen::Vector3d& n = normal[std::size_t(f.triangle)];
+        const double w = f.weights[k];
+        A += w * w * n * n.transpose();
+        rhs += w * offset[std::size_t(s)] * n;
+      }
+      A += (kTangentHold * A.trace() / 3 + 1e-300) * Eigen::Matrix3d::Identity();
+      Eigen::Vector3d x = merged.vertices.row(v).transpose() + kDamping * A.ldlt().solve(rhs);
+      const Eigen::Vector3d from = start.row(v).transpose();
+      if ((x - from).norm() > reach) x = from + (x - from) * (reach / (x - from).norm());
+      if (x.allFinite()) moved.row(v) = x.transpose();
+    });
+    merged.vertices = std::move(moved);
+  }
+  revert_self_intersections(merged, start);
+  long count = 0;
+  for (Eigen::Index v = 0; v < merged.vertices.rows(); ++v)
+    count += merged.vertices.row(v) != start.row(v);
+  return count;
+}
+
+}  // namespace
+
+long fit_merged_vertices(Mesh& merged, const Mesh& dense, const std::vector<char>& fixed, double h,
+                         const SurfaceFitOptions& options) {
+  return fit_to_samples(merged, dense.vertices, vertex_normals(dense), fixed, h, options);
+}
+
+}  // namespace sdfcontour::detail
