@@ -95,9 +95,11 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
   }
   Mesh out = std::move(state.mesh);
   if (options.fit_rounds > 0) {
-    // The frozen regions keep the input's triangles where merging made the mesh cross.
+    // The frozen regions keep the input's triangles where merging made the mesh cross; corners
+    // stay where their contact points put them.
     std::vector<char> fixed(std::size_t(out.vertices.rows()), 0);
-    for (std::size_t v = 0; v < fixed.size(); ++v) fixed[v] = frozen[std::size_t(state.source[v])];
+    for (std::size_t v = 0; v < fixed.size(); ++v)
+      fixed[v] = frozen[std::size_t(state.source[v])] || state.quadrics[v].pinned;
     detail::SurfaceFitOptions fit;
     fit.rounds = options.fit_rounds;
     s.fitted_vertices = detail::fit_merged_vertices(out, mesh, fixed, spacing, fit);

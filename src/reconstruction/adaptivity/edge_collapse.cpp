@@ -38,6 +38,12 @@ struct QuadricPlacement {
   boost::optional<K::Point_3> operator()(const Profile& profile) const {
     const std::vector<char>& frozen = *policies.frozen;
     if (frozen[std::size_t(profile.v0())] || frozen[std::size_t(profile.v1())]) return boost::none;
+    // A corner keeps its place; two corners stay two.
+    const bool pinned0 = (*policies.quadrics)[std::size_t(profile.v0())].pinned;
+    const bool pinned1 = (*policies.quadrics)[std::size_t(profile.v1())].pinned;
+    if (pinned0 && pinned1) return boost::none;
+    if (pinned0) return profile.p0();
+    if (pinned1) return profile.p1();
     const Eigen::Vector3d mid = (vec(profile.p0()) + vec(profile.p1())) / 2;
     const Eigen::Vector3d x = policies.merged(profile).minimiser(mid);
     // A minimiser far from the edge extrapolates (nearly parallel planes): not merged.

@@ -37,19 +37,41 @@ constexpr double kFaceWeight = 1.0;
 // cost that the surface does not have. The built-in box at 32^3, TOL 0.25: 208 -> 96 triangles.
 constexpr double kPlaneMiss = 0.01;
 
+// A vertex is a corner where three or more points lie on it whose normals span every direction:
+// the smallest eigenvalue of their normals' scatter above this fraction of the largest (the local
+// reconstruction's feature ratio). Samples on different sides of a corner share it as their
+// contact point; a smooth surface is touched at one point only along one normal.
+constexpr double kCornerSpread = 0.02;
+
 }  // namespace
 
 std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& points,
                                           const PointMatrix& normals, double h) {
   std::vector<MergeQuadric> q(std::size_t(mesh.vertices.rows()));
   const std::vector<int> nearest = nearest_vertices(mesh.vertices, points, h);
+  std::vector<Eigen::Matrix3d> on_vertex;  // per vertex: the scatter of the normals on it
+  std::vector<int> count;
   for (Eigen::Index i = 0; i < points.rows(); ++i) {  // in row order: the same sums every run
     const int v = nearest[std::size_t(i)];
     if (v < 0) continue;
     const Eigen::Vector3d n = normals.row(i).transpose(), p = points.row(i).transpose();
+    if ((mesh.vertices.row(v).transpose() - p).norm() <= 1e-9 * h) {
+      if (on_vertex.empty()) {
+        on_vertex.assign(q.size(), Eigen::Matrix3d::Zero());
+        count.assign(q.size(), 0);
+      }
+      on_vertex[std::size_t(v)] += n * n.transpose();
+      ++count[std::size_t(v)];
+    }
     if (std::abs(n.dot(mesh.vertices.row(v).transpose() - p)) > kPlaneMiss * h) continue;
     q[std::size_t(v)].points.add_plane(n, p, 1.0);
   }
+  for (std::size_t v = 0; v < count.size(); ++v)
+    if (count[v] >= 3) {
+      const Eigen::Vector3d lambda =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(on_vertex[v]).eigenvalues();
+      q[v].pinned = lambda[0] > kCornerSpread * lambda[2];
+    }
 
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
     const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)).transpose();

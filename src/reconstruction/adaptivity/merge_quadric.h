@@ -60,12 +60,15 @@ struct PlaneQuadric {
 // lose the points' pull onto the surface: penguin 17.2x at 1.037.
 struct MergeQuadric {
   PlaneQuadric points, faces;
+  /// The region holds a corner that its contact points share exactly (as a box's): the merged
+  /// vertex stays on it, and no merge joins two such corners.
+  bool pinned = false;
 
   static constexpr double kPointCostWeight = 0.25;
   static constexpr double kPointPlacementLimit = 4;  // points a region may hold to place by them
 
   MergeQuadric operator+(const MergeQuadric& o) const {
-    return {points + o.points, faces + o.faces};
+    return {points + o.points, faces + o.faces, pinned || o.pinned};
   }
   // The region's summed squared plane distances at x (the cost TOL bounds).
   double at(const Eigen::Vector3d& x) const {
@@ -80,7 +83,8 @@ struct MergeQuadric {
 
 /// The quadric of each vertex of `mesh`: the tangent planes of the `points` (n x 3, unit
 /// `normals` n x 3) nearest it within spacing `h`, and its triangles' own planes, weighed by area
-/// over h^2 (a point stands for about h^2 of surface).
+/// over h^2 (a point stands for about h^2 of surface). A vertex on which three or more points
+/// lie (to 1e-9 h) with normals that span every direction is pinned: a corner.
 std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& points,
                                           const PointMatrix& normals, double h);
 

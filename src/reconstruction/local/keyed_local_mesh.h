@@ -18,7 +18,8 @@ struct KeyedLocalMesh {
   std::vector<std::uint64_t> vertex_key;
   std::vector<std::uint64_t> triangle_edge;  ///< per triangle: its polygon's grid edge key
   std::vector<std::uint8_t> triangle_rank;   ///< per triangle: its rank in the polygon
-  /// Per cell vertex (the first rows): placed from crossings, at a feature, clamped, field miss.
+  /// Per cell vertex (the first rows): placed from crossings, at a feature (2: at a corner that
+  /// its samples share, exact), clamped, field miss.
   std::vector<std::array<char, 4>> flags;
   /// Per cell vertex: the mean of its polygon's edge crossings, a place inside the cell that no
   /// quadric moves (where the quadrics' vertices make the mesh cross itself).

@@ -156,7 +156,7 @@ detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, c
                                               : keyed.mesh.vertices.row(used[v]);
     out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
     const std::size_t u = std::size_t(used[v]);
-    out.on_feature.push_back(u < keyed.flags.size() && keyed.flags[u][1] ? 1 : 0);
+    out.on_feature.push_back(u < keyed.flags.size() ? keyed.flags[u][1] : 0);
   }
   return out;
 }
@@ -175,7 +175,8 @@ LocalReconstructionStats owned_cell_stats(const detail::KeyedLocalMesh& keyed, c
     s.cells += keyed.vertex_key[v] % 4 == 0;
     s.split_cells += keyed.vertex_key[v] % 4 == 1;
     const auto& f = keyed.flags[v];
-    s.crossing_cells += f[0], s.feature_vertices += f[1], s.clamped += f[2], s.field_misses += f[3];
+    s.crossing_cells += f[0], s.feature_vertices += f[1] != 0, s.clamped += f[2];
+    s.field_misses += f[3];
   }
   return s;
 }
@@ -367,7 +368,10 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   near = detail::KeyedTriangles();
   const PointMatrix reconstructed = sub.mesh.vertices;
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
-  const std::vector<char>* fixed = options.keep_features ? &sub.on_feature : nullptr;
+  // Corners that the samples around them share (exact, as a box's) stay always.
+  std::vector<char> corners(sub.on_feature.size(), 0);
+  for (std::size_t v = 0; v < corners.size(); ++v) corners[v] = sub.on_feature[v] == 2;
+  const std::vector<char>* fixed = options.keep_features ? &sub.on_feature : &corners;
   if (options.project && cp.size() > 0)
     project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection,
                               fixed);

@@ -101,6 +101,7 @@ int polygon_of_point(const detail::CellPolygons& polys, const Eigen::Vector3d& p
 struct VertexResult {
   Eigen::Vector3d position;
   bool from_crossings = false, feature = false, clamped = false, field_miss = false;
+  bool corner = false;  // at the point that samples around a corner share (shared_corner)
   // The minimiser moved into the cell along the directions the planes leave free, if it gets
   // there (the quadric's value unchanged).
   std::optional<Eigen::Vector3d> fitted;
@@ -181,6 +182,7 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
   if (!out.from_crossings && shared_corner(planes, options.feature_ratio, h, s.position)) {
     s.rank = 3;
     s.free.setZero();
+    out.corner = true;
   } else {
     s = detail::minimise_quadric(out.from_crossings ? crossings : planes, options.feature_ratio,
                                  options.robust_rounds, options.robust_scale * h);
@@ -200,6 +202,7 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
   const bool in_cell = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
   if (in_cell) out.fitted = x;
   out.position = in_cell && !out.clamped ? x : s.position.cwiseMax(inner_lo).cwiseMin(inner_hi);
+  out.corner = out.corner && out.position == s.position;
   return out;
 }
 
@@ -273,13 +276,13 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       }
       const Eigen::Index id = cell.first_vertex + q;
       vertices.row(id) = v.position.transpose();
-      flags[std::size_t(id)] = {char(v.from_crossings), char(v.feature), char(v.clamped),
-                                char(v.field_miss)};
+      flags[std::size_t(id)] = {char(v.from_crossings), char(v.feature ? 1 + v.corner : 0),
+                                char(v.clamped), char(v.field_miss)};
     }
   });
   for (const auto& f : flags) {
     stats.crossing_cells += f[0];
-    stats.feature_vertices += f[1];
+    stats.feature_vertices += f[1] != 0;
     stats.clamped += f[2];
     stats.field_misses += f[3];
   }
