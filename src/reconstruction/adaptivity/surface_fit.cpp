@@ -97,6 +97,16 @@ Carried carried_samples(const Mesh& merged, const std::vector<Foot>& feet) {
   return c;
 }
 
+// The median |offset| of the samples with a foot (0 if none).
+double median_offset(const std::vector<Foot>& feet, const std::vector<double>& offset) {
+  std::vector<double> a;
+  for (std::size_t s = 0; s < feet.size(); ++s)
+    if (feet[s].triangle >= 0) a.push_back(std::abs(offset[s]));
+  if (a.empty()) return 0;
+  std::nth_element(a.begin(), a.begin() + std::ptrdiff_t(a.size() / 2), a.end());
+  return a[a.size() / 2];
+}
+
 // The fit of `merged` to `samples` (n x 3) with unit `normals` (n x 3).
 long fit_to_samples(Mesh& merged, const PointMatrix& samples, const PointMatrix& normals,
                     const std::vector<char>& fixed, double h, const SurfaceFitOptions& options) {
@@ -113,6 +123,12 @@ long fit_to_samples(Mesh& merged, const PointMatrix& samples, const PointMatrix&
   // Along the directions that no sample fixes, a vertex stays (a tenth of the mean weight).
   constexpr double kTangentHold = 0.1;
   const double reach = options.max_move * h;
+  // Samples weigh 1 / (1 + (offset / scale)^2), the scale the median |offset| before the first
+  // move: a vertex of the unmerged mesh that lies off the surface (next to a crease, where its
+  // points were few) then pulls little. Measured at 256^3, TOL 0.03 (L1 without these weights ->
+  // with): bunny 2.22e-5 -> 2.06e-5, penguin 1.99e-5 -> 1.89e-5, goathead 2.55e-5 -> 2.43e-5, blub
+  // 1.87e-5 -> 1.84e-5; half the median gave the bunny 2.06e-5 too, twice 2.07e-5.
+  double scale = 0;
   for (int round = 0; round < options.rounds; ++round) {
     std::vector<Eigen::Vector3d> normal(std::size_t(merged.triangles.rows()));
     tbb::parallel_for(Eigen::Index(0), merged.triangles.rows(),
@@ -126,6 +142,7 @@ long fit_to_samples(Mesh& merged, const PointMatrix& samples, const PointMatrix&
       offset[s] =
           normal[std::size_t(f.triangle)].dot(samples.row(Eigen::Index(s)).transpose() - at);
     });
+    if (round == 0) scale = median_offset(feet, offset);
     PointMatrix moved = merged.vertices;
     tbb::parallel_for(Eigen::Index(0), merged.vertices.rows(), [&](Eigen::Index v) {
       const long b = carried.first[std::size_t(v)], e = carried.first[std::size_t(v) + 1];
@@ -137,8 +154,10 @@ long fit_to_samples(Mesh& merged, const PointMatrix& samples, const PointMatrix&
         const Foot& f = feet[std::size_t(s)];
         const Eigen::Vector3d& n = normal[std::size_t(f.triangle)];
         const double w = f.weights[k];
-        A += w * w * n * n.transpose();
-        rhs += w * offset[std::size_t(s)] * n;
+        const double r = offset[std::size_t(s)];
+        const double robust = scale > 0 ? 1 / (1 + (r / scale) * (r / scale)) : 1.0;
+        A += robust * w * w * n * n.transpose();
+        rhs += robust * w * r * n;
       }
       A += (kTangentHold * A.trace() / 3 + 1e-300) * Eigen::Matrix3d::Identity();
       Eigen::Vector3d x = merged.vertices.row(v).transpose() + kDamping * A.ldlt().solve(rhs);
