@@ -599,7 +599,10 @@ def test_adaptivity_merges_flat_parts_and_says_so():
                                     return_stats=True)
     assert sa["adaptivity"] == {"triangles_before": len(F), "triangles_after": len(Fa),
                                 "merges": sa["adaptivity"]["merges"],
-                                "freeze_rounds": sa["adaptivity"]["freeze_rounds"]}
+                                "freeze_rounds": sa["adaptivity"]["freeze_rounds"],
+                                "fitted_vertices": sa["adaptivity"]["fitted_vertices"]}
+    # The last step fits the merged vertices to the surface: most move.
+    assert len(Va) / 2 < sa["adaptivity"]["fitted_vertices"] <= len(Va)
     assert 5 * len(Fa) < len(F) and sa["closed"] and sa["manifold"]
     assert np.abs(torus(Va)).max() < 0.25 * 2 / 39
     assert "adaptivity" not in stats
