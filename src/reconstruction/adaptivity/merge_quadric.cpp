@@ -2,6 +2,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <utility>
+
 #include "reconstruction/point_cubes.h"
 
 namespace sdfcontour::detail {
@@ -49,29 +52,25 @@ std::vector<MergeQuadric> vertex_quadrics(const Mesh& mesh, const PointMatrix& p
                                           const PointMatrix& normals, double h) {
   std::vector<MergeQuadric> q(std::size_t(mesh.vertices.rows()));
   const std::vector<int> nearest = nearest_vertices(mesh.vertices, points, h);
-  std::vector<Eigen::Matrix3d> on_vertex;  // per vertex: the scatter of the normals on it
-  std::vector<int> count;
-  for (Eigen::Index i = 0; i < points.rows(); ++i) {  // in row order: the same sums every run
+  std::vector<std::pair<int, Eigen::Index>> on_vertex;  // (vertex, point) for points on a vertex
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {    // in row order: the same sums every run
     const int v = nearest[std::size_t(i)];
     if (v < 0) continue;
     const Eigen::Vector3d n = normals.row(i).transpose(), p = points.row(i).transpose();
-    if ((mesh.vertices.row(v).transpose() - p).norm() <= 1e-9 * h) {
-      if (on_vertex.empty()) {
-        on_vertex.assign(q.size(), Eigen::Matrix3d::Zero());
-        count.assign(q.size(), 0);
-      }
-      on_vertex[std::size_t(v)] += n * n.transpose();
-      ++count[std::size_t(v)];
-    }
+    if ((mesh.vertices.row(v).transpose() - p).norm() <= 1e-9 * h) on_vertex.push_back({v, i});
     if (std::abs(n.dot(mesh.vertices.row(v).transpose() - p)) > kPlaneMiss * h) continue;
     q[std::size_t(v)].points.add_plane(n, p, 1.0);
   }
-  for (std::size_t v = 0; v < count.size(); ++v)
-    if (count[v] >= 3) {
-      const Eigen::Vector3d lambda =
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(on_vertex[v]).eigenvalues();
-      q[v].pinned = lambda[0] > kCornerSpread * lambda[2];
-    }
+  std::sort(on_vertex.begin(), on_vertex.end());
+  for (std::size_t a = 0, b = 0; a < on_vertex.size(); a = b) {
+    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();  // the normals' scatter on the vertex
+    for (b = a; b < on_vertex.size() && on_vertex[b].first == on_vertex[a].first; ++b)
+      spread += normals.row(on_vertex[b].second).transpose() * normals.row(on_vertex[b].second);
+    if (b - a < 3) continue;
+    const Eigen::Vector3d lambda =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues();
+    q[std::size_t(on_vertex[a].first)].pinned = lambda[0] > kCornerSpread * lambda[2];
+  }
 
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
     const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)).transpose();
