@@ -42,8 +42,11 @@ struct AdaptivityStats {
 /// condition) and turn no triangle by more than options.max_normal_turn. Where the merged mesh
 /// crosses itself, it is merged again from `mesh` with the vertices within 3 spacings of the
 /// crossing triangles frozen (up to 4 rounds; the regions of the input's own crossings are frozen
-/// from the start): no merge adds a crossing unless 4 rounds do not suffice. Then the merged
-/// vertices, but those frozen, move so that the merged triangles fit the input's vertices in the
+/// from the start): no merge adds a crossing unless 4 rounds do not suffice. A vertex on which
+/// three or more points lie with normals that span every direction (a corner that samples on its
+/// sides share) keeps its place in every merge, and no merge joins two. Then the merged
+/// vertices, but those frozen and those corners, move so that the merged triangles fit the
+/// input's vertices in the
 /// least squares (options.fit_rounds; by at most a quarter spacing; moves that make triangles
 /// cross are undone). Brick by brick
 /// (options.brick_spacings): a vertex merges within its brick while its neighbours lie in it too;
