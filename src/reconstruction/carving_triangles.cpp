@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "reconstruction/carving_internal.h"
+#include "reconstruction/mesh_geometry.h"
 #include "reconstruction/nearest_triangles.h"
 
 namespace sdfcontour::detail {
@@ -56,19 +57,6 @@ Eigen::Vector3d feature_normal(const Mesh& mesh, const VertexTriangles& around, 
     n += angle * unit_normal(u);
   }
   return n.normalized();
-}
-
-// Barycentric coordinates of q (in the plane of triangle t) in triangle t.
-Eigen::Vector3d barycentric(const Mesh& mesh, Eigen::Index t, const Eigen::Vector3d& q) {
-  const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
-                        b = mesh.vertices.row(mesh.triangles(t, 1)),
-                        c = mesh.vertices.row(mesh.triangles(t, 2));
-  const Eigen::Vector3d e0 = b - a, e1 = c - a, d = q - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), d20 = d.dot(e0),
-               d21 = d.dot(e1), den = d00 * d11 - d01 * d01;
-  if (!(den > 0)) return Eigen::Vector3d(0, 0, 0);
-  const double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
-  return Eigen::Vector3d(1 - v - w, v, w);
 }
 
 // Above this many queries a tree builds its kd-tree of hints first.

@@ -12,29 +12,12 @@
 #include <vector>
 
 #include "pipeline/work_counter.h"
+#include "reconstruction/mesh_geometry.h"
 #include "reconstruction/point_cubes.h"
 
 namespace sdfcontour {
 
 namespace {
-
-// Area-weighted vertex normals (unit; zero where the triangles around cancel or there are none).
-PointMatrix vertex_normals(const Mesh& mesh) {
-  PointMatrix N = PointMatrix::Zero(mesh.vertices.rows(), 3);
-  // Serial: the sums' order, hence the result, is fixed.
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
-    const Eigen::RowVector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
-                             b = mesh.vertices.row(mesh.triangles(t, 1)),
-                             c = mesh.vertices.row(mesh.triangles(t, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a);
-    for (int k = 0; k < 3; ++k) N.row(mesh.triangles(t, k)) += n;
-  }
-  for (Eigen::Index v = 0; v < N.rows(); ++v) {
-    const double len = N.row(v).norm();
-    N.row(v) = len > 0 ? Eigen::RowVector3d(N.row(v) / len) : Eigen::RowVector3d::Zero();
-  }
-  return N;
-}
 
 void validate(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
               double spacing, const ContactProjectionOptions& o) {
@@ -188,7 +171,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
                                       : 0;
   ContactProjectionStats stats;
   if (points.rows() == 0 || mesh.vertices.rows() == 0) return stats;
-  const PointMatrix N = vertex_normals(mesh);
+  const PointMatrix N = detail::vertex_normals(mesh);
   const EdgeMoments chords = o.chord_offset ? edge_moments(mesh, spacing) : EdgeMoments{};
   // Points within each radius, in cubes of that side.
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "reconstruction/mesh_geometry.h"
 #include "reconstruction/nearest_triangles.h"
 #include "sdfcontour/metrics/self_intersections.h"
 
@@ -24,30 +25,11 @@ Eigen::Vector3d unit_normal(const Mesh& m, Eigen::Index t) {
   return length > 0 ? Eigen::Vector3d(n / length) : Eigen::Vector3d::Zero();
 }
 
-// Each vertex's normal: its triangles' area-weighted normals, summed (unit; zero if they cancel).
-PointMatrix vertex_normals(const Mesh& m) {
-  PointMatrix n = PointMatrix::Zero(m.vertices.rows(), 3);
-  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
-    const Eigen::Vector3d a = corner(m, t, 0);
-    const Eigen::Vector3d w = (corner(m, t, 1) - a).cross(corner(m, t, 2) - a);
-    for (int k = 0; k < 3; ++k) n.row(m.triangles(t, k)) += w.transpose();
-  }
-  for (Eigen::Index v = 0; v < n.rows(); ++v)
-    if (n.row(v).norm() > 0) n.row(v).normalize();
-  return n;
-}
-
-// The barycentric coordinates of q (on triangle a b c), clamped to the triangle.
-Eigen::Vector3d barycentric(const Eigen::Vector3d& q, const Eigen::Vector3d& a,
-                            const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  const Eigen::Vector3d e0 = b - a, e1 = c - a, d = q - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1);
-  const double d20 = d.dot(e0), d21 = d.dot(e1), det = d00 * d11 - d01 * d01;
-  if (!(det > 0)) return Eigen::Vector3d::Constant(1.0 / 3);
-  const double v = (d11 * d20 - d01 * d21) / det, w = (d00 * d21 - d01 * d20) / det;
-  Eigen::Vector3d l(1 - v - w, v, w);
-  l = l.cwiseMax(0.0);
-  return l / l.sum();
+// The barycentric coordinates of q (on triangle t) clamped to the triangle (thirds on a degenerate
+// one).
+Eigen::Vector3d clamped_barycentric(const Mesh& m, Eigen::Index t, const Eigen::Vector3d& q) {
+  const Eigen::Vector3d l = barycentric(m, t, q).cwiseMax(0.0);
+  return l.sum() > 0 ? Eigen::Vector3d(l / l.sum()) : Eigen::Vector3d::Constant(1.0 / 3);
 }
 
 // A dense vertex's foot: the merged triangle nearest it and its barycentric coordinates there.
@@ -68,8 +50,7 @@ std::vector<Foot> feet_of(const Mesh& merged, const PointMatrix& samples,
     if (unit_normal(merged, hit.triangle).dot(normals.row(s).transpose()) < 0.5) return;
     Foot& f = feet[std::size_t(s)];
     f.triangle = hit.triangle;
-    f.weights = barycentric(hit.point, corner(merged, hit.triangle, 0),
-                            corner(merged, hit.triangle, 1), corner(merged, hit.triangle, 2));
+    f.weights = clamped_barycentric(merged, hit.triangle, hit.point);
   });
   return feet;
 }
