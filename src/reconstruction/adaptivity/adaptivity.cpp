@@ -99,7 +99,7 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
     // stay where their contact points put them.
     std::vector<char> fixed(std::size_t(out.vertices.rows()), 0);
     for (std::size_t v = 0; v < fixed.size(); ++v)
-      fixed[v] = frozen[std::size_t(state.source[v])] || state.quadrics[v].pinned;
+      fixed[v] = state.frozen[v] || state.quadrics[v].pinned;
     detail::SurfaceFitOptions fit;
     fit.rounds = options.fit_rounds;
     s.fitted_vertices = detail::fit_merged_vertices(out, mesh, fixed, spacing, fit);

@@ -15,7 +15,7 @@ namespace sdfcontour::detail {
 struct KeyedTriangles {
   PointMatrix vertices;
   std::vector<std::uint64_t> vertex_key;  ///< per vertex (level 0: KeyedLocalMesh's keys)
-  std::vector<char> on_feature;           ///< per vertex: placed on an edge or corner
+  std::vector<char> on_feature;  ///< per vertex: placed on an edge or corner (2: a shared corner)
   TriangleMatrix triangles;
   std::vector<std::uint64_t> triangle_name;  ///< per triangle: edge * 8 + rank, ascending
 };
@@ -27,7 +27,8 @@ struct SubdividedMesh {
   Mesh mesh;
   std::vector<VertexKey> keys;
   std::vector<std::uint64_t> parent;  ///< per triangle: its parent's name
-  /// Per vertex: a feature vertex, or on the segment between two (along a sharp edge).
+  /// Per vertex: a feature vertex (2 at a corner that samples share), or 1 on the segment
+  /// between two (along a sharp edge).
   std::vector<char> on_feature;
 };
 
