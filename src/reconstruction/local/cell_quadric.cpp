@@ -50,7 +50,88 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
   return out;
 }
 
+// The box-constrained minimiser of sum_i weight_i (n_i . (x - p_i))^2 (minimise_quadric_in_box).
+Eigen::Vector3d solve_in_box(const std::vector<TangentPlane>& planes,
+                             const std::vector<double>& weight, const Eigen::Vector3d& lo,
+                             const Eigen::Vector3d& hi) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double total = 0;
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    const Eigen::Vector3d& n = planes[i].normal;
+    centroid += weight[i] * planes[i].point;
+    total += weight[i];
+    ata.noalias() += weight[i] * n * n.transpose();
+    atb += weight[i] * n * n.dot(planes[i].point);
+  }
+  const Eigen::Vector3d start = (centroid / total).cwiseMax(lo).cwiseMin(hi);
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(ata).eigenvalues()[2];
+  auto value = [&](const Eigen::Vector3d& x) {
+    double sum = 0;
+    for (std::size_t i = 0; i < planes.size(); ++i) {
+      const double r = planes[i].normal.dot(x - planes[i].point);
+      sum += weight[i] * r * r;
+    }
+    return sum;
+  };
+  Eigen::Vector3d best = start;
+  double best_value = value(start);
+  for (int set = 0; set < 27; ++set) {
+    // Axis a is free (0), held at lo (1) or at hi (2).
+    const int state[3] = {set % 3, set / 3 % 3, set / 9};
+    Eigen::Vector3d x = start;
+    std::vector<int> free;
+    for (int a = 0; a < 3; ++a) {
+      if (state[a] == 0) free.push_back(a);
+      if (state[a] == 1) x[a] = lo[a];
+      if (state[a] == 2) x[a] = hi[a];
+    }
+    if (!free.empty()) {
+      // The free coordinates' normal equations from x, solved along the directions the planes fix.
+      const int k = int(free.size());
+      Eigen::MatrixXd a(k, k);
+      Eigen::VectorXd rhs(k);
+      const Eigen::Vector3d gradient = atb - ata * x;
+      for (int i = 0; i < k; ++i) {
+        rhs[i] = gradient[free[std::size_t(i)]];
+        for (int j = 0; j < k; ++j) a(i, j) = ata(free[std::size_t(i)], free[std::size_t(j)]);
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
+      Eigen::VectorXd step = Eigen::VectorXd::Zero(k);
+      for (int j = 0; j < k; ++j)
+        if (eigen.eigenvalues()[j] > 1e-9 * largest) {
+          const Eigen::VectorXd v = eigen.eigenvectors().col(j);
+          step += v * (v.dot(rhs) / eigen.eigenvalues()[j]);
+        }
+      for (int i = 0; i < k; ++i) x[free[std::size_t(i)]] += step[i];
+    }
+    const double slack = 1e-12 * (hi - lo).maxCoeff();
+    if ((x.array() < lo.array() - slack).any() || (x.array() > hi.array() + slack).any()) continue;
+    x = x.cwiseMax(lo).cwiseMin(hi);
+    const double v = value(x);
+    if (v < best_value) best = x, best_value = v;
+  }
+  return best;
+}
+
 }  // namespace
+
+Eigen::Vector3d minimise_quadric_in_box(const std::vector<TangentPlane>& planes,
+                                        const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                        int robust_rounds, double robust_scale) {
+  std::vector<double> weight(planes.size());
+  for (std::size_t i = 0; i < planes.size(); ++i) weight[i] = planes[i].weight;
+  Eigen::Vector3d x = solve_in_box(planes, weight, lo, hi);
+  for (int round = 0; round < robust_rounds; ++round) {
+    for (std::size_t i = 0; i < planes.size(); ++i) {
+      const double miss = planes[i].normal.dot(x - planes[i].point) / robust_scale;
+      weight[i] = planes[i].weight / (1 + miss * miss);
+    }
+    x = solve_in_box(planes, weight, lo, hi);
+  }
+  return x;
+}
 
 QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double feature_ratio,
                                  int robust_rounds, double robust_scale) {

@@ -30,4 +30,13 @@ struct QuadricSolution {
 QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double feature_ratio,
                                  int robust_rounds, double robust_scale);
 
+/// The point of the box [lo, hi] that minimises the same quadric (planes not empty), with
+/// `robust_rounds` reweightings as above. Every face, edge and corner of the box is tried as the
+/// set of active bounds (27 sets) and the least value among the feasible solutions is taken;
+/// directions that no plane fixes (eigenvalues under 1e-9 of the largest) keep the planes'
+/// weighted centroid, clamped into the box.
+Eigen::Vector3d minimise_quadric_in_box(const std::vector<TangentPlane>& planes,
+                                        const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                        int robust_rounds, double robust_scale);
+
 }  // namespace sdfcontour::detail

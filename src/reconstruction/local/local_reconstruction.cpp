@@ -17,6 +17,7 @@
 #include "reconstruction/local/cell_quadric.h"
 #include "reconstruction/local/keyed_local_mesh.h"
 #include "reconstruction/local/surface_cells.h"
+#include "reconstruction/local/vertex_placement.h"
 
 namespace sdfcontour {
 
@@ -25,6 +26,7 @@ namespace {
 using detail::ActiveCell;
 using detail::SurfaceCells;
 using detail::TangentPlane;
+using detail::VertexResult;
 
 // Contact points sorted by the cell that holds them (ties by position, so the order of the input
 // rows does not matter), for the gathering around each cell.
@@ -98,15 +100,6 @@ int polygon_of_point(const detail::CellPolygons& polys, const Eigen::Vector3d& p
   return best;
 }
 
-struct VertexResult {
-  Eigen::Vector3d position;
-  bool from_crossings = false, feature = false, clamped = false, field_miss = false;
-  bool corner = false;  // at the point that samples around a corner share (shared_corner)
-  // The minimiser moved into the cell along the directions the planes leave free, if it gets
-  // there (the quadric's value unchanged).
-  std::optional<Eigen::Vector3d> fitted;
-};
-
 // The distance from p (in cell `at`) to the zero set of the cell's trilinear interpolant, to
 // first order: |value| / |gradient| at p.
 double trilinear_miss(const SurfaceCells& cells, const std::array<int, 3>& at,
@@ -130,80 +123,6 @@ double trilinear_miss(const SurfaceCells& cells, const std::array<int, 3>& at,
   }
   const double g = gradient.norm();
   return g > 0 ? std::abs(value) / g : INFINITY;
-}
-
-// A vertex stays this fraction of its cell inside it. On the cell's side (clamped there, or the
-// planes' centroid on a grid line), the vertices of two cells next to a feature could meet (1 ulp
-// apart on the cube at 128^3): their triangles then overlap, and neither the crossing test nor
-// the untangling sees it. It moves along the directions the planes leave free where it can (so
-// vertices of a linear field stay on its plane), else straight in. Measured (bench/local.py,
-// gcp-local): the cube at 128^3 67 crossing pairs -> 0 (L1 1.23x -> 1.33x MC's, sharp edges 0.34 h
-// -> 0.27 h), the built-in box at 48^3-64^3 80 -> 0; every other shared mesh at 32^3 and 64^3 (and
-// seven at 128^3) within 1.5% of its L1 (plane 32^3: 1.5% lower), the geometric means unchanged
-// (0.379x and 0.365x MC's).
-constexpr double kCellMargin = 1e-3;
-
-// Where three or more of the planes' points coincide (to 1e-9 h) with normals that span every
-// direction, samples on different sides of a corner touch the surface at that one point (a
-// smooth surface is touched at one point only along one normal): the corner itself. The largest
-// such cluster (ties by position), or nothing.
-bool shared_corner(const std::vector<TangentPlane>& planes, double feature_ratio, double h,
-                   Eigen::Vector3d& corner) {
-  int best = 0;
-  for (std::size_t a = 0; a < planes.size(); ++a) {
-    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
-    int count = 0;
-    for (const TangentPlane& t : planes)
-      if ((t.point - planes[a].point).norm() <= 1e-9 * h) {
-        spread += t.normal * t.normal.transpose();
-        ++count;
-      }
-    if (count < 3 || count < best) continue;
-    const Eigen::Vector3d lambda =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues();
-    if (!(lambda[0] > feature_ratio * lambda[2])) continue;
-    if (count == best &&
-        !std::lexicographical_compare(planes[a].point.data(), planes[a].point.data() + 3,
-                                      corner.data(), corner.data() + 3))
-      continue;
-    best = count;
-    corner = planes[a].point;
-  }
-  return best > 0;
-}
-
-VertexResult place_vertex(const std::vector<TangentPlane>& planes,
-                          const std::vector<TangentPlane>& crossings, const Eigen::Vector3d& lo,
-                          const Eigen::Vector3d& hi, double h,
-                          const LocalReconstructionOptions& options) {
-  VertexResult out;
-  out.from_crossings = int(planes.size()) < options.min_points;
-  detail::QuadricSolution s;
-  if (!out.from_crossings && shared_corner(planes, options.feature_ratio, h, s.position)) {
-    s.rank = 3;
-    s.free.setZero();
-    out.corner = true;
-  } else {
-    s = detail::minimise_quadric(out.from_crossings ? crossings : planes, options.feature_ratio,
-                                 options.robust_rounds, options.robust_scale * h);
-  }
-  out.feature = s.rank >= 2;
-  const Eigen::Vector3d margin = kCellMargin * (hi - lo);
-  const Eigen::Vector3d inner_lo = lo + margin, inner_hi = hi - margin;
-  out.clamped = s.position != s.position.cwiseMax(lo).cwiseMin(hi);
-  // Into the cell shrunk by the margin, along the directions the planes leave free where they
-  // suffice (the quadric's minimum stays: a plane's vertices stay on it), else straight.
-  Eigen::Vector3d x = s.position;
-  for (int round = 0; round < 8; ++round) {
-    const Eigen::Vector3d inside = x.cwiseMax(inner_lo).cwiseMin(inner_hi);
-    if (inside == x) break;
-    x += s.free * (inside - x);
-  }
-  const bool in_cell = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
-  if (in_cell) out.fitted = x;
-  out.position = in_cell && !out.clamped ? x : s.position.cwiseMax(inner_lo).cwiseMin(inner_hi);
-  out.corner = out.corner && out.position == s.position;
-  return out;
 }
 
 // Every polygon's vertex, in cell order then polygon order.
@@ -246,15 +165,29 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       }
       crossing_means.row(cell.first_vertex + q) = (mean / double(crossings.size())).transpose();
       VertexResult v = place_vertex(planes[std::size_t(q)], crossings, lo, hi, h, options);
-      if (v.from_crossings && options.empty_cell_reach > options.reach) {
+      // The vertex from the planes gathered farther (empty_cell_reach) where those planes meet
+      // at a corner beyond the cell: on the corner's edges that cross the cell, if any.
+      const bool gather_wide = options.empty_cell_reach > options.reach;
+      auto corner_edge = [&](const VertexResult& w) -> std::optional<VertexResult> {
+        if (!w.corner_beyond) return std::nullopt;
+        return corner_edge_vertex(wide[std::size_t(q)], *w.corner_beyond, lo, hi, h, options);
+      };
+      // A feature from fewer planes than kFewFeaturePlanes may be no feature: a point at a
+      // corner has a normal anywhere in the corner's cone, and with one other plane it makes an
+      // edge that is not there (the built-in box at 40^3, band 3: a vertex 0.18 h off).
+      const bool few_for_feature =
+          v.feature && !v.corner && planes[std::size_t(q)].size() < detail::kFewFeaturePlanes;
+      if ((v.from_crossings || few_for_feature) && gather_wide) {
         // Only a feature (edge or corner) in the cell is taken from farther points: a smooth
         // patch without points of its own (a thin part, a noisy field) keeps its crossings, as
         // does a feature beyond the cell (penguin 32^3: 16% higher L1 with those).
         if (wide.empty()) wide = planes_near(options.empty_cell_reach * cells.spacing);
         const VertexResult w = place_vertex(wide[std::size_t(q)], crossings, lo, hi, h, options);
-        if (!w.from_crossings && w.feature && w.fitted) {
+        if (v.from_crossings && !w.from_crossings && w.feature && w.fitted) {
           v = w;
           v.position = *w.fitted;
+        } else if (auto e = corner_edge(w)) {
+          v = *e;
         }
       }
       // (Not at a feature: there the interpolant itself cuts the corner.)
@@ -262,6 +195,14 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
           trilinear_miss(cells, at, v.position) > options.max_field_miss * h) {
         v = place_vertex({}, crossings, lo, hi, h, options);
         v.field_miss = true;
+        // One plane next to a corner, its normal bent (the built-in box at 64^3, band 4: the
+        // crossings 0.16 h off the edge).
+        if (gather_wide) {
+          if (wide.empty()) wide = planes_near(options.empty_cell_reach * cells.spacing);
+          if (auto e =
+                  corner_edge(place_vertex(wide[std::size_t(q)], crossings, lo, hi, h, options)))
+            v = *e;
+        }
       }
       if (v.clamped && !v.from_crossings) {
         // A feature just outside the cell (planes from beyond its sides): the cell's own points.
