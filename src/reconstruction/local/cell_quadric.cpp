@@ -50,6 +50,22 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
   return out;
 }
 
+// The planes' own weights.
+std::vector<double> given_weights(const std::vector<TangentPlane>& planes) {
+  std::vector<double> weight(planes.size());
+  for (std::size_t i = 0; i < planes.size(); ++i) weight[i] = planes[i].weight;
+  return weight;
+}
+
+// A robust round's weights: each plane's own over 1 + (its miss of x / robust_scale)^2.
+void reweigh(const std::vector<TangentPlane>& planes, const Eigen::Vector3d& x, double robust_scale,
+             std::vector<double>& weight) {
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    const double miss = planes[i].normal.dot(x - planes[i].point) / robust_scale;
+    weight[i] = planes[i].weight / (1 + miss * miss);
+  }
+}
+
 // The box-constrained minimiser of sum_i weight_i (n_i . (x - p_i))^2 (minimise_quadric_in_box).
 Eigen::Vector3d solve_in_box(const std::vector<TangentPlane>& planes,
                              const std::vector<double>& weight, const Eigen::Vector3d& lo,
@@ -77,6 +93,7 @@ Eigen::Vector3d solve_in_box(const std::vector<TangentPlane>& planes,
   };
   Eigen::Vector3d best = start;
   double best_value = value(start);
+  const double slack = 1e-12 * (hi - lo).maxCoeff();
   for (int set = 0; set < 27; ++set) {
     // Axis a is free (0), held at lo (1) or at hi (2).
     const int state[3] = {set % 3, set / 3 % 3, set / 9};
@@ -106,7 +123,6 @@ Eigen::Vector3d solve_in_box(const std::vector<TangentPlane>& planes,
         }
       for (int i = 0; i < k; ++i) x[free[std::size_t(i)]] += step[i];
     }
-    const double slack = 1e-12 * (hi - lo).maxCoeff();
     if ((x.array() < lo.array() - slack).any() || (x.array() > hi.array() + slack).any()) continue;
     x = x.cwiseMax(lo).cwiseMin(hi);
     const double v = value(x);
@@ -120,14 +136,10 @@ Eigen::Vector3d solve_in_box(const std::vector<TangentPlane>& planes,
 Eigen::Vector3d minimise_quadric_in_box(const std::vector<TangentPlane>& planes,
                                         const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
                                         int robust_rounds, double robust_scale) {
-  std::vector<double> weight(planes.size());
-  for (std::size_t i = 0; i < planes.size(); ++i) weight[i] = planes[i].weight;
+  std::vector<double> weight = given_weights(planes);
   Eigen::Vector3d x = solve_in_box(planes, weight, lo, hi);
   for (int round = 0; round < robust_rounds; ++round) {
-    for (std::size_t i = 0; i < planes.size(); ++i) {
-      const double miss = planes[i].normal.dot(x - planes[i].point) / robust_scale;
-      weight[i] = planes[i].weight / (1 + miss * miss);
-    }
+    reweigh(planes, x, robust_scale, weight);
     x = solve_in_box(planes, weight, lo, hi);
   }
   return x;
@@ -135,15 +147,11 @@ Eigen::Vector3d minimise_quadric_in_box(const std::vector<TangentPlane>& planes,
 
 QuadricSolution minimise_quadric(const std::vector<TangentPlane>& planes, double feature_ratio,
                                  int robust_rounds, double robust_scale) {
-  std::vector<double> weight(planes.size());
-  for (std::size_t i = 0; i < planes.size(); ++i) weight[i] = planes[i].weight;
+  std::vector<double> weight = given_weights(planes);
   QuadricSolution solution = solve_weighted(planes, weight, feature_ratio);
   const int rank = solution.rank;
   for (int round = 0; round < robust_rounds; ++round) {
-    for (std::size_t i = 0; i < planes.size(); ++i) {
-      const double miss = planes[i].normal.dot(solution.position - planes[i].point) / robust_scale;
-      weight[i] = planes[i].weight / (1 + miss * miss);
-    }
+    reweigh(planes, solution.position, robust_scale, weight);
     // The first solve's rank stays: a whole family of planes (one face of an edge) that a
     // solve pulled by a few bent normals missed must not vanish as outliers, or the feature
     // would become a flat patch at the other face's centroid.

@@ -168,9 +168,13 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       // The vertex from the planes gathered farther (empty_cell_reach) where those planes meet
       // at a corner beyond the cell: on the corner's edges that cross the cell, if any.
       const bool gather_wide = options.empty_cell_reach > options.reach;
+      auto wide_planes = [&]() -> const std::vector<TangentPlane>& {
+        if (wide.empty()) wide = planes_near(options.empty_cell_reach * cells.spacing);
+        return wide[std::size_t(q)];
+      };
       auto corner_edge = [&](const VertexResult& w) -> std::optional<VertexResult> {
         if (!w.corner_beyond) return std::nullopt;
-        return corner_edge_vertex(wide[std::size_t(q)], *w.corner_beyond, lo, hi, h, options);
+        return corner_edge_vertex(wide_planes(), *w.corner_beyond, lo, hi, h, options);
       };
       // A feature from fewer planes than kFewFeaturePlanes may be no feature: a point at a
       // corner has a normal anywhere in the corner's cone, and with one other plane it makes an
@@ -181,8 +185,7 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
         // Only a feature (edge or corner) in the cell is taken from farther points: a smooth
         // patch without points of its own (a thin part, a noisy field) keeps its crossings, as
         // does a feature beyond the cell (penguin 32^3: 16% higher L1 with those).
-        if (wide.empty()) wide = planes_near(options.empty_cell_reach * cells.spacing);
-        const VertexResult w = place_vertex(wide[std::size_t(q)], crossings, lo, hi, h, options);
+        const VertexResult w = place_vertex(wide_planes(), crossings, lo, hi, h, options);
         if (v.from_crossings && !w.from_crossings && w.feature && w.fitted) {
           v = w;
           v.position = *w.fitted;
@@ -197,12 +200,9 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
         v.field_miss = true;
         // One plane next to a corner, its normal bent (the built-in box at 64^3, band 4: the
         // crossings 0.16 h off the edge).
-        if (gather_wide) {
-          if (wide.empty()) wide = planes_near(options.empty_cell_reach * cells.spacing);
-          if (auto e =
-                  corner_edge(place_vertex(wide[std::size_t(q)], crossings, lo, hi, h, options)))
+        if (gather_wide)
+          if (auto e = corner_edge(place_vertex(wide_planes(), crossings, lo, hi, h, options)))
             v = *e;
-        }
       }
       if (v.clamped && !v.from_crossings) {
         // A feature just outside the cell (planes from beyond its sides): the cell's own points.

@@ -19,7 +19,10 @@ namespace {
 // (0.379x and 0.365x MC's).
 constexpr double kCellMargin = 1e-3;
 
-// Where three or more of the planes' points coincide (to 1e-9 h) with normals that span every
+// Points this many spacings apart are one point (a corner's contact points, from any side).
+constexpr double kSamePoint = 1e-9;
+
+// Where three or more of the planes' points coincide (to kSamePoint h) with normals that span every
 // direction, samples on different sides of a corner touch the surface at that one point (a
 // smooth surface is touched at one point only along one normal): the corner itself. The largest
 // such cluster (ties by position), or nothing.
@@ -30,7 +33,7 @@ bool shared_corner(const std::vector<TangentPlane>& planes, double feature_ratio
     Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
     int count = 0;
     for (const TangentPlane& t : planes)
-      if ((t.point - planes[a].point).norm() <= 1e-9 * h) {
+      if ((t.point - planes[a].point).norm() <= kSamePoint * h) {
         spread += t.normal * t.normal.transpose();
         ++count;
       }
@@ -94,7 +97,7 @@ std::optional<VertexResult> corner_edge_vertex(const std::vector<TangentPlane>& 
                                                const LocalReconstructionOptions& options) {
   std::vector<TangentPlane> rest;
   for (const TangentPlane& t : wide)
-    if ((t.point - corner).norm() > 1e-9 * h) rest.push_back(t);
+    if ((t.point - corner).norm() > kSamePoint * h) rest.push_back(t);
   if (int(rest.size()) < options.min_points) return std::nullopt;
   const Eigen::Vector3d margin = kCellMargin * (hi - lo);
   VertexResult out;
