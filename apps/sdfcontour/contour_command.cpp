@@ -287,7 +287,7 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
   c->add_option(
        "--subdivisions", a.subdivisions,
        "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
-       "the contact points (auto: 2 below 96 samples per axis, else 1)")
+       "the contact points (auto: 2 below 256 samples per axis, else 1)")
       ->capture_default_str();
   c->add_option("--local-reach", a.local.reach,
                 "GCP local reconstruction: contact points within this many spacings of a cell "

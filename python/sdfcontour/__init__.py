@@ -136,7 +136,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
-        (0 to 4; "auto": 2 below 96 samples per axis, else 1).
+        (0 to 4; "auto": 2 below 256 samples per axis, else 1).
     zero_set : bool or "auto"
         Local reconstruction: move the vertices onto the zero set of the grid's tricubic
         interpolant, uncarved. "auto" (default): where the values are found no exact distances

@@ -55,9 +55,10 @@ std::string reconstruction_name(Reconstruction reconstruction);
 bool auto_local_reconstruction(double samples_per_axis);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
-/// dimension): 2 below 96, else 1 (64^3: bunny 4.00e-4 with 2 against 4.57e-4 with 1, spot
-/// 1.45e-4 against 1.91e-4; 256^3: bunny 3.56e-5 with 1 against 6.61e-5 with none, which is
-/// marching cubes' 6.42e-5; docs/local.md).
+/// dimension): 2 below 256, else 1. Two levels are 11% closer at 128^3 (17 shared meshes, 0.390x
+/// -> 0.348x MC's L1 without the exact cube) for 2.1x the time; at 256^3 (bunny 13% closer) they
+/// cost 2.4x the time and 3x the memory, and the sphere and torus would get more triangles than
+/// Poisson's, where `auto` takes this reconstruction for arrays (docs/local.md, session 18).
 int auto_subdivisions(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.
