@@ -120,6 +120,10 @@ ContourOptions contour_options(const ContourArgs& a) {
       parse_count_or_auto("--subdivisions", a.subdivisions, int(option_range("--subdivisions").hi),
                           "a whole number of levels")
           .value_or(-1);
+  if (a.split_sag != "auto") {
+    opt.split_sag = parse_number_or("--split-sag", a.split_sag, {{"off", 0.0}, {"0", 0.0}});
+    require_in_range("--split-sag", opt.split_sag, "--split-sag");
+  }
   require_in_range("--adaptivity", a.adaptivity, "--adaptivity");
   opt.adaptivity.tolerance = a.adaptivity;
   require_in_range("--adaptivity-bricks", a.adaptivity_bricks, "--adaptivity-bricks");
@@ -287,7 +291,13 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
   c->add_option(
        "--subdivisions", a.subdivisions,
        "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
-       "the contact points (auto: 2 below 256 samples per axis, else 1)")
+       "the contact points (auto: 2 below 96 samples per axis, else 1)")
+      ->capture_default_str();
+  c->add_option(
+       "--split-sag", a.split_sag,
+       "GCP local reconstruction, after the projection: split each edge once more where "
+       "its chord sags by more than this many spacings (its length times its ends' "
+       "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.004)")
       ->capture_default_str();
   c->add_option("--local-reach", a.local.reach,
                 "GCP local reconstruction: contact points within this many spacings of a cell "

@@ -25,7 +25,7 @@ import numpy as _np
 from . import _checks, _sdfcontour
 from ._arguments import METHODS  # noqa: F401 (the method names, public)
 from ._arguments import (_bounds, _count_or_auto, _degree, _full_depth_within, _lipschitz, _options,
-                         _poisson_options, _refine_dilation, _switch)
+                         _poisson_options, _refine_dilation, _split_sag, _switch)
 from ._checks import ArgumentTypeError
 from ._running import _at_level, _from_path, _normals_of, _placement, _run
 from ._warning_types import DroppedSamplesWarning, FallbackWarning, LipschitzWarning, RescaleWarning
@@ -64,7 +64,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
             degree=1, reconstruction="auto", subdivisions="auto", batch_size=65536,
             refine="auto", strict=False, progress=False, return_stats=False, level=0.0,
             spacing=None, origin=None, return_normals=False, grid_name=None, lipschitz=1.0,
-            adaptivity=0.0, zero_set="auto"):
+            adaptivity=0.0, zero_set="auto", split_sag="auto"):
     """Contour signed distance samples into a triangle mesh.
 
     Parameters
@@ -136,7 +136,11 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
-        (0 to 4; "auto": 2 below 256 samples per axis, else 1).
+        (0 to 4; "auto": 2 below 96 samples per axis, else 1).
+    split_sag : float, "auto" or "off"
+        Local reconstruction on grids: after the projection, each edge whose chord sags by more
+        than this many spacings (its length times its ends' normals' turn / 8) is split once
+        more and its midpoint projected (0 to 1; "auto": 0.004). CLI ``--split-sag``.
     zero_set : bool or "auto"
         Local reconstruction: move the vertices onto the zero set of the grid's tricubic
         interpolant, uncarved. "auto" (default): where the values are found no exact distances
@@ -269,6 +273,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         reconstruction = "local"
     o["reconstruction"] = reconstruction
     o["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
+    o["split_sag"] = _split_sag(split_sag)
     o["zero_set"] = _switch("zero_set", zero_set)
     o["adaptivity"] = _checks.in_range("adaptivity", adaptivity)
     if isinstance(refine_dilation, str) and refine_dilation == "auto":

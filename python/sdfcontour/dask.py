@@ -304,7 +304,7 @@ def _one_line(error):
 def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
             resolution=None, dataset=None, batch_size=65536, band="auto", truncation="auto",
             subdivisions="auto", projection="auto", zero_set="auto", progress=False,
-            return_stats=False):
+            return_stats=False, split_sag="auto"):
     """Contour a grid too large for one process, brick by brick on Dask.
 
     Parameters
@@ -335,7 +335,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         Samples per axis for a callable source.
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
-    band, subdivisions, projection
+    band, subdivisions, projection, split_sag
         GCP: as in :func:`sdfcontour.contour`.
     zero_set : bool or "auto"
         GCP: True moves the vertices onto each brick's tricubic zero set, uncarved: for values
@@ -369,11 +369,12 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     _checks.choice("method", method, ("mc", "gcp"))
     options = None
     if method == "gcp":
-        from ._arguments import _count_or_auto, _options, _switch
+        from ._arguments import _count_or_auto, _options, _split_sag, _switch
         options = _options("gcp", band, 1.0, truncation, "regular", "james", 18, False, 1e-6,
                            "auto", 0.0, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, False)
         options["reconstruction"] = "local"
         options["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)
+        options["split_sag"] = _split_sag(split_sag)
         options["projection"] = _switch("projection", projection)
         options["zero_set"] = _switch("zero_set", zero_set)
     brick = _checks.whole_in("brick", brick, 1, 2**20)

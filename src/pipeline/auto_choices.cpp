@@ -21,8 +21,10 @@ bool auto_local_reconstruction(double samples_per_axis) {
 }
 
 int auto_subdivisions(double samples_per_axis) {
-  return samples_per_axis < 256 ? 2 : 1;
+  return samples_per_axis < 96 ? 2 : 1;
 }
+
+double auto_split_sag(double /*samples_per_axis*/) { return 0.004; }
 
 bool auto_sign_constraints(double samples_per_axis) {
   return samples_per_axis < 128;

@@ -24,6 +24,7 @@ const std::vector<OptionRange>& option_ranges() {
       {"--solver-tolerance", "solver_tolerance", 1e-16, 0.5},
       {"--finest-solver-tolerance", "finest_solver_tolerance", 1e-16, 0.5},
       {"--subdivisions", "subdivisions", 0, 4},
+      {"--split-sag", "split_sag", 0, 1},
       {"--adaptivity", "adaptivity", 0, 10},
       {"--adaptivity-bricks", "", 0, 4096},
       {"--adaptivity-fit", "", 0, 100},

@@ -55,11 +55,16 @@ std::string reconstruction_name(Reconstruction reconstruction);
 bool auto_local_reconstruction(double samples_per_axis);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
-/// dimension): 2 below 256, else 1. Two levels are 11% closer at 128^3 (17 shared meshes, 0.390x
-/// -> 0.348x MC's L1 without the exact cube) for 2.1x the time; at 256^3 (bunny 13% closer) they
-/// cost 2.4x the time and 3x the memory, and the sphere and torus would get more triangles than
-/// Poisson's, where `auto` takes this reconstruction for arrays (docs/local.md, session 18).
+/// dimension): 2 below 96, else 1, and then auto_split_sag's edges once more (64^3: bunny 4.00e-4
+/// with 2 against 4.57e-4 with 1; docs/local.md, session 18: at 128^3 a second uniform level is
+/// 2% closer than one level and the split, for 2.5x the triangles and 1.4x the time).
 int auto_subdivisions(double samples_per_axis);
+
+/// The local reconstruction's split_sag (LocalBrickOptions) for a grid `samples_per_axis` across:
+/// 0.004 spacings at any size. The 17 shared meshes' L1 over MC's (geometric means, session 18):
+/// 128^3 0.390x -> 0.356x for 1.6x the triangles, 64^3 0.257x -> 0.253x, 32^3 0.295x -> 0.292x;
+/// the analytic torus at 256^3 splits no edge (its chords sag less).
+double auto_split_sag(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.
 enum class Switch { Auto, On, Off };
@@ -121,6 +126,9 @@ struct ContourOptions {
   /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
   /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.
   int subdivisions = -1;
+  /// The local reconstruction's edges split once more where their chords sag by more than this
+  /// many spacings (LocalBrickOptions::split_sag; grids, brick by brick); -1: auto_split_sag.
+  double split_sag = -1;
   PoissonOptions poisson;  ///< reconstruction of gcp's and gtcp's meshes; depth 0: automatic
   /// GCP: the samples within sign_band spacings of the surface (in the band proper) constrain the
   /// indicator so that each ends on its own side of the mesh (poisson.h, SignedSamples). Auto:

@@ -61,6 +61,10 @@ constexpr int kDualUntangleRounds = 2;
 constexpr int kUntangleRing = 1 + kSideReach * (kSideRounds + 1) +
                               kCrossingReach * (kDualUntangleRounds + kUntangleRounds + 2);
 
+/// Grid edges that splitting the sagging edges adds to a brick's ring: a split asks for its
+/// ends' normals (their triangles), a new vertex's projection for its own.
+constexpr int kSplitReach = 2;
+
 struct LocalBrickOptions {
   /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the
   /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
@@ -71,6 +75,10 @@ struct LocalBrickOptions {
   /// Lattice subdivisions of each triangle (2^s segments per edge), 0..4; -1: auto_subdivisions
   /// of the whole grid (pipeline.h).
   int subdivisions = -1;
+  /// After the projection, one more level where the mesh's chords sag by more than this many
+  /// spacings (an edge's length times its ends' normals' turn / 8), the new vertices projected
+  /// too (with up to 3 subdivisions); 0: none; -1: auto_split_sag of the whole grid (pipeline.h).
+  double split_sag = -1;
   bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
   /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit, robust.
   ContactProjectionOptions projection = local_projection_options();

@@ -4,12 +4,28 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
+
+#include "reconstruction/mesh_geometry.h"
+#include "sdfcontour/reconstruction/contact_projection.h"
 
 namespace sdfcontour::detail {
 
 namespace {
 
 constexpr std::uint64_t kInside = std::uint64_t(1) << 63;
+
+// Points are named by their place on the finest lattice (kFinestLattice segments per edge), so
+// that a point keeps its name at every level: split_curved_edges' midpoints are named as one
+// more uniform level would name them.
+constexpr int kFinestLattice = 32;
+
+std::uint64_t inside_slot(int u, int v, int n) {
+  const int s = kFinestLattice / n;
+  return std::uint64_t(u * s) * (kFinestLattice + 1) + std::uint64_t(v * s);
+}
 
 struct KeyedPosition {
   VertexKey key;
@@ -26,7 +42,7 @@ KeyedPosition on_edge(const KeyedTriangles& in, int x, int y, int j, int n) {
   if (j == n) return {{ky, 0}, in.vertices.row(y).transpose(), fy};
   if (kx > ky) std::swap(kx, ky), std::swap(x, y), j = n - j;
   const double t = double(j) / n;
-  return {{kx, (ky + 1) * 64 + std::uint64_t(j)},
+  return {{kx, (ky + 1) * 64 + std::uint64_t(j * (kFinestLattice / n))},
           (1 - t) * in.vertices.row(x).transpose() + t * in.vertices.row(y).transpose(),
           char(fx && fy)};
 }
@@ -38,7 +54,6 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   const Eigen::Index f = in.triangles.rows();
   // Lattice point (u, v): u steps towards the triangle's 2nd vertex, v towards its 3rd.
   const int points = (n + 1) * (n + 2) / 2;
-  auto slot = [n](int u, int v) { return u * (n + 1) + v; };
   std::vector<KeyedPosition> all(std::size_t(f) * std::size_t(points));
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
     const int a = in.triangles(t, 0), b = in.triangles(t, 1), c = in.triangles(t, 2);
@@ -54,7 +69,7 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
         else if (u + v == n)
           out[i] = on_edge(in, b, c, v, n);
         else
-          out[i] = {{kInside | in.triangle_name[std::size_t(t)], std::uint64_t(slot(u, v))},
+          out[i] = {{kInside | in.triangle_name[std::size_t(t)], inside_slot(u, v, n)},
                     (double(n - u - v) / n) * pa + (double(u) / n) * pb + (double(v) / n) * pc};
       }
   });
@@ -80,6 +95,7 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   const int children = n * n;
   out.mesh.triangles.resize(f * children, 3);
   out.parent.resize(std::size_t(f * children));
+  out.child.resize(std::size_t(f * children));
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
     const int* ids = id.data() + std::size_t(t) * std::size_t(points);
     auto at = [&](int u, int v) {
@@ -93,10 +109,202 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
         if (u + v + 2 <= n)
           out.mesh.triangles.row(r++) << at(u + 1, v), at(u + 1, v + 1), at(u, v + 1);
       }
-    for (Eigen::Index k = t * children; k < (t + 1) * children; ++k)
+    for (Eigen::Index k = t * children; k < (t + 1) * children; ++k) {
       out.parent[std::size_t(k)] = in.triangle_name[std::size_t(t)];
+      out.child[std::size_t(k)] = int(k - t * children);
+    }
   });
   return out;
+}
+
+namespace {
+
+// The lattice coordinates (u, v) of the corners of child k of a triangle cut into n x n, in the
+// order lattice_subdivision makes them.
+std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
+  std::vector<std::array<std::array<int, 2>, 3>> out;
+  for (int u = 0; u < n; ++u)
+    for (int v = 0; u + v < n; ++v) {
+      out.push_back({{{u, v}, {u + 1, v}, {u, v + 1}}});
+      if (u + v + 2 <= n) out.push_back({{{u + 1, v}, {u + 1, v + 1}, {u, v + 1}}});
+    }
+  return out;
+}
+
+// The name of lattice point (u, v) of level-0 triangle t cut into n, and whether it lies on a
+// sharp feature (the ends of its level-0 edge both do).
+std::pair<VertexKey, char> lattice_name(const KeyedTriangles& in, Eigen::Index t, int u, int v,
+                                        int n) {
+  const int a = in.triangles(t, 0), b = in.triangles(t, 1), c = in.triangles(t, 2);
+  KeyedPosition p;
+  if (v == 0)
+    p = on_edge(in, a, b, u, n);
+  else if (u == 0)
+    p = on_edge(in, a, c, v, n);
+  else if (u + v == n)
+    p = on_edge(in, b, c, v, n);
+  else
+    return {{kInside | in.triangle_name[std::size_t(t)], inside_slot(u, v, n)}, 0};
+  return {p.key, p.on_feature};
+}
+
+}  // namespace
+
+SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fine, int levels,
+                             const std::function<bool(int, int)>& split) {
+  const int n = 1 << levels;
+  const int children = n * n;
+  const Eigen::Index f = in.triangles.rows();
+  const auto corners = child_corners(n);
+  struct NewPoint {
+    VertexKey key;
+    std::array<int, 2> source;
+    char on_feature;
+  };
+  // Per level-0 triangle: its children's pieces (fine's vertex ids, or -1 - k for its k-th new
+  // point) and the new points.
+  std::vector<std::vector<std::array<int, 3>>> pieces(static_cast<std::size_t>(f));
+  std::vector<std::vector<NewPoint>> points(static_cast<std::size_t>(f));
+  tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
+    auto& out = pieces[std::size_t(t)];
+    auto& made = points[std::size_t(t)];
+    for (int k = 0; k < children; ++k) {
+      const Eigen::Index row = t * children + k;
+      int id[3], mid[3];
+      for (int c = 0; c < 3; ++c) id[c] = fine.mesh.triangles(row, c);
+      int splits = 0;
+      for (int e = 0; e < 3; ++e) {
+        const int x = id[e], y = id[(e + 1) % 3];
+        mid[e] = 0;
+        // Vertex ids ascend with keys: (min, max) asks the same of both triangles on the edge.
+        if (!split(std::min(x, y), std::max(x, y))) continue;
+        const auto& cx = corners[std::size_t(k)][std::size_t(e)];
+        const auto& cy = corners[std::size_t(k)][std::size_t((e + 1) % 3)];
+        const auto [key, feature] = lattice_name(in, t, cx[0] + cy[0], cx[1] + cy[1], 2 * n);
+        made.push_back({key, {std::min(x, y), std::max(x, y)}, feature});
+        mid[e] = -int(made.size());
+        ++splits;
+      }
+      const int a = id[0], b = id[1], c = id[2], ab = mid[0], bc = mid[1], ca = mid[2];
+      if (splits == 0) {
+        out.push_back({a, b, c});
+      } else if (splits == 3) {
+        out.push_back({a, ab, ca});
+        out.push_back({ab, b, bc});
+        out.push_back({ca, bc, c});
+        out.push_back({ab, bc, ca});
+      } else if (splits == 1) {
+        if (ab) out.push_back({a, ab, c}), out.push_back({ab, b, c});
+        if (bc) out.push_back({a, b, bc}), out.push_back({a, bc, c});
+        if (ca) out.push_back({a, b, ca}), out.push_back({ca, b, c});
+      } else {
+        // Two split edges: the corner between them is cut off, the rest is cut at its shorter
+        // diagonal's fixed choice (from the unsplit edge's first end).
+        if (!ca) out.push_back({ab, b, bc}), out.push_back({a, ab, bc}), out.push_back({a, bc, c});
+        if (!ab) out.push_back({bc, c, ca}), out.push_back({b, bc, ca}), out.push_back({b, ca, a});
+        if (!bc) out.push_back({ca, a, ab}), out.push_back({c, ca, ab}), out.push_back({c, ab, b});
+      }
+    }
+  });
+  // Every vertex, old and new, named; new points shared by two triangles are made twice alike.
+  std::vector<std::pair<VertexKey, long>> order;
+  const Eigen::Index old = fine.mesh.vertices.rows();
+  order.reserve(std::size_t(old));
+  for (Eigen::Index v = 0; v < old; ++v) order.push_back({fine.keys[std::size_t(v)], long(v)});
+  std::vector<long> first_new(std::size_t(f) + 1, 0);
+  for (Eigen::Index t = 0; t < f; ++t)
+    first_new[std::size_t(t) + 1] = first_new[std::size_t(t)] + long(points[std::size_t(t)].size());
+  for (Eigen::Index t = 0; t < f; ++t)
+    for (std::size_t k = 0; k < points[std::size_t(t)].size(); ++k)
+      order.push_back({points[std::size_t(t)][k].key, old + first_new[std::size_t(t)] + long(k)});
+  tbb::parallel_sort(order.begin(), order.end());
+  std::vector<int> id(order.size());
+  SplitMesh out;
+  std::vector<long> first_of;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (i == 0 || order[i].first != order[i - 1].first) {
+      out.sub.keys.push_back(order[i].first);
+      first_of.push_back(order[i].second);
+    }
+    id[std::size_t(order[i].second)] = int(out.sub.keys.size()) - 1;
+  }
+  const std::size_t count = first_of.size();
+  out.source.resize(count);
+  out.sub.on_feature.resize(count);
+  out.sub.mesh.vertices.resize(Eigen::Index(count), 3);
+  std::vector<const NewPoint*> made(std::size_t(first_new.back()));
+  for (Eigen::Index t = 0; t < f; ++t)
+    for (std::size_t k = 0; k < points[std::size_t(t)].size(); ++k)
+      made[std::size_t(first_new[std::size_t(t)]) + k] = &points[std::size_t(t)][k];
+  for (std::size_t v = 0; v < count; ++v) {
+    const long s = first_of[v];
+    if (s < old) {
+      out.source[v] = {int(s), int(s)};
+      out.sub.on_feature[v] = fine.on_feature[std::size_t(s)];
+    } else {
+      const NewPoint& p = *made[std::size_t(s - old)];
+      out.source[v] = p.source;
+      out.sub.on_feature[v] = p.on_feature;
+    }
+    const auto [x, y] = out.source[v];
+    out.sub.mesh.vertices.row(Eigen::Index(v)) =
+        0.5 * (fine.mesh.vertices.row(x) + fine.mesh.vertices.row(y));
+  }
+  Eigen::Index total = 0;
+  for (const auto& p : pieces) total += Eigen::Index(p.size());
+  out.sub.mesh.triangles.resize(total, 3);
+  out.sub.parent.resize(std::size_t(total));
+  out.sub.child.resize(std::size_t(total));
+  Eigen::Index r = 0;
+  for (Eigen::Index t = 0; t < f; ++t) {
+    const auto& ps = pieces[std::size_t(t)];
+    for (std::size_t k = 0; k < ps.size(); ++k, ++r) {
+      for (int c = 0; c < 3; ++c) {
+        const int v = ps[k][std::size_t(c)];
+        out.sub.mesh.triangles(r, c) =
+            v >= 0 ? id[std::size_t(v)]
+                   : id[std::size_t(old + first_new[std::size_t(t)] + long(-v - 1))];
+      }
+      out.sub.parent[std::size_t(r)] = in.triangle_name[std::size_t(t)];
+      out.sub.child[std::size_t(r)] = int(k);
+    }
+  }
+  return out;
+}
+
+// Normals that turn by more than 30 degrees along an edge (the benchmark's sharp edges' dihedral
+// angle) cross a crease.
+const double kCreaseTurnCosine = std::cos(30.0 * M_PI / 180.0);
+
+// (lattice_subdivision.h) An edge whose ends' normals turn by t radians over its length L sags by
+// about L t / 8.
+void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
+                         const ContactPoints& cp, const Eigen::VectorXd& depths, double h,
+                         const LocalBrickOptions& options, SubdividedMesh& sub,
+                         PointMatrix& reconstructed, std::vector<char>& corners) {
+  const PointMatrix normals = vertex_normals(sub.mesh);
+  auto split = [&](int x, int y) {
+    // Not along a sharp edge (straight), nor across a crease (its normals turn by more than
+    // kCreaseTurn; the fit is least sure next to it): only where the surface curves.
+    if (sub.on_feature[std::size_t(x)] && sub.on_feature[std::size_t(y)]) return false;
+    const double c = std::clamp(normals.row(x).dot(normals.row(y)), -1.0, 1.0);
+    if (c < kCreaseTurnCosine) return false;
+    const double length = (sub.mesh.vertices.row(x) - sub.mesh.vertices.row(y)).norm();
+    return length * std::acos(c) / 8 > limit;
+  };
+  SplitMesh split_mesh = split_curved_edges(near, sub, levels, split);
+  PointMatrix start(split_mesh.sub.mesh.vertices.rows(), 3);
+  std::vector<char> stay(split_mesh.source.size(), 0);
+  for (std::size_t v = 0; v < stay.size(); ++v) {
+    const auto [x, y] = split_mesh.source[v];
+    start.row(Eigen::Index(v)) = 0.5 * (reconstructed.row(x) + reconstructed.row(y));
+    stay[v] = x == y || (options.keep_features && split_mesh.sub.on_feature[v]);
+  }
+  sub = std::move(split_mesh.sub);
+  reconstructed = std::move(start);
+  corners.assign(sub.on_feature.size(), 0);
+  for (std::size_t v = 0; v < corners.size(); ++v) corners[v] = sub.on_feature[v] == 2;
+  project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection, &stay);
 }
 
 }  // namespace sdfcontour::detail

@@ -3,7 +3,9 @@
 // edge compute and name its vertices alike.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "sdfcontour/reconstruction/local_brick.h"
@@ -27,11 +29,38 @@ struct SubdividedMesh {
   Mesh mesh;
   std::vector<VertexKey> keys;
   std::vector<std::uint64_t> parent;  ///< per triangle: its parent's name
+  std::vector<int> child;             ///< per triangle: its rank among its parent's, < 256
   /// Per vertex: a feature vertex (2 at a corner that samples share), or 1 on the segment
   /// between two (along a sharp edge).
   std::vector<char> on_feature;
 };
 
 SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels);
+
+/// split_curved_edges' mesh, and per vertex the two vertices of `fine` whose midpoint it is (the
+/// same one twice for fine's own).
+struct SplitMesh {
+  SubdividedMesh sub;
+  std::vector<std::array<int, 2>> source;
+};
+
+/// One more level where it pays: each edge (x, y) of `fine` (lattice_subdivision(in, levels),
+/// levels <= 3, its vertices moved since) for which split(x, y) holds (x < y: asked once per
+/// edge, from any thread) gets its midpoint, named as one more uniform level would name it, and
+/// each triangle is cut at its split edges into 1-4. Vertices in ascending key order, triangles
+/// by parent, then by rank among the parent's.
+SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fine, int levels,
+                             const std::function<bool(int, int)>& split);
+
+/// The local reconstruction's use of it (LocalBrickOptions::split_sag): after `sub`
+/// (lattice_subdivision(near, levels)) was projected onto the contact points `cp` (`depths` their
+/// samples' |value|s, `h` the spacing), each edge whose chord sags by more than `limit` (its
+/// length times its ends' normals' turn / 8, a circular arc's sag) is split and the new vertices
+/// projected; `reconstructed` (the positions the untangling returns vertices to: the new ones at
+/// their edges' midpoints) and `corners` (per vertex: a shared corner) follow the new numbering.
+void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
+                         const ContactPoints& cp, const Eigen::VectorXd& depths, double h,
+                         const LocalBrickOptions& options, SubdividedMesh& sub,
+                         PointMatrix& reconstructed, std::vector<char>& corners);
 
 }  // namespace sdfcontour::detail

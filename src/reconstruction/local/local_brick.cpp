@@ -51,8 +51,9 @@ double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& di
 // Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
 // need one ring; undoing crossings needs kUntangleRing (the dual mesh's rounds alone, fewer).
 int ring(const LocalBrickOptions& o) {
-  if (!o.untangle) return 1;
-  return o.project || o.carve ? kUntangleRing : 1 + kCrossingReach * kDualUntangleRounds;
+  const int split = o.split_sag != 0 ? kSplitReach : 0;
+  if (!o.untangle) return 1 + split;
+  return (o.project || o.carve ? kUntangleRing : 1 + kCrossingReach * kDualUntangleRounds) + split;
 }
 
 // How far beyond the owned samples a contact point can matter, in samples: the reach of the
@@ -231,8 +232,8 @@ void keep_owned_contact_points(const GridView& block, const BandSamples& band,
 
 // The owned triangles of the subdivided brick mesh and their vertices (keys stay ascending),
 // into `piece`.
-void take_owned_part(const detail::SubdividedMesh& sub, int levels, const Index3& n,
-                     const Index3& own_first, const Index3& own_end, LocalPiece& piece) {
+void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const Index3& own_first,
+                     const Index3& own_end, LocalPiece& piece) {
   std::vector<Eigen::Index> owned;
   for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
     if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
@@ -251,9 +252,9 @@ void take_owned_part(const detail::SubdividedMesh& sub, int levels, const Index3
       piece.keys[std::size_t(id[v])] = sub.keys[v];
     }
   piece.triangles.resize(Eigen::Index(owned.size()), 3);
-  const Eigen::Index children = Eigen::Index(1) << (2 * levels);
   for (const Eigen::Index t : owned)
-    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 + std::uint64_t(t % children));
+    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 +
+                                   std::uint64_t(sub.child[std::size_t(t)]));
   for (std::size_t r = 0; r < owned.size(); ++r)
     for (int c = 0; c < 3; ++c)
       piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
@@ -365,8 +366,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                          ? options.subdivisions
                          : auto_subdivisions(*std::max_element(n.begin(), n.end()));
   detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
-  near = detail::KeyedTriangles();
-  const PointMatrix reconstructed = sub.mesh.vertices;
+  PointMatrix reconstructed = sub.mesh.vertices;
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
   // Corners that the samples around them share (exact, as a box's) stay always.
   std::vector<char> corners(sub.on_feature.size(), 0);
@@ -375,6 +375,14 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (options.project && cp.size() > 0)
     project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection,
                               fixed);
+  const double sag = options.split_sag >= 0 ? options.split_sag
+                                            : auto_split_sag(*std::max_element(n.begin(), n.end()));
+  // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
+  // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
+  // vertices 0.002 h off it.)
+  if (sag > 0 && levels <= 3 && options.project && !options.refine_zero_set && cp.size() > 0)
+    split_sagging_edges(near, levels, sag * h, cp, depths, h, options, sub, reconstructed, corners);
+  near = detail::KeyedTriangles();
   cp = ContactPoints();
   depths = Eigen::VectorXd();
   // Where the values are no distances, their spheres are not empty either: those vertices go
@@ -412,7 +420,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     }
   }
   clock.next(5);
-  take_owned_part(sub, levels, n, own_first, own_end, piece);
+  take_owned_part(sub, n, own_first, own_end, piece);
   return piece;
 }
 

@@ -47,6 +47,7 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.contact.near_miss_tolerance = kLocalNearMiss;
   lb.local = options.local;
   lb.subdivisions = options.subdivisions;
+  lb.split_sag = options.split_sag;
   lb.project = options.project != Switch::Off;
   lb.projection = options.local_projection;
   lb.carve = options.carve != Switch::Off;
