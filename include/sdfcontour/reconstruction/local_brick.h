@@ -120,8 +120,9 @@ struct LocalBrickOptions {
 };
 
 /// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,
-/// (ky + 1) * 64 + j) for the subdivision vertex j / 2^s of the way along edge (kx, ky), kx < ky;
-/// (2^63 + triangle, slot) for a vertex inside one of the reconstruction's triangles.
+/// (ky + 1) * 64 + j) for the subdivision vertex j / 32 of the way along edge (kx, ky), kx < ky;
+/// (2^63 + triangle, slot) for a vertex inside one of the reconstruction's triangles (its place
+/// on the lattice of 32 segments per edge: the same name at every subdivision level).
 using VertexKey = std::array<std::uint64_t, 2>;
 
 /// The part of the mesh that one brick owns.

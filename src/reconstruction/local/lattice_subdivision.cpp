@@ -47,6 +47,31 @@ KeyedPosition on_edge(const KeyedTriangles& in, int x, int y, int j, int n) {
           char(fx && fy)};
 }
 
+// Lattice point (u, v) of level-0 triangle t cut into n (u steps towards its 2nd vertex, v
+// towards its 3rd): named, placed, and on a sharp feature where its level-0 edge's ends both are.
+KeyedPosition lattice_point(const KeyedTriangles& in, Eigen::Index t, int u, int v, int n) {
+  const int a = in.triangles(t, 0), b = in.triangles(t, 1), c = in.triangles(t, 2);
+  if (v == 0) return on_edge(in, a, b, u, n);
+  if (u == 0) return on_edge(in, a, c, v, n);
+  if (u + v == n) return on_edge(in, b, c, v, n);
+  return {{kInside | in.triangle_name[std::size_t(t)], inside_slot(u, v, n)},
+          (double(n - u - v) / n) * in.vertices.row(a).transpose() +
+              (double(u) / n) * in.vertices.row(b).transpose() +
+              (double(v) / n) * in.vertices.row(c).transpose()};
+}
+
+// The lattice coordinates (u, v) of the corners of child k of a triangle cut into n x n, in the
+// order lattice_subdivision makes them.
+std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
+  std::vector<std::array<std::array<int, 2>, 3>> out;
+  for (int u = 0; u < n; ++u)
+    for (int v = 0; u + v < n; ++v) {
+      out.push_back({{{u, v}, {u + 1, v}, {u, v + 1}}});
+      if (u + v + 2 <= n) out.push_back({{{u + 1, v}, {u + 1, v + 1}, {u, v + 1}}});
+    }
+  return out;
+}
+
 }  // namespace
 
 SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
@@ -56,22 +81,9 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   const int points = (n + 1) * (n + 2) / 2;
   std::vector<KeyedPosition> all(std::size_t(f) * std::size_t(points));
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
-    const int a = in.triangles(t, 0), b = in.triangles(t, 1), c = in.triangles(t, 2);
-    const Eigen::Vector3d pa = in.vertices.row(a).transpose(), pb = in.vertices.row(b).transpose(),
-                          pc = in.vertices.row(c).transpose();
     KeyedPosition* out = all.data() + std::size_t(t) * std::size_t(points);
     for (int u = 0, i = 0; u <= n; ++u)
-      for (int v = 0; u + v <= n; ++v, ++i) {
-        if (v == 0)
-          out[i] = on_edge(in, a, b, u, n);
-        else if (u == 0)
-          out[i] = on_edge(in, a, c, v, n);
-        else if (u + v == n)
-          out[i] = on_edge(in, b, c, v, n);
-        else
-          out[i] = {{kInside | in.triangle_name[std::size_t(t)], inside_slot(u, v, n)},
-                    (double(n - u - v) / n) * pa + (double(u) / n) * pb + (double(v) / n) * pc};
-      }
+      for (int v = 0; u + v <= n; ++v, ++i) out[i] = lattice_point(in, t, u, v, n);
   });
   std::vector<std::pair<VertexKey, std::size_t>> order(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) order[i] = {all[i].key, i};
@@ -93,6 +105,7 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
     out.on_feature[v] = all[first_of[v]].on_feature;
   }
   const int children = n * n;
+  const auto corners = child_corners(n);
   out.mesh.triangles.resize(f * children, 3);
   out.parent.resize(std::size_t(f * children));
   out.child.resize(std::size_t(f * children));
@@ -103,12 +116,8 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
       return ids[u * (n + 1) - u * (u - 1) / 2 + v];
     };
     Eigen::Index r = t * children;
-    for (int u = 0; u < n; ++u)
-      for (int v = 0; u + v < n; ++v) {
-        out.mesh.triangles.row(r++) << at(u, v), at(u + 1, v), at(u, v + 1);
-        if (u + v + 2 <= n)
-          out.mesh.triangles.row(r++) << at(u + 1, v), at(u + 1, v + 1), at(u, v + 1);
-      }
+    for (const auto& [p, q, w] : corners)
+      out.mesh.triangles.row(r++) << at(p[0], p[1]), at(q[0], q[1]), at(w[0], w[1]);
     for (Eigen::Index k = t * children; k < (t + 1) * children; ++k) {
       out.parent[std::size_t(k)] = in.triangle_name[std::size_t(t)];
       out.child[std::size_t(k)] = int(k - t * children);
@@ -116,39 +125,6 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   });
   return out;
 }
-
-namespace {
-
-// The lattice coordinates (u, v) of the corners of child k of a triangle cut into n x n, in the
-// order lattice_subdivision makes them.
-std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
-  std::vector<std::array<std::array<int, 2>, 3>> out;
-  for (int u = 0; u < n; ++u)
-    for (int v = 0; u + v < n; ++v) {
-      out.push_back({{{u, v}, {u + 1, v}, {u, v + 1}}});
-      if (u + v + 2 <= n) out.push_back({{{u + 1, v}, {u + 1, v + 1}, {u, v + 1}}});
-    }
-  return out;
-}
-
-// The name of lattice point (u, v) of level-0 triangle t cut into n, and whether it lies on a
-// sharp feature (the ends of its level-0 edge both do).
-std::pair<VertexKey, char> lattice_name(const KeyedTriangles& in, Eigen::Index t, int u, int v,
-                                        int n) {
-  const int a = in.triangles(t, 0), b = in.triangles(t, 1), c = in.triangles(t, 2);
-  KeyedPosition p;
-  if (v == 0)
-    p = on_edge(in, a, b, u, n);
-  else if (u == 0)
-    p = on_edge(in, a, c, v, n);
-  else if (u + v == n)
-    p = on_edge(in, b, c, v, n);
-  else
-    return {{kInside | in.triangle_name[std::size_t(t)], inside_slot(u, v, n)}, 0};
-  return {p.key, p.on_feature};
-}
-
-}  // namespace
 
 SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fine, int levels,
                              const std::function<bool(int, int)>& split) {
@@ -180,8 +156,8 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
         if (!split(std::min(x, y), std::max(x, y))) continue;
         const auto& cx = corners[std::size_t(k)][std::size_t(e)];
         const auto& cy = corners[std::size_t(k)][std::size_t((e + 1) % 3)];
-        const auto [key, feature] = lattice_name(in, t, cx[0] + cy[0], cx[1] + cy[1], 2 * n);
-        made.push_back({key, {std::min(x, y), std::max(x, y)}, feature});
+        const KeyedPosition p = lattice_point(in, t, cx[0] + cy[0], cx[1] + cy[1], 2 * n);
+        made.push_back({p.key, {std::min(x, y), std::max(x, y)}, p.on_feature});
         mid[e] = -int(made.size());
         ++splits;
       }
