@@ -134,7 +134,8 @@ with tempfile.TemporaryDirectory() as d:
     for opt, value, needle in [("--band", "0", "--band"), ("--band", "wide", "--band"), ("--band", "nan", "--band"),
                                ("--truncation", "-1", "--truncation"), ("--truncation", "maybe", "--truncation"),
                                ("--brick-size", "-1", "--brick-size"), ("--brick-halo", "-2", "halo"),
-                               ("--brick-halo", "inf", "halo")]:
+                               ("--brick-halo", "inf", "halo"), ("--split-sag", "-1", "--split-sag"),
+                               ("--split-sag", "2", "--split-sag")]:
         expect_error(f"{opt} {value}", ["contour", "builtin:torus@24", "-o", out, "--points", p("bp.ply"), opt, value],
                      needle, [out, p("bp.ply")])
     expect_error("band without samples", ["contour", "builtin:torus@24", "-o", out, "--band", "1e-6", "--margin", "0"],

@@ -365,6 +365,16 @@ def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
         sdfcontour.contour(g, reconstruction="global")
     with pytest.raises(ValueError, match="subdivisions"):
         sdfcontour.contour(g, reconstruction="local", subdivisions=9)
+    # Without the split of the sagging edges: fewer triangles, the CLI's mesh alike.
+    V3, F3 = sdfcontour.contour(g, reconstruction="local", split_sag="off")
+    assert 0 < len(F3) < len(F)
+    subprocess.run([CLI, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m3.ply"),
+                    "--reconstruction", "local", "--split-sag", "0", "--quiet"], check=True)
+    V4, F4 = sdfcontour.read_mesh(str(tmp_path / "m3.ply"))
+    assert np.array_equal(V3, V4) and np.array_equal(F3, F4)
+    for bad in (2, -0.1, "some", True):
+        with pytest.raises(ValueError, match="split_sag"):
+            sdfcontour.contour(g, reconstruction="local", split_sag=bad)
 
 
 def test_pip_installs_the_command_beside_the_interpreter(tmp_path):
