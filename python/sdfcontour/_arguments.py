@@ -141,16 +141,12 @@ def _count_or_auto(name, value, most):
 
 
 def _split_sag(value):
-    """-1 for "auto", 0 for False or "off", else a number of spacings from 0 to 1."""
+    """-1 for "auto", 0 for False or "off", else spacings within the option table's range."""
     if isinstance(value, str) and value == "auto":
         return -1.0
     if value is False or (isinstance(value, str) and value == "off"):
         return 0.0
-    if isinstance(value, (int, float, _np.integer, _np.floating)) and \
-            not isinstance(value, (bool, _np.bool_)) and 0 <= value <= 1:
-        return float(value)
-    raise ValueError(f"split_sag must be a number of spacings from 0 to 1, 'auto' or 'off', "
-                     f"got {value!r}")
+    return _checks.in_range("split_sag", value)
 
 
 def _switch(name, value):

@@ -72,6 +72,28 @@ std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
   return out;
 }
 
+// Points made once per triangle that holds them, merged by name: the distinct keys ascending, per
+// key its first point, and per point its vertex.
+struct KeyOrder {
+  std::vector<VertexKey> keys;
+  std::vector<std::size_t> first_of;
+  std::vector<int> id;
+};
+
+KeyOrder order_by_key(std::vector<std::pair<VertexKey, std::size_t>> order) {
+  tbb::parallel_sort(order.begin(), order.end());
+  KeyOrder out;
+  out.id.resize(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (i == 0 || order[i].first != order[i - 1].first) {
+      out.keys.push_back(order[i].first);
+      out.first_of.push_back(order[i].second);
+    }
+    out.id[order[i].second] = int(out.keys.size()) - 1;
+  }
+  return out;
+}
+
 }  // namespace
 
 SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
@@ -87,17 +109,11 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   });
   std::vector<std::pair<VertexKey, std::size_t>> order(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) order[i] = {all[i].key, i};
-  tbb::parallel_sort(order.begin(), order.end());
+  KeyOrder named = order_by_key(std::move(order));
+  const std::vector<std::size_t>& first_of = named.first_of;
+  const std::vector<int>& id = named.id;
   SubdividedMesh out;
-  std::vector<int> id(all.size());
-  std::vector<std::size_t> first_of;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    if (i == 0 || order[i].first != order[i - 1].first) {
-      out.keys.push_back(order[i].first);
-      first_of.push_back(order[i].second);
-    }
-    id[order[i].second] = int(out.keys.size()) - 1;
-  }
+  out.keys = std::move(named.keys);
   out.mesh.vertices.resize(Eigen::Index(first_of.size()), 3);
   out.on_feature.resize(first_of.size());
   for (std::size_t v = 0; v < first_of.size(); ++v) {
@@ -123,6 +139,12 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
       out.child[std::size_t(k)] = int(k - t * children);
     }
   });
+  return out;
+}
+
+std::vector<char> shared_corners(const SubdividedMesh& sub) {
+  std::vector<char> out(sub.on_feature.size(), 0);
+  for (std::size_t v = 0; v < out.size(); ++v) out[v] = sub.on_feature[v] == 2;
   return out;
 }
 
@@ -183,42 +205,36 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
     }
   });
   // Every vertex, old and new, named; new points shared by two triangles are made twice alike.
-  std::vector<std::pair<VertexKey, long>> order;
-  const Eigen::Index old = fine.mesh.vertices.rows();
-  order.reserve(std::size_t(old));
-  for (Eigen::Index v = 0; v < old; ++v) order.push_back({fine.keys[std::size_t(v)], long(v)});
-  std::vector<long> first_new(std::size_t(f) + 1, 0);
+  std::vector<std::pair<VertexKey, std::size_t>> order;
+  const std::size_t old = std::size_t(fine.mesh.vertices.rows());
+  order.reserve(old);
+  for (std::size_t v = 0; v < old; ++v) order.push_back({fine.keys[v], v});
+  std::vector<std::size_t> first_new(std::size_t(f) + 1, 0);
   for (Eigen::Index t = 0; t < f; ++t)
-    first_new[std::size_t(t) + 1] = first_new[std::size_t(t)] + long(points[std::size_t(t)].size());
+    first_new[std::size_t(t) + 1] = first_new[std::size_t(t)] + points[std::size_t(t)].size();
   for (Eigen::Index t = 0; t < f; ++t)
     for (std::size_t k = 0; k < points[std::size_t(t)].size(); ++k)
-      order.push_back({points[std::size_t(t)][k].key, old + first_new[std::size_t(t)] + long(k)});
-  tbb::parallel_sort(order.begin(), order.end());
-  std::vector<int> id(order.size());
+      order.push_back({points[std::size_t(t)][k].key, old + first_new[std::size_t(t)] + k});
+  KeyOrder named = order_by_key(std::move(order));
+  const std::vector<std::size_t>& first_of = named.first_of;
+  const std::vector<int>& id = named.id;
   SplitMesh out;
-  std::vector<long> first_of;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    if (i == 0 || order[i].first != order[i - 1].first) {
-      out.sub.keys.push_back(order[i].first);
-      first_of.push_back(order[i].second);
-    }
-    id[std::size_t(order[i].second)] = int(out.sub.keys.size()) - 1;
-  }
+  out.sub.keys = std::move(named.keys);
   const std::size_t count = first_of.size();
   out.source.resize(count);
   out.sub.on_feature.resize(count);
   out.sub.mesh.vertices.resize(Eigen::Index(count), 3);
-  std::vector<const NewPoint*> made(std::size_t(first_new.back()));
+  std::vector<const NewPoint*> made(first_new.back());
   for (Eigen::Index t = 0; t < f; ++t)
     for (std::size_t k = 0; k < points[std::size_t(t)].size(); ++k)
-      made[std::size_t(first_new[std::size_t(t)]) + k] = &points[std::size_t(t)][k];
+      made[first_new[std::size_t(t)] + k] = &points[std::size_t(t)][k];
   for (std::size_t v = 0; v < count; ++v) {
-    const long s = first_of[v];
+    const std::size_t s = first_of[v];
     if (s < old) {
       out.source[v] = {int(s), int(s)};
-      out.sub.on_feature[v] = fine.on_feature[std::size_t(s)];
+      out.sub.on_feature[v] = fine.on_feature[s];
     } else {
-      const NewPoint& p = *made[std::size_t(s - old)];
+      const NewPoint& p = *made[s - old];
       out.source[v] = p.source;
       out.sub.on_feature[v] = p.on_feature;
     }
@@ -238,8 +254,7 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
       for (int c = 0; c < 3; ++c) {
         const int v = ps[k][std::size_t(c)];
         out.sub.mesh.triangles(r, c) =
-            v >= 0 ? id[std::size_t(v)]
-                   : id[std::size_t(old + first_new[std::size_t(t)] + long(-v - 1))];
+            v >= 0 ? id[std::size_t(v)] : id[old + first_new[std::size_t(t)] + std::size_t(-v - 1)];
       }
       out.sub.parent[std::size_t(r)] = in.triangle_name[std::size_t(t)];
       out.sub.child[std::size_t(r)] = int(k);
@@ -278,8 +293,7 @@ void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
   }
   sub = std::move(split_mesh.sub);
   reconstructed = std::move(start);
-  corners.assign(sub.on_feature.size(), 0);
-  for (std::size_t v = 0; v < corners.size(); ++v) corners[v] = sub.on_feature[v] == 2;
+  corners = shared_corners(sub);
   project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection, &stay);
 }
 

@@ -37,6 +37,9 @@ struct SubdividedMesh {
 
 SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels);
 
+/// Per vertex of `sub`: a corner that samples share (on_feature 2), which stays where it is.
+std::vector<char> shared_corners(const SubdividedMesh& sub);
+
 /// split_curved_edges' mesh, and per vertex the two vertices of `fine` whose midpoint it is (the
 /// same one twice for fine's own).
 struct SplitMesh {

@@ -369,8 +369,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   PointMatrix reconstructed = sub.mesh.vertices;
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
   // Corners that the samples around them share (exact, as a box's) stay always.
-  std::vector<char> corners(sub.on_feature.size(), 0);
-  for (std::size_t v = 0; v < corners.size(); ++v) corners[v] = sub.on_feature[v] == 2;
+  std::vector<char> corners = detail::shared_corners(sub);
   const std::vector<char>* fixed = options.keep_features ? &sub.on_feature : &corners;
   if (options.project && cp.size() > 0)
     project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection,
