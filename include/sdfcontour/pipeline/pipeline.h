@@ -57,7 +57,7 @@ bool auto_local_reconstruction(double samples_per_axis);
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
 /// dimension): 2 below 96, else 1, and then auto_split_sag's edges once more (64^3: bunny 4.00e-4
 /// with 2 against 4.57e-4 with 1; docs/local.md, session 18: at 128^3 a second uniform level is
-/// 2% closer than one level and the split, for 2.5x the triangles and 1.4x the time).
+/// 2% closer than one level and the split, for 2.5x the triangles and 1.7x the time).
 int auto_subdivisions(double samples_per_axis);
 
 /// The local reconstruction's split_sag (LocalBrickOptions) for a grid `samples_per_axis` across:
