@@ -23,6 +23,7 @@ METHODS = {
     "mt-rt": ["--method", "mt-rt"],
     "gcp-poisson": ["--method", "gcp", "--reconstruction", "poisson"],
     "gcp-local": ["--method", "gcp", "--reconstruction", "local"],
+    "gcp-local-thin": ["--method", "gcp", "--reconstruction", "local", "--thin-parts", "on"],
 }
 
 

@@ -236,6 +236,7 @@ ContourOptions contour_options(const py::dict& o) {
   }
   c.project = parse_switch("projection", get<std::string>(o, "projection", "auto"));
   c.zero_set = parse_switch("zero_set", get<std::string>(o, "zero_set", "auto"));
+  c.thin_parts = parse_switch("thin_parts", get<std::string>(o, "thin_parts", "auto"));
   c.reconstruction = parse_reconstruction(get<std::string>(o, "reconstruction", "auto"));
   c.fallback_to_mc = get<bool>(o, "fallback_to_mc", c.fallback_to_mc);
   c.subdivisions = get<int>(o, "subdivisions", -1);
@@ -387,6 +388,7 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
   stats["local_cells"] = piece.stats.cells;
   stats["local_feature_vertices"] = piece.stats.feature_vertices;
   stats["local_field_misses"] = piece.stats.field_misses;
+  stats["local_thin_points"] = piece.stats.thin_points;
   stats["local_crossing_cells"] = piece.stats.crossing_cells;
   py::array_t<std::uint64_t> names(py::ssize_t(piece.triangle_names.size()));
   std::copy(piece.triangle_names.begin(), piece.triangle_names.end(), names.mutable_data());
@@ -517,6 +519,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
     stats["local_cells"] = r.local->cells;
     stats["local_feature_vertices"] = r.local->feature_vertices;
     stats["local_field_misses"] = r.local->field_misses;
+    stats["local_thin_points"] = r.local->thin_points;
     stats["local_crossing_cells"] = r.local->crossing_cells;
   }
   stats["untangled_vertices"] = r.untangling ? r.untangling->vertices_reverted : 0;

@@ -97,6 +97,7 @@ with tempfile.TemporaryDirectory() as d:
                        ("--projection", "maybe"), ("--projection-radius", "0"), ("--projection-residual", "nan"),
                        ("--projection-variance", "0.5"), ("--refine-dilation", "0"),
                        ("--refine-dilation", "5"), ("--refine-dilation", "1.5"), ("--zero-set", "maybe"),
+                       ("--thin-parts", "maybe"),
                        ("--zero-set-mismatch", "nan"), ("--zero-set-mismatch", "-1")]:
         depth = [] if opt in ("--depth", "--full-depth") else ["--depth", "5"]
         args = ["contour", "builtin:sphere@12", "-o", out, *depth] + ([opt, value] if value else [opt])

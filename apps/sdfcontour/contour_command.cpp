@@ -139,6 +139,7 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.local = a.local;
   opt.project = parse_switch("--projection", a.projection);
   opt.zero_set = parse_switch("--zero-set", a.zero_set);
+  opt.thin_parts = parse_switch("--thin-parts", a.thin_parts);
   require_range("--zero-set-mismatch", a.zero_set_mismatch, 0, 1e6);
   opt.zero_set_options.mismatch = a.zero_set_mismatch;
   for (const ProjectionOption& p : kProjectionOptions)
@@ -293,11 +294,16 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
        "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
        "the contact points (auto: 2 below 96 samples per axis, else 1)")
       ->capture_default_str();
-  c->add_option(
-       "--split-sag", a.split_sag,
-       "GCP local reconstruction, after the projection: split each edge once more where "
-       "its chord sags by more than this many spacings (its length times its ends' "
-       "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.004)")
+  c->add_option("--split-sag", a.split_sag,
+                "GCP local reconstruction, after the projection: split each edge once more where "
+                "its chord sags by more than this many spacings (its length times its ends' "
+                "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.004)")
+      ->capture_default_str();
+  c->add_option("--thin-parts", a.thin_parts,
+                "GCP local reconstruction: find the parts thinner than a spacing that the "
+                "samples straddle without a sign change (a wing, a blade) from the contact "
+                "points on their two sides, on a grid of twice the resolution with one "
+                "subdivision fewer (on, off; auto: on below 96 samples per axis)")
       ->capture_default_str();
   c->add_option("--local-reach", a.local.reach,
                 "GCP local reconstruction: contact points within this many spacings of a cell "

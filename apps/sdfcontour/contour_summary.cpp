@@ -91,6 +91,7 @@ void add_stage_counts(nlohmann::json& j, const ContourOptions& opt, const Contou
                   {"crossing_cells", r.local->crossing_cells},
                   {"feature_vertices", r.local->feature_vertices},
                   {"field_misses", r.local->field_misses},
+                  {"thin_points", r.local->thin_points},
                   {"clamped", r.local->clamped}};
   if (r.mesh && (opt.method == Method::Gcp || opt.method == Method::Gtcp))
     j["reconstruction"] = reconstruction_name(r.reconstruction);

@@ -304,7 +304,7 @@ def _one_line(error):
 def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
             resolution=None, dataset=None, batch_size=65536, band="auto", truncation="auto",
             subdivisions="auto", projection="auto", zero_set="auto", progress=False,
-            return_stats=False, split_sag="auto"):
+            return_stats=False, split_sag="auto", thin_parts="auto"):
     """Contour a grid too large for one process, brick by brick on Dask.
 
     Parameters
@@ -335,7 +335,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         Samples per axis for a callable source.
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
-    band, subdivisions, projection, split_sag
+    band, subdivisions, projection, split_sag, thin_parts
         GCP: as in :func:`sdfcontour.contour`.
     zero_set : bool or "auto"
         GCP: True moves the vertices onto each brick's tricubic zero set, uncarved: for values
@@ -377,6 +377,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         options["split_sag"] = _split_sag(split_sag)
         options["projection"] = _switch("projection", projection)
         options["zero_set"] = _switch("zero_set", zero_set)
+        options["thin_parts"] = _switch("thin_parts", thin_parts)
     brick = _checks.whole_in("brick", brick, 1, 2**20)
     batch_size = _checks.whole_in("batch_size", batch_size, 1, 2**26)
     progress = _checks.flag("progress", progress)

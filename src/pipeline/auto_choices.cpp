@@ -26,6 +26,10 @@ int auto_subdivisions(double samples_per_axis) {
 
 double auto_split_sag(double /*samples_per_axis*/) { return 0.004; }
 
+bool auto_thin_parts(double samples_per_axis) {
+  return samples_per_axis < 96;
+}
+
 bool auto_sign_constraints(double samples_per_axis) {
   return samples_per_axis < 128;
 }

@@ -375,6 +375,18 @@ def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
     for bad in (2, -0.1, "some", True):
         with pytest.raises(ValueError, match="split_sag"):
             sdfcontour.contour(g, reconstruction="local", split_sag=bad)
+    # Without the grid at twice the resolution (on below 96 samples per axis): the CLI's mesh
+    # alike, and no point of it in a thin part (the torus has none).
+    V5, F5, s5 = sdfcontour.contour(g, reconstruction="local", thin_parts=False, return_stats=True)
+    assert stats["local_thin_points"] == 0 and s5["local_thin_points"] == 0
+    assert V5.shape != V.shape or not np.array_equal(V5, V)  # the finer grid's cells
+    subprocess.run([CLI, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m5.ply"),
+                    "--reconstruction", "local", "--thin-parts", "off", "--quiet"], check=True)
+    V6, F6 = sdfcontour.read_mesh(str(tmp_path / "m5.ply"))
+    assert np.array_equal(V5, V6) and np.array_equal(F5, F6)
+    for bad in ("on", 1, None):
+        with pytest.raises(ValueError, match="thin_parts"):
+            sdfcontour.contour(g, reconstruction="local", thin_parts=bad)
 
 
 def test_pip_installs_the_command_beside_the_interpreter(tmp_path):

@@ -64,6 +64,8 @@ constexpr int kUntangleRing = 1 + kSideReach * (kSideRounds + 1) +
 /// Grid edges that splitting the sagging edges adds to a brick's ring: a split asks for its
 /// ends' normals (their triangles), a new vertex's projection for its own.
 constexpr int kSplitReach = 2;
+/// Samples beyond a brick's reach whose contact points decide the thin parts' points.
+constexpr int kThinPartReach = 2;
 
 struct LocalBrickOptions {
   /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the
@@ -79,6 +81,12 @@ struct LocalBrickOptions {
   /// spacings (an edge's length times its ends' normals' turn / 8), the new vertices projected
   /// too (with up to 3 subdivisions); 0: none; -1: auto_split_sag of the whole grid (pipeline.h).
   double split_sag = -1;
+  /// The dual mesh on the grid at twice the resolution, with the parts thinner than a spacing
+  /// that its samples straddle (a wing, a blade: no sign change between them) read from the
+  /// contact points on their two sides, and one subdivision level fewer
+  /// (reconstruction/local/thin_parts.h). Not with refine_zero_set. 1: on, 0: off, -1:
+  /// auto_thin_parts of the whole grid (pipeline.h).
+  int thin_parts = -1;
   bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
   /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit, robust.
   ContactProjectionOptions projection = local_projection_options();

@@ -49,6 +49,15 @@ struct LocalReconstructionOptions {
   /// (contact points of a field that is only roughly a distance): the cell falls back to its edge
   /// crossings. 0: no check.
   double max_field_miss = 0.5;
+  /// The cells are narrower than the contact points' spacing (the grid at twice the samples'
+  /// resolution that looks for thin parts, LocalBrickOptions::thin_parts), so a few points
+  /// often leave a smooth patch's quadric minimum outside its cell: it then slides along its
+  /// plane into the cell, and where the plane misses the cell, the cell takes its edge crossings
+  /// (bunny at 64^3 on that grid: a quarter of the vertices clamped, 11x the crossing triangles
+  /// after the projection); and a corner that the samples around it share (exact, as a box's)
+  /// stays where they put it within a quarter cell beyond its cell, whose signs an interpolant
+  /// gave. Else (a cell a spacing wide) both are clamped into the cell.
+  bool narrow_cells = false;
 };
 
 struct LocalReconstructionStats {
@@ -59,6 +68,7 @@ struct LocalReconstructionStats {
   long feature_vertices = 0;  ///< vertices whose quadric had rank 2 or 3 (an edge or a corner)
   long clamped = 0;           ///< vertices whose quadric's minimiser left the cell, clamped to it
   long field_misses = 0;      ///< vertices off the cell's interpolated zero set (max_field_miss)
+  long thin_points = 0;       ///< points of the finer grid put in a thin part (LocalBrickOptions)
 };
 
 /// The local reconstruction of the zero level set of `grid` (inside: value < 0) from contact

@@ -16,6 +16,7 @@
 #include "reconstruction/local/brick_moves.h"
 #include "reconstruction/local/keyed_local_mesh.h"
 #include "reconstruction/local/lattice_subdivision.h"
+#include "reconstruction/local/thin_parts.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/metrics/self_intersections.h"
 #include "sdfcontour/pipeline/pipeline.h"
@@ -48,6 +49,13 @@ double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& di
   return b + band.margin;
 }
 
+// Whether the dual mesh lives on the grid at twice the resolution (LocalBrickOptions::thin_parts).
+bool thin_parts_on(const LocalBrickOptions& o, const std::array<int, 3>& dims) {
+  if (o.refine_zero_set) return false;
+  return o.thin_parts < 0 ? auto_thin_parts(*std::max_element(dims.begin(), dims.end()))
+                          : o.thin_parts > 0;
+}
+
 // Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
 // need one ring; undoing crossings needs kUntangleRing (the dual mesh's rounds alone, fewer).
 int ring(const LocalBrickOptions& o) {
@@ -59,11 +67,12 @@ int ring(const LocalBrickOptions& o) {
 // How far beyond the owned samples a contact point can matter, in samples: the reach of the
 // ring of cells around the owned edges' cells (2), of a vertex's gathering or projection, and
 // of a sample to its contact point (its |value|).
-int flag_reach(const LocalBrickOptions& o, double largest) {
+int flag_reach(const LocalBrickOptions& o, double largest, const std::array<int, 3>& dims) {
   const double gather =
       std::max({o.local.reach, o.local.empty_cell_reach,
                 o.project ? std::max(o.projection.radius, o.projection.wide_radius) : 0.0});
-  return int(std::ceil(gather + largest)) + 2 + ring(o);
+  return int(std::ceil(gather + largest)) + 2 + ring(o) +
+         (thin_parts_on(o, dims) ? kThinPartReach : 0);
 }
 
 Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
@@ -85,8 +94,8 @@ Index3 shifted(const Index3& p, int by) {
 }
 
 // True if the block's samples in the global range [lo, hi) (clipped to the block) have both
-// signs.
-bool has_sign_change(const GridView& block, const Index3& lo, const Index3& hi) {
+// signs, or with `near` > 0 one closer to the surface than that (a thin part may pass there).
+bool has_surface(const GridView& block, const Index3& lo, const Index3& hi, double near) {
   Index3 a, b;
   for (std::size_t d = 0; d < 3; ++d) {
     a[d] = std::max(lo[d] - block.first[d], 0);
@@ -97,8 +106,9 @@ bool has_sign_change(const GridView& block, const Index3& lo, const Index3& hi) 
   for (int i = a[0]; i < b[0]; ++i)
     for (int j = a[1]; j < b[1]; ++j)
       for (int k = a[2]; k < b[2]; ++k) {
-        (block.value(block.index(i, j, k)) < 0 ? inside : outside) = true;
-        if (inside && outside) return true;
+        const double v = block.value(block.index(i, j, k));
+        (v < 0 ? inside : outside) = true;
+        if ((inside && outside) || std::abs(v) < near) return true;
       }
   return false;
 }
@@ -264,7 +274,7 @@ void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const I
 
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
   const double largest = largest_in_spacings(options.band, dims);
-  const int stars = flag_reach(options, largest) + int(auto_brick_halo(largest, 1.0)) +
+  const int stars = flag_reach(options, largest, dims) + int(auto_brick_halo(largest, 1.0)) +
                     int(std::ceil(2 * largest)) + 1;
   // Carving: the balls around the owned edges' vertices (within 2 cells of the owned samples).
   return std::max(stars, int(std::ceil(detail::carving_band(options, dims))) + 2 + ring(options));
@@ -281,9 +291,11 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   piece.vertices.resize(0, 3);
   piece.triangles.resize(0, 3);
   // The owned edges' polygons join the cells around them: no sign change there, no surface.
-  if (!has_sign_change(block, shifted(own_first, -1), shifted(own_end, 1))) return piece;
-  const Index3 n = block.whole_dims();
   const double h = block.spacing().maxCoeff();
+  const Index3 n = block.whole_dims();
+  const bool refine = thin_parts_on(options, n);
+  if (!has_surface(block, shifted(own_first, -1), shifted(own_end, 1), refine ? h : 0))
+    return piece;
   StepClock clock(piece.seconds);
   BandSamples band;
   try {
@@ -298,7 +310,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   }
   const double largest = largest_in_spacings(options.band, n) * h;
   // Samples whose contact points the owned part can use.
-  const int reach = flag_reach(options, largest / h);
+  const int reach = flag_reach(options, largest / h, n);
   const Eigen::Vector3d flag_lo =
       block.point(own_first[0] - reach - block.first[0], own_first[1] - reach - block.first[1],
                   own_first[2] - reach - block.first[2]);
@@ -335,17 +347,37 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   for (int q = 0; q < cp.size(); ++q)
     depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
   clock.next(1);
+  // With thin parts, the dual mesh lives on the grid at twice the resolution (thin_parts.h): its
+  // cells, edges and names, with the options' reaches in its spacings and one subdivision level
+  // fewer; the rest (carving, sides) reads the block's own samples.
+  detail::RefinedGrid refined;
+  if (refine)
+    refined =
+        detail::refine_for_thin_parts(block, cp.points, cp.normals, options.band.value_scale,
+                                      grid_truncation(band.truncation, options.band.value_scale));
+  const GridView& cells_grid = refine ? refined.view : block;
+  const int scale = refine ? 2 : 1;
+  const Index3 cells_n = cells_grid.whole_dims();
+  const Index3 cells_first{scale * own_first[0], scale * own_first[1], scale * own_first[2]};
+  const Index3 cells_end{scale * own_end[0], scale * own_end[1], scale * own_end[2]};
+  LocalReconstructionOptions local = options.local;
+  local.reach *= scale, local.empty_cell_reach *= scale, local.max_field_miss *= scale;
+  local.depth_scale *= scale, local.robust_scale *= scale;
+  local.narrow_cells = refine;
   // The owned edges and the ring around them (their vertices' normals need every triangle); the
   // block's whole dual mesh goes once they are taken.
   PointMatrix crossing_means;
   detail::KeyedTriangles near;
   {
     const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
-        block, cp.points, cp.normals, options.local, nullptr, depths);
-    piece.stats = owned_cell_stats(keyed, n, own_first, own_end);
-    near = triangles_of_edges(keyed, n, shifted(own_first, -ring(options)),
-                              shifted(own_end, ring(options)), crossing_means);
+        cells_grid, cp.points, cp.normals, local, nullptr, depths);
+    piece.stats = owned_cell_stats(keyed, cells_n, cells_first, cells_end);
+    for (const Index3& t : refined.thin_points)
+      piece.stats.thin_points += in_range(t, cells_first, cells_end);
+    near = triangles_of_edges(keyed, cells_n, shifted(cells_first, -scale * ring(options)),
+                              shifted(cells_end, scale * ring(options)), crossing_means);
   }
+  refined = detail::RefinedGrid();
   if (options.refine_zero_set) {
     // First the cells' own vertices: the subdivision's then start near the zero set, and so do
     // the positions that the untangling goes back to.
@@ -362,9 +394,10 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     near.vertices = std::move(dual.vertices);
   }
   clock.next(2);
-  const int levels = options.subdivisions >= 0
-                         ? options.subdivisions
-                         : auto_subdivisions(*std::max_element(n.begin(), n.end()));
+  const int levels = std::max(
+      0, (options.subdivisions >= 0 ? options.subdivisions
+                                    : auto_subdivisions(*std::max_element(n.begin(), n.end()))) -
+             (scale - 1));
   detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
   PointMatrix reconstructed = sub.mesh.vertices;
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
@@ -419,7 +452,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     }
   }
   clock.next(5);
-  take_owned_part(sub, n, own_first, own_end, piece);
+  take_owned_part(sub, cells_n, cells_first, cells_end, piece);
   return piece;
 }
 

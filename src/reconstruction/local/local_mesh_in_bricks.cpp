@@ -225,6 +225,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
       s.split_cells += p.stats.split_cells, s.crossing_cells += p.stats.crossing_cells;
       s.feature_vertices += p.stats.feature_vertices, s.clamped += p.stats.clamped;
       s.field_misses += p.stats.field_misses;
+      s.thin_points += p.stats.thin_points;
       for (std::size_t k = 0; k < p.seconds.size(); ++k) stats->seconds[k] += p.seconds[k];
     }
   }

@@ -215,6 +215,9 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
           if (!w.clamped) v = w;
         }
       }
+      // (A narrow cell's smooth patch whose plane misses it: narrow_cells.)
+      if (options.narrow_cells && v.clamped && !v.feature && !v.from_crossings)
+        v = place_vertex({}, crossings, lo, hi, h, options);
       const Eigen::Index id = cell.first_vertex + q;
       vertices.row(id) = v.position.transpose();
       flags[std::size_t(id)] = {char(v.from_crossings), char(v.feature ? 1 + v.corner : 0),

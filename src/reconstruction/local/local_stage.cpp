@@ -48,6 +48,7 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.local = options.local;
   lb.subdivisions = options.subdivisions;
   lb.split_sag = options.split_sag;
+  lb.thin_parts = options.thin_parts == Switch::On ? 1 : options.thin_parts == Switch::Off ? 0 : -1;
   lb.project = options.project != Switch::Off;
   lb.projection = options.local_projection;
   lb.carve = options.carve != Switch::Off;

@@ -1,0 +1,212 @@
+// The grid at twice the resolution with the thin parts' signs (thin_parts.h).
+#include "reconstruction/local/thin_parts.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "sdfcontour/reconstruction/zero_set_refinement.h"
+
+namespace sdfcontour::detail {
+
+namespace {
+
+// The contact points sorted by the block's cell that holds them (cells one beyond the block's
+// sides hold the points beyond them).
+class PointCells {
+ public:
+  PointCells(const GridView& block, const PointMatrix& points) : block_(block) {
+    origin_ = block.point(0, 0, 0);
+    spacing_ = block.spacing();
+    keyed_.reserve(std::size_t(points.rows()));
+    for (Eigen::Index r = 0; r < points.rows(); ++r) {
+      const auto c = cell_of(points.row(r).transpose());
+      keyed_.push_back({key(c), int(r)});
+    }
+    std::sort(keyed_.begin(), keyed_.end());
+  }
+
+  // Calls f(row) for every point in the cells within one of x's cell.
+  template <class F>
+  void for_each_near(const Eigen::Vector3d& x, F&& f) const {
+    const auto c = cell_of(x);
+    for (int di = -1; di <= 1; ++di)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int dk = -1; dk <= 1; ++dk) {
+          const std::array<int, 3> n{c[0] + di, c[1] + dj, c[2] + dk};
+          bool inside = true;
+          for (int a = 0; a < 3; ++a) inside = inside && n[a] >= -1 && n[a] <= block_.dims[a];
+          if (!inside) continue;
+          const std::int64_t k = key(n);
+          auto it =
+              std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<std::int64_t, int>{k, -1});
+          for (; it != keyed_.end() && it->first == k; ++it) f(it->second);
+        }
+  }
+
+ private:
+  std::array<int, 3> cell_of(const Eigen::Vector3d& p) const {
+    std::array<int, 3> c;
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::clamp(int(std::floor((p[a] - origin_[a]) / spacing_[a])), -1, block_.dims[a]);
+    return c;
+  }
+  std::int64_t key(const std::array<int, 3>& c) const {
+    return (std::int64_t(c[0] + 1) * (block_.dims[1] + 2) + (c[1] + 1)) * (block_.dims[2] + 2) +
+           (c[2] + 1);
+  }
+
+  const GridView& block_;
+  Eigen::Vector3d origin_, spacing_;
+  std::vector<std::pair<std::int64_t, int>> keyed_;
+};
+
+// The rows of the contact points within `radius` of x, nearest first (ties by position, so
+// that the rows' order does not matter).
+void points_near(const Eigen::Vector3d& x, double radius, const PointCells& cells,
+                 const PointMatrix& points, std::vector<std::pair<double, int>>& near) {
+  near.clear();
+  cells.for_each_near(x, [&](int r) {
+    const double d2 = (x - points.row(r).transpose()).squaredNorm();
+    if (d2 <= radius * radius) near.push_back({d2, r});
+  });
+  std::sort(near.begin(), near.end(), [&](const auto& a, const auto& b) {
+    if (a.first != b.first) return a.first < b.first;
+    for (int d = 0; d < 3; ++d)
+      if (points(a.second, d) != points(b.second, d))
+        return points(a.second, d) < points(b.second, d);
+    return a.second < b.second;
+  });
+}
+
+// Whether the contact points `near` x put it in a thin part of the side opposite to `side` (+1:
+// outside, -1: inside): two tangent planes with x within `slack` of the slab between them, facing
+// away from each other (side +1: a sheet of inside) or toward each other (side -1: a gap), and
+// no plane with x more than `slack` in front of it (seen from `side`).
+bool in_thin_part(const Eigen::Vector3d& x, int side,
+                  const std::vector<std::pair<double, int>>& near, const PointMatrix& points,
+                  const PointMatrix& normals, double slack) {
+  // Normals as seen from the side x is on: a part of the other side is then a slab behind two
+  // planes that face away from each other.
+  for (const auto& [d2, r] : near)
+    if (side * normals.row(r).dot(x.transpose() - points.row(r)) > slack) return false;
+  for (std::size_t a = 0; a < near.size(); ++a) {
+    const Eigen::Vector3d ca = points.row(near[a].second).transpose();
+    const Eigen::Vector3d na = side * normals.row(near[a].second).transpose();
+    for (std::size_t b = a + 1; b < near.size(); ++b) {
+      const Eigen::Vector3d nb = side * normals.row(near[b].second).transpose();
+      if (na.dot(nb) > -0.5) continue;
+      const Eigen::Vector3d cb = points.row(near[b].second).transpose();
+      // Each point behind the other's plane: the slab between them is the other side's.
+      if (na.dot(cb - ca) <= 0 && nb.dot(ca - cb) <= 0) return true;
+    }
+  }
+  return false;
+}
+
+// Whether the block's point `at` lies on a side of its whole grid.
+bool on_side(const GridView& block, const std::array<int, 3>& at) {
+  const std::array<int, 3> whole = block.whole_dims();
+  for (int a = 0; a < 3; ++a)
+    if (block.first[a] + at[a] == 0 || block.first[a] + at[a] == whole[a] - 1) return true;
+  return false;
+}
+
+}  // namespace
+
+RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& points,
+                                  const PointMatrix& normals, double value_scale,
+                                  double truncation) {
+  RefinedGrid out;
+  GridView& fine = out.view;
+  static_cast<GridGeometry&>(fine) = block;
+  const std::array<int, 3> whole = block.whole_dims();
+  for (int a = 0; a < 3; ++a) {
+    fine.dims[a] = 2 * block.dims[a] - 1;
+    fine.first[a] = 2 * block.first[a];
+    fine.whole[a] = block.whole[0] > 0 ? 2 * whole[a] - 1 : 0;
+  }
+  out.values.assign(fine.size(), 0.0);
+  fine.data = out.values.data();
+  fine.type = ScalarType::Float64;
+  fine.drop_pages = nullptr;
+  const double h = block.spacing().maxCoeff();
+  const PointCells cells(block, points);
+  std::vector<std::vector<std::array<int, 3>>> thin(std::size_t(fine.dims[0]));
+  tbb::parallel_for(0, fine.dims[0], [&](int I) {
+    std::vector<std::pair<double, int>> near;
+    for (int J = 0; J < fine.dims[1]; ++J)
+      for (int K = 0; K < fine.dims[2]; ++K) {
+        const std::array<int, 3> at{I, J, K};
+        // The samples x lies between: both neighbours on each axis where its index is odd.
+        std::array<std::array<int, 3>, 8> parents;
+        std::array<double, 8> values;
+        double sum = 0, nearest = INFINITY;
+        int count = 0;
+        for (int c = 0; c < 8; ++c) {
+          std::array<int, 3> p;
+          bool skip = false;
+          for (int a = 0; a < 3; ++a) {
+            const bool odd = at[a] & 1;
+            if (!odd && (c >> a & 1)) skip = true;
+            p[a] = at[a] / 2 + (odd && (c >> a & 1) ? 1 : 0);
+          }
+          if (skip) continue;
+          const double v = block.value(block.index(p[0], p[1], p[2]));
+          sum += v;
+          nearest = std::min(nearest, std::abs(v) * value_scale);
+          parents[std::size_t(count)] = p;
+          values[std::size_t(count++)] = v;
+        }
+        double value = sum / count;
+        // Between samples near the surface: the interpolant there, and a thin part may pass
+        // between them.
+        if (count > 1 && nearest < h) {
+          const Eigen::Vector3d x = fine.point(I, J, K);
+          points_near(x, h, cells, points, near);
+          // The tricubic interpolant is closer to a distance's zero set than the mean, where
+          // its stencil lies in the block and holds no truncated value; where the two disagree
+          // on the side (a surface within a hair of x, or a kink of the field in the stencil: a
+          // box's edge), the nearest contact point's tangent plane decides.
+          double cubic;
+          Eigen::Vector3d gradient;
+          if (tricubic_value(block, x, truncation, cubic, gradient)) {
+            if ((cubic < 0) == (value < 0) || near.empty())
+              value = cubic;
+            else
+              value = normals.row(near[0].second).dot(x.transpose() - points.row(near[0].second)) /
+                      value_scale;
+          }
+          // A point in a sample's ball (radius |value|, which holds no surface) is on its side:
+          // an interpolant can miss that where the surface passes within a hair of x (next to
+          // a box's edge, where the field is not smooth), and the narrow cells' vertices then
+          // lie off their cells.
+          double certain = 0;
+          for (int c = 0; c < count; ++c) {
+            const double v = values[std::size_t(c)];
+            const auto& p = parents[std::size_t(c)];
+            const double margin =
+                std::abs(v) - (x - block.point(p[0], p[1], p[2])).norm() / value_scale;
+            if (margin > std::abs(certain)) certain = v < 0 ? -margin : margin;
+          }
+          if (certain != 0 && (certain < 0) != (value < 0)) value = certain;
+          const int side = value < 0 ? -1 : 1;
+          // (Not on the grid's sides: a part marked there would leave the mesh open.)
+          if (!on_side(fine, at) && in_thin_part(x, side, near, points, normals, h / 4)) {
+            value = -side * h / 8 / value_scale;
+            thin[std::size_t(I)].push_back(
+                {fine.first[0] + I, fine.first[1] + J, fine.first[2] + K});
+          }
+        }
+        out.values[fine.index(I, J, K)] = value;
+      }
+  });
+  for (const auto& t : thin) out.thin_points.insert(out.thin_points.end(), t.begin(), t.end());
+  return out;
+}
+
+}  // namespace sdfcontour::detail

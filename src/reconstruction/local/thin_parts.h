@@ -1,0 +1,50 @@
+// Internal: a grid of twice the resolution whose signs also show the parts thinner than a
+// spacing that the samples straddle without a sign change (a wing, a blade), read from the
+// contact points on their two sides, so that the local reconstruction's topology includes them.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+#include "sdfcontour/input/samples.h"
+
+namespace sdfcontour::detail {
+
+/// A block at twice the resolution (2 n - 1 samples per axis over the same bounds), owning its
+/// values. Not copyable: `view` points into `values`.
+struct RefinedGrid {
+  std::vector<double> values;
+  GridView view;
+  /// The points between the samples whose side the contact points decided: their global
+  /// (i, j, k) on the finer grid, ascending.
+  std::vector<std::array<int, 3>> thin_points;
+
+  RefinedGrid() = default;
+  RefinedGrid(const RefinedGrid&) = delete;
+  RefinedGrid& operator=(const RefinedGrid&) = delete;
+  RefinedGrid(RefinedGrid&&) = default;
+  RefinedGrid& operator=(RefinedGrid&&) = default;
+};
+
+/// `block` (a grid or a block of one, GridGeometry::first and ::whole naming where it lies) at
+/// twice its resolution: the block's samples keep their values, a point between them takes the
+/// mean of the samples it lies between (the trilinear interpolant there; within a spacing of the
+/// surface the tricubic one, tricubic_value, where its stencil holds no value at or beyond
+/// `truncation` in size: closer to a distance's zero set, so that the narrower cells' signs
+/// agree with the contact points), except where the
+/// contact points say that a thin part passes between those samples: all of them on one side,
+/// and x within a quarter spacing of the slab between two contact points' tangent planes that
+/// face away from each other (a sheet of the other side; toward each other: a thin gap) with no
+/// contact point within a spacing putting x farther than that on its samples' side. Such a
+/// point gets the other sign (value -+ h / 8: a topology marker, as its vertices come from the
+/// contact points). The quarter spacing makes a sheet of any thickness hold a point.
+///
+/// points, normals: k x 3 contact points and unit outward normals (those within a spacing and a
+/// half of the block's points decide them; the same result in any block that holds them).
+/// value_scale: the values times it are distances (BandOptions::value_scale).
+RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& points,
+                                  const PointMatrix& normals, double value_scale,
+                                  double truncation);
+
+}  // namespace sdfcontour::detail
