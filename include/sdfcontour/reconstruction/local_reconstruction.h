@@ -54,9 +54,7 @@ struct LocalReconstructionOptions {
   /// often leave a smooth patch's quadric minimum outside its cell: it then slides along its
   /// plane into the cell, and where the plane misses the cell, the cell takes its edge crossings
   /// (bunny at 64^3 on that grid: a quarter of the vertices clamped, 11x the crossing triangles
-  /// after the projection); and a corner that the samples around it share (exact, as a box's)
-  /// stays where they put it within a quarter cell beyond its cell, whose signs an interpolant
-  /// gave. Else (a cell a spacing wide) both are clamped into the cell.
+  /// after the projection). Else (a cell a spacing wide) it is clamped into the cell.
   bool narrow_cells = false;
 };
 

@@ -19,10 +19,6 @@ namespace {
 // (0.379x and 0.365x MC's).
 constexpr double kCellMargin = 1e-3;
 
-// How far beyond a narrow cell a shared corner may lie, as a fraction of the cell. (Letting an
-// edge's vertex out by as much made wingnut and hammer 10-19% worse at 32^3 and 64^3.)
-constexpr double kNarrowCornerSlack = 0.25;
-
 // Points this many spacings apart are one point (a corner's contact points, from any side).
 constexpr double kSamePoint = 1e-9;
 
@@ -89,16 +85,6 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
   const bool in_cell = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
   if (in_cell) out.fitted = x;
   out.position = in_cell && !out.clamped ? x : s.position.cwiseMax(inner_lo).cwiseMin(inner_hi);
-  // A narrow cell (narrow_cells) whose signs come from an interpolant, which a surface within a
-  // hair of a point can fool: a corner that samples around it share lies where they say, within
-  // kNarrowCornerSlack of the cell (the built-in box at 24^3: its corners 0.025 h off without).
-  const Eigen::Vector3d slack = kNarrowCornerSlack * (hi - lo);
-  if (options.narrow_cells && out.clamped && out.corner &&
-      (s.position.array() >= (lo - slack).array()).all() &&
-      (s.position.array() <= (hi + slack).array()).all()) {
-    out.position = s.position;
-    out.clamped = false;
-  }
   // A narrow cell's smooth patch (narrow_cells): along its plane into the cell, where it crosses.
   if (options.narrow_cells && out.clamped && in_cell && !out.feature && !out.from_crossings) {
     out.position = x;
