@@ -59,6 +59,9 @@ TEST(LocalBrick, SaggingEdgesSplitAlikeInBricksAndComeCloserToTheSurface) {
   LocalBrickOptions o;
   o.subdivisions = 1;
   o.split_sag = kTestSag;
+  // The grid's own cells and one level (on the finer grid of the thin parts, which has no level
+  // left here, the split adds 22% and brings the centroids 3% closer, measured).
+  o.thin_parts = 0;
   const Mesh whole = bricked(g, o, 0, 1);
   test::expect_closed_and_outward(whole);
   for (const auto& [brick, threads] : {std::pair{13, 2}, std::pair{20, 1}}) {

@@ -145,7 +145,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Local reconstruction on grids: find the parts thinner than a spacing that the samples
         straddle without a sign change (a wing, a blade) from the contact points on their two
         sides, on a grid of twice the resolution with one subdivision fewer ("auto": below 96
-        samples per axis; the shared meshes' L1 over marching cubes' at 64^3 0.253x -> 0.200x,
+        samples per axis; the shared meshes' L1 over marching cubes' at 64^3 0.253x -> 0.199x,
         docs/local.md). ``stats["local_thin_points"]`` counts the points put in a thin part.
         CLI ``--thin-parts``.
     zero_set : bool or "auto"

@@ -68,9 +68,10 @@ double auto_split_sag(double samples_per_axis);
 /// Whether the local reconstruction looks for parts thinner than a spacing
 /// (LocalBrickOptions::thin_parts) on a grid `samples_per_axis` across: below 96, where the grid
 /// at twice the resolution with one subdivision replaces two subdivisions (the 17 shared meshes'
-/// L1 over MC's, session 19: 64^3 0.253x -> 0.200x, 32^3 0.292x -> 0.196x; the sword's blade
-/// and the plane's wings appear). Not from 96: at 128^3 it lost the exact cube's exactness
-/// (1e-5 -> 0.43x MC's) and 6% on the smooth meshes, for 0.356x -> 0.283x without the cube.
+/// L1 over MC's, session 19: 64^3 0.253x -> 0.199x, 32^3 0.292x -> 0.216x; the sword's blade
+/// and the plane's wings appear). Not from 96: at 128^3 every shared mesh but the exact cube
+/// gained (0.356x -> 0.267x without it), but the cube lost its exactness (1e-5 -> 0.36x MC's),
+/// as an axis-aligned CAD box would where the local reconstruction is the default (docs/local.md).
 bool auto_thin_parts(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.

@@ -50,11 +50,13 @@ struct LocalReconstructionOptions {
   /// crossings. 0: no check.
   double max_field_miss = 0.5;
   /// The cells are narrower than the contact points' spacing (the grid at twice the samples'
-  /// resolution that looks for thin parts, LocalBrickOptions::thin_parts), so a few points
-  /// often leave a smooth patch's quadric minimum outside its cell: it then slides along its
-  /// plane into the cell, and where the plane misses the cell, the cell takes its edge crossings
-  /// (bunny at 64^3 on that grid: a quarter of the vertices clamped, 11x the crossing triangles
-  /// after the projection). Else (a cell a spacing wide) it is clamped into the cell.
+  /// resolution that looks for thin parts, LocalBrickOptions::thin_parts), so a smooth patch's
+  /// few points put their centroid anywhere, often outside the cell: its vertex is then the
+  /// mean of the cell's edge crossings moved onto the points' plane, or the minimum slid along
+  /// the plane into the cell, and where the plane misses the cell, the cell takes its edge
+  /// crossings (bunny at 64^3 on that grid, clamped instead: a quarter of the vertices, and 11x
+  /// the crossing triangles after the projection). Else (a cell a spacing wide) the vertex
+  /// stays at the minimum, clamped into the cell.
   bool narrow_cells = false;
 };
 

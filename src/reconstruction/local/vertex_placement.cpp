@@ -85,10 +85,25 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
   const bool in_cell = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
   if (in_cell) out.fitted = x;
   out.position = in_cell && !out.clamped ? x : s.position.cwiseMax(inner_lo).cwiseMin(inner_hi);
-  // A narrow cell's smooth patch (narrow_cells): along its plane into the cell, where it crosses.
-  if (options.narrow_cells && out.clamped && in_cell && !out.feature && !out.from_crossings) {
-    out.position = x;
-    out.clamped = false;
+  if (options.narrow_cells && s.rank == 1 && !out.from_crossings) {
+    // A narrow cell's smooth patch (narrow_cells): its few points' centroid is no place in the
+    // cell, so the mean of its edge crossings goes onto their plane (dual contouring's mass
+    // point; the analytic sphere at 64^3: L1 0.000213 h -> 0.000157 h), else the minimum slides
+    // along the plane into the cell, where the plane crosses it.
+    Eigen::Vector3d onto = Eigen::Vector3d::Constant(NAN);
+    if (!crossings.empty()) {
+      Eigen::Vector3d mass = Eigen::Vector3d::Zero();
+      for (const TangentPlane& c : crossings) mass += c.point;
+      mass /= double(crossings.size());
+      onto = mass + (Eigen::Matrix3d::Identity() - s.free) * (s.position - mass);
+    }
+    if ((onto.array() >= lo.array()).all() && (onto.array() <= hi.array()).all()) {
+      out.position = onto.cwiseMax(inner_lo).cwiseMin(inner_hi);
+      out.clamped = false;
+    } else if (out.clamped && in_cell) {
+      out.position = x;
+      out.clamped = false;
+    }
   }
   if (out.corner && out.position != s.position) out.corner_beyond = s.position;
   out.corner = out.corner && out.position == s.position;
