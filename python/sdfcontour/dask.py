@@ -336,7 +336,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
     band, subdivisions, projection, split_sag, thin_parts
-        GCP: as in :func:`sdfcontour.contour`.
+        GCP: as in :func:`sdfcontour.contour` (thin_parts "auto": off for a callable).
     zero_set : bool or "auto"
         GCP: True moves the vertices onto each brick's tricubic zero set, uncarved: for values
         that are no exact distances (a neural SDF's grid), which :func:`sdfcontour.contour` finds
@@ -378,6 +378,8 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         options["projection"] = _switch("projection", projection)
         options["zero_set"] = _switch("zero_set", zero_set)
         options["thin_parts"] = _switch("thin_parts", thin_parts)
+        if options["thin_parts"] == "auto" and callable(source):
+            options["thin_parts"] = "off"  # (as contour(): a callable may be no distance)
     brick = _checks.whole_in("brick", brick, 1, 2**20)
     batch_size = _checks.whole_in("batch_size", batch_size, 1, 2**26)
     progress = _checks.flag("progress", progress)

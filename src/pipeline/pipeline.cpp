@@ -339,6 +339,8 @@ bool choose_for_approximate_distances(const GridMeasures& measured, ContourOptio
     options.reconstruction = Reconstruction::Local;
   if (options.carve == Switch::Auto) options.carve = Switch::Off;
   if (options.zero_set == Switch::Auto) options.zero_set = Switch::On;
+  // (Its contact points make false thin parts where the values are no distances.)
+  if (options.thin_parts == Switch::Auto) options.thin_parts = Switch::Off;
   if (options.progress) {
     std::ostringstream message;
     message << std::setprecision(2) << "the values are no exact distances (their slope is off 1 by "

@@ -517,8 +517,9 @@ def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
         warnings.simplefilter("ignore", sdfcontour.RescaleWarning)
         V, F, stats = sdfcontour.contour(f, resolution=n, refine=False, brick_size=brick,
                                          lipschitz=scale, return_stats=True)
+        # (thin_parts: a callable's "auto" is off, an array's on below 96 samples per axis.)
         V2, F2, stats2 = sdfcontour.contour(f(P).reshape(n, n, n), reconstruction="local",
-                                            brick_size=brick, return_stats=True)
+                                            brick_size=brick, thin_parts=False, return_stats=True)
     from sdfcontour.dask import canonical_mesh
     (Vc, Fc), (Vc2, Fc2) = canonical_mesh(V, F), canonical_mesh(V2, F2)
     assert np.array_equal(Vc, Vc2) and np.array_equal(Fc, Fc2)
@@ -572,7 +573,8 @@ def test_callable_local_mesh_with_adaptivity_is_the_full_grids():
     # Adaptivity merges the joined mesh of the callable's bricks over their own contact points,
     # in the core's order: the full grid's merged mesh, bit for bit, for any bricks.
     grid = full_grid(torus, 48)
-    Vg, Fg, sg = sdfcontour.contour(grid, reconstruction="local", adaptivity=0.1,
+    # (thin_parts: a callable's "auto" is off, an array's on below 96 samples per axis.)
+    Vg, Fg, sg = sdfcontour.contour(grid, reconstruction="local", adaptivity=0.1, thin_parts=False,
                                     return_stats=True)
     from sdfcontour.dask import canonical_mesh
     for brick in ("auto", 24):
