@@ -93,6 +93,19 @@ Index3 shifted(const Index3& p, int by) {
   return {p[0] + by, p[1] + by, p[2] + by};
 }
 
+Index3 times(const Index3& p, int factor) {
+  return {p[0] * factor, p[1] * factor, p[2] * factor};
+}
+
+// The reconstruction's options on a grid `scale` times finer: its lengths in that grid's
+// spacings, and (scale > 1) its narrow cells.
+LocalReconstructionOptions on_finer_grid(LocalReconstructionOptions o, int scale) {
+  o.reach *= scale, o.empty_cell_reach *= scale, o.max_field_miss *= scale;
+  o.depth_scale *= scale, o.robust_scale *= scale;
+  o.narrow_cells = scale > 1;
+  return o;
+}
+
 // True if the block's samples in the global range [lo, hi) (clipped to the block) have both
 // signs, or with `near` > 0 one closer to the surface than that (a thin part may pass there).
 bool has_surface(const GridView& block, const Index3& lo, const Index3& hi, double near) {
@@ -358,12 +371,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   const GridView& cells_grid = refine ? refined.view : block;
   const int scale = refine ? 2 : 1;
   const Index3 cells_n = cells_grid.whole_dims();
-  const Index3 cells_first{scale * own_first[0], scale * own_first[1], scale * own_first[2]};
-  const Index3 cells_end{scale * own_end[0], scale * own_end[1], scale * own_end[2]};
-  LocalReconstructionOptions local = options.local;
-  local.reach *= scale, local.empty_cell_reach *= scale, local.max_field_miss *= scale;
-  local.depth_scale *= scale, local.robust_scale *= scale;
-  local.narrow_cells = refine;
+  const Index3 cells_first = times(own_first, scale), cells_end = times(own_end, scale);
+  const LocalReconstructionOptions local = on_finer_grid(options.local, scale);
   // The owned edges and the ring around them (their vertices' normals need every triangle); the
   // block's whole dual mesh goes once they are taken.
   PointMatrix crossing_means;
