@@ -28,17 +28,18 @@ struct RefinedGrid {
 };
 
 /// `block` (a grid or a block of one, GridGeometry::first and ::whole naming where it lies) at
-/// twice its resolution: the block's samples keep their values, a point between them takes the
-/// mean of the samples it lies between (the trilinear interpolant there; within a spacing of the
-/// surface the tricubic one, tricubic_value, where its stencil holds no value at or beyond
-/// `truncation` in size: closer to a distance's zero set, so that the narrower cells' signs
-/// agree with the contact points), except where the
-/// contact points say that a thin part passes between those samples: all of them on one side,
-/// and x within a quarter spacing of the slab between two contact points' tangent planes that
-/// face away from each other (a sheet of the other side; toward each other: a thin gap) with no
-/// contact point within a spacing putting x farther than that on its samples' side. Such a
-/// point gets the other sign (value -+ h / 8: a topology marker, as its vertices come from the
-/// contact points). The quarter spacing makes a sheet of any thickness hold a point.
+/// twice its resolution. The block's samples keep their values; a point x between them takes
+///  1. the mean of the samples it lies between (the trilinear interpolant there); within a
+///     spacing of the surface the tricubic one (tricubic_value, where its stencil holds no value
+///     at or beyond `truncation` in size), closer to a distance's zero set, and where the two
+///     disagree on the side, the signed distance to the nearest contact point's tangent plane;
+///  2. the side of a sample's ball (radius |value|, which holds no surface) that holds x;
+///  3. the other side where the contact points within a spacing say that a thin part passes:
+///     x within a quarter spacing of the slab between two tangent planes that face away from
+///     each other (a sheet of the other side; toward each other: a thin gap), each point behind
+///     the other's plane, and no plane with x farther than that in front of it. Such a point
+///     gets -+h / 8 (a topology marker: its vertices come from the contact points); the quarter
+///     spacing makes a sheet of any thickness hold a point. Not on the whole grid's sides.
 ///
 /// points, normals: k x 3 contact points and unit outward normals (those within a spacing and a
 /// half of the block's points decide them; the same result in any block that holds them).
