@@ -6,71 +6,23 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdint>
+#include <optional>
 #include <utility>
 
+#include "reconstruction/point_cubes.h"
 #include "sdfcontour/reconstruction/zero_set_refinement.h"
 
 namespace sdfcontour::detail {
 
 namespace {
 
-// The contact points sorted by the block's cell that holds them (cells one beyond the block's
-// sides hold the points beyond them).
-class PointCells {
- public:
-  PointCells(const GridView& block, const PointMatrix& points) : block_(block) {
-    origin_ = block.point(0, 0, 0);
-    spacing_ = block.spacing();
-    keyed_.reserve(std::size_t(points.rows()));
-    for (Eigen::Index r = 0; r < points.rows(); ++r) {
-      const auto c = cell_of(points.row(r).transpose());
-      keyed_.push_back({key(c), int(r)});
-    }
-    std::sort(keyed_.begin(), keyed_.end());
-  }
-
-  // Calls f(row) for every point in the cells within one of x's cell.
-  template <class F>
-  void for_each_near(const Eigen::Vector3d& x, F&& f) const {
-    const auto c = cell_of(x);
-    for (int di = -1; di <= 1; ++di)
-      for (int dj = -1; dj <= 1; ++dj)
-        for (int dk = -1; dk <= 1; ++dk) {
-          const std::array<int, 3> n{c[0] + di, c[1] + dj, c[2] + dk};
-          bool inside = true;
-          for (int a = 0; a < 3; ++a) inside = inside && n[a] >= -1 && n[a] <= block_.dims[a];
-          if (!inside) continue;
-          const std::int64_t k = key(n);
-          auto it =
-              std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<std::int64_t, int>{k, -1});
-          for (; it != keyed_.end() && it->first == k; ++it) f(it->second);
-        }
-  }
-
- private:
-  std::array<int, 3> cell_of(const Eigen::Vector3d& p) const {
-    std::array<int, 3> c;
-    for (int a = 0; a < 3; ++a)
-      c[a] = std::clamp(int(std::floor((p[a] - origin_[a]) / spacing_[a])), -1, block_.dims[a]);
-    return c;
-  }
-  std::int64_t key(const std::array<int, 3>& c) const {
-    return (std::int64_t(c[0] + 1) * (block_.dims[1] + 2) + (c[1] + 1)) * (block_.dims[2] + 2) +
-           (c[2] + 1);
-  }
-
-  const GridView& block_;
-  Eigen::Vector3d origin_, spacing_;
-  std::vector<std::pair<std::int64_t, int>> keyed_;
-};
-
 // The rows of the contact points within `radius` of x, nearest first (ties by position, so
 // that the rows' order does not matter).
-void points_near(const Eigen::Vector3d& x, double radius, const PointCells& cells,
+void points_near(const Eigen::Vector3d& x, double radius, const PointCubes* cubes,
                  const PointMatrix& points, std::vector<std::pair<double, int>>& near) {
   near.clear();
-  cells.for_each_near(x, [&](int r) {
+  if (!cubes) return;
+  cubes->for_each_near(x, [&](int r) {
     const double d2 = (x - points.row(r).transpose()).squaredNorm();
     if (d2 <= radius * radius) near.push_back({d2, r});
   });
@@ -135,7 +87,9 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
   fine.type = ScalarType::Float64;
   fine.drop_pages = nullptr;
   const double h = block.spacing().maxCoeff();
-  const PointCells cells(block, points);
+  // (Cubes a spacing wide: the points within a spacing of x lie in the 27 around it.)
+  const std::optional<PointCubes> cubes =
+      points.rows() > 0 ? std::optional<PointCubes>(std::in_place, points, h) : std::nullopt;
   std::vector<std::vector<std::array<int, 3>>> thin(std::size_t(fine.dims[0]));
   tbb::parallel_for(0, fine.dims[0], [&](int I) {
     std::vector<std::pair<double, int>> near;
@@ -167,7 +121,7 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
         // between them.
         if (count > 1 && nearest < h) {
           const Eigen::Vector3d x = fine.point(I, J, K);
-          points_near(x, h, cells, points, near);
+          points_near(x, h, cubes ? &*cubes : nullptr, points, near);
           // The tricubic interpolant is closer to a distance's zero set than the mean, where
           // its stencil lies in the block and holds no truncated value; where the two disagree
           // on the side (a surface within a hair of x, or a kink of the field in the stencil: a
