@@ -307,7 +307,10 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   const double h = block.spacing().maxCoeff();
   const Index3 n = block.whole_dims();
   const bool refine = thin_parts_on(options, n);
-  if (!has_surface(block, shifted(own_first, -1), shifted(own_end, 1), refine ? h : 0))
+  // (With thin parts, a sample within a spacing of the surface, as refine_for_thin_parts reads
+  // it: the values times value_scale are distances.)
+  if (!has_surface(block, shifted(own_first, -1), shifted(own_end, 1),
+                   refine ? h / options.band.value_scale : 0))
     return piece;
   StepClock clock(piece.seconds);
   BandSamples band;
