@@ -61,18 +61,25 @@ TEST(Approximate, ScaledDistancesAreRescaled) {
 }
 
 TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
-  // Values clamped at one spacing: GCP cannot keep contact points.
+  // Values clamped at one spacing: no sample is left in the band for a contact point.
   const Grid g =
       transformed("sphere", 40, [](double v, double h, double) { return std::clamp(v, -h, h); });
-  const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+  ContourOptions poisson = gcp_options();
+  poisson.reconstruction = Reconstruction::Poisson;
+  const ContourResult r = contour(grid_input(g), nullptr, poisson);
   EXPECT_FALSE(r.fallback.empty());
   EXPECT_FALSE(r.smoothed);
   const Mesh mc = marching_cubes(g);
   EXPECT_TRUE(r.mesh->vertices == mc.vertices);
   EXPECT_TRUE(r.mesh->triangles == mc.triangles);
-  ContourOptions strict = gcp_options();
+  ContourOptions strict = poisson;
   strict.fallback_to_mc = false;
   EXPECT_THROW(contour(grid_input(g), nullptr, strict), Error);
+  // The local reconstruction (the default on grids) has no contact point either: the same.
+  const ContourResult local = contour(grid_input(g), nullptr, gcp_options());
+  EXPECT_NE(local.fallback.find("no contact point"), std::string::npos) << local.fallback;
+  EXPECT_TRUE(local.mesh->vertices == mc.vertices);
+  EXPECT_TRUE(local.mesh->triangles == mc.triangles);
 }
 
 TEST(Approximate, ThinPartsWhoseRescalingFailsKeepGcpOnTheValuesAsGiven) {
@@ -145,6 +152,7 @@ TEST(Approximate, MeshesOffTheZeroSetFallBack) {
   // cubes.
   ContourOptions as_distances = gcp_options();
   as_distances.detect_approximate = false;
+  as_distances.reconstruction = Reconstruction::Poisson;  // (its whole-mesh check)
   const ContourResult r1 = contour(grid_input(g), nullptr, as_distances);
   EXPECT_NE(r1.fallback.find("off the field's zero set"), std::string::npos) << r1.fallback;
   EXPECT_EQ(connected_components(*r1.mesh), 1);

@@ -186,11 +186,17 @@ with tempfile.TemporaryDirectory() as d:
     check("gcp stage seconds sum to the total", r.returncode == 0 and
           abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
 
-    # The side repair runs with carving's triangle rounds (below 128 samples per axis) and reports
-    # in --stats; --no-side-repair skips it.
+    # The Poisson path's side repair runs with carving's triangle rounds (below 128 samples per
+    # axis) and reports in --stats; --no-side-repair skips it.
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_p.ply"), "--stats", p("gcp_p.json"), "-q",
+            "--reconstruction", "poisson")
+    s = json.load(open(p("gcp_p.json")))
+    check("poisson stage seconds sum to the total", r.returncode == 0 and
+          abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
     check("side repair in stats", "side_repair" in s and s["side_repair"]["left"] <= s["side_repair"]["wrong_side"],
           s.get("side_repair"))
-    r = run("contour", "builtin:torus@24", "-o", p("gcp_n.ply"), "--stats", p("gcp_n.json"), "-q", "--no-side-repair")
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_n.ply"), "--stats", p("gcp_n.json"), "-q", "--no-side-repair",
+            "--reconstruction", "poisson")
     s = json.load(open(p("gcp_n.json")))
     check("--no-side-repair", r.returncode == 0 and "side_repair" not in s, r.stderr)
 

@@ -93,7 +93,8 @@ with tempfile.TemporaryDirectory() as d:
                                    "--full-depth", "10"], "--full-depth")
     memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     if 48 * 6 * 4**14 > memory / 2:  # the estimate refuses depth 14 on machines under ~150 GB
-        expect_error("depth 14, estimated", ["contour", "builtin:sphere@12", "-o", p("b.ply"), "--depth", "14"],
+        expect_error("depth 14, estimated", ["contour", "builtin:sphere@12", "-o", p("b.ply"), "--depth", "14",
+                                             "--reconstruction", "poisson"],
                      "million triangles", [p("b.ply")])
 
     # 9. CLI11's errors: one line in the project's format, exit 1.

@@ -72,6 +72,7 @@ TEST(Clipping, GcpOnAGridThatCutsTheSurface) {
   const double h = grid.spacing().maxCoeff();
   ContourOptions options;
   options.method = Method::Gcp;
+  options.reconstruction = Reconstruction::Poisson;  // (the local mesh stops at the grid's sides)
   const ContourResult r = contour(grid_input(grid), nullptr, options);
   ASSERT_TRUE(r.fallback.empty()) << r.fallback;
   EXPECT_TRUE(r.clipped_to_grid);
@@ -106,7 +107,9 @@ TEST(Clipping, GcpOnAPlaneThroughTheGrid) {
         grid.values[Eigen::Index(grid.index(i, j, k))] = n.dot(p) - 0.1;
       }
   const double h = grid.spacing().maxCoeff();
-  const ContourResult r = contour(grid_input(grid), nullptr, ContourOptions{});
+  ContourOptions poisson;  // (the local mesh stops at the grid's sides)
+  poisson.reconstruction = Reconstruction::Poisson;
+  const ContourResult r = contour(grid_input(grid), nullptr, poisson);
   ASSERT_TRUE(r.fallback.empty()) << r.fallback;
   EXPECT_TRUE(r.clipped_to_grid);
   ASSERT_TRUE(r.mesh);
@@ -118,4 +121,14 @@ TEST(Clipping, GcpOnAPlaneThroughTheGrid) {
   // It spans the grid: its area is the plane's inside the box, to a few percent (the cut's
   // edges follow the box's sides exactly).
   EXPECT_GT(surface_area(*r.mesh), 4.0 * 0.9 / n.z());
+  // The local mesh (the default on grids) lies on the plane too, up to the grid's sides.
+  const ContourResult local = contour(grid_input(grid), nullptr, ContourOptions{});
+  ASSERT_TRUE(local.fallback.empty()) << local.fallback;
+  EXPECT_EQ(local.reconstruction, Reconstruction::Local);
+  EXPECT_EQ(connected_components(*local.mesh), 1);
+  double local_worst = 0;
+  for (Eigen::Index v = 0; v < local.mesh->vertices.rows(); ++v)
+    local_worst =
+        std::max(local_worst, std::abs(n.dot(local.mesh->vertices.row(v).transpose()) - 0.1));
+  EXPECT_LT(local_worst, 1e-3 * h);
 }

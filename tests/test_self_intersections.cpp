@@ -169,15 +169,17 @@ TEST(SelfIntersections, RevertOnlyTheCrossingMoves) {
   EXPECT_THROW(revert_self_intersections(mesh, clean.vertices.topRows(3)), Error);
 }
 
-// GCP's meshes of the shared meshes with the most crossings before they were undone (plane and
-// wingnut at 32^3: 138 and 122 pairs, from the projection's and carving's moves) have none by
-// CGAL's test,.
+// GCP's Poisson meshes of the shared meshes with the most crossings before they were undone
+// (plane and wingnut at 32^3: 138 and 122 pairs, from the projection's and carving's moves) have
+// none by CGAL's test, and neither have the local meshes (the default on grids).
 TEST(SelfIntersections, GcpMeshesOfThinShapesDoNotCrossThemselves) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   for (const char* name : {"plane", "wingnut"}) {
     SCOPED_TRACE(name);
     const Grid grid = test::shared_mesh_grid(name, 32);
-    const ContourResult r = contour(grid_input(grid), nullptr, ContourOptions{});
+    ContourOptions poisson;
+    poisson.reconstruction = Reconstruction::Poisson;
+    const ContourResult r = contour(grid_input(grid), nullptr, poisson);
     ASSERT_TRUE(r.fallback.empty()) << r.fallback;
     ASSERT_TRUE(r.untangling.has_value());
     std::cout << name << ": " << r.untangling->intersections_found << " crossing pairs, "
@@ -185,5 +187,9 @@ TEST(SelfIntersections, GcpMeshesOfThinShapesDoNotCrossThemselves) {
     EXPECT_GT(r.untangling->intersections_found, 10);
     EXPECT_EQ(r.untangling->intersections_left, 0);
     EXPECT_TRUE(cgal_pairs(*r.mesh).empty());
+    const ContourResult local = contour(grid_input(grid), nullptr, ContourOptions{});
+    ASSERT_TRUE(local.fallback.empty()) << local.fallback;
+    EXPECT_EQ(local.reconstruction, Reconstruction::Local);
+    EXPECT_TRUE(cgal_pairs(*local.mesh).empty());
   }
 }

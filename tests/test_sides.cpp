@@ -62,6 +62,7 @@ TEST(Sides, SamplesStayOnTheirSide) {
     // The constraints alone: carving moves the mesh afterwards, which flips a few samples
     // within ~0.01 h of the surface either way (docs/carving.md).
     ContourOptions with, without;
+    with.reconstruction = without.reconstruction = Reconstruction::Poisson;
     with.carve = without.carve = Switch::Off;
     without.enforce_signs = Switch::Off;
     const ContourResult held = contour(grid_input(grid), nullptr, with);
@@ -80,14 +81,16 @@ TEST(Sides, SamplesStayOnTheirSide) {
   });
 }
 
-// With everything on (the sign constraints, then carving's vertex and triangle rounds), no sample
-// of bunny's or koala's grid at 32^3 or 64^3 within 3 spacings of the surface ends on the wrong
-// side of GCP's mesh (MC never puts one there; checking every sample took 71 s and found none
-// either); without the triangle rounds, 0-12 do.
+// The Poisson path with everything on (the sign constraints, then carving's vertex and triangle
+// rounds): no sample of bunny's or koala's grid at 32^3 or 64^3 within 3 spacings of the surface
+// ends on the wrong side of GCP's mesh (MC never puts one there; checking every sample took 71 s
+// and found none either); without the triangle rounds, 0-12 do.
 TEST(Sides, NoSampleOnTheWrongSideOfTheCarvedMesh) {
   SDFCONTOUR_REQUIRE_PATH(kMeshes, "the shared test meshes");
   for_each_shared_grid([](const char* name, int n, const Grid& grid) {
-    const ContourResult r = contour(grid_input(grid), nullptr, ContourOptions{});
+    ContourOptions poisson;
+    poisson.reconstruction = Reconstruction::Poisson;
+    const ContourResult r = contour(grid_input(grid), nullptr, poisson);
     ASSERT_TRUE(r.fallback.empty()) << r.fallback;
     ASSERT_TRUE(r.carving.has_value());
     EXPECT_GT(r.carving->side_passes, 0);
@@ -128,9 +131,10 @@ TEST(Sides, RepairDentsTheMeshOffSamplesInThinGaps) {
   for (const int n : {32, 64}) {
     SCOPED_TRACE(n);
     const Grid grid = test::shared_mesh_grid("plane", n);
-    ContourOptions without;
+    ContourOptions with, without;  // (the Poisson path's repair)
+    with.reconstruction = without.reconstruction = Reconstruction::Poisson;
     without.side_repair = Switch::Off;
-    const ContourResult a = contour(grid_input(grid), nullptr, ContourOptions{});
+    const ContourResult a = contour(grid_input(grid), nullptr, with);
     const ContourResult b = contour(grid_input(grid), nullptr, without);
     ASSERT_TRUE(a.fallback.empty()) << a.fallback;
     ASSERT_TRUE(a.side_repair.has_value());
@@ -153,7 +157,8 @@ TEST(Sides, ConstraintsAutomaticOnlyBelow128SamplesPerAxis) {
   // A small sphere in a wide box: few samples near the surface, quick.
   const auto sphere = make_builtin_shape("sphere");
   const Bounds wide{Eigen::Vector3d::Constant(-4.0), Eigen::Vector3d::Constant(4.0)};
-  ContourOptions automatic, on;
+  ContourOptions automatic, on;  // (the Poisson path's constraints)
+  automatic.reconstruction = on.reconstruction = Reconstruction::Poisson;
   on.enforce_signs = Switch::On;
   const Grid fine = sample_grid(*sphere, 128, wide);
   const ContourResult a = contour(grid_input(fine), nullptr, automatic);

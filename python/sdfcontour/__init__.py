@@ -2,7 +2,9 @@
 
 Numpy in, numpy out. The default method is GCP ("Contouring Signed Distance Fields by
 Approximating Gradients"): contact points from the regular triangulation of the samples near the
-surface, then screened Poisson reconstruction. Marching cubes (``method="mc"``), marching
+surface, then a mesh from them: on grids a local reconstruction (a vertex per surface cell from
+the contact points near it), on scattered samples the paper's screened Poisson reconstruction
+(``reconstruction=``). Marching cubes (``method="mc"``), marching
 tetrahedra (``"mt-rt"``, ``"mt-dt"``) are there too.
 
 Conventions: a grid ``a`` of shape (nx, ny, nz) has ``a[i, j, k]`` at ``lo + (i*hx, j*hy, k*hz)``
@@ -127,13 +129,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         contact points near it; topology from the samples' signs; then subdivision, projection
         and carving vertex by vertex; brick by brick, as :func:`sdfcontour.dask.contour` runs it;
         grids and callables only), or
-        "auto": local for a callable (refined on it, 0.15x / 0.17x marching cubes' L1 on a neural
-        SDF at 64^3 / 128^3; Poisson 0.19x / 0.55x), local for grids from 256 samples per axis
-        (more accurate and faster there) and for grids whose values are no exact distances (see
-        ``zero_set``), poisson for smaller grids (whose worst vertex on mirror-symmetric analytic
-        shapes stays within marching cubes'; local is more accurate on average there too:
-        docs/local.md) and scattered samples. CLI
-        ``--reconstruction``.
+        "auto": local for grids and callables (the shared meshes' L1 over marching cubes' at
+        32^3 / 64^3: 0.22x / 0.20x, Poisson's 0.31x / 0.34x; a callable refined on it, 0.15x /
+        0.17x on a neural SDF at 64^3 / 128^3, Poisson 0.19x / 0.55x; docs/local.md), poisson
+        for scattered samples. CLI ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
         (0 to 4; "auto": 2 below 96 samples per axis, else 1).
@@ -144,7 +143,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     thin_parts : bool or "auto"
         Local reconstruction on grids: find the parts thinner than a spacing that the samples
         straddle without a sign change (a wing, a blade) from the contact points on their two
-        sides, on a grid of twice the resolution with one subdivision fewer ("auto": below 96
+        sides, on a grid of twice the resolution with one subdivision fewer ("auto": below 192
         samples per axis, for arrays and files; off for callables, which may be neural SDFs whose
         values are no distances; the shared meshes' L1 over marching cubes' at 64^3 0.253x ->
         0.199x, docs/local.md). ``stats["local_thin_points"]`` counts the points put in a thin part.

@@ -16,18 +16,20 @@ int auto_poisson_depth(const PointMatrix& points, double spacing) {
   return samples_per_axis > 48 ? 8 : 7;
 }
 
-bool auto_local_reconstruction(double samples_per_axis) {
-  return samples_per_axis >= 256;
+bool auto_local_reconstruction(double /*samples_per_axis*/) {
+  return true;
 }
 
 int auto_subdivisions(double samples_per_axis) {
   return samples_per_axis < 96 ? 2 : 1;
 }
 
-double auto_split_sag(double /*samples_per_axis*/) { return 0.004; }
+double auto_split_sag(double /*samples_per_axis*/) {
+  return 0.004;
+}
 
 bool auto_thin_parts(double samples_per_axis) {
-  return samples_per_axis < 96;
+  return samples_per_axis < 192;
 }
 
 bool auto_sign_constraints(double samples_per_axis) {

@@ -219,6 +219,8 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     with pytest.warns(sdfcontour.FallbackWarning, match="values as given"):
         Vc, Fc, cstats = sdfcontour.contour(nearest, resolution=16, reconstruction="poisson",
                                             refine=False, return_stats=True)
+    # (The grid through the same Poisson path; its default is the local reconstruction, above.)
+    V, F, stats = sdfcontour.contour(plane, reconstruction="poisson", return_stats=True)
     assert cstats["rescale_dropped"] == stats["rescale_dropped"]
     from sdfcontour.dask import canonical_mesh
     (A, B), (C, D) = canonical_mesh(V, F), canonical_mesh(Vc, Fc)

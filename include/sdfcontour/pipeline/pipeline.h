@@ -48,10 +48,13 @@ Reconstruction parse_reconstruction(const std::string& name);
 std::string reconstruction_name(Reconstruction reconstruction);
 
 /// Whether Reconstruction::Auto takes the local reconstruction for a grid `samples_per_axis`
-/// across (its largest dimension): from 256. Measured (bench/scale.py, bunny and spot, 2 cores):
-/// at 256³ local's L1 is 0.505x MC's against Poisson's 0.590x, in 1.1x the time and 1.6x the
-/// memory; at 128³ they tie (0.469x against 0.460x), and at 32³ and 64³ Poisson leads by 4-8%
-/// (docs/local.md).
+/// across (its largest dimension): at every size since session 20. The 17 shared meshes' L1 over
+/// MC's (geometric means, docs/local.md, session 20): 32^3 local 0.217x against Poisson's 0.311x,
+/// 64^3 0.200x against 0.337x, 128^3 0.272x (with thin parts); 16^3 0.264x against 0.275x
+/// (session 19); 256^3 0.505x against 0.590x (bunny and spot, session 27) in about the time. Below
+/// 256 Poisson was kept while the local mesh's worst vertex on the analytic torus at 64^3 lay
+/// beyond marching cubes' (power vertices on its mirror planes; now 0.0093 h against 0.0152 h,
+/// kLocalNearMiss).
 bool auto_local_reconstruction(double samples_per_axis);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
@@ -66,12 +69,15 @@ int auto_subdivisions(double samples_per_axis);
 /// the analytic torus at 256^3 splits no edge (its chords sag less).
 double auto_split_sag(double samples_per_axis);
 /// Whether the local reconstruction looks for parts thinner than a spacing
-/// (LocalBrickOptions::thin_parts) on a grid `samples_per_axis` across: below 96, where the grid
-/// at twice the resolution with one subdivision replaces two subdivisions (the 17 shared meshes'
-/// L1 over MC's, session 19: 64^3 0.253x -> 0.199x, 32^3 0.292x -> 0.216x; the sword's blade
-/// and the plane's wings appear). Not from 96: at 128^3 every shared mesh but the exact cube
-/// gained (0.356x -> 0.267x without it), but the cube lost its exactness (1e-5 -> 0.36x MC's),
-/// as an axis-aligned CAD box would where the local reconstruction is the default (docs/local.md).
+/// (LocalBrickOptions::thin_parts) on a grid `samples_per_axis` across: below 192, where the grid
+/// at twice the resolution with one subdivision fewer replaces the grid's own cells (the 17 shared
+/// meshes' L1 over MC's, session 19: 32^3 0.292x -> 0.216x, 64^3 0.253x -> 0.199x; session 20:
+/// 128^3 0.356x -> 0.267x without the exact cube, 0.193x -> 0.272x with it; the sword's blade and
+/// the plane's wings appear). An exact axis-aligned box loses its exactness on that grid (128^3:
+/// 1e-5
+/// -> 0.36x MC's; its narrow cells next to the edges hold one or two contact points, one of them
+/// with a bent normal). Not from 192: at 256^3 the exact cube is 1.02x MC's with it, and it costs
+/// twice the time and 2-3x the memory (docs/local.md).
 bool auto_thin_parts(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.
@@ -116,9 +122,8 @@ struct ContourOptions {
   BandOptions band;
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
-  /// GCP's mesh. Auto: local for grids from 256 samples per axis (auto_local_reconstruction),
-  /// else Poisson (more accurate below: docs/local.md). Local needs a grid's cells: scattered
-  /// samples and .vdb level sets always take Poisson.
+  /// GCP's mesh. Auto: local for grids (auto_local_reconstruction). Local needs a grid's cells:
+  /// scattered samples and .vdb level sets always take Poisson.
   Reconstruction reconstruction = Reconstruction::Auto;
   LocalReconstructionOptions local;
   /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no
