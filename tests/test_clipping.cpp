@@ -88,6 +88,15 @@ TEST(Clipping, GcpOnAGridThatCutsTheSurface) {
   std::cout << "largest distance to the sphere: gcp " << gcp_worst / h << " h, mc " << mc_worst / h
             << " h\n";
   EXPECT_LT(gcp_worst, mc_worst);
+  // The local mesh (the default on grids) stops at the grid's side, inside the grid's box.
+  const ContourResult local = contour(grid_input(grid), nullptr, ContourOptions{});
+  ASSERT_TRUE(local.fallback.empty()) << local.fallback;
+  EXPECT_EQ(local.reconstruction, Reconstruction::Local);
+  EXPECT_LE(local.mesh->vertices.col(0).maxCoeff(), 0.3);
+  double local_worst = 0;
+  for (Eigen::Index v = 0; v < local.mesh->vertices.rows(); ++v)
+    local_worst = std::max(local_worst, std::abs(local.mesh->vertices.row(v).norm() - 0.6));
+  EXPECT_LT(local_worst, mc_worst);
 }
 
 // A plane through the whole grid (a terrain, a wall): the grid's sides are inside in part, so

@@ -450,6 +450,13 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
     detail::return_free_memory();
   }
+  // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
+  // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is
+  // undone below.
+  for (Eigen::Index v = 0; v < sub.mesh.vertices.rows(); ++v)
+    sub.mesh.vertices.row(v) = sub.mesh.vertices.row(v)
+                                   .cwiseMax(block.bounds.min.transpose())
+                                   .cwiseMin(block.bounds.max.transpose());
   clock.next(4);
   if (options.untangle) {
     std::vector<char> reverted;
