@@ -186,6 +186,14 @@ with tempfile.TemporaryDirectory() as d:
     check("gcp stage seconds sum to the total", r.returncode == 0 and
           abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
 
+    # Poisson options on a grid, whose default is the local reconstruction: said, even with -q.
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--depth", "7")
+    check("poisson option on the local default warned", r.returncode == 0 and "--depth" in r.stderr and
+          "--reconstruction poisson" in r.stderr, r.stderr)
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--depth", "7",
+            "--reconstruction", "poisson")
+    check("poisson option on poisson not warned", r.returncode == 0 and "warning" not in r.stderr, r.stderr)
+
     # The Poisson path's side repair runs with carving's triangle rounds (below 128 samples per
     # axis) and reports in --stats; --no-side-repair skips it.
     r = run("contour", "builtin:torus@24", "-o", p("gcp_p.ply"), "--stats", p("gcp_p.json"), "-q",

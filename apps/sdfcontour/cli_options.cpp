@@ -135,46 +135,57 @@ std::unique_ptr<tbb::global_control> RunOptions::limit_threads() const {
 }
 
 void PoissonArgs::add_to(CLI::App* app) {
-  app->add_option("--alpha", options.point_weight,
-                  "Screening weight (PoissonRecon's --pointWeight); 0 is plain Poisson")
-      ->capture_default_str();
-  app->add_option("--depth", depth,
-                  depth == "auto"
-                      ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 up to "
-                        "256, 10 up to 512, 11 above (in all: a 512^3 grid 1.4-2.2 GB, "
-                        "1024^3 6.1-8.4 GB)"
-                      : "Finest octree depth")
-      ->capture_default_str();
-  app->add_option("--degree", degree,
-                  "Poisson elements: 1, trilinear; 2, quadratic B-splines (PoissonRecon's default; "
-                  "smoother, slower)")
-      ->capture_default_str();
-  app->add_option("--full-depth", options.full_depth, "The octree is complete down to this depth")
-      ->capture_default_str();
-  app->add_option(
-         "--refine-dilation", dilation,
-         std::string("Each depth refines the cells within this many cells of the points' "
-                     "(1-4; 1 is cheaper, less accurate where points are sparse)") +
-             (dilation == "auto" ? "; 'auto': 2 below 256 samples per axis, 1 from 256" : ""))
-      ->capture_default_str();
-  app->add_option("--samples-per-node", options.samples_per_node,
-                  "Splat each normal where an octree node holds about this many samples")
-      ->capture_default_str();
-  app->add_option("--scale", options.scale,
-                  "Domain = bounding cube of the points enlarged by this factor")
-      ->capture_default_str();
-  app->add_option(
-         "--boundary", boundary,
-         "Boundary condition on the domain cube: neumann, dirichlet (chi = 0 on the "
-         "faces) or free (B-splines reaching in from outside kept as they are; for degree 1 "
-         "the same as neumann)")
-      ->capture_default_str();
-  app->add_option("--solver-tolerance", options.solver_tolerance,
-                  "Conjugate gradients stop at this relative residual at each depth but the finest")
-      ->capture_default_str();
-  app->add_option("--finest-solver-tolerance", options.finest_solver_tolerance,
-                  "... and at this one at the finest depth (most of the solve's time)")
-      ->capture_default_str();
+  added_.push_back(
+      app->add_option("--alpha", options.point_weight,
+                      "Screening weight (PoissonRecon's --pointWeight); 0 is plain Poisson")
+          ->capture_default_str());
+  added_.push_back(
+      app->add_option("--depth", depth,
+                      depth == "auto"
+                          ? "Finest octree depth, or 'auto': 8 up to 128 samples per axis, 9 up to "
+                            "256, 10 up to 512, 11 above (in all: a 512^3 grid 1.4-2.2 GB, "
+                            "1024^3 6.1-8.4 GB)"
+                          : "Finest octree depth")
+          ->capture_default_str());
+  added_.push_back(
+      app->add_option(
+             "--degree", degree,
+             "Poisson elements: 1, trilinear; 2, quadratic B-splines (PoissonRecon's default; "
+             "smoother, slower)")
+          ->capture_default_str());
+  added_.push_back(app->add_option("--full-depth", options.full_depth,
+                                   "The octree is complete down to this depth")
+                       ->capture_default_str());
+  added_.push_back(
+      app->add_option(
+             "--refine-dilation", dilation,
+             std::string("Each depth refines the cells within this many cells of the points' "
+                         "(1-4; 1 is cheaper, less accurate where points are sparse)") +
+                 (dilation == "auto" ? "; 'auto': 2 below 256 samples per axis, 1 from 256" : ""))
+          ->capture_default_str());
+  added_.push_back(
+      app->add_option("--samples-per-node", options.samples_per_node,
+                      "Splat each normal where an octree node holds about this many samples")
+          ->capture_default_str());
+  added_.push_back(app->add_option("--scale", options.scale,
+                                   "Domain = bounding cube of the points enlarged by this factor")
+                       ->capture_default_str());
+  added_.push_back(
+      app->add_option(
+             "--boundary", boundary,
+             "Boundary condition on the domain cube: neumann, dirichlet (chi = 0 on the "
+             "faces) or free (B-splines reaching in from outside kept as they are; for degree 1 "
+             "the same as neumann)")
+          ->capture_default_str());
+  added_.push_back(
+      app->add_option(
+             "--solver-tolerance", options.solver_tolerance,
+             "Conjugate gradients stop at this relative residual at each depth but the finest")
+          ->capture_default_str());
+  added_.push_back(
+      app->add_option("--finest-solver-tolerance", options.finest_solver_tolerance,
+                      "... and at this one at the finest depth (most of the solve's time)")
+          ->capture_default_str());
 }
 
 namespace {
@@ -191,6 +202,13 @@ int whole_number_or_auto(const std::string& option, const std::string& text, int
 }
 
 }  // namespace
+
+std::string PoissonArgs::given() const {
+  std::string names;
+  for (const CLI::Option* o : added_)
+    if (o->count() > 0) names += (names.empty() ? "" : ", ") + o->get_name();
+  return names;
+}
 
 PoissonOptions PoissonArgs::resolved() const {
   PoissonOptions o = options;

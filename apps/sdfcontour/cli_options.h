@@ -74,6 +74,11 @@ struct PoissonArgs {
   void add_to(CLI::App* app);
   /// The options, range-checked; depth 0 for "auto".
   PoissonOptions resolved() const;
+  /// The names of these options given on the command line, comma-separated ("" if none).
+  std::string given() const;
+
+ private:
+  std::vector<const CLI::Option*> added_;
 };
 
 }  // namespace sdfcontour::cli

@@ -180,6 +180,12 @@ int run_contour(const ContourArgs& a) {
     std::cerr << "sdfcontour: warning: the values were rescaled by " << r.value_scale
               << " to distances (they change by " << 1 / r.value_scale
               << " per unit length near the surface)\n";
+  // The Poisson options set a solve that the local reconstruction does not make.
+  if (const std::string poisson = a.poisson.given();
+      r.reconstruction == Reconstruction::Local && !poisson.empty())
+    std::cerr << "sdfcontour: warning: " << poisson
+              << " set the Poisson reconstruction, and this is the local one (the default on "
+                 "grids): give --reconstruction poisson for it\n";
   if (r.isolated_samples > 0)
     std::cerr << "sdfcontour: warning: dropped " << r.isolated_samples
               << " isolated samples (fewer than 3 others within " << kIsolationReach

@@ -22,6 +22,8 @@ Examples
 >>> V, F = sdfcontour.contour(grid, method="mc")       # marching cubes
 >>> V, F = sdfcontour.contour(lambda p: _np.linalg.norm(p, axis=1) - 0.6, resolution=128)
 """
+import warnings as _warnings
+
 import numpy as _np
 
 from . import _checks, _sdfcontour
@@ -297,6 +299,18 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     o["fallback_to_mc"] = not _checks.flag("strict", strict)
     out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing,
                _lipschitz(lipschitz))
+    # The Poisson options set a solve that the local reconstruction does not make: said.
+    poisson_given = [name for name, value, default in (
+        ("depth", depth, "auto"), ("full_depth", full_depth, 5), ("alpha", alpha, 10.0),
+        ("samples_per_node", samples_per_node, 1.5), ("scale", scale, 1.1),
+        ("boundary", boundary, "neumann"), ("solver_tolerance", solver_tolerance, 1e-4),
+        ("finest_solver_tolerance", finest_solver_tolerance, 1e-3),
+        ("refine_dilation", refine_dilation, "auto"), ("degree", degree, 1))
+        if isinstance(value, str) != isinstance(default, str) or value != default]
+    if method == "gcp" and poisson_given and out["stats"].get("reconstruction") == "local":
+        _warnings.warn(", ".join(poisson_given) + " set the Poisson reconstruction, and this is "
+                       "the local one (the default on grids): pass reconstruction='poisson' for it",
+                       stacklevel=2)
     if callable(sdf) and method == "gcp" and refine != "off":
         from ._callable import refine_on_zero_set
         lo, hi = _bounds(bounds)

@@ -445,6 +445,9 @@ def test_gcp_output_follows_the_grid():
     assert len(gcp.F) < 25 * len(mc.F)
     # The default, local: subdivided on the grid at twice the resolution (21x, 0.15x measured).
     local = sdfcontour.contour(grid)
+    # A Poisson option with it is said (the CLI's warning), and changes nothing.
+    with pytest.warns(UserWarning, match="reconstruction='poisson'"):
+        np.testing.assert_array_equal(sdfcontour.contour(grid, depth=8, alpha=10).V, local.V)
     assert len(local.F) < 25 * len(mc.F)
     l1 = {name: sdfcontour.distances(m.V, m.F, V_gt, F_gt, samples=50000)["L1"]
           for name, m in (("mc", mc), ("gcp", gcp), ("local", local))}
