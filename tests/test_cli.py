@@ -181,10 +181,12 @@ with tempfile.TemporaryDirectory() as d:
         check(f"{method} deterministic points", outputs[0][1] == outputs[1][1])
 
     # GCP's stage seconds add up to the total (the untangling runs twice and is summed).
+    def seconds_add_up(name, r, s):
+        check(name, r.returncode == 0 and
+              abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
+
     r = run("contour", "builtin:torus@24", "-o", p("gcp_t.ply"), "--stats", p("gcp_t.json"), "-q")
-    s = json.load(open(p("gcp_t.json")))
-    check("gcp stage seconds sum to the total", r.returncode == 0 and
-          abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
+    seconds_add_up("gcp stage seconds sum to the total", r, json.load(open(p("gcp_t.json"))))
 
     # Poisson options on a grid, whose default is the local reconstruction: said, even with -q.
     r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--depth", "7")
@@ -199,8 +201,7 @@ with tempfile.TemporaryDirectory() as d:
     r = run("contour", "builtin:torus@24", "-o", p("gcp_p.ply"), "--stats", p("gcp_p.json"), "-q",
             "--reconstruction", "poisson")
     s = json.load(open(p("gcp_p.json")))
-    check("poisson stage seconds sum to the total", r.returncode == 0 and
-          abs(sum(s["seconds"].values()) - s["seconds_total"]) <= 1e-6 * s["seconds_total"], s["seconds"])
+    seconds_add_up("poisson stage seconds sum to the total", r, s)
     check("side repair in stats", "side_repair" in s and s["side_repair"]["left"] <= s["side_repair"]["wrong_side"],
           s.get("side_repair"))
     r = run("contour", "builtin:torus@24", "-o", p("gcp_n.ply"), "--stats", p("gcp_n.json"), "-q", "--no-side-repair",

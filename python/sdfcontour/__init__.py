@@ -22,6 +22,7 @@ Examples
 >>> V, F = sdfcontour.contour(grid, method="mc")       # marching cubes
 >>> V, F = sdfcontour.contour(lambda p: _np.linalg.norm(p, axis=1) - 0.6, resolution=128)
 """
+import inspect as _inspect
 import warnings as _warnings
 
 import numpy as _np
@@ -300,13 +301,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing,
                _lipschitz(lipschitz))
     # The Poisson options set a solve that the local reconstruction does not make: said.
-    poisson_given = [name for name, value, default in (
-        ("depth", depth, "auto"), ("full_depth", full_depth, 5), ("alpha", alpha, 10.0),
-        ("samples_per_node", samples_per_node, 1.5), ("scale", scale, 1.1),
-        ("boundary", boundary, "neumann"), ("solver_tolerance", solver_tolerance, 1e-4),
-        ("finest_solver_tolerance", finest_solver_tolerance, 1e-3),
-        ("refine_dilation", refine_dilation, "auto"), ("degree", degree, 1))
-        if isinstance(value, str) != isinstance(default, str) or value != default]
+    given = locals()
+    poisson_given = [name for name in _POISSON_OPTIONS
+                     if _differs(given[name], _CONTOUR_DEFAULTS[name])]
     if method == "gcp" and poisson_given and out["stats"].get("reconstruction") == "local":
         _warnings.warn(", ".join(poisson_given) + " set the Poisson reconstruction, and this is "
                        "the local one (the default on grids): pass reconstruction='poisson' for it",
@@ -325,6 +322,17 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     unpack = ("V", "F") + (("normals",) if normals is not None else ()) + \
         (("stats",) if _checks.flag("return_stats", return_stats) else ())
     return Mesh(out["V"], out["F"], normals, out["stats"], unpack)
+
+
+# contour()'s options that only the Poisson solve reads, and contour()'s defaults (whether the
+# user set them).
+_POISSON_OPTIONS = ("depth", "full_depth", "alpha", "samples_per_node", "scale", "boundary",
+                    "solver_tolerance", "finest_solver_tolerance", "refine_dilation", "degree")
+_CONTOUR_DEFAULTS = {name: p.default for name, p in _inspect.signature(contour).parameters.items()}
+
+
+def _differs(value, default):
+    return isinstance(value, str) != isinstance(default, str) or value != default
 
 
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",

@@ -86,6 +86,10 @@ struct ReconstructionInputs {
   double zero_set_truncation = std::numeric_limits<double>::infinity();
 };
 
+// What NotDistances says where no contact point was kept at all (both reconstructions).
+inline constexpr const char* kNoContactPoint =
+    "no contact point was kept, so there is nothing to reconstruct a surface from";
+
 // Throws NotDistances where the contact points are too few for the values to be distances.
 void check_contact_point_count(const GridSource& grid, const ContourOptions& options,
                                const ContactPoints& cp);

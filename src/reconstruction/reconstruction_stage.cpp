@@ -198,9 +198,7 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
 
 void check_contact_point_count(const GridSource& grid, const ContourOptions& options,
                                const ContactPoints& cp) {
-  if (cp.size() == 0)
-    throw NotDistances(
-        "no contact point was kept, so there is nothing to reconstruct a surface from");
+  if (cp.size() == 0) throw NotDistances(kNoContactPoint);
   // An exact distance keeps at least about one contact point per grid cell the surface
   // crosses (flat faces aligned with the grid hide the rest); far fewer means the values are
   // not distances.

@@ -18,6 +18,7 @@ import sdfcontour
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CLI = os.environ.get("SDFCONTOUR_CLI", os.path.join(ROOT, "build", "sdfcontour"))
+POISSON_CLI = [CLI, "contour", "--reconstruction", "poisson"]  # GCP, the paper's Poisson path
 MESHES = os.path.join(ROOT, "..", "shared", "data", "meshes")
 
 
@@ -58,7 +59,7 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
         pytest.skip("../shared/data/meshes is missing")
     subprocess.run([CLI, "sample", mesh, "--res", "32", "-o", str(tmp_path / "b"), "-q"], check=True,
                    stdout=subprocess.DEVNULL)
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "--reconstruction", "poisson", "-o", str(tmp_path / "cli.ply"), "-q",
+    subprocess.run([*POISSON_CLI, str(tmp_path / "b.npy"), "-o", str(tmp_path / "cli.ply"), "-q",
                     "--stats", str(tmp_path / "cli.json")], check=True, stdout=subprocess.DEVNULL)
     V_cli, F_cli = sdfcontour.read_mesh(tmp_path / "cli.ply")
     grid = np.load(tmp_path / "b.npy")
@@ -70,8 +71,10 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     np.testing.assert_array_equal(F_local, sdfcontour.read_mesh(tmp_path / "local.ply")[1])
     assert local_stats["reconstruction"] == "local"
     # The paper's Poisson path, asked for, from here on.
+    def poisson(*args, **kwargs):
+        return sdfcontour.contour(*args, reconstruction="poisson", **kwargs)
     start = time.perf_counter()
-    V, F, stats = sdfcontour.contour(grid, reconstruction="poisson", return_stats=True)
+    V, F, stats = poisson(grid, return_stats=True)
     elapsed = time.perf_counter() - start
     np.testing.assert_array_equal(V, V_cli)
     np.testing.assert_array_equal(F, F_cli)
@@ -86,74 +89,74 @@ def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     # At 32^3 the automatic setting turns the sign constraints on; forcing them gives the same mesh.
     assert stats["sign_constraints"] and stats["sign_violations"] > 0
     assert not stats["sign_constraints_dropped"]
-    V_on, _ = sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", sign_constraints=True)
+    V_on, _ = poisson(np.load(tmp_path / "b.npy"), sign_constraints=True)
     np.testing.assert_array_equal(V_on, V)
     for bad in ("sometimes", 1, None):  # only True, False or "auto", as for projection
         with pytest.raises(ValueError, match="sign_constraints"):
-            sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", sign_constraints=bad)
+            poisson(np.load(tmp_path / "b.npy"), sign_constraints=bad)
     # Bricks of any size give the automatic bricks' mesh; a bad size is a ValueError.
-    V_b, F_b = sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", brick_size=8)
+    V_b, F_b = poisson(np.load(tmp_path / "b.npy"), brick_size=8)
     np.testing.assert_array_equal(V_b, V)
     np.testing.assert_array_equal(F_b, F)
     for bad in ("big", -2):
         with pytest.raises(ValueError, match="brick_size"):
-            sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", brick_size=bad)
+            poisson(np.load(tmp_path / "b.npy"), brick_size=bad)
     with pytest.raises(ValueError, match="tolerance"):
-        sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", finest_solver_tolerance=0.0)
+        poisson(np.load(tmp_path / "b.npy"), finest_solver_tolerance=0.0)
     # Without the sign constraints: the CLI's --no-sign-constraints mesh, a different one.
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "--reconstruction", "poisson", "-o", str(tmp_path / "free.ply"), "-q",
+    subprocess.run([*POISSON_CLI, str(tmp_path / "b.npy"), "-o", str(tmp_path / "free.ply"), "-q",
                     "--no-sign-constraints"], check=True, stdout=subprocess.DEVNULL)
-    V_free, F_free = sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", sign_constraints=False)
+    V_free, F_free = poisson(np.load(tmp_path / "b.npy"), sign_constraints=False)
     np.testing.assert_array_equal(V_free, sdfcontour.read_mesh(tmp_path / "free.ply")[0])
     assert V_free.shape != V.shape or not np.array_equal(V_free, V)
     # Carving is on by default and moves vertices; carve=False is the CLI's --no-carve mesh, with
     # the same triangles and a larger L1.
     assert stats["carved_vertices"] > 0
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "--reconstruction", "poisson", "-o", str(tmp_path / "uncarved.ply"),
+    subprocess.run([*POISSON_CLI, str(tmp_path / "b.npy"), "-o", str(tmp_path / "uncarved.ply"),
                     "-q", "--no-carve"], check=True, stdout=subprocess.DEVNULL)
-    V_plain, F_plain, plain_stats = sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", carve=False,
+    V_plain, F_plain, plain_stats = poisson(np.load(tmp_path / "b.npy"), carve=False,
                                                        return_stats=True)
     np.testing.assert_array_equal(V_plain, sdfcontour.read_mesh(tmp_path / "uncarved.ply")[0])
     np.testing.assert_array_equal(F_plain, F)
     assert plain_stats["carved_vertices"] == 0
     with pytest.raises(ValueError, match="carve"):
-        sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", carve="auto")
+        poisson(np.load(tmp_path / "b.npy"), carve="auto")
     # side_passes=0 (vertices only) is the CLI's --side-passes 0 mesh, and differs from the
     # default's, whose triangles also leave the spheres.
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "--reconstruction", "poisson", "-o", str(tmp_path / "vertices.ply"),
+    subprocess.run([*POISSON_CLI, str(tmp_path / "b.npy"), "-o", str(tmp_path / "vertices.ply"),
                     "-q", "--side-passes", "0"], check=True, stdout=subprocess.DEVNULL)
-    V_vertices, _ = sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", side_passes=0)
+    V_vertices, _ = poisson(np.load(tmp_path / "b.npy"), side_passes=0)
     np.testing.assert_array_equal(V_vertices, sdfcontour.read_mesh(tmp_path / "vertices.ply")[0])
     assert not np.array_equal(V_vertices, V)
     for bad in (-1, 1.5, "all", True):
         with pytest.raises(ValueError, match="side_passes"):
-            sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", side_passes=bad)
+            poisson(np.load(tmp_path / "b.npy"), side_passes=bad)
     # The projection onto the contact points is on by default;
     # projection=False is the CLI's --projection off mesh (same triangles, vertices unprojected).
     assert stats["projected_vertices"] > 0
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "--reconstruction", "poisson", "-o", str(tmp_path / "unprojected.ply"),
+    subprocess.run([*POISSON_CLI, str(tmp_path / "b.npy"), "-o", str(tmp_path / "unprojected.ply"),
                     "-q", "--projection", "off"], check=True, stdout=subprocess.DEVNULL)
-    V_unprojected, F_unprojected, unprojected_stats = sdfcontour.contour(
-        np.load(tmp_path / "b.npy"), reconstruction="poisson", projection=False, return_stats=True)
+    V_unprojected, F_unprojected, unprojected_stats = poisson(
+        np.load(tmp_path / "b.npy"), projection=False, return_stats=True)
     np.testing.assert_array_equal(V_unprojected,
                                   sdfcontour.read_mesh(tmp_path / "unprojected.ply")[0])
     np.testing.assert_array_equal(F_unprojected, F)
     assert unprojected_stats["projected_vertices"] == 0 and not np.array_equal(V_unprojected, V)
     for bad in ("on", 1, None):
         with pytest.raises(ValueError, match="projection"):
-            sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", projection=bad)
+            poisson(np.load(tmp_path / "b.npy"), projection=bad)
     # The refinement's dilation: "auto" is 2 cells below 256 samples per axis; 1 is the CLI's
     # --refine-dilation 1 mesh, another one.
-    np.testing.assert_array_equal(sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson",
+    np.testing.assert_array_equal(poisson(np.load(tmp_path / "b.npy"),
                                                      refine_dilation=2)[0], V)
-    subprocess.run([CLI, "contour", str(tmp_path / "b.npy"), "--reconstruction", "poisson", "-o", str(tmp_path / "dilated1.ply"),
+    subprocess.run([*POISSON_CLI, str(tmp_path / "b.npy"), "-o", str(tmp_path / "dilated1.ply"),
                     "-q", "--refine-dilation", "1"], check=True, stdout=subprocess.DEVNULL)
-    V_one = sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", refine_dilation=1)[0]
+    V_one = poisson(np.load(tmp_path / "b.npy"), refine_dilation=1)[0]
     np.testing.assert_array_equal(V_one, sdfcontour.read_mesh(tmp_path / "dilated1.ply")[0])
     assert V_one.shape != V.shape or not np.array_equal(V_one, V)
     for bad in (0, 5, 1.5, True, "one"):
         with pytest.raises(ValueError, match="refine_dilation"):
-            sdfcontour.contour(np.load(tmp_path / "b.npy"), reconstruction="poisson", refine_dilation=bad)
+            poisson(np.load(tmp_path / "b.npy"), refine_dilation=bad)
     # And the mesh is close to the ground truth the CLI wrote.
     V_gt, F_gt = sdfcontour.read_mesh(tmp_path / "b_mesh.ply")
     d = sdfcontour.distances(V, F, V_gt, F_gt, samples=20000)

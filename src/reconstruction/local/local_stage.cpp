@@ -121,8 +121,7 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
       throw Error("no contact point: no sample within the band of " +
                   (std::ostringstream() << band.band).str() +
                   " spacings keeps one; widen it with --band (or --band all)");
-    throw NotDistances(
-        "no contact point was kept, so there is nothing to reconstruct a surface from");
+    throw NotDistances(kNoContactPoint);
   }
   if (lb.keep_contact_points) {
     ContactPoints cp;
