@@ -423,6 +423,23 @@ py::array_t<double> run_crossing_gradient_norms(
   return out;
 }
 
+// The subspacing gaps (subspacing_gaps.h) over the edges from the samples [own_first, own_end)
+// of a grid of `dims` over [lo, hi], from `block`, its samples [first, first + block.shape) (one
+// more before and two after the owned ones, where the grid has them): (gaps, crossings).
+py::tuple run_subspacing_gaps(const py::array& block, const std::array<int, 3>& first,
+                              const std::array<int, 3>& dims, const std::array<double, 3>& lo,
+                              const std::array<double, 3>& hi, const std::array<int, 3>& own_first,
+                              const std::array<int, 3>& own_end) {
+  py::object keep;
+  const GridView view = block_view(block, first, dims, lo, hi, keep);
+  SubspacingGaps counts;
+  {
+    py::gil_scoped_release release;
+    counts = count_subspacing_gaps(view, own_first, own_end);
+  }
+  return py::make_tuple(counts.gaps, counts.crossings);
+}
+
 // A .vdb float level set, read sparse as the CLI reads it: (points (n, 3), values (n,), voxel
 // size, background).
 py::tuple run_read_vdb(const std::string& path, const std::string& grid_name) {
@@ -514,6 +531,11 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   if (r.local_bricks) {
     stats["local_bricks"] = r.local_bricks->bricks;
     stats["contact_points"] = r.local_bricks->contact_points;
+    stats["local_thin_parts"] = r.local_bricks->thin_parts;
+  }
+  if (r.subspacing_gaps) {
+    stats["subspacing_gaps"] = r.subspacing_gaps->gaps;
+    stats["crossing_edges"] = r.subspacing_gaps->crossings;
   }
   if (r.local) {
     stats["local_cells"] = r.local->cells;
@@ -728,6 +750,16 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
+  m.def("subspacing_gaps", &run_subspacing_gaps, py::arg("block"), py::arg("first"),
+        py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
+  m.def(
+      "auto_thin_parts",
+      [](double samples_per_axis, std::int64_t gaps, std::int64_t crossings) {
+        return auto_thin_parts(samples_per_axis, SubspacingGaps{gaps, crossings});
+      },
+      py::arg("samples_per_axis"), py::arg("gaps"), py::arg("crossings"),
+      "Whether GCP's local reconstruction looks for thin parts on a grid of this size with these "
+      "subspacing gaps (the single process's rule).");
   m.def(
       "distance_value_scale",
       [](py::array_t<double, py::array::c_style | py::array::forcecast> norms) {

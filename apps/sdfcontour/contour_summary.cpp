@@ -83,7 +83,11 @@ void add_stage_counts(nlohmann::json& j, const ContourOptions& opt, const Contou
   if (r.local_bricks)
     j["local_bricks"] = {{"bricks", r.local_bricks->bricks},
                          {"wider_halos", r.local_bricks->wider_halos},
-                         {"contact_points", r.local_bricks->contact_points}};
+                         {"contact_points", r.local_bricks->contact_points},
+                         {"thin_parts", r.local_bricks->thin_parts}};
+  if (r.subspacing_gaps)
+    j["subspacing_gaps"] = {{"gaps", r.subspacing_gaps->gaps},
+                            {"crossings", r.subspacing_gaps->crossings}};
   if (r.local)
     j["local"] = {{"cells", r.local->cells},
                   {"vertices", r.local->vertices},

@@ -220,6 +220,20 @@ def _extremes_task(source, index, first, dims):
             int(((v > 0) & (v >= hi * (1 - _TOLERANCE))).sum()), int((v < 0).sum()), v.size)
 
 
+def _gaps_task(source, index, first, own, shape, lo, hi):
+    """(gaps, crossings) over the edges from one brick's own samples (subspacing_gaps), read
+    with one sample before and two after them."""
+    start = [max(f - 1, 0) for f in first]
+    end = [min(f + d + 2, n) for f, d, n in zip(first, own, shape)]
+    try:
+        block = np.asarray(_read(source, start, [e - b for b, e in zip(start, end)]))
+    except ValueError as e:
+        raise BrickError(f"brick {tuple(index)}: {e}") from None
+    own_end = [f + d for f, d in zip(first, own)]
+    return _sdfcontour.subspacing_gaps(block, tuple(start), tuple(shape), tuple(lo), tuple(hi),
+                                       tuple(first), tuple(own_end))
+
+
 def _truncation_of(parts):
     lo = min(p[0] for p in parts)
     hi = max(p[1] for p in parts)
@@ -336,7 +350,9 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
     band, subdivisions, projection, split_sag, thin_parts
-        GCP: as in :func:`sdfcontour.contour` (thin_parts "auto": off for a callable).
+        GCP: as in :func:`sdfcontour.contour` (thin_parts "auto": off for a callable; from 192
+        samples per axis, the bricks' gaps are counted in a first pass, as the single process
+        counts them on the whole grid).
     zero_set : bool or "auto"
         GCP: True moves the vertices onto each brick's tricubic zero set, uncarved: for values
         that are no exact distances (a neural SDF's grid), which :func:`sdfcontour.contour` finds
@@ -432,6 +448,30 @@ def _gcp_truncation(dask_client, reader, source, shape, brick, options):
     return _truncation_of(parts)
 
 
+def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
+    """"on" or "off": the single process's choice of thin parts (auto_thin_parts), from the
+    subspacing gaps counted brick by brick where the grid's size leaves it open."""
+    given = options["thin_parts"]
+    samples = max(shape)
+    if given != "auto" or options["zero_set"] == "on":
+        return given
+    if _sdfcontour.auto_thin_parts(samples, 0, 0):
+        return "on"
+    import dask
+    tasks = []
+    for index, first, dims in bricks(shape, brick):
+        if active is not None and tuple(index) not in active:
+            continue  # no active voxel: no surface, no gap
+        own = [d - 1 if f + d < n else d for f, d, n in zip(first, dims, shape)]
+        tasks.append(dask.delayed(_gaps_task, pure=True)(source, index, first, own, shape, lo, hi))
+    try:
+        parts = dask_client.gather(dask_client.compute(tasks))
+    except Exception as error:
+        raise _one_line(error) from None
+    gaps, crossings = sum(p[0] for p in parts), sum(p[1] for p in parts)
+    return "on" if _sdfcontour.auto_thin_parts(samples, gaps, crossings) else "off"
+
+
 def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stats, options):
     import dask
     started = time.perf_counter()
@@ -445,6 +485,8 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
         truncation = None
         if options is not None:
             truncation = _gcp_truncation(dask_client, reader, source, shape, brick, options)
+            options = dict(options, thin_parts=_gcp_thin_parts(dask_client, source, shape, brick,
+                                                               lo, hi, options, active))
         for index, first, dims in bricks(shape, brick):
             if active is not None and tuple(index) not in active:
                 continue  # no active voxel: no surface, not read

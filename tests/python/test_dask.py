@@ -257,3 +257,30 @@ def test_openvdb_level_set_read_box_by_box(client, tmp_path):
         sdfcontour.dask.contour(vdb, bounds=(-1, 1), client=client)
     with pytest.raises(ValueError, match="no float grid named"):
         sdfcontour.dask.contour(vdb, dataset="density", client=client)
+
+
+def test_gcp_finds_thin_parts_on_a_fine_grid_as_the_single_process_does(client):
+    # 193 samples along x, where the size alone leaves thin parts off: a fin 0.4 spacings thick
+    # between the samples 127 and 128, on the seam of the 64-cell bricks. The bricks' gap counts
+    # (one sample read before and two after their own) turn thin parts on as the single process
+    # does, and the fin is in both meshes, alike; without thin parts it is not.
+    n = (193, 24, 24)
+    hi = np.array(n, float) - 1
+    p = np.stack(np.meshgrid(*[np.arange(k, dtype=float) for k in n], indexing="ij"),
+                 axis=-1).reshape(-1, 3)
+
+    def box(points, center, half):
+        q = np.abs(points - np.array(center)) - np.array(half)
+        return np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0)
+
+    def on_fin(V):
+        return np.sum(np.abs(box(V, (127.5, 11.5, 11.5), (0.2, 6, 6))) < 0.05)
+    grid = np.minimum(box(p, (50, 11.5, 11.5), (25.3, 6.2, 6.3)),
+                      box(p, (127.5, 11.5, 11.5), (0.2, 6, 6))).reshape(n)
+    *single, stats = sdfcontour.contour(grid, bounds=(0, hi), return_stats=True)
+    assert stats["local_thin_parts"] and stats["subspacing_gaps"] == 12 * 12  # the fin's edges
+    V, F = sdfcontour.dask.contour(grid, bounds=(0, hi), method="gcp", brick=64, client=client)
+    assert_same_mesh((V, F), single)
+    assert_closed_manifold(F)
+    assert on_fin(V) > 200
+    assert on_fin(sdfcontour.contour(grid, bounds=(0, hi), thin_parts=False)[0]) == 0

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sdfcontour/band/band.h"
+#include "sdfcontour/band/subspacing_gaps.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/contact_points/contact_points.h"
 #include "sdfcontour/contact_points/gradients.h"
@@ -78,6 +79,12 @@ double auto_split_sag(double samples_per_axis);
 /// points, one of them often with a bent normal). Not from 192: at 256^3 the exact cube is 1.02x
 /// MC's with it, and it costs twice the time and 2-3x the memory (docs/local.md).
 bool auto_thin_parts(double samples_per_axis);
+/// The same, knowing the grid's `gaps` (count_subspacing_gaps): below 192 samples per axis on, and
+/// from 192 on where at least kThinPartGapShare of the edges that the surface crosses are
+/// subspacing gaps (a blade, wings: the sword at 256^3; no smooth or boxy shape comes near).
+bool auto_thin_parts(double samples_per_axis, const SubspacingGaps& gaps);
+/// auto_thin_parts's share of subspacing gaps among the edges that the surface crosses.
+constexpr double kThinPartGapShare = 0.01;
 
 /// An option that is on, off, or chosen from the input.
 enum class Switch { Auto, On, Off };
@@ -234,8 +241,10 @@ struct ContourResult {
   Reconstruction reconstruction = Reconstruction::Poisson;
   std::optional<LocalReconstructionStats> local;  ///< when the local reconstruction ran
   std::optional<LocalBricksStats> local_bricks;   ///< when it ran brick by brick
-  int poisson_depth = 0;                          ///< the depth the mesh was reconstructed at
-  int hidden = -1;  ///< hidden samples of the regular triangulation, -1 if none was built
+  /// The grid's subspacing gaps, when auto_thin_parts needed them.
+  std::optional<SubspacingGaps> subspacing_gaps;
+  int poisson_depth = 0;  ///< the depth the mesh was reconstructed at
+  int hidden = -1;        ///< hidden samples of the regular triangulation, -1 if none was built
   std::vector<StageTime> stages;
   std::vector<StageTime> poisson_stages;  ///< inside the "poisson" stage, for gcp/gtcp meshes
   /// Inside the "local" stage run brick by brick: each step's seconds summed over the bricks.

@@ -85,7 +85,8 @@ struct LocalBrickOptions {
   /// that its samples straddle (a wing, a blade: no sign change between them) read from the
   /// contact points on their two sides, and one subdivision level fewer
   /// (reconstruction/local/thin_parts.h). Not with refine_zero_set. 1: on, 0: off, -1:
-  /// auto_thin_parts of the whole grid (pipeline.h).
+  /// auto_thin_parts of the whole grid's size alone (pipeline.h; contour() counts the grid's
+  /// subspacing gaps first and passes 0 or 1).
   int thin_parts = -1;
   bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
   /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit, robust.
@@ -157,6 +158,10 @@ constexpr std::array<const char*, 6> kLocalSteps{"band",           "contact poin
                                                  "reconstruction", "subdivision and projection",
                                                  "carving",        "untangling"};
 
+/// Whether the bricks of a grid `dims` across (the whole grid's) look for thin parts
+/// (LocalBrickOptions::thin_parts; never with refine_zero_set).
+bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>& dims);
+
 /// The halo, in samples, that a brick's block needs first with these options on a grid of
 /// whole-grid `dims` (the contact points' stars may ask for more: HaloTooSmall).
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims);
@@ -188,6 +193,7 @@ Mesh join_local_pieces(std::vector<LocalPiece>&& pieces);
 struct LocalBricksStats {
   int bricks = 0;                   ///< bricks with a piece of the surface
   int wider_halos = 0;              ///< bricks read again with a wider halo
+  bool thin_parts = false;          ///< whether they looked for thin parts (local_thin_parts)
   long contact_points = 0;          ///< over all bricks (a halo's samples counted again)
   LocalReconstructionStats local;   ///< summed over the bricks' owned cells
   std::array<double, 6> seconds{};  ///< LocalPiece::seconds summed over the bricks

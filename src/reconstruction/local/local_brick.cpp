@@ -49,13 +49,6 @@ double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& di
   return b + band.margin;
 }
 
-// Whether the dual mesh lives on the grid at twice the resolution (LocalBrickOptions::thin_parts).
-bool thin_parts_on(const LocalBrickOptions& o, const std::array<int, 3>& dims) {
-  if (o.refine_zero_set) return false;
-  return o.thin_parts < 0 ? auto_thin_parts(*std::max_element(dims.begin(), dims.end()))
-                          : o.thin_parts > 0;
-}
-
 // Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
 // need one ring; undoing crossings needs kUntangleRing (the dual mesh's rounds alone, fewer).
 int ring(const LocalBrickOptions& o) {
@@ -72,7 +65,7 @@ int flag_reach(const LocalBrickOptions& o, double largest, const std::array<int,
       std::max({o.local.reach, o.local.empty_cell_reach,
                 o.project ? std::max(o.projection.radius, o.projection.wide_radius) : 0.0});
   return int(std::ceil(gather + largest)) + 2 + ring(o) +
-         (thin_parts_on(o, dims) ? kThinPartReach : 0);
+         (local_thin_parts(o, dims) ? kThinPartReach : 0);
 }
 
 Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
@@ -285,6 +278,12 @@ void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const I
 
 }  // namespace
 
+bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
+  if (options.refine_zero_set) return false;
+  return options.thin_parts < 0 ? auto_thin_parts(*std::max_element(dims.begin(), dims.end()))
+                                : options.thin_parts > 0;
+}
+
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
   const double largest = largest_in_spacings(options.band, dims);
   const int stars = flag_reach(options, largest, dims) + int(auto_brick_halo(largest, 1.0)) +
@@ -306,7 +305,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // The owned edges' polygons join the cells around them: no sign change there, no surface.
   const double h = block.spacing().maxCoeff();
   const Index3 n = block.whole_dims();
-  const bool refine = thin_parts_on(options, n);
+  const bool refine = local_thin_parts(options, n);
   // (With thin parts, a sample within a spacing of the surface, as refine_for_thin_parts reads
   // it: the values times value_scale are distances.)
   if (!has_surface(block, shifted(own_first, -1), shifted(own_end, 1),

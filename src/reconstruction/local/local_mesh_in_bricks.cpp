@@ -215,6 +215,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
   }
   if (stats) {
     *stats = {};
+    stats->thin_parts = local_thin_parts(options, grid.dims);
     for (std::size_t b = 0; b < pieces.size(); ++b) {
       const LocalPiece& p = pieces[b];
       stats->bricks += p.triangles.rows() > 0;

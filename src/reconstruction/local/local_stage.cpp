@@ -91,6 +91,15 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   LocalBrickOptions lb = local_brick_options(options);
   lb.band = band;
   lb.grid_read = grid_read;
+  // Thin parts on fine grids only where the grid has them: one pass over the values, before the
+  // bricks, which must agree.
+  const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
+  if (lb.thin_parts < 0 && !lb.refine_zero_set && !auto_thin_parts(samples_per_axis)) {
+    result.subspacing_gaps = stages.run("gaps", "edges with a thin part across", [&] {
+      return count_subspacing_gaps(grid, band.value_scale);
+    });
+    lb.thin_parts = auto_thin_parts(samples_per_axis, *result.subspacing_gaps) ? 1 : 0;
+  }
   if (options.progress_fraction)
     lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
   // One brick up to 512 samples per axis (its stages run in parallel inside it); beyond, bricks
