@@ -750,6 +750,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
+  m.attr("THIN_PART_GRID_LIMIT") = kThinPartGridLimit;
   m.def("subspacing_gaps", &run_subspacing_gaps, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
   m.def(

@@ -160,3 +160,21 @@ TEST(SubspacingGaps, FineGridsLookForThinPartsWhereTheyHaveThem) {
   EXPECT_EQ(plain.mesh->vertices, without.vertices);
   EXPECT_EQ(plain.mesh->triangles, without.triangles);
 }
+
+TEST(SubspacingGaps, ChooseThinPartsFrom192To256SamplesPerAxis) {
+  EXPECT_TRUE(auto_thin_parts(191, SubspacingGaps{0, 1000}));  // below 192: always
+  EXPECT_TRUE(auto_thin_parts(256, SubspacingGaps{10, 1000}));
+  EXPECT_FALSE(auto_thin_parts(256, SubspacingGaps{9, 1000}));  // under 1% of the crossings
+  EXPECT_FALSE(auto_thin_parts(200, SubspacingGaps{0, 0}));
+  EXPECT_FALSE(auto_thin_parts(257, SubspacingGaps{1000, 1000}));  // the finer grid's memory
+  // Beyond 256 contour() counts no gaps: a fin on a grid 257 samples long stays out.
+  const Grid g = unit_grid(257, 12, 12, [](const Eigen::Vector3d& p) {
+    return std::min(box_distance(p, {60, 5.5, 5.5}, {30.3, 3.2, 3.3}),
+                    box_distance(p, {200.5, 5.5, 5.5}, {0.2, 3, 3}));
+  });
+  const ContourResult r = contour(grid_input(g), nullptr, ContourOptions{});
+  EXPECT_FALSE(r.subspacing_gaps);
+  ASSERT_TRUE(r.local_bricks);
+  EXPECT_FALSE(r.local_bricks->thin_parts);
+  EXPECT_EQ(count_subspacing_gaps(view_of(g)).gaps, 6 * 6);  // (which it would have found)
+}

@@ -350,8 +350,8 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
     band, subdivisions, projection, split_sag, thin_parts
-        GCP: as in :func:`sdfcontour.contour` (thin_parts "auto": off for a callable; from 192
-        samples per axis, the bricks' gaps are counted in a first pass, as the single process
+        GCP: as in :func:`sdfcontour.contour` (thin_parts "auto": off for a callable; from 192 to
+        256 samples per axis, the bricks' gaps are counted in a first pass, as the single process
         counts them on the whole grid).
     zero_set : bool or "auto"
         GCP: True moves the vertices onto each brick's tricubic zero set, uncarved: for values
@@ -457,6 +457,8 @@ def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
         return given
     if _sdfcontour.auto_thin_parts(samples, 0, 0):
         return "on"
+    if samples > _sdfcontour.THIN_PART_GRID_LIMIT:
+        return "off"  # (too large a grid for thin parts, whatever its gaps)
     import dask
     tasks = []
     for index, first, dims in bricks(shape, brick):

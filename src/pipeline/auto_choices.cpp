@@ -33,8 +33,9 @@ bool auto_thin_parts(double samples_per_axis) {
 }
 
 bool auto_thin_parts(double samples_per_axis, const SubspacingGaps& gaps) {
-  return auto_thin_parts(samples_per_axis) ||
-         (gaps.gaps > 0 && double(gaps.gaps) >= kThinPartGapShare * double(gaps.crossings));
+  if (auto_thin_parts(samples_per_axis)) return true;
+  return samples_per_axis <= kThinPartGridLimit && gaps.gaps > 0 &&
+         double(gaps.gaps) >= kThinPartGapShare * double(gaps.crossings);
 }
 
 bool auto_sign_constraints(double samples_per_axis) {

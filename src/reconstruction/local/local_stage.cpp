@@ -92,9 +92,10 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   lb.band = band;
   lb.grid_read = grid_read;
   // Thin parts on fine grids only where the grid has them: one pass over the values, before the
-  // bricks, which must agree.
+  // bricks, which must agree (none beyond kThinPartGridLimit: thin parts stay off there).
   const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
-  if (lb.thin_parts < 0 && !lb.refine_zero_set && !auto_thin_parts(samples_per_axis)) {
+  if (lb.thin_parts < 0 && !lb.refine_zero_set && !auto_thin_parts(samples_per_axis) &&
+      samples_per_axis <= kThinPartGridLimit) {
     result.subspacing_gaps = stages.run("gaps", "edges with a thin part across", [&] {
       return count_subspacing_gaps(grid, band.value_scale);
     });
