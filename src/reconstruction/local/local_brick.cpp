@@ -14,6 +14,7 @@
 #include "reconstruction/carving_internal.h"
 #include "reconstruction/free_memory.h"
 #include "reconstruction/local/brick_moves.h"
+#include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/local/keyed_local_mesh.h"
 #include "reconstruction/local/lattice_subdivision.h"
 #include "reconstruction/local/thin_parts.h"
@@ -25,7 +26,8 @@ namespace sdfcontour {
 
 namespace {
 
-using Index3 = std::array<int, 3>;
+using detail::in_range;
+using detail::Index3;
 
 // Adds the seconds since the last call to a step's entry.
 class StepClock {
@@ -66,20 +68,6 @@ int flag_reach(const LocalBrickOptions& o, double largest, const std::array<int,
                 o.project ? std::max(o.projection.radius, o.projection.wide_radius) : 0.0});
   return int(std::ceil(gather + largest)) + 2 + ring(o) +
          (local_thin_parts(o, dims) ? kThinPartReach : 0);
-}
-
-Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
-  std::uint64_t p = edge / 3;
-  const int k = int(p % std::uint64_t(n[2]));
-  p /= std::uint64_t(n[2]);
-  return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
-}
-
-bool in_range(const Index3& p, const Index3& lo, const Index3& hi) {
-  for (int a = 0; a < 3; ++a)
-    if (p[std::size_t(a)] < lo[std::size_t(a)] || p[std::size_t(a)] >= hi[std::size_t(a)])
-      return false;
-  return true;
 }
 
 Index3 shifted(const Index3& p, int by) {
@@ -136,68 +124,6 @@ Bounds certain_box(const GridView& block) {
   return b;
 }
 
-// The triangles of the edges in [lo, hi), in the order of their names, with their vertices.
-// The triangles of the grid edges with low sample in [lo, hi), and in `crossing_means` their
-// vertices' crossing means (KeyedLocalMesh; a segment vertex's own position).
-detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, const Index3& n,
-                                          const Index3& lo, const Index3& hi,
-                                          PointMatrix& crossing_means) {
-  std::vector<std::pair<std::uint64_t, Eigen::Index>> kept;
-  for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t) {
-    const std::uint64_t edge = keyed.triangle_edge[std::size_t(t)];
-    if (in_range(edge_low_point(edge, n), lo, hi))
-      kept.push_back({edge * 8 + keyed.triangle_rank[std::size_t(t)], t});
-  }
-  std::sort(kept.begin(), kept.end());
-  std::vector<int> id(std::size_t(keyed.mesh.vertices.rows()), -1);
-  detail::KeyedTriangles out;
-  out.triangles.resize(Eigen::Index(kept.size()), 3);
-  std::vector<int> used;
-  for (std::size_t r = 0; r < kept.size(); ++r) {
-    out.triangle_name.push_back(kept[r].first);
-    for (int c = 0; c < 3; ++c) {
-      const int v = keyed.mesh.triangles(kept[r].second, c);
-      if (id[std::size_t(v)] < 0) {
-        id[std::size_t(v)] = int(used.size());
-        used.push_back(v);
-      }
-      out.triangles(Eigen::Index(r), c) = id[std::size_t(v)];
-    }
-  }
-  out.vertices.resize(Eigen::Index(used.size()), 3);
-  crossing_means.resize(Eigen::Index(used.size()), 3);
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(used[v]);
-    crossing_means.row(Eigen::Index(v)) = used[v] < keyed.crossing_means.rows()
-                                              ? keyed.crossing_means.row(used[v])
-                                              : keyed.mesh.vertices.row(used[v]);
-    out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
-    const std::size_t u = std::size_t(used[v]);
-    out.on_feature.push_back(u < keyed.flags.size() ? keyed.flags[u][1] : 0);
-  }
-  return out;
-}
-
-// The reconstruction's counts over the cells whose low corner is owned.
-LocalReconstructionStats owned_cell_stats(const detail::KeyedLocalMesh& keyed, const Index3& n,
-                                          const Index3& own_first, const Index3& own_end) {
-  LocalReconstructionStats s;
-  const std::uint64_t ny = std::uint64_t(n[1] - 1), nz = std::uint64_t(n[2] - 1);
-  for (std::size_t v = 0; v < keyed.flags.size(); ++v) {
-    const std::uint64_t cell = keyed.vertex_key[v] / 4;
-    const Index3 at{int(cell / (ny * nz)), int(cell / nz % ny), int(cell % nz)};
-    if (!in_range(at, own_first, own_end)) continue;
-    ++s.vertices;
-    // A cell's vertices are keyed 4 * cell + polygon: the first makes a cell, the second a split.
-    s.cells += keyed.vertex_key[v] % 4 == 0;
-    s.split_cells += keyed.vertex_key[v] % 4 == 1;
-    const auto& f = keyed.flags[v];
-    s.crossing_cells += f[0], s.feature_vertices += f[1] != 0, s.clamped += f[2];
-    s.field_misses += f[3];
-  }
-  return s;
-}
-
 void validate(const GridView& block, const Index3& own_first, const Index3& own_end,
               const LocalBrickOptions& o) {
   validate_grid_geometry(block);
@@ -218,62 +144,58 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
     throw Error("the local reconstruction's subdivisions must lie in 0..4 (-1: auto)");
 }
 
-// The contact points of the samples whose global index lies in [own_first, own_end), with
-// those indices, ascending (the band keeps the grid's order).
-void keep_owned_contact_points(const GridView& block, const BandSamples& band,
-                               const ContactPoints& cp, const Index3& own_first,
-                               const Index3& own_end, LocalPiece& piece) {
-  const Index3 n = block.whole_dims();
-  const Eigen::Vector3d h = block.spacing();
-  std::vector<std::pair<std::uint64_t, int>> owned;
-  for (int q = 0; q < cp.size(); ++q) {
-    const Eigen::Vector3d p = band.samples.points.row(cp.samples[std::size_t(q)]).transpose();
-    Index3 at;
-    for (int a = 0; a < 3; ++a) at[a] = int(std::lround((p[a] - block.bounds.min[a]) / h[a]));
-    if (!in_range(at, own_first, own_end)) continue;
-    owned.push_back(
-        {(std::uint64_t(at[0]) * std::uint64_t(n[1]) + std::uint64_t(at[1])) * std::uint64_t(n[2]) +
-             std::uint64_t(at[2]),
-         q});
-  }
-  std::sort(owned.begin(), owned.end());
-  piece.owned_points.resize(Eigen::Index(owned.size()), 3);
-  piece.owned_normals.resize(Eigen::Index(owned.size()), 3);
-  for (std::size_t r = 0; r < owned.size(); ++r) {
-    piece.owned_samples.push_back(owned[r].first);
-    piece.owned_points.row(Eigen::Index(r)) = cp.points.row(owned[r].second);
-    piece.owned_normals.row(Eigen::Index(r)) = cp.normals.row(owned[r].second);
+// The block's band; none where it has no usable one (its cells then use their edge crossings).
+BandSamples brick_band(const GridView& block, const LocalBrickOptions& options) {
+  try {
+    return select_band(block, options.band);
+  } catch (const InternalError&) {
+    throw;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const Error&) {
+    BandSamples band;
+    band.band = options.band.band;
+    return band;
   }
 }
 
-// The owned triangles of the subdivided brick mesh and their vertices (keys stay ascending),
-// into `piece`.
-void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const Index3& own_first,
-                     const Index3& own_end, LocalPiece& piece) {
-  std::vector<Eigen::Index> owned;
-  for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
-    if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
-      owned.push_back(t);
-  std::vector<int> id(std::size_t(sub.mesh.vertices.rows()), -1);
-  for (Eigen::Index t : owned)
-    for (int c = 0; c < 3; ++c) id[std::size_t(sub.mesh.triangles(t, c))] = 0;
-  int next = 0;
-  for (int& v : id)
-    if (v == 0) v = next++;
-  piece.vertices.resize(next, 3);
-  piece.keys.resize(std::size_t(next));
-  for (std::size_t v = 0; v < id.size(); ++v)
-    if (id[v] >= 0) {
-      piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
-      piece.keys[std::size_t(id[v])] = sub.keys[v];
-    }
-  piece.triangles.resize(Eigen::Index(owned.size()), 3);
-  for (const Eigen::Index t : owned)
-    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 +
-                                   std::uint64_t(sub.child[std::size_t(t)]));
-  for (std::size_t r = 0; r < owned.size(); ++r)
-    for (int c = 0; c < 3; ++c)
-      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
+// The contact points of the band samples that the owned part [own_first, own_end) can use (within
+// flag_reach of it), from the block's triangulation with certified stars.
+ContactPoints owned_reach_contact_points(const GridView& block, const BandSamples& band,
+                                         const Index3& own_first, const Index3& own_end,
+                                         const LocalBrickOptions& options) {
+  const double h = block.spacing().maxCoeff();
+  const Index3 n = block.whole_dims();
+  const double largest = largest_in_spacings(options.band, n) * h;
+  const int reach = flag_reach(options, largest / h, n);
+  const Eigen::Vector3d flag_lo =
+      block.point(own_first[0] - reach - block.first[0], own_first[1] - reach - block.first[1],
+                  own_first[2] - reach - block.first[2]);
+  const Eigen::Vector3d flag_hi =
+      block.point(own_end[0] + reach - block.first[0], own_end[1] + reach - block.first[1],
+                  own_end[2] + reach - block.first[2]);
+  const Eigen::Index count = band.samples.points.rows();
+  std::vector<char> flagged(std::size_t(count), 0);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const Eigen::Vector3d p = band.samples.points.row(i).transpose();
+    flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
+                              (p.array() <= flag_hi.array()).all();
+  }
+  const Bounds within = certain_box(block);
+  BrickOptions bricks;
+  bricks.halo = auto_brick_halo(largest, h);
+  bricks.within = &within;
+  bricks.largest_value = largest;
+  bricks.weight_cap_inside = band.core_inside;
+  bricks.weight_cap_outside = band.core_outside;
+  bricks.cancel = options.cancel;
+  ContactPoints cp;
+  cp.points.resize(0, 3);
+  cp.normals.resize(0, 3);
+  if (count > 0)
+    cp = brick_contact_points(band.samples, h, options.gradient, options.contact, bricks, nullptr,
+                              {}, &flagged);
+  return cp;
 }
 
 }  // namespace
@@ -312,52 +234,13 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                    refine ? h / options.band.value_scale : 0))
     return piece;
   StepClock clock(piece.seconds);
-  BandSamples band;
-  try {
-    band = select_band(block, options.band);
-  } catch (const InternalError&) {
-    throw;
-  } catch (const Cancelled&) {
-    throw;
-  } catch (const Error&) {
-    band = BandSamples();  // no usable band here: the cells use their edge crossings
-    band.band = options.band.band;
-  }
-  const double largest = largest_in_spacings(options.band, n) * h;
-  // Samples whose contact points the owned part can use.
-  const int reach = flag_reach(options, largest / h, n);
-  const Eigen::Vector3d flag_lo =
-      block.point(own_first[0] - reach - block.first[0], own_first[1] - reach - block.first[1],
-                  own_first[2] - reach - block.first[2]);
-  const Eigen::Vector3d flag_hi =
-      block.point(own_end[0] + reach - block.first[0], own_end[1] + reach - block.first[1],
-                  own_end[2] + reach - block.first[2]);
-  const Eigen::Index count = band.samples.points.rows();
-  std::vector<char> flagged(std::size_t(count), 0);
-  for (Eigen::Index i = 0; i < count; ++i) {
-    const Eigen::Vector3d p = band.samples.points.row(i).transpose();
-    flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
-                              (p.array() <= flag_hi.array()).all();
-  }
-  const Bounds within = certain_box(block);
-  BrickOptions bricks;
-  bricks.halo = auto_brick_halo(largest, h);
-  bricks.within = &within;
-  bricks.largest_value = largest;
-  bricks.weight_cap_inside = band.core_inside;
-  bricks.weight_cap_outside = band.core_outside;
-  bricks.cancel = options.cancel;
+  const BandSamples band = brick_band(block, options);
   clock.next(0);
-  ContactPoints cp;
-  cp.points.resize(0, 3);
-  cp.normals.resize(0, 3);
-  if (count > 0)
-    cp = brick_contact_points(band.samples, h, options.gradient, options.contact, bricks, nullptr,
-                              {}, &flagged);
+  ContactPoints cp = owned_reach_contact_points(block, band, own_first, own_end, options);
   piece.contact_points = cp.size();
   detail::return_free_memory();  // the triangulation's bricks, freed in every thread's arena
   if (options.keep_contact_points)
-    keep_owned_contact_points(block, band, cp, own_first, own_end, piece);
+    detail::keep_owned_contact_points(block, band, cp, own_first, own_end, piece);
   Eigen::VectorXd depths(cp.size());
   for (int q = 0; q < cp.size(); ++q)
     depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
@@ -382,11 +265,11 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   {
     const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
         cells_grid, cp.points, cp.normals, local, nullptr, depths);
-    piece.stats = owned_cell_stats(keyed, cells_n, cells_first, cells_end);
+    piece.stats = detail::owned_cell_stats(keyed, cells_n, cells_first, cells_end);
     for (const Index3& t : refined.thin_points)
       piece.stats.thin_points += in_range(t, cells_first, cells_end);
-    near = triangles_of_edges(keyed, cells_n, shifted(cells_first, -scale * ring(options)),
-                              shifted(cells_end, scale * ring(options)), crossing_means);
+    near = detail::triangles_of_edges(keyed, cells_n, shifted(cells_first, -scale * ring(options)),
+                                      shifted(cells_end, scale * ring(options)), crossing_means);
   }
   refined = detail::RefinedGrid();
   if (options.refine_zero_set) {
@@ -470,7 +353,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     }
   }
   clock.next(5);
-  take_owned_part(sub, cells_n, cells_first, cells_end, piece);
+  detail::take_owned_part(sub, cells_n, cells_first, cells_end, piece);
   return piece;
 }
 

@@ -1,0 +1,136 @@
+// What a brick of the local reconstruction owns (brick_ownership.h).
+#include "reconstruction/local/brick_ownership.h"
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+namespace sdfcontour::detail {
+
+Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
+  std::uint64_t p = edge / 3;
+  const int k = int(p % std::uint64_t(n[2]));
+  p /= std::uint64_t(n[2]);
+  return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
+}
+
+bool in_range(const Index3& p, const Index3& lo, const Index3& hi) {
+  for (int a = 0; a < 3; ++a)
+    if (p[std::size_t(a)] < lo[std::size_t(a)] || p[std::size_t(a)] >= hi[std::size_t(a)])
+      return false;
+  return true;
+}
+
+detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, const Index3& n,
+                                          const Index3& lo, const Index3& hi,
+                                          PointMatrix& crossing_means) {
+  std::vector<std::pair<std::uint64_t, Eigen::Index>> kept;
+  for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t) {
+    const std::uint64_t edge = keyed.triangle_edge[std::size_t(t)];
+    if (in_range(edge_low_point(edge, n), lo, hi))
+      kept.push_back({edge * 8 + keyed.triangle_rank[std::size_t(t)], t});
+  }
+  std::sort(kept.begin(), kept.end());
+  std::vector<int> id(std::size_t(keyed.mesh.vertices.rows()), -1);
+  detail::KeyedTriangles out;
+  out.triangles.resize(Eigen::Index(kept.size()), 3);
+  std::vector<int> used;
+  for (std::size_t r = 0; r < kept.size(); ++r) {
+    out.triangle_name.push_back(kept[r].first);
+    for (int c = 0; c < 3; ++c) {
+      const int v = keyed.mesh.triangles(kept[r].second, c);
+      if (id[std::size_t(v)] < 0) {
+        id[std::size_t(v)] = int(used.size());
+        used.push_back(v);
+      }
+      out.triangles(Eigen::Index(r), c) = id[std::size_t(v)];
+    }
+  }
+  out.vertices.resize(Eigen::Index(used.size()), 3);
+  crossing_means.resize(Eigen::Index(used.size()), 3);
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(used[v]);
+    crossing_means.row(Eigen::Index(v)) = used[v] < keyed.crossing_means.rows()
+                                              ? keyed.crossing_means.row(used[v])
+                                              : keyed.mesh.vertices.row(used[v]);
+    out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
+    const std::size_t u = std::size_t(used[v]);
+    out.on_feature.push_back(u < keyed.flags.size() ? keyed.flags[u][1] : 0);
+  }
+  return out;
+}
+
+LocalReconstructionStats owned_cell_stats(const detail::KeyedLocalMesh& keyed, const Index3& n,
+                                          const Index3& own_first, const Index3& own_end) {
+  LocalReconstructionStats s;
+  const std::uint64_t ny = std::uint64_t(n[1] - 1), nz = std::uint64_t(n[2] - 1);
+  for (std::size_t v = 0; v < keyed.flags.size(); ++v) {
+    const std::uint64_t cell = keyed.vertex_key[v] / 4;
+    const Index3 at{int(cell / (ny * nz)), int(cell / nz % ny), int(cell % nz)};
+    if (!in_range(at, own_first, own_end)) continue;
+    ++s.vertices;
+    // A cell's vertices are keyed 4 * cell + polygon: the first makes a cell, the second a split.
+    s.cells += keyed.vertex_key[v] % 4 == 0;
+    s.split_cells += keyed.vertex_key[v] % 4 == 1;
+    const auto& f = keyed.flags[v];
+    s.crossing_cells += f[0], s.feature_vertices += f[1] != 0, s.clamped += f[2];
+    s.field_misses += f[3];
+  }
+  return s;
+}
+
+void keep_owned_contact_points(const GridView& block, const BandSamples& band,
+                               const ContactPoints& cp, const Index3& own_first,
+                               const Index3& own_end, LocalPiece& piece) {
+  const Index3 n = block.whole_dims();
+  const Eigen::Vector3d h = block.spacing();
+  std::vector<std::pair<std::uint64_t, int>> owned;
+  for (int q = 0; q < cp.size(); ++q) {
+    const Eigen::Vector3d p = band.samples.points.row(cp.samples[std::size_t(q)]).transpose();
+    Index3 at;
+    for (int a = 0; a < 3; ++a) at[a] = int(std::lround((p[a] - block.bounds.min[a]) / h[a]));
+    if (!in_range(at, own_first, own_end)) continue;
+    owned.push_back(
+        {(std::uint64_t(at[0]) * std::uint64_t(n[1]) + std::uint64_t(at[1])) * std::uint64_t(n[2]) +
+             std::uint64_t(at[2]),
+         q});
+  }
+  std::sort(owned.begin(), owned.end());
+  piece.owned_points.resize(Eigen::Index(owned.size()), 3);
+  piece.owned_normals.resize(Eigen::Index(owned.size()), 3);
+  for (std::size_t r = 0; r < owned.size(); ++r) {
+    piece.owned_samples.push_back(owned[r].first);
+    piece.owned_points.row(Eigen::Index(r)) = cp.points.row(owned[r].second);
+    piece.owned_normals.row(Eigen::Index(r)) = cp.normals.row(owned[r].second);
+  }
+}
+
+void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const Index3& own_first,
+                     const Index3& own_end, LocalPiece& piece) {
+  std::vector<Eigen::Index> owned;
+  for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
+    if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
+      owned.push_back(t);
+  std::vector<int> id(std::size_t(sub.mesh.vertices.rows()), -1);
+  for (Eigen::Index t : owned)
+    for (int c = 0; c < 3; ++c) id[std::size_t(sub.mesh.triangles(t, c))] = 0;
+  int next = 0;
+  for (int& v : id)
+    if (v == 0) v = next++;
+  piece.vertices.resize(next, 3);
+  piece.keys.resize(std::size_t(next));
+  for (std::size_t v = 0; v < id.size(); ++v)
+    if (id[v] >= 0) {
+      piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
+      piece.keys[std::size_t(id[v])] = sub.keys[v];
+    }
+  piece.triangles.resize(Eigen::Index(owned.size()), 3);
+  for (const Eigen::Index t : owned)
+    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 +
+                                   std::uint64_t(sub.child[std::size_t(t)]));
+  for (std::size_t r = 0; r < owned.size(); ++r)
+    for (int c = 0; c < 3; ++c)
+      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
+}
+
+}  // namespace sdfcontour::detail
