@@ -155,6 +155,10 @@ TEST(Band, AutoBandFollowsTheResolution) {
   EXPECT_EQ(auto_band(255), 4);
   EXPECT_EQ(auto_band(256), 3);
   EXPECT_EQ(auto_band(1024), 3);
+  // The local reconstruction's: 8 below 384, then the same.
+  EXPECT_EQ(auto_local_band(128), 8);
+  EXPECT_EQ(auto_local_band(383), 8);
+  EXPECT_EQ(auto_local_band(384), 3);
   const Grid grid = torus_grid(40);
   const BandSamples b = select_band(grid, BandOptions{});
   EXPECT_EQ(b.band, 8);

@@ -320,3 +320,36 @@ TEST(LocalBrick, JoinRejectsOneKeyPlacedTwice) {
   pieces.push_back(piece_of({{0, 3}, {0, 4}, {0, 5}}, 1, {{0, 1, 2}}, {1}));
   EXPECT_THROW(join_local_pieces(pieces), InternalError);
 }
+
+TEST(LocalBrick, AutoBandIsTheLocalReconstructionsOwn) {
+  // A slab of the torus 130 samples long, where auto_band says 4 and auto_local_band 8: the auto
+  // band's mesh is band 8's bit for bit (and not band 4's), in bricks as in one, and it gathers
+  // more contact points.
+  const auto shape = make_builtin_shape("torus");
+  Grid g;
+  g.dims = {130, 24, 24};
+  const double h = 2.0 / 129;
+  g.bounds.min = Eigen::Vector3d(-1, -0.3, -11.5 * h);
+  g.bounds.max = g.bounds.min + h * Eigen::Vector3d(129, 23, 23);
+  g.values.resize(Eigen::Index(g.size()));
+  for (int i = 0; i < 130; ++i)
+    for (int j = 0; j < 24; ++j)
+      for (int k = 0; k < 24; ++k)
+        g.values[Eigen::Index(g.index(i, j, k))] = shape->distance(g.point(i, j, k));
+  LocalBrickOptions o;
+  o.thin_parts = 0;
+  LocalBricksStats auto_stats, four_stats;
+  const Mesh automatic = local_mesh_in_bricks(view_of(g), o, 0, &auto_stats);
+  o.band.band = 8;
+  const Mesh eight = local_mesh_in_bricks(view_of(g), o, 64);
+  o.band.band = 4;
+  const Mesh four = local_mesh_in_bricks(view_of(g), o, 0, &four_stats);
+  ASSERT_GT(automatic.triangles.rows(), 1000);
+  ASSERT_EQ(automatic.vertices.rows(), eight.vertices.rows());
+  ASSERT_EQ(automatic.triangles.rows(), eight.triangles.rows());
+  EXPECT_EQ(automatic.vertices, eight.vertices);
+  EXPECT_EQ(automatic.triangles, eight.triangles);
+  EXPECT_FALSE(automatic.vertices.rows() == four.vertices.rows() &&
+               automatic.vertices == four.vertices);
+  EXPECT_GT(auto_stats.contact_points, four_stats.contact_points);
+}

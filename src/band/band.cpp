@@ -195,6 +195,10 @@ double auto_band(double samples_per_axis) {
   return samples_per_axis < 128 ? 8.0 : samples_per_axis < 256 ? 4.0 : 3.0;
 }
 
+double auto_local_band(double samples_per_axis) {
+  return samples_per_axis < 384 ? 8.0 : auto_band(samples_per_axis);
+}
+
 void validate_band_options(const BandOptions& options) {
   if (!(options.band >= 0))
     throw Error("the band must be a positive number of spacings (or 'all' or 'auto'), got " +

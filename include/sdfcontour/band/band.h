@@ -97,6 +97,15 @@ constexpr double kIsolationReach = 4;
 /// 0.79x (bunny 512^3) the time for 1.02x the L1 (docs/scale.md).
 double auto_band(double samples_per_axis);
 
+/// The automatic band of GCP's local reconstruction (LocalBrickOptions::band with band 0), in
+/// spacings: 8 below 384 samples per axis, then auto_band's. Its vertices fit the contact points
+/// of the samples around their cells, and farther samples' points are still exact there: bunny
+/// 128^3 L1 7.38e-5 (band 4) -> 6.54e-5 (6) -> 5.78e-5 (8), boot 4.08e-4 -> 3.84e-4 (8); bunny
+/// 256^3 2.18e-5 (band 3) -> 2.03e-5 (4) -> 1.77e-5 (6) -> 1.61e-5 (8), boot 1.19e-4 -> 1.01e-4
+/// (8), for 1.5-1.9x the time and up to 1.6x the memory (docs/local.md, session 21). From 384 the
+/// narrower band keeps large grids' time and memory (1024^3 within 4 GB).
+double auto_local_band(double samples_per_axis);
+
 /// The grid's samples with |value| <= (band + margin) * h (h the largest grid spacing) that are
 /// not truncated, in C order; core flags those with |value| <= band * h and a margin inside the
 /// truncation distance. Never builds the full grid's positions.

@@ -44,11 +44,15 @@ class StepClock {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
+// The band's options with its auto band (0) resolved for the whole grid of `dims`.
+BandOptions resolved_band(BandOptions band, const std::array<int, 3>& dims) {
+  if (band.band == 0) band.band = auto_local_band(*std::max_element(dims.begin(), dims.end()));
+  return band;
+}
+
 // The largest |value| a band sample can have, in spacings.
 double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& dims) {
-  const double b =
-      band.band > 0 ? band.band : auto_band(*std::max_element(dims.begin(), dims.end()));
-  return b + band.margin;
+  return resolved_band(band, dims).band + band.margin;
 }
 
 // Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
@@ -147,7 +151,7 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
 // The block's band; none where it has no usable one (its cells then use their edge crossings).
 BandSamples brick_band(const GridView& block, const LocalBrickOptions& options) {
   try {
-    return select_band(block, options.band);
+    return select_band(block, resolved_band(options.band, block.whole_dims()));
   } catch (const InternalError&) {
     throw;
   } catch (const Cancelled&) {
