@@ -232,7 +232,8 @@ void add_contact_point_options(CLI::App* c, ContourArgs& a) {
                 "Triangulation methods (all but mc) use only samples with |value| <= BAND "
                 "grid spacings (scattered samples: the side of a cube holding one sample); "
                 "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
-                "axis, 4 from 128, 3 from 256")
+                "axis, 4 from 128, 3 from 256; GCP's local reconstruction (the default on grids) "
+                "8 below 384, 3 from 384")
       ->capture_default_str();
 }
 

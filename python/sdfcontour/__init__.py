@@ -91,8 +91,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Samples per axis for a callable ``sdf``.
     band : float, "auto" or "all"
         Triangulation methods use the samples with ``|value| <= band`` grid spacings; "auto"
-        is 8 below 128 samples per axis, 4 from 128 and 3 from 256 (docs/band.md); "all" keeps
-        every sample (the paper's GCP, far slower).
+        is 8 below 128 samples per axis, 4 from 128 and 3 from 256 (docs/band.md), and for GCP's
+        local reconstruction (the default on grids and callables) 8 below 384 and 3 from 384
+        (docs/local.md); "all" keeps every sample (the paper's GCP, far slower).
     margin : float
         Samples up to this many spacings beyond the band close the band's stars.
     truncation : "auto", "none" or a number as text
