@@ -49,10 +49,12 @@ def report(text, out):
             f.write(text)
 
 
-def sample_shared_mesh(name, res, folder):
-    """Samples the shared mesh `name` on a res^3 grid into `folder` (`sdfcontour sample`): the
-    prefix of its `.npy` grid and `_mesh.ply` ground truth."""
+def sample_shared_mesh(name, res, folder, truncate=None):
+    """Samples the shared mesh `name` on a res^3 grid into `folder` (`sdfcontour sample`; with
+    `truncate`, the distances truncated at that many spacings): the prefix of its `.npy` grid and
+    `_mesh.ply` ground truth."""
     prefix = os.path.join(folder, name)
+    extra = ["--truncate", str(truncate)] if truncate else []
     subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
-                    prefix, "-q"], check=True, stdout=subprocess.DEVNULL)
+                    prefix, "-q", *extra], check=True, stdout=subprocess.DEVNULL)
     return prefix
