@@ -750,7 +750,9 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
-  m.attr("THIN_PART_GRID_LIMIT") = kThinPartGridLimit;
+  m.def("thin_parts_need_gaps", &thin_parts_need_gaps, py::arg("samples_per_axis"),
+        "Whether the choice of thin parts needs the grid's subspacing gaps (the single "
+        "process's rule; elsewhere auto_thin_parts(samples_per_axis, 0, 0) decides).");
   m.def("subspacing_gaps", &run_subspacing_gaps, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
   m.def(

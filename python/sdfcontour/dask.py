@@ -455,10 +455,8 @@ def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
     samples = max(shape)
     if given != "auto" or options["zero_set"] == "on":
         return given
-    if _sdfcontour.auto_thin_parts(samples, 0, 0):
-        return "on"
-    if samples > _sdfcontour.THIN_PART_GRID_LIMIT:
-        return "off"  # (too large a grid for thin parts, whatever its gaps)
+    if not _sdfcontour.thin_parts_need_gaps(samples):
+        return "on" if _sdfcontour.auto_thin_parts(samples, 0, 0) else "off"
     import dask
     tasks = []
     for index, first, dims in bricks(shape, brick):

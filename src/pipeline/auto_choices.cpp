@@ -32,10 +32,13 @@ bool auto_thin_parts(double samples_per_axis) {
   return samples_per_axis < 192;
 }
 
+bool thin_parts_need_gaps(double samples_per_axis) {
+  return !auto_thin_parts(samples_per_axis) && samples_per_axis <= kThinPartGridLimit;
+}
+
 bool auto_thin_parts(double samples_per_axis, const SubspacingGaps& gaps) {
-  if (auto_thin_parts(samples_per_axis)) return true;
-  return samples_per_axis <= kThinPartGridLimit && gaps.gaps > 0 &&
-         double(gaps.gaps) >= kThinPartGapShare * double(gaps.crossings);
+  if (!thin_parts_need_gaps(samples_per_axis)) return auto_thin_parts(samples_per_axis);
+  return gaps.gaps > 0 && double(gaps.gaps) >= kThinPartGapShare * double(gaps.crossings);
 }
 
 bool auto_sign_constraints(double samples_per_axis) {

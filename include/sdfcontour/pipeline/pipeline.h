@@ -90,6 +90,9 @@ constexpr double kThinPartGapShare = 0.01;
 /// grid's values are dense doubles, (2n - 1)^3 of them in a brick whose halo spans ~70 samples
 /// (1.2 GB peak for the sword at 256^3; 9 GB and 57 s at 512^3, against 0.6 GB and 6.6 s without).
 constexpr int kThinPartGridLimit = 256;
+/// Whether auto_thin_parts's choice needs the grid's gaps on a grid `samples_per_axis` across:
+/// from 192 up to kThinPartGridLimit; elsewhere the size alone decides (no pass is made).
+bool thin_parts_need_gaps(double samples_per_axis);
 
 /// An option that is on, off, or chosen from the input.
 enum class Switch { Auto, On, Off };

@@ -94,8 +94,7 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   // Thin parts on fine grids only where the grid has them: one pass over the values, before the
   // bricks, which must agree (none beyond kThinPartGridLimit: thin parts stay off there).
   const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
-  if (lb.thin_parts < 0 && !lb.refine_zero_set && !auto_thin_parts(samples_per_axis) &&
-      samples_per_axis <= kThinPartGridLimit) {
+  if (lb.thin_parts < 0 && !lb.refine_zero_set && thin_parts_need_gaps(samples_per_axis)) {
     result.subspacing_gaps = stages.run("gaps", "edges with a thin part across", [&] {
       return count_subspacing_gaps(grid, band.value_scale);
     });
