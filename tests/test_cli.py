@@ -195,6 +195,17 @@ with tempfile.TemporaryDirectory() as d:
     r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--depth", "7",
             "--reconstruction", "poisson")
     check("poisson option on poisson not warned", r.returncode == 0 and "warning" not in r.stderr, r.stderr)
+    # So are the Poisson path's sign constraints on the local reconstruction, and the local
+    # reconstruction's options on the Poisson path; neither on the path that reads them.
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--sign-band", "3")
+    check("sign option on the local default warned", r.returncode == 0 and "--sign-band" in r.stderr and
+          "--reconstruction poisson" in r.stderr, r.stderr)
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--reconstruction", "poisson",
+            "--subdivisions", "1", "--thin-parts", "off")
+    check("local options on poisson warned", r.returncode == 0 and "--subdivisions, --thin-parts" in r.stderr
+          and "--reconstruction local" in r.stderr, r.stderr)
+    r = run("contour", "builtin:torus@24", "-o", p("gcp_d.ply"), "-q", "--subdivisions", "1")
+    check("local option on local not warned", r.returncode == 0 and "warning" not in r.stderr, r.stderr)
 
     # The Poisson path's side repair runs with carving's triangle rounds (below 128 samples per
     # axis) and reports in --stats; --no-side-repair skips it.

@@ -68,6 +68,45 @@ const ProjectionOption kProjectionOptions[] = {
      "GCP projection: a vertex stays where the points' RMS distance from the fitted quadric "
      "exceeds this many spacings (0: no limit)"}};
 
+// The names among `names` given on the command line, comma-separated ("" if none).
+std::string given_options(const CLI::App& app, std::initializer_list<const char*> names) {
+  std::string given;
+  for (const char* name : names)
+    if (app.count(name) > 0) given += (given.empty() ? "" : ", ") + std::string(name);
+  return given;
+}
+
+// Options that the reconstruction which ran does not read are said, even with --quiet: a user
+// would otherwise take them for having had an effect.
+void warn_of_options_not_read(const ContourArgs& a, const ContourOptions& opt,
+                              const ContourResult& r) {
+  if (!r.mesh || (opt.method != Method::Gcp && opt.method != Method::Gtcp)) return;
+  if (r.reconstruction == Reconstruction::Local) {
+    std::string poisson = a.poisson.given();
+    if (a.app) {
+      const std::string path = given_options(
+          *a.app, {"--sign-constraints", "--no-sign-constraints", "--sign-band", "--sign-radius",
+                   "--sign-margin", "--sign-trigger", "--no-side-repair"});
+      poisson += (poisson.empty() || path.empty() ? "" : ", ") + path;
+    }
+    if (!poisson.empty())
+      std::cerr << "sdfcontour: warning: " << poisson
+                << " set the Poisson reconstruction, and this is the local one (the default on "
+                   "grids): give --reconstruction poisson for it\n";
+  } else if (a.app) {
+    const std::string local =
+        given_options(*a.app, {"--subdivisions", "--split-sag", "--thin-parts", "--local-reach",
+                               "--local-feature-ratio", "--local-robust-rounds",
+                               "--local-min-points", "--local-max-field-miss",
+                               "--local-depth-scale", "--zero-set", "--zero-set-mismatch"});
+    if (!local.empty())
+      std::cerr << "sdfcontour: warning: " << local
+                << " set the local reconstruction, and this is the Poisson one (scattered "
+                   "samples, .vdb level sets and --reconstruction poisson take it): give a grid "
+                   "and --reconstruction local for it\n";
+  }
+}
+
 ContourOptions contour_options(const ContourArgs& a) {
   ContourOptions opt;
   opt.method = parse_method(a.method);
@@ -180,12 +219,7 @@ int run_contour(const ContourArgs& a) {
     std::cerr << "sdfcontour: warning: the values were rescaled by " << r.value_scale
               << " to distances (they change by " << 1 / r.value_scale
               << " per unit length near the surface)\n";
-  // The Poisson options set a solve that the local reconstruction does not make.
-  if (const std::string poisson = a.poisson.given();
-      r.reconstruction == Reconstruction::Local && !poisson.empty())
-    std::cerr << "sdfcontour: warning: " << poisson
-              << " set the Poisson reconstruction, and this is the local one (the default on "
-                 "grids): give --reconstruction poisson for it\n";
+  warn_of_options_not_read(a, opt, r);
   if (r.isolated_samples > 0)
     std::cerr << "sdfcontour: warning: dropped " << r.isolated_samples
               << " isolated samples (fewer than 3 others within " << kIsolationReach
@@ -412,6 +446,7 @@ Command add_contour_command(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "contour",
       "Contour SDF samples (grid .npy, scattered .npy, OpenVDB level set .vdb or builtin:NAME@N)");
+  a->app = c;
   c->add_option("input", a->input,
                 "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
                 "x,y,z,value, an OpenVDB float level set .vdb (read sparse; its voxel size and "

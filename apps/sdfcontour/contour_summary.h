@@ -36,6 +36,7 @@ struct ContourArgs {
   LocalReconstructionOptions local;
   std::uint64_t seed = 0;
   RunOptions run;
+  const CLI::App* app = nullptr;  ///< the subcommand, to tell which options were given
   PoissonArgs poisson = [] {
     PoissonArgs p;
     p.depth = "auto";

@@ -303,14 +303,21 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     o["fallback_to_mc"] = not _checks.flag("strict", strict)
     out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing,
                _lipschitz(lipschitz))
-    # The Poisson options set a solve that the local reconstruction does not make: said.
+    # Options that the reconstruction which ran does not read are said (the CLI's warning).
     given = locals()
-    poisson_given = [name for name in _POISSON_OPTIONS
-                     if _differs(given[name], _CONTOUR_DEFAULTS[name])]
-    if method == "gcp" and poisson_given and out["stats"].get("reconstruction") == "local":
-        _warnings.warn(", ".join(poisson_given) + " set the Poisson reconstruction, and this is "
-                       "the local one (the default on grids): pass reconstruction='poisson' for it",
-                       stacklevel=2)
+    ran = out["stats"].get("reconstruction")
+    if method == "gcp" and ran in ("local", "poisson"):
+        other = _POISSON_OPTIONS if ran == "local" else _LOCAL_OPTIONS
+        other_given = [name for name in other if _differs(given[name], _CONTOUR_DEFAULTS[name])]
+        if other_given and ran == "local":
+            _warnings.warn(", ".join(other_given) + " set the Poisson reconstruction, and this "
+                           "is the local one (the default on grids): pass "
+                           "reconstruction='poisson' for it", stacklevel=2)
+        elif other_given:
+            _warnings.warn(", ".join(other_given) + " set the local reconstruction, and this is "
+                           "the Poisson one (scattered samples and .vdb level sets take it): pass "
+                           "a grid or a callable with reconstruction='local' for it",
+                           stacklevel=2)
     if callable(sdf) and method == "gcp" and refine != "off":
         from ._callable import refine_on_zero_set
         lo, hi = _bounds(bounds)
@@ -330,7 +337,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
 # contour()'s options that only the Poisson solve reads, and contour()'s defaults (whether the
 # user set them).
 _POISSON_OPTIONS = ("depth", "full_depth", "alpha", "samples_per_node", "scale", "boundary",
-                    "solver_tolerance", "finest_solver_tolerance", "refine_dilation", "degree")
+                    "solver_tolerance", "finest_solver_tolerance", "refine_dilation", "degree",
+                    "sign_constraints")
+# ... and those that only the local reconstruction reads.
+_LOCAL_OPTIONS = ("subdivisions", "split_sag", "thin_parts", "zero_set")
 _CONTOUR_DEFAULTS = {name: p.default for name, p in _inspect.signature(contour).parameters.items()}
 
 

@@ -453,6 +453,15 @@ def test_gcp_output_follows_the_grid():
     # A Poisson option with it is said (the CLI's warning), and changes nothing.
     with pytest.warns(UserWarning, match="reconstruction='poisson'"):
         np.testing.assert_array_equal(sdfcontour.contour(grid, depth=8, alpha=10).V, local.V)
+    # So are the local reconstruction's options on the Poisson path, and nothing on the path
+    # that reads them.
+    with pytest.warns(UserWarning, match="subdivisions, thin_parts set the local"):
+        np.testing.assert_array_equal(
+            sdfcontour.contour(grid, reconstruction="poisson", subdivisions=1,
+                               thin_parts=False).V, gcp.V)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sdfcontour.contour(grid, subdivisions=1)
     assert len(local.F) < 25 * len(mc.F)
     l1 = {name: sdfcontour.distances(m.V, m.F, V_gt, F_gt, samples=50000)["L1"]
           for name, m in (("mc", mc), ("gcp", gcp), ("local", local))}
