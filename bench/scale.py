@@ -9,8 +9,8 @@ exact at <= 128^3, truncated at 8 spacings above (sampled block by block; marchi
 unaffected, GCP detects the truncation), all float32. L1 against the normalised mesh from
 `sdfcontour eval`.
 
-Methods: gcp (the default reconstruction: Poisson for grids), gcp-local (--reconstruction local,
-brick by brick), mt-rt, mc, and the peers skimage, openvdb, vtk.
+Methods: gcp (the default reconstruction: the local one on grids since session 20), gcp-local
+(--reconstruction local, the same on grids), mt-rt, mc, and the peers skimage, openvdb, vtk.
 
 Usage: /usr/bin/python3 bench/scale.py [--res 64,128,256,512] [--meshes bunny,spot,armadillo]
        [--repeats 1] [--out docs/results/scale.md] [--work /tmp/sdfcontour_scale]
