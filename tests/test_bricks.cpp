@@ -1,3 +1,8 @@
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/convex_hull_3.h>
+
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -230,6 +235,41 @@ TEST(BrickGeometry, GlobalHullFacets) {
             HullFacet::Global);
   EXPECT_EQ(classify_hull_facet({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}, tet),
             HullFacet::NotGlobal);
+}
+
+// The hull from the columns' ends (convex_hull_vertices keeps of each run of points with the
+// same x and y only its two ends) is CGAL's hull of every point: a grid's band around a sphere,
+// with scattered points among it, in buckets of any shape.
+TEST(BrickGeometry, HullFromColumnEndsIsTheHullOfEveryPoint) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::Vector3d> rows;
+  const double h = 2.0 / 23;
+  for (int i = 0; i < 24; ++i)
+    for (int j = 0; j < 24; ++j)
+      for (int k = 0; k < 24; ++k) {
+        const Eigen::Vector3d p(-1 + i * h, -1 + j * h, -1 + k * h);
+        if (std::abs(p.norm() - 0.7) <= 3 * h) rows.push_back(p);
+      }
+  for (int r = 0; r < 300; ++r) rows.emplace_back(0.8 * u(rng), 0.8 * u(rng), 0.8 * u(rng));
+  PointMatrix points(Eigen::Index(rows.size()), 3);
+  for (std::size_t r = 0; r < rows.size(); ++r) points.row(Eigen::Index(r)) = rows[r].transpose();
+  std::vector<std::vector<int>> buckets(5);
+  for (int r = 0; r < points.rows(); ++r) buckets[std::size_t(r % 5)].push_back(r);
+  auto sorted = [](std::vector<std::array<double, 3>> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  std::vector<std::array<double, 3>> ours, all;
+  for (const Eigen::Vector3d& p : convex_hull_vertices(points, buckets))
+    ours.push_back({p.x(), p.y(), p.z()});
+  std::vector<K::Point_3> every, hull;
+  for (const Eigen::Vector3d& p : rows) every.emplace_back(p.x(), p.y(), p.z());
+  CGAL::extreme_points_3(every, std::back_inserter(hull));
+  for (const K::Point_3& p : hull) all.push_back({p.x(), p.y(), p.z()});
+  EXPECT_GT(all.size(), 8u);
+  EXPECT_EQ(sorted(ours), sorted(all));
 }
 
 // The shell's test against brute force: a sample q conflicts with the sphere (c, r2) when

@@ -42,10 +42,21 @@ std::vector<Eigen::Vector3d> convex_hull_vertices(const PointMatrix& points,
                                                   const std::vector<std::vector<int>>& buckets) {
   std::vector<std::vector<Point>> per_bucket(buckets.size());
   tbb::parallel_for(std::size_t(0), buckets.size(), [&](std::size_t b) {
-    std::vector<Point> own;
+    // A point between two others with its x and y is no hull vertex: only each such column's
+    // two ends go to the hull search (a grid's band of 8 crosses a column in runs of 17 samples,
+    // all on the grid's degenerate planes, which the hull search is slow on).
+    std::vector<std::array<double, 3>> own;
     own.reserve(buckets[b].size());
-    for (int r : buckets[b]) own.push_back(Point(points(r, 0), points(r, 1), points(r, 2)));
-    per_bucket[b] = extreme_points(own);
+    for (int r : buckets[b]) own.push_back({points(r, 0), points(r, 1), points(r, 2)});
+    std::sort(own.begin(), own.end());
+    std::vector<Point> ends;
+    for (std::size_t i = 0; i < own.size(); ++i) {
+      const bool first = i == 0 || own[i][0] != own[i - 1][0] || own[i][1] != own[i - 1][1];
+      const bool last =
+          i + 1 == own.size() || own[i][0] != own[i + 1][0] || own[i][1] != own[i + 1][1];
+      if (first || last) ends.push_back(Point(own[i][0], own[i][1], own[i][2]));
+    }
+    per_bucket[b] = extreme_points(ends);
   });
   std::vector<Point> all;
   for (const auto& v : per_bucket) all.insert(all.end(), v.begin(), v.end());

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <set>
 #include <string>
 
 #include "contact_points/brick_geometry.h"
@@ -62,9 +63,13 @@ BrickGrid bucket(const PointMatrix& points, double side) {
   const Eigen::Index n = points.rows();
   std::vector<Cell> cell(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) cell[std::size_t(i)] = g.cell_of(points.row(i).transpose());
-  g.cells = cell;
-  std::sort(g.cells.begin(), g.cells.end());
-  g.cells.erase(std::unique(g.cells.begin(), g.cells.end()), g.cells.end());
+  // The occupied bricks are few (hundreds): a set of them, not a sort of every sample's cell
+  // (auto_brick_size buckets the band once per size it tries). Samples in a row mostly share
+  // their brick.
+  std::set<Cell> occupied;
+  for (std::size_t i = 0; i < cell.size(); ++i)
+    if (i == 0 || cell[i] != cell[i - 1]) occupied.insert(cell[i]);
+  g.cells.assign(occupied.begin(), occupied.end());
   std::vector<int> brick_of(static_cast<std::size_t>(n));
   g.offsets.assign(g.cells.size() + 1, 0);
   for (Eigen::Index i = 0; i < n; ++i) {
