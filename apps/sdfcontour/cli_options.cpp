@@ -203,11 +203,15 @@ int whole_number_or_auto(const std::string& option, const std::string& text, int
 
 }  // namespace
 
-std::string PoissonArgs::given() const {
+std::string given_names(const std::vector<const CLI::Option*>& options) {
   std::string names;
-  for (const CLI::Option* o : added_)
+  for (const CLI::Option* o : options)
     if (o->count() > 0) names += (names.empty() ? "" : ", ") + o->get_name();
   return names;
+}
+
+std::string PoissonArgs::given() const {
+  return given_names(added_);
 }
 
 PoissonOptions PoissonArgs::resolved() const {

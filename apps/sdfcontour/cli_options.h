@@ -63,6 +63,9 @@ struct RunOptions {
   std::unique_ptr<tbb::global_control> limit_threads() const;
 };
 
+/// The names of `options` given on the command line, comma-separated ("" if none).
+std::string given_names(const std::vector<const CLI::Option*>& options);
+
 /// Screened Poisson options, shared by `contour` (gcp, gtcp) and `poisson`.
 struct PoissonArgs {
   PoissonOptions options;

@@ -68,42 +68,23 @@ const ProjectionOption kProjectionOptions[] = {
      "GCP projection: a vertex stays where the points' RMS distance from the fitted quadric "
      "exceeds this many spacings (0: no limit)"}};
 
-// The names among `names` given on the command line, comma-separated ("" if none).
-std::string given_options(const CLI::App& app, std::initializer_list<const char*> names) {
-  std::string given;
-  for (const char* name : names)
-    if (app.count(name) > 0) given += (given.empty() ? "" : ", ") + std::string(name);
-  return given;
-}
-
 // Options that the reconstruction which ran does not read are said, even with --quiet: a user
 // would otherwise take them for having had an effect.
 void warn_of_options_not_read(const ContourArgs& a, const ContourOptions& opt,
                               const ContourResult& r) {
   if (!r.mesh || (opt.method != Method::Gcp && opt.method != Method::Gtcp)) return;
   if (r.reconstruction == Reconstruction::Local) {
-    std::string poisson = a.poisson.given();
-    if (a.app) {
-      const std::string path = given_options(
-          *a.app, {"--sign-constraints", "--no-sign-constraints", "--sign-band", "--sign-radius",
-                   "--sign-margin", "--sign-trigger", "--no-side-repair"});
-      poisson += (poisson.empty() || path.empty() ? "" : ", ") + path;
-    }
+    const std::string solver = a.poisson.given(), path = given_names(a.poisson_path_options);
+    const std::string poisson = solver + (solver.empty() || path.empty() ? "" : ", ") + path;
     if (!poisson.empty())
       std::cerr << "sdfcontour: warning: " << poisson
                 << " set the Poisson reconstruction, and this is the local one (the default on "
                    "grids): give --reconstruction poisson for it\n";
-  } else if (a.app) {
-    const std::string local =
-        given_options(*a.app, {"--subdivisions", "--split-sag", "--thin-parts", "--local-reach",
-                               "--local-feature-ratio", "--local-robust-rounds",
-                               "--local-min-points", "--local-max-field-miss",
-                               "--local-depth-scale", "--zero-set", "--zero-set-mismatch"});
-    if (!local.empty())
-      std::cerr << "sdfcontour: warning: " << local
-                << " set the local reconstruction, and this is the Poisson one (scattered "
-                   "samples, .vdb level sets and --reconstruction poisson take it): give a grid "
-                   "and --reconstruction local for it\n";
+  } else if (const std::string local = given_names(a.local_options); !local.empty()) {
+    std::cerr << "sdfcontour: warning: " << local
+              << " set the local reconstruction, and this is the Poisson one (scattered "
+                 "samples, .vdb level sets and --reconstruction poisson take it): give a grid "
+                 "and --reconstruction local for it\n";
   }
 }
 
@@ -273,21 +254,24 @@ void add_contact_point_options(CLI::App* c, ContourArgs& a) {
 
 // The Poisson path's sign constraints, carving and side rounds.
 void add_carving_options(CLI::App* c, ContourArgs& a) {
-  c->add_flag("--sign-constraints", a.sign_constraints,
-              "GCP: correct the indicator where samples next to the surface would end on the "
-              "wrong side of the mesh (default: below 128 samples per axis, where it is more "
-              "accurate; finer grids are more accurate without)");
-  c->add_flag("--no-sign-constraints", a.no_sign_constraints,
-              "GCP: do not correct the indicator (the paper's reconstruction)");
+  a.poisson_path_options.push_back(
+      c->add_flag("--sign-constraints", a.sign_constraints,
+                  "GCP: correct the indicator where samples next to the surface would end on the "
+                  "wrong side of the mesh (default: below 128 samples per axis, where it is more "
+                  "accurate; finer grids are more accurate without)"));
+  a.poisson_path_options.push_back(
+      c->add_flag("--no-sign-constraints", a.no_sign_constraints,
+                  "GCP: do not correct the indicator (the paper's reconstruction)"));
   c->add_flag("--no-carve", a.no_carve,
               "GCP: keep the reconstruction's vertices where they are; by default a vertex "
               "inside a sample's sphere (which holds no surface) moves onto it: the band's "
               "samples, or below 128 samples per axis with --band auto every sample within 16 "
               "spacings; not on values smoothed for noise");
-  c->add_flag("--no-side-repair", a.no_side_repair,
-              "GCP carving: leave the samples that carving's untangling left on the wrong side of "
-              "the mesh; by default (where --side-passes runs) each dents the nearest sheet onto "
-              "its side where that crosses and folds nothing and moves no other sample's side");
+  a.poisson_path_options.push_back(c->add_flag(
+      "--no-side-repair", a.no_side_repair,
+      "GCP carving: leave the samples that carving's untangling left on the wrong side of "
+      "the mesh; by default (where --side-passes runs) each dents the nearest sheet onto "
+      "its side where that crosses and folds nothing and moves no other sample's side"));
   c->add_option("--side-passes", a.side_passes,
                 "GCP carving: rounds in which each sample within a spacing of the surface that a "
                 "triangle cuts, or that lies on the wrong side of the mesh, moves the nearest "
@@ -327,59 +311,72 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                 "--adaptivity 0.03: L1 2.41e-5 -> 2.06e-5, below the unmerged mesh's 2.44e-5). "
                 "0: the merged vertices stay at their quadrics' minima")
       ->capture_default_str();
-  c->add_option(
-       "--subdivisions", a.subdivisions,
-       "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
-       "the contact points (auto: 2 below 96 samples per axis, else 1)")
-      ->capture_default_str();
-  c->add_option("--split-sag", a.split_sag,
-                "GCP local reconstruction, after the projection: split each edge once more where "
-                "its chord sags by more than this many spacings (its length times its ends' "
-                "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.004)")
-      ->capture_default_str();
-  c->add_option(
-       "--thin-parts", a.thin_parts,
-       "GCP local reconstruction: find the parts thinner than a spacing that the "
-       "samples straddle without a sign change (a wing, a blade) from the contact "
-       "points on their two sides, on a grid of twice the resolution with one "
-       "subdivision fewer (on, off; auto: on below 192 samples per axis, and from 192 to 256 "
-       "where at least 1% of the edges that the surface crosses have such a gap next to them: "
-       "two samples on one side, closer together than their values allow)")
-      ->capture_default_str();
-  c->add_option("--local-reach", a.local.reach,
-                "GCP local reconstruction: contact points within this many spacings of a cell "
-                "feed its vertex")
-      ->capture_default_str();
-  c->add_option("--local-feature-ratio", a.local.feature_ratio,
-                "GCP local reconstruction: a cell's planes make an edge or corner where the "
-                "quadric's smaller eigenvalues exceed this fraction of its largest")
-      ->capture_default_str();
-  c->add_option("--local-robust-rounds", a.local.robust_rounds,
-                "GCP local reconstruction: reweighting rounds that discount planes missing the "
-                "vertex")
-      ->capture_default_str();
-  c->add_option("--local-min-points", a.local.min_points,
-                "GCP local reconstruction: a cell with fewer contact points places its vertex "
-                "from its edge crossings")
-      ->capture_default_str();
-  c->add_option("--local-max-field-miss", a.local.max_field_miss,
-                "GCP local reconstruction: a vertex farther than this many spacings from the "
-                "cell's interpolated zero set falls back to the edge crossings (0: no check)")
-      ->capture_default_str();
-  c->add_option("--local-depth-scale", a.local.depth_scale,
-                "GCP local reconstruction: a contact point from a sample |value| away weighs "
-                "1 / (1 + (|value| / (this many spacings))^2), in the cell quadrics and the "
-                "projection (0: all alike)")
-      ->capture_default_str();
-  c->add_option("--zero-set", a.zero_set,
-                "GCP local reconstruction: move the vertices onto the zero set of the grid's "
-                "tricubic interpolant, uncarved (auto: where the values are no exact distances, "
-                "as a neural SDF's; on; off)")
-      ->capture_default_str();
-  c->add_option("--zero-set-mismatch", a.zero_set_mismatch,
-                "GCP --zero-set: only the vertices whose samples 1-2.5 spacings from the mesh "
-                "have a mean | |value| / distance - 1 | above this (0: every vertex)")
-      ->capture_default_str();
+  a.local_options.push_back(
+      c->add_option(
+           "--subdivisions", a.subdivisions,
+           "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
+           "the contact points (auto: 2 below 96 samples per axis, else 1)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option(
+           "--split-sag", a.split_sag,
+           "GCP local reconstruction, after the projection: split each edge once more where "
+           "its chord sags by more than this many spacings (its length times its ends' "
+           "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.004)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option(
+           "--thin-parts", a.thin_parts,
+           "GCP local reconstruction: find the parts thinner than a spacing that the "
+           "samples straddle without a sign change (a wing, a blade) from the contact "
+           "points on their two sides, on a grid of twice the resolution with one "
+           "subdivision fewer (on, off; auto: on below 192 samples per axis, and from 192 to 256 "
+           "where at least 1% of the edges that the surface crosses have such a gap next to them: "
+           "two samples on one side, closer together than their values allow)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--local-reach", a.local.reach,
+                    "GCP local reconstruction: contact points within this many spacings of a cell "
+                    "feed its vertex")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--local-feature-ratio", a.local.feature_ratio,
+                    "GCP local reconstruction: a cell's planes make an edge or corner where the "
+                    "quadric's smaller eigenvalues exceed this fraction of its largest")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--local-robust-rounds", a.local.robust_rounds,
+                    "GCP local reconstruction: reweighting rounds that discount planes missing the "
+                    "vertex")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--local-min-points", a.local.min_points,
+                    "GCP local reconstruction: a cell with fewer contact points places its vertex "
+                    "from its edge crossings")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--local-max-field-miss", a.local.max_field_miss,
+                    "GCP local reconstruction: a vertex farther than this many spacings from the "
+                    "cell's interpolated zero set falls back to the edge crossings (0: no check)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--local-depth-scale", a.local.depth_scale,
+                    "GCP local reconstruction: a contact point from a sample |value| away weighs "
+                    "1 / (1 + (|value| / (this many spacings))^2), in the cell quadrics and the "
+                    "projection (0: all alike)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option(
+           "--zero-set", a.zero_set,
+           "GCP local reconstruction: move the vertices onto the zero set of the grid's "
+           "tricubic interpolant, uncarved (auto: where the values are no exact distances, "
+           "as a neural SDF's; on; off)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--zero-set-mismatch", a.zero_set_mismatch,
+                    "GCP --zero-set: only the vertices whose samples 1-2.5 spacings from the mesh "
+                    "have a mean | |value| / distance - 1 | above this (0: every vertex)")
+          ->capture_default_str());
 }
 
 // The projection onto the contact points and the sign constraints' options.
@@ -403,8 +400,9 @@ void add_projection_options(CLI::App* c, ContourArgs& a) {
       "GCP: a sample is corrected once it keeps less than this fraction of that margin (0: only "
       "samples on the wrong side)"};
   for (int i = 0; i < 4; ++i)
-    c->add_option(sign_options[i].first, *sign_options[i].second, sign_help[i])
-        ->capture_default_str();
+    a.poisson_path_options.push_back(
+        c->add_option(sign_options[i].first, *sign_options[i].second, sign_help[i])
+            ->capture_default_str());
 }
 
 // Reading the input: the .vdb grid, truncation, margin, bricks, --fn, --seed.
@@ -446,7 +444,6 @@ Command add_contour_command(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "contour",
       "Contour SDF samples (grid .npy, scattered .npy, OpenVDB level set .vdb or builtin:NAME@N)");
-  a->app = c;
   c->add_option("input", a->input,
                 "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
                 "x,y,z,value, an OpenVDB float level set .vdb (read sparse; its voxel size and "

@@ -36,7 +36,10 @@ struct ContourArgs {
   LocalReconstructionOptions local;
   std::uint64_t seed = 0;
   RunOptions run;
-  const CLI::App* app = nullptr;  ///< the subcommand, to tell which options were given
+  /// The options that only the Poisson path's sign constraints and side repair read, and those
+  /// that only the local reconstruction reads (to tell which were given; PoissonArgs keeps the
+  /// solver's).
+  std::vector<const CLI::Option*> poisson_path_options, local_options;
   PoissonArgs poisson = [] {
     PoissonArgs p;
     p.depth = "auto";
