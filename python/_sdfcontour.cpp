@@ -559,6 +559,15 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   return out;
 }
 
+// contour() of a .vdb level set read box by box (vdb_blocked_grid): GCP's local reconstruction.
+py::dict run_contour_vdb(const std::string& path, const std::string& grid_name,
+                         const py::dict& options, const py::object& progress_callback) {
+  BlockedGrid grid = run_interruptible(
+      [path, grid_name](std::atomic<bool>&) { return vdb_blocked_grid(path, grid_name); });
+  return contour_input(BlockedGridInput{std::move(grid)}, py::none(), options, true, false,
+                       progress_callback);
+}
+
 py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,
                      const std::array<double, 3>& hi, double spacing, const py::dict& options,
                      bool want_mesh, bool want_points, const py::object& progress_callback) {
@@ -828,6 +837,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
       },
       py::arg("path"), py::arg("grid_name"), py::arg("first"), py::arg("dims"));
   m.def("read_vdb", &run_read_vdb, py::arg("path"), py::arg("grid_name"));
+  m.def("contour_vdb", &run_contour_vdb, py::arg("path"), py::arg("grid_name"), py::arg("options"),
+        py::arg("progress_callback") = py::none());
   m.def("read_mesh", &run_read_mesh, py::arg("path"));
   m.def("write_mesh", &run_write_mesh, py::arg("path"), py::arg("V"), py::arg("F"),
         py::arg("ascii"));

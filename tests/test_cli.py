@@ -328,12 +328,30 @@ with tempfile.TemporaryDirectory() as d:
         r = run("sample", os.path.join(meshes, "spot.obj"), "--res", "40", "-o", p("spot.vdb"), "-q")
         check("sample vdb", r.returncode == 0 and os.path.exists(p("spot.vdb")) and os.path.exists(p("spot_mesh.ply")),
               r.stderr)
-        r = run("contour", p("spot.vdb"), "-o", p("spot_vdb.ply"), "--depth", "7", "--stats", p("vdb.json"), "-q")
+        r = run("contour", p("spot.vdb"), "-o", p("spot_vdb.ply"), "--reconstruction", "poisson", "--depth", "7",
+                "--stats", p("vdb.json"), "-q")
         check("contour vdb", r.returncode == 0, r.stderr)
         s = json.load(open(p("vdb.json")))
         check("vdb sparse", s["samples"] < 40**3 / 4 and abs(s["band"]["spacing"] - 2 / 39) < 1e-9, s)
         r = run("eval", p("spot_vdb.ply"), p("spot_mesh.ply"), "--samples", "20000")
         check("vdb mesh accurate", r.returncode == 0 and json.loads(r.stdout)["L1"] < 0.05 * 2 / 39, r.stdout)
+        poisson_l1 = json.loads(r.stdout)["L1"]
+        # By default GCP's local reconstruction, read box by box on the voxels' grid (the active
+        # voxels' box grown by one): closed, and closer than the Poisson mesh of the same file.
+        r = run("contour", p("spot.vdb"), "-o", p("spot_vdb_local.ply"), "--stats", p("vdb_local.json"), "-q")
+        check("contour vdb local", r.returncode == 0 and r.stderr == "", r.stderr)
+        s = json.load(open(p("vdb_local.json")))
+        check("vdb local by boxes", s.get("reconstruction") == "local" and s["local_bricks"]["bricks"] == 1 and
+              s["samples"] == s["grid"][0] * s["grid"][1] * s["grid"][2], s)
+        r = run("eval", p("spot_vdb_local.ply"), p("spot_mesh.ply"), "--samples", "20000")
+        e = json.loads(r.stdout)
+        check("vdb local accurate", r.returncode == 0 and e["L1"] < poisson_l1 and e["recon_mesh"]["closed"] and
+              e["recon_mesh"]["manifold"] and e["recon_mesh"]["self_intersections"] == 0, r.stdout)
+        r = run("contour", p("spot.vdb"), "-o", p("spot_vdb_local2.ply"), "--depth", "7", "-q")
+        check("vdb local warns of Poisson options", r.returncode == 0 and "--depth set the Poisson" in r.stderr,
+              r.stderr)
+        expect_error("vdb local knn", ["contour", p("spot.vdb"), "-o", out, "--reconstruction", "local",
+                                       "--gradient", "knn"], "regular-triangulation gradients", [out])
         expect_error("vdb grid name", ["contour", p("spot.vdb"), "-o", out, "--grid", "density"], "no float grid named",
                      [out])
         open(p("junk.vdb"), "w").write("not a vdb")

@@ -149,6 +149,62 @@ TEST(LocalBrick, Float32GridsInBricksEqualOneBrickAndReportTheirReads) {
   EXPECT_EQ(pieces.triangles, whole.triangles);
 }
 
+TEST(LocalBrick, GridReadBlockByBlockEqualsTheGridInMemory) {
+  // A level set as a .vdb holds it (values clamped at 3 spacings, float32), read a block at a
+  // time: the same arrays as the grid in memory, and the blocks that cannot hold the surface
+  // (no value within 3 spacings: outside the leaves) are not read at all.
+  const Grid g =
+      sample_grid(*make_builtin_shape("sphere"), 40,
+                  Bounds{Eigen::Vector3d::Constant(-1.5), Eigen::Vector3d::Constant(1.5)});
+  const double h = g.spacing().maxCoeff();
+  std::vector<float> values(std::size_t(g.values.size()));
+  for (Eigen::Index i = 0; i < g.values.size(); ++i)
+    values[std::size_t(i)] = float(std::clamp(g.values[i], -3 * h, 3 * h));
+  GridView view = view_of(g);
+  view.data = values.data();
+  view.type = ScalarType::Float32;
+  LocalBrickOptions o;  // halos of 12 samples, as in the test above
+  o.untangle = false;
+  o.carve = false;
+  o.band.band = 1;
+  o.band.margin = 0;
+  o.split_sag = 0;
+  o.thin_parts = 0;
+  o.band.truncation_mode = TruncationMode::Given;
+  o.band.truncation = float(3 * h);
+  const Mesh whole = local_mesh_in_bricks(view, o, 0);
+  ASSERT_GT(whole.triangles.rows(), 1000);
+
+  BlockedGrid blocked;
+  static_cast<GridGeometry&>(blocked) = static_cast<const GridGeometry&>(view);
+  int reads = 0;
+  blocked.read = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    ++reads;
+    std::vector<float> block;
+    for (int i = lo[0]; i < hi[0]; ++i)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        for (int k = lo[2]; k < hi[2]; ++k) block.push_back(values[view.index(i, j, k)]);
+    return block;
+  };
+  int unread = 0;
+  blocked.may_hold_surface = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    for (int i = lo[0]; i < hi[0]; ++i)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        for (int k = lo[2]; k < hi[2]; ++k)
+          if (std::abs(values[view.index(i, j, k)]) < float(3 * h)) return true;
+    ++unread;
+    return false;
+  };
+  const Mesh pieces = local_mesh_in_bricks(blocked, o, 10);  // 64 bricks
+  EXPECT_EQ(pieces.vertices, whole.vertices);
+  EXPECT_EQ(pieces.triangles, whole.triangles);
+  EXPECT_GE(unread, 8);  // the corners' bricks, at least, hold no surface
+  EXPECT_GE(reads, 64 - unread);
+  // Its truncation cannot be found from the whole grid, which is never read at once.
+  LocalBrickOptions auto_truncation;
+  EXPECT_THROW(local_mesh_in_bricks(blocked, auto_truncation, 10), Error);
+}
+
 TEST(LocalBrick, NothingReadsTheGridAfterABrickSaysItIsDone) {
   // Values spoilt (NaN) from the first grid_read on change nothing: the bricks free their
   // copied blocks there. Default options, so the carving reads the grid before it.

@@ -20,8 +20,18 @@ namespace sdfcontour::cli {
 
 namespace {
 
+// Whether a .vdb level set is read a box at a time for GCP's local reconstruction (else sparse,
+// as scattered samples).
+bool vdb_read_by_boxes(const ContourOptions& opt) {
+  const bool local =
+      opt.reconstruction == Reconstruction::Local ||
+      (opt.reconstruction == Reconstruction::Auto &&
+       opt.gradient_source == GradientSource::Regular && std::isfinite(opt.band.band));
+  return opt.method == Method::Gcp && opt.want_mesh && local;
+}
+
 LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint64_t seed,
-                       const std::string& grid_name) {
+                       const std::string& grid_name, bool vdb_by_boxes) {
   LoadedInput loaded;
   if (is_builtin_spec(spec)) {
     const BuiltinSpec b = parse_builtin_spec(spec);
@@ -31,6 +41,12 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
     } else {
       loaded.input = grid_input(sample_grid(*loaded.shape, b.resolution, bounds));
     }
+    return loaded;
+  }
+  if (is_vdb_path(spec) && vdb_by_boxes) {
+    VdbLayout layout;
+    loaded.input = BlockedGridInput{vdb_blocked_grid(spec, grid_name, &layout)};
+    loaded.vdb_background = layout.background;
     return loaded;
   }
   if (is_vdb_path(spec)) {
@@ -83,8 +99,8 @@ void warn_of_options_not_read(const ContourArgs& a, const ContourOptions& opt,
   } else if (const std::string local = given_names(a.local_options); !local.empty()) {
     std::cerr << "sdfcontour: warning: " << local
               << " set the local reconstruction, and this is the Poisson one (scattered "
-                 "samples, .vdb level sets and --reconstruction poisson take it): give a grid "
-                 "and --reconstruction local for it\n";
+                 "samples and --reconstruction poisson take it): give a grid or a .vdb level "
+                 "set and --reconstruction local for it\n";
   }
 }
 
@@ -182,7 +198,8 @@ int run_contour(const ContourArgs& a) {
 
   const auto t0 = std::chrono::steady_clock::now();
   a.run.say("reading " + a.input);
-  LoadedInput in = load_input(a.input, parse_bounds(a.bounds), a.seed, a.grid);
+  LoadedInput in =
+      load_input(a.input, parse_bounds(a.bounds), a.seed, a.grid, vdb_read_by_boxes(opt));
   // A level set's background is its truncation distance, unless one is given.
   if (in.vdb_background > 0 && opt.band.truncation_mode == TruncationMode::Auto) {
     opt.band.truncation_mode = TruncationMode::Given;
@@ -287,9 +304,10 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                 "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
                 "crosses, from the contact points near it; topology from the samples' signs; "
                 "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
-                "and carving), or 'auto' (local for grids and Python's callables: 0.22x / 0.20x "
-                "marching cubes' L1 on the shared meshes at 32^3 / 64^3, Poisson 0.31x / 0.34x; "
-                "docs/local.md). Scattered samples and .vdb level sets always take poisson")
+                "and carving), or 'auto' (local for grids, .vdb level sets and Python's callables: "
+                "0.22x / 0.20x marching cubes' L1 on the shared meshes at 32^3 / 64^3, Poisson "
+                "0.31x / 0.34x; docs/local.md). A .vdb level set is then read box by box, never "
+                "whole; scattered samples always take poisson")
       ->capture_default_str();
   c->add_option("--adaptivity", a.adaptivity,
                 "Merge the mesh where the surface is flat enough: edges collapse while the merged "
@@ -444,11 +462,13 @@ Command add_contour_command(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "contour",
       "Contour SDF samples (grid .npy, scattered .npy, OpenVDB level set .vdb or builtin:NAME@N)");
-  c->add_option("input", a->input,
-                "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
-                "x,y,z,value, an OpenVDB float level set .vdb (read sparse; its voxel size and "
-                "transform are used), or a built-in shape builtin:NAME@N (N^3 grid) / "
-                "builtin:NAME@random:COUNT; NAME is one of sphere, torus, box, plate, shell, csg")
+  c->add_option(
+       "input", a->input,
+       "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
+       "x,y,z,value, an OpenVDB float level set .vdb (its transform places it; for GCP's "
+       "local reconstruction read box by box on its voxels' grid, else sparse as "
+       "scattered samples; never densified whole), or a built-in shape builtin:NAME@N (N^3 grid) / "
+       "builtin:NAME@random:COUNT; NAME is one of sphere, torus, box, plate, shell, csg")
       ->required();
   c->add_option("-o,--output", a->output,
                 "Mesh to write (.ply binary by default, .obj, .off or binary .stl)");

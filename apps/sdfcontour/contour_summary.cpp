@@ -180,6 +180,8 @@ nlohmann::json contour_summary_json(const ContourArgs& a, const ContourOptions& 
   j["samples"] = r.samples;
   const GridView* grid = grid_view_of(in.input);
   if (grid) j["grid"] = grid->dims;
+  if (const auto* blocked = std::get_if<BlockedGridInput>(&in.input))
+    j["grid"] = blocked->grid.dims;
   add_input_checks(j, a, r);
   add_stage_counts(j, opt, r);
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};

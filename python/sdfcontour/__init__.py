@@ -32,7 +32,8 @@ from ._arguments import METHODS  # noqa: F401 (the method names, public)
 from ._arguments import (_bounds, _count_or_auto, _degree, _full_depth_within, _lipschitz, _options,
                          _poisson_options, _refine_dilation, _split_sag, _switch)
 from ._checks import ArgumentTypeError
-from ._running import _at_level, _from_path, _normals_of, _placement, _run
+from ._running import (_at_level, _from_path, _normals_of, _placement, _run, _run_vdb,
+                       _vdb_by_boxes)
 from ._warning_types import DroppedSamplesWarning, FallbackWarning, LipschitzWarning, RescaleWarning
 
 __all__ = ["Mesh", "contour", "contact_points", "poisson", "sample", "distances", "read_mesh", "write_mesh",
@@ -78,9 +79,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         A grid of signed distances (float32 or float64; read in place when C-contiguous),
         scattered samples (rows x, y, z, value), a function ``f(points (k, 3)) -> (k,)``
         that is sampled on a ``resolution``^3 grid only near the surface (see Notes), or a
-        path: a ``.npy`` (memory-mapped) or an OpenVDB ``.vdb`` float level set, read sparse as
-        the CLI reads it (its active voxels as samples, its voxel size the spacing, its
-        background the truncation).
+        path: a ``.npy`` (memory-mapped) or an OpenVDB ``.vdb`` float level set, read as the CLI
+        reads it (its background the truncation): for GCP's local reconstruction box by box on
+        its voxels' grid, never whole; otherwise sparse, its active voxels as scattered samples
+        with its voxel size as the spacing.
     bounds : (lo, hi), optional
         The grid's box: positions of the first and last samples, each a number or 3 numbers.
         Default (-1, 1). Ignored for scattered samples.
@@ -261,11 +263,20 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     >>> V, F = sdfcontour.contour(grid, bounds=(-1, 1), method="mc")
     >>> V, F = sdfcontour.contour(samples)                  # (n, 4) scattered samples
     """
-    sdf, sample_spacing, truncation_found = _from_path(sdf, grid_name)
-    if truncation_found is not None and truncation == "auto":
-        truncation = repr(truncation_found)  # a level set's background is its truncation
-    sdf = _at_level(sdf, level)
-    bounds = _placement(sdf, bounds, spacing, origin, resolution)
+    vdb = _vdb_by_boxes(sdf, method, reconstruction, gradient, band, level)
+    if vdb is not None:
+        sdf = vdb
+        if bounds is not None or spacing is not None or origin is not None:
+            raise ValueError("a .vdb level set places itself (its transform): give no bounds, "
+                             "spacing or origin")
+        if truncation == "auto":  # a level set's background is its truncation
+            truncation = repr(float(_sdfcontour.vdb_layout(vdb, grid_name or "")["background"]))
+    else:
+        sdf, sample_spacing, truncation_found = _from_path(sdf, grid_name)
+        if truncation_found is not None and truncation == "auto":
+            truncation = repr(truncation_found)  # a level set's background is its truncation
+        sdf = _at_level(sdf, level)
+        bounds = _placement(sdf, bounds, spacing, origin, resolution)
     o = _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_tolerance,
                  brick_size, brick_halo, depth, full_depth, alpha, samples_per_node, scale, boundary,
                  solver_tolerance, progress, finest_solver_tolerance)
@@ -301,8 +312,13 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         o["refine_dilation"] = _refine_dilation(refine_dilation)
     refine = _switch("refine", refine)
     o["fallback_to_mc"] = not _checks.flag("strict", strict)
-    out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing,
-               _lipschitz(lipschitz))
+    if vdb is not None:
+        if resolution is not None:
+            raise ValueError("resolution is for a callable SDF; a grid has its own shape")
+        out = _run_vdb(vdb, grid_name, o)
+    else:
+        out = _run(sdf, bounds, resolution, batch_size, o, True, False, sample_spacing,
+                   _lipschitz(lipschitz))
     # Options that the reconstruction which ran does not read are said (the CLI's warning).
     given = locals()
     ran = out["stats"].get("reconstruction")
@@ -315,8 +331,8 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
                            "reconstruction='poisson' for it", stacklevel=2)
         elif other_given:
             _warnings.warn(", ".join(other_given) + " set the local reconstruction, and this is "
-                           "the Poisson one (scattered samples and .vdb level sets take it): pass "
-                           "a grid or a callable with reconstruction='local' for it",
+                           "the Poisson one (scattered samples take it): pass a grid or a "
+                           "callable with reconstruction='local' for it",
                            stacklevel=2)
     if callable(sdf) and method == "gcp" and refine != "off":
         from ._callable import refine_on_zero_set

@@ -48,6 +48,25 @@ def _from_path(sdf, grid_name):
     raise ValueError(f"cannot read '{path}': give a .npy or .vdb path, an array or a callable")
 
 
+def _vdb_by_boxes(sdf, method, reconstruction, gradient, band, level):
+    """The path of a .vdb level set that GCP's local reconstruction reads box by box (as the CLI
+    does: a mesh of GCP on a finite band, the level set's own zero set), or None."""
+    import os
+    if not isinstance(sdf, (str, os.PathLike)) or not os.fspath(sdf).lower().endswith(".vdb"):
+        return None
+    local = reconstruction == "local" or (reconstruction == "auto" and gradient == "regular" and
+                                          not (isinstance(band, str) and band == "all"))
+    return os.fspath(sdf) if method == "gcp" and local and level == 0 else None
+
+
+def _run_vdb(path, grid_name, options):
+    """A .vdb level set read box by box, never whole, for GCP's local reconstruction; its
+    background is its truncation unless one is given."""
+    options = dict(options)
+    callback = options.pop("progress_callback", None)
+    return _sdfcontour.contour_vdb(path, grid_name or "", options, callback)
+
+
 def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_points, lipschitz):
     """A callable sampled near the surface and contoured; memory follows the surface. Marching
     cubes and GCP's local reconstruction go brick by brick; the other methods, and contact points
@@ -208,6 +227,9 @@ def _normals_of(sdf, bounds, resolution, out, batch_size):
     """Unit vertex normals of out["V"] from the field (see contour's Returns)."""
     from . import _normals
     V = out["V"]
+    if isinstance(sdf, str) and sdf.lower().endswith(".vdb"):  # read box by box: the mesh's own
+        from ._callable import vertex_normals
+        return vertex_normals(V, out["F"])
     if callable(sdf):
         lo, hi = _bounds(bounds)
         h = float(((hi - lo) / (int(resolution) - 1)).max())

@@ -212,6 +212,44 @@ std::vector<float> read_vdb_box(const std::string& path, const std::string& grid
   return values;
 }
 
+BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_name,
+                             VdbLayout* layout_out) {
+  const VdbLayout layout = read_vdb_layout(path, grid_name);
+  if (layout.leaf_origins.empty())
+    throw Error("grid '" + layout.grid_name + "' in '" + path + "' has no active voxels");
+  BlockedGrid grid;
+  std::array<int, 3> first;
+  for (int a = 0; a < 3; ++a) {
+    first[a] = layout.min[a] - 1;
+    const long long n = (long long)layout.max[a] - first[a] + 2;
+    if (n > (1 << 30)) throw Error("the level set in '" + path + "' is too large a grid");
+    grid.dims[a] = int(n);
+    grid.bounds.min[a] = layout.origin[a] + layout.voxel_size * first[a];
+    grid.bounds.max[a] = layout.origin[a] + layout.voxel_size * (first[a] + grid.dims[a] - 1);
+  }
+  const std::string name = layout.grid_name;
+  grid.read = [path, name, first](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    std::array<int, 3> at, dims;
+    for (int a = 0; a < 3; ++a) at[a] = first[a] + lo[a], dims[a] = hi[a] - lo[a];
+    return read_vdb_box(path, name, at, dims);
+  };
+  // The leaves (8^3 voxels) in grid indices: outside them every voxel is inactive, its value the
+  // signed background (the band's half width), so no sign changes there.
+  std::vector<std::array<int, 3>> leaves;
+  for (const auto& o : layout.leaf_origins)
+    leaves.push_back({o[0] - first[0], o[1] - first[1], o[2] - first[2]});
+  grid.may_hold_surface = [leaves](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    for (const auto& o : leaves) {
+      bool meets = true;
+      for (int a = 0; a < 3; ++a) meets = meets && o[a] < hi[a] && o[a] + 8 > lo[a];
+      if (meets) return true;
+    }
+    return false;
+  };
+  if (layout_out) *layout_out = layout;
+  return grid;
+}
+
 void write_vdb_level_set(const std::string& path, const Grid& grid, double half_width,
                          const std::string& name) {
   const Eigen::Vector3d h = grid.spacing();

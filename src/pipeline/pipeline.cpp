@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "pipeline/enum_names.h"
@@ -154,9 +155,30 @@ BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* sca
   });
 }
 
+// A grid read a block at a time (a .vdb level set): GCP's local reconstruction brick by brick,
+// the values taken as distances (a level set's are), nothing measured of the whole grid.
+ContourResult contour_blocked_grid(const BlockedGrid& grid, const ContourOptions& options) {
+  validate_grid_geometry(grid);
+  if (options.method != Method::Gcp || !options.want_mesh ||
+      options.reconstruction == Reconstruction::Poisson ||
+      options.gradient_source != GradientSource::Regular || !std::isfinite(options.band.band))
+    throw Error(
+        "a grid read block by block (a .vdb level set) takes GCP's local reconstruction to a "
+        "mesh, with regular-triangulation gradients and a finite band: read it as scattered "
+        "samples for the rest");
+  ContourResult result;
+  const double samples = double(grid.dims[0]) * grid.dims[1] * grid.dims[2];
+  result.samples = int(std::min(samples, double(std::numeric_limits<int>::max())));
+  Stages stages(result, options);
+  detail::reconstruct_in_bricks(grid, options.band, options, result, stages);
+  return result;
+}
+
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
+  if (const auto* blocked = std::get_if<BlockedGridInput>(&input))
+    return contour_blocked_grid(blocked->grid, options);
   const detail::GridSource grid = detail::grid_source_of(input);
   const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
   check_input_for_method(grid, scattered, shape, options, measured);

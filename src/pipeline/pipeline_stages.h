@@ -126,6 +126,9 @@ bool bricked_local(const GridView* grid, const ContourOptions& options);
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
                            const ContourOptions& options, ContourResult& result, Stages& stages,
                            const std::function<void()>& grid_read = {});
+/// The same for a grid read a block at a time (its band's truncation given or none).
+void reconstruct_in_bricks(const BlockedGrid& grid, const BandOptions& band,
+                           const ContourOptions& options, ContourResult& result, Stages& stages);
 
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
                          const ContourOptions& options, ContourResult& result, Stages& stages);

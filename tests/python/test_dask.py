@@ -237,7 +237,8 @@ def test_bad_input_is_one_clear_error(client, call, kind, words):
 
 def test_openvdb_level_set_read_box_by_box(client, tmp_path):
     # Split by its active leaves, never densified whole: the same mesh as marching cubes on the
-    # level set's box read in one piece, and next to GCP's mesh of the same file.
+    # level set's box read in one piece, and next to GCP's mesh of the same file, which is the
+    # single process's.
     import subprocess
     root = os.path.join(os.path.dirname(__file__), "..", "..")
     cli = os.environ.get("SDFCONTOUR_CLI", os.path.join(root, "build", "sdfcontour"))
@@ -253,6 +254,10 @@ def test_openvdb_level_set_read_box_by_box(client, tmp_path):
     assert_closed_manifold(F)
     V_gcp, F_gcp = sdfcontour.contour(vdb)
     assert sdfcontour.distances(V, F, V_gcp, F_gcp, samples=20000)["L1"] < 0.5 * (2 / 63)
+    # GCP's local reconstruction of the file, read box by box in one process (the default for a
+    # .vdb) and on Dask in bricks of 32: the same mesh.
+    assert_same_mesh(sdfcontour.dask.contour(vdb, method="gcp", brick=32, client=client),
+                     (V_gcp, F_gcp))
     with pytest.raises(ValueError, match="places itself"):
         sdfcontour.dask.contour(vdb, bounds=(-1, 1), client=client)
     with pytest.raises(ValueError, match="no float grid named"):

@@ -4,6 +4,7 @@
 #include <memory>
 #include <variant>
 
+#include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/samples.h"
 #include "sdfcontour/input/sparse_grid.h"
 
@@ -32,7 +33,14 @@ struct SparseGridInput {
   double gradient_norm = 1;
 };
 
-using SdfInput = std::variant<GridInput, ScatteredInput, SparseGridInput>;
+/// A grid read a block at a time (an OpenVDB level set in its file: vdb_blocked_grid): GCP's
+/// local reconstruction runs on it brick by brick, its values taken as distances, with the
+/// options' band truncation (a level set's background) resolved, never found from the whole grid.
+struct BlockedGridInput {
+  BlockedGrid grid;
+};
+
+using SdfInput = std::variant<GridInput, ScatteredInput, SparseGridInput, BlockedGridInput>;
 
 /// An input that owns `grid`.
 SdfInput grid_input(Grid grid);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/samples.h"
 
 namespace sdfcontour {
@@ -46,6 +47,14 @@ VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name 
 /// the signed background), read from the part of the file that the box needs.
 std::vector<float> read_vdb_box(const std::string& path, const std::string& grid_name,
                                 const std::array<int, 3>& first, const std::array<int, 3>& dims);
+
+/// The level set as a grid read box by box, never densified whole (as sdfcontour.dask reads it):
+/// the active voxels' bounding box grown by one voxel, its samples at the voxels' world
+/// positions; a block is read from the part of the file it needs (inactive voxels hold the signed
+/// background), and a block that meets no leaf with active voxels cannot hold the surface.
+/// `layout` (optional) gets the file's layout (the background is the band's half width).
+BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_name = "",
+                             VdbLayout* layout = nullptr);
 
 /// Writes `grid` as a float level set named `name`: voxels with |value| < half_width * h are
 /// active, the rest is background (+-half_width * h); the transform maps voxel (i,j,k) to the

@@ -136,8 +136,9 @@ struct ContourOptions {
   BandOptions band;
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
-  /// GCP's mesh. Auto: local for grids (auto_local_reconstruction). Local needs a grid's cells:
-  /// scattered samples and .vdb level sets always take Poisson.
+  /// GCP's mesh. Auto: local for grids (auto_local_reconstruction), and for a grid read block by
+  /// block (BlockedGridInput: a .vdb level set), which takes nothing else. Local needs a grid's
+  /// cells: scattered samples always take Poisson.
   Reconstruction reconstruction = Reconstruction::Auto;
   LocalReconstructionOptions local;
   /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no

@@ -23,6 +23,7 @@
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/contact_points.h"
 #include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/samples.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 #include "sdfcontour/reconstruction/local_reconstruction.h"
@@ -202,6 +203,14 @@ struct LocalBricksStats {
 /// `contact_points` (optional, with options.keep_contact_points): every brick's owned contact
 /// points joined in sample order (the same for any bricks).
 Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& options, int brick = 0,
+                          LocalBricksStats* stats = nullptr,
+                          OrientedPoints* contact_points = nullptr);
+
+/// The same for a grid read a block at a time (each brick's block with its halo, float32); its
+/// band's truncation must be resolved already (TruncationMode None, Given or Resolved: the whole
+/// grid is never read at once). Bricks whose own samples, grown by one, cannot hold the surface
+/// (BlockedGrid::may_hold_surface) are not read.
+Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& options, int brick,
                           LocalBricksStats* stats = nullptr,
                           OrientedPoints* contact_points = nullptr);
 

@@ -44,9 +44,16 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
   return block;
 }
 
-LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Index3& own_end,
+// Reads the samples [lo, hi) of the whole grid into `floats` or `doubles` and views them.
+using BlockRead = std::function<GridView(const Index3& lo, const Index3& hi,
+                                         std::vector<float>& floats, std::vector<double>& doubles)>;
+
+// The piece that a brick owns, from its block read with a halo that doubles until its stars fit.
+// `whole_grid`: the grid itself where it is in memory (a block that is all of it is not copied).
+LocalPiece brick_piece(const Index3& dims, const BlockRead& read, const GridView* whole_grid,
+                       const Index3& own_first, const Index3& own_end,
                        const LocalBrickOptions& options, int& wider) {
-  int halo = local_brick_halo(options, grid.dims);
+  int halo = local_brick_halo(options, dims);
   std::vector<float> floats;
   std::vector<double> doubles;
   for (;;) {
@@ -54,14 +61,12 @@ LocalPiece brick_piece(const GridView& grid, const Index3& own_first, const Inde
     bool whole = true;
     for (std::size_t a = 0; a < 3; ++a) {
       lo[a] = std::max(own_first[a] - halo, 0);
-      hi[a] = std::min(own_end[a] + halo, grid.dims[a]);
-      whole = whole && lo[a] == 0 && hi[a] == grid.dims[a];
+      hi[a] = std::min(own_end[a] + halo, dims[a]);
+      whole = whole && lo[a] == 0 && hi[a] == dims[a];
     }
     try {
-      // A block that is the whole grid is the grid itself (no copy).
-      if (whole) return local_brick_piece(grid, own_first, own_end, options);
-      const GridView block = grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
-                                                              : copy_block(grid, lo, hi, doubles);
+      if (whole && whole_grid) return local_brick_piece(*whole_grid, own_first, own_end, options);
+      const GridView block = read(lo, hi, floats, doubles);
       if (options.grid_read) options.grid_read();
       // The copy goes as soon as the brick has read what it needs of it.
       LocalBrickOptions inner = options;
@@ -181,20 +186,18 @@ OrientedPoints join_owned_contact_points(const std::vector<LocalPiece>& pieces) 
   return out;
 }
 
-Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, int brick,
-                          LocalBricksStats* stats, OrientedPoints* contact_points) {
-  validate_grid(grid);
-  if (grid.whole[0] > 0 || grid.first != Index3{0, 0, 0})
-    throw Error("local_mesh_in_bricks needs a whole grid, not a block");
+namespace {
+
+// local_mesh_in_bricks of a grid `dims` across, read by `read`; bricks whose own samples grown by
+// one cannot hold the surface (`may_hold_surface`, if set) are left out unread.
+Mesh mesh_in_bricks(const Index3& dims, const BlockRead& read, const GridView* whole_grid,
+                    const std::function<bool(const Index3&, const Index3&)>& may_hold_surface,
+                    const LocalBrickOptions& options, int brick, LocalBricksStats* stats,
+                    OrientedPoints* contact_points) {
   if (brick < 0) throw Error("the brick size must be positive (0: one brick)");
-  LocalBrickOptions options = given;
-  if (options.band.truncation_mode == TruncationMode::Auto) {
-    options.band.resolved = resolve_truncation(grid, options.band);
-    options.band.truncation_mode = TruncationMode::Resolved;
-  }
-  const int side = brick > 0 ? brick : *std::max_element(grid.dims.begin(), grid.dims.end());
+  const int side = brick > 0 ? brick : *std::max_element(dims.begin(), dims.end());
   Index3 count;
-  for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] + side - 1) / side;
+  for (std::size_t a = 0; a < 3; ++a) count[a] = (dims[a] + side - 1) / side;
   const int total = count[0] * count[1] * count[2];
   std::vector<LocalPiece> pieces(static_cast<std::size_t>(total));
   std::vector<int> wider(std::size_t(total), 0);
@@ -202,20 +205,25 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
   // in parallel held as many bricks as the scheduler started: 27 GB at 1024³ on 16 threads).
   for (int b = 0; b < total; ++b) {
     const Index3 at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
-    Index3 first, end;
+    Index3 first, end, near_first, near_end;
     for (std::size_t a = 0; a < 3; ++a) {
       first[a] = at[a] * side;
-      end[a] = std::min(first[a] + side, grid.dims[a]);
+      end[a] = std::min(first[a] + side, dims[a]);
+      near_first[a] = std::max(first[a] - 1, 0);
+      near_end[a] = std::min(end[a] + 1, dims[a]);
     }
     check_cancel(options.cancel);
-    pieces[std::size_t(b)] = brick_piece(grid, first, end, options, wider[std::size_t(b)]);
-    if (options.grid_read) options.grid_read();
-    detail::return_free_memory();
+    if (!may_hold_surface || may_hold_surface(near_first, near_end)) {
+      pieces[std::size_t(b)] =
+          brick_piece(dims, read, whole_grid, first, end, options, wider[std::size_t(b)]);
+      if (options.grid_read) options.grid_read();
+      detail::return_free_memory();
+    }
     if (options.progress) options.progress(b + 1, total);
   }
   if (stats) {
     *stats = {};
-    stats->thin_parts = local_thin_parts(options, grid.dims);
+    stats->thin_parts = local_thin_parts(options, dims);
     for (std::size_t b = 0; b < pieces.size(); ++b) {
       const LocalPiece& p = pieces[b];
       stats->bricks += p.triangles.rows() > 0;
@@ -232,6 +240,51 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
   }
   if (contact_points) *contact_points = join_owned_contact_points(pieces);
   return join_local_pieces(std::move(pieces));
+}
+
+}  // namespace
+
+Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, int brick,
+                          LocalBricksStats* stats, OrientedPoints* contact_points) {
+  validate_grid(grid);
+  if (grid.whole[0] > 0 || grid.first != Index3{0, 0, 0})
+    throw Error("local_mesh_in_bricks needs a whole grid, not a block");
+  LocalBrickOptions options = given;
+  if (options.band.truncation_mode == TruncationMode::Auto) {
+    options.band.resolved = resolve_truncation(grid, options.band);
+    options.band.truncation_mode = TruncationMode::Resolved;
+  }
+  const BlockRead copy = [&](const Index3& lo, const Index3& hi, std::vector<float>& floats,
+                             std::vector<double>& doubles) {
+    return grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
+                                            : copy_block(grid, lo, hi, doubles);
+  };
+  return mesh_in_bricks(grid.dims, copy, &grid, {}, options, brick, stats, contact_points);
+}
+
+Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& options, int brick,
+                          LocalBricksStats* stats, OrientedPoints* contact_points) {
+  validate_grid_geometry(grid);
+  if (!grid.read) throw Error("a grid read block by block needs its reader");
+  if (options.band.truncation_mode == TruncationMode::Auto)
+    throw Error("a grid read block by block needs its truncation resolved (none, given or found)");
+  const BlockRead read = [&](const Index3& lo, const Index3& hi, std::vector<float>& floats,
+                             std::vector<double>&) {
+    floats = grid.read(lo, hi);
+    GridView block;
+    block.bounds = grid.bounds;
+    block.first = lo;
+    block.whole = grid.dims;
+    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+    if (floats.size() != block.size())
+      throw InternalError("a grid's reader gave " + std::to_string(floats.size()) +
+                          " values for a block of " + std::to_string(block.size()));
+    block.data = floats.data();
+    block.type = ScalarType::Float32;
+    return block;
+  };
+  return mesh_in_bricks(grid.dims, read, nullptr, grid.may_hold_surface, options, brick, stats,
+                        contact_points);
 }
 
 }  // namespace sdfcontour

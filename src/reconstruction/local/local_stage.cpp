@@ -80,9 +80,66 @@ bool bricked_local(const GridView* grid, const ContourOptions& options) {
           auto_local_reconstruction(*std::max_element(grid->dims.begin(), grid->dims.end())));
 }
 
-void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
-                           const ContourOptions& options, ContourResult& result, Stages& stages,
-                           const std::function<void()>& grid_read) {
+namespace {
+
+// The subspacing gaps of a grid in memory (parallel, windowed over a mapped file).
+SubspacingGaps subspacing_gaps_of(const GridView& grid, double value_scale) {
+  return count_subspacing_gaps(grid, value_scale);
+}
+
+// ... of a grid read a block at a time: each brick's block with the samples its edges need around
+// it, bricks that cannot hold the surface unread (no sign change, no value within the band).
+SubspacingGaps subspacing_gaps_of(const BlockedGrid& grid, double value_scale) {
+  SubspacingGaps sum;
+  const int side = kLocalBrick;
+  std::array<int, 3> count;
+  for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] + side - 1) / side;
+  for (int b = 0; b < count[0] * count[1] * count[2]; ++b) {
+    const std::array<int, 3> at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
+    std::array<int, 3> own_first, own_end, lo, hi;
+    for (std::size_t a = 0; a < 3; ++a) {
+      own_first[a] = at[a] * side;
+      own_end[a] = std::min(own_first[a] + side, grid.dims[a]);
+      lo[a] = std::max(own_first[a] - 1, 0);
+      hi[a] = std::min(own_end[a] + 2, grid.dims[a]);
+    }
+    if (grid.may_hold_surface && !grid.may_hold_surface(lo, hi)) continue;
+    const std::vector<float> values = grid.read(lo, hi);
+    GridView block;
+    block.bounds = grid.bounds;
+    block.first = lo;
+    block.whole = grid.dims;
+    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+    block.data = values.data();
+    block.type = ScalarType::Float32;
+    const SubspacingGaps piece = count_subspacing_gaps(block, own_first, own_end, value_scale);
+    sum.gaps += piece.gaps;
+    sum.crossings += piece.crossings;
+  }
+  return sum;
+}
+
+bool truncation_found(const GridView& grid, const BandOptions& band) {
+  return resolve_truncation(grid, band).detected();
+}
+bool truncation_found(const BlockedGrid&, const BandOptions& band) {
+  return resolve_truncation(Eigen::VectorXd(), band).detected();  // given, never found
+}
+
+// One brick up to 512 samples per axis for a grid in memory (its stages run in parallel inside
+// it), bricks of 512 beyond; a grid read block by block, which exists to bound memory, bricks of
+// 256 (as a callable's or Dask's).
+int default_brick(const GridView&) {
+  return kLocalGridBrick;
+}
+int default_brick(const BlockedGrid&) {
+  return kLocalBrick;
+}
+
+template <class AnyGrid>
+void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
+                                const ContourOptions& options, ContourResult& result,
+                                Stages& stages, const std::function<void()>& grid_read) {
   if (options.carve_sides == Switch::On || options.side_repair == Switch::On)
     throw Error(
         "carving's triangle rounds and side repair are whole-mesh stages: the local "
@@ -95,17 +152,14 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   // bricks, which must agree (none beyond kThinPartGridLimit: thin parts stay off there).
   const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
   if (lb.thin_parts < 0 && !lb.refine_zero_set && thin_parts_need_gaps(samples_per_axis)) {
-    result.subspacing_gaps = stages.run("gaps", "edges with a thin part across", [&] {
-      return count_subspacing_gaps(grid, band.value_scale);
-    });
+    result.subspacing_gaps = stages.run("gaps", "edges with a thin part across",
+                                        [&] { return subspacing_gaps_of(grid, band.value_scale); });
     lb.thin_parts = auto_thin_parts(samples_per_axis, *result.subspacing_gaps) ? 1 : 0;
   }
   if (options.progress_fraction)
     lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
-  // One brick up to 512 samples per axis (its stages run in parallel inside it); beyond, bricks
-  // of 512 bound the memory by a brick.
   const int size =
-      options.bricks.size == BrickOptions::kAutoSize ? kLocalGridBrick : options.bricks.size;
+      options.bricks.size == BrickOptions::kAutoSize ? default_brick(grid) : options.bricks.size;
   LocalBricksStats stats;
   // Adaptivity merges over the contact points, and --points writes the ones the mesh was made
   // from (the local reconstruction's options differ from the paper's): the bricks hand theirs on.
@@ -126,7 +180,7 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   // As on the Poisson path: a band the user narrowed is the user's error; values clamped too
   // close to the surface, or none that keeps a point, are no distances (contour() falls back).
   if (stats.contact_points == 0 && !lb.refine_zero_set) {
-    if (band.band > 0 && !resolve_truncation(grid, band).detected())
+    if (band.band > 0 && !truncation_found(grid, band))
       throw Error("no contact point: no sample within the band of " +
                   (std::ostringstream() << band.band).str() +
                   " spacings keeps one; widen it with --band (or --band all)");
@@ -146,6 +200,19 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
   result.band_spacing = grid.spacing().maxCoeff();
   if (result.mesh->triangles.rows() == 0)
     throw Error("the local reconstruction found no surface inside the grid");
+}
+
+}  // namespace
+
+void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
+                           const ContourOptions& options, ContourResult& result, Stages& stages,
+                           const std::function<void()>& grid_read) {
+  reconstruct_grid_in_bricks(grid, band, options, result, stages, grid_read);
+}
+
+void reconstruct_in_bricks(const BlockedGrid& grid, const BandOptions& band,
+                           const ContourOptions& options, ContourResult& result, Stages& stages) {
+  reconstruct_grid_in_bricks(grid, band, options, result, stages, {});
 }
 
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
