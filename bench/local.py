@@ -24,6 +24,10 @@ METHODS = {
     "gcp-poisson": ["--method", "gcp", "--reconstruction", "poisson"],
     "gcp-local": ["--method", "gcp", "--reconstruction", "local"],
     "gcp-local-thin": ["--method", "gcp", "--reconstruction", "local", "--thin-parts", "on"],
+    # The same grid as an OpenVDB level set (half width 3 spacings): local reads it box by box,
+    # Poisson sparse.
+    "gcp-local-vdb": ["--method", "gcp", "--reconstruction", "local"],
+    "gcp-poisson-vdb": ["--method", "gcp", "--reconstruction", "poisson"],
 }
 
 
@@ -124,6 +128,8 @@ def main():
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "sdfcontour-local"))
     ap.add_argument("--markdown", default="")
+    ap.add_argument("--truncate", type=float, default=0,
+                    help="sample the grids truncated at this many spacings (fast at 256^3); 0: exact")
     args = ap.parse_args()
     names = [m for m in args.meshes.split(",") if m] or sorted(
         f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
@@ -135,9 +141,10 @@ def main():
         for name in names:
             prefix = os.path.join(args.work, f"{name}{res}")
             if not os.path.exists(prefix + ".npy"):
+                truncate = ["--truncate", str(args.truncate)] if args.truncate > 0 else []
                 r = subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"), "--res",
-                                    str(res), "-o", prefix, "--quiet"], capture_output=True,
-                                   text=True)
+                                    str(res), "-o", prefix, "--quiet", *truncate],
+                                   capture_output=True, text=True)
                 if r.returncode != 0:  # e.g. thinner than a spacing at this grid
                     print(json.dumps({"mesh": name, "res": res, "skipped": r.stderr.strip()}),
                           flush=True)
@@ -146,8 +153,15 @@ def main():
             edge_points = sharp_edge_points(*read_ply(gt), step=h / 4)
             for method in methods:
                 out = prefix + f"_{method}.ply"
-                seconds, peak, _, err = timed([CLI, "contour", prefix + ".npy", "-o", out,
-                                               "--quiet", *METHODS[method]])
+                source = prefix + ".npy"
+                if method.endswith("-vdb"):
+                    source = prefix + ".vdb"
+                    if not os.path.exists(source):
+                        subprocess.run([CLI, "sample", os.path.join(MESHES, name + ".obj"),
+                                        "--res", str(res), "-o", source, "--quiet"], check=True,
+                                       capture_output=True)
+                seconds, peak, _, err = timed([CLI, "contour", source, "-o", out, "--quiet",
+                                               *METHODS[method]])
                 row = {"mesh": name, "res": res, "method": method, "seconds": seconds,
                        "peak_mb": peak}
                 if err is None:
