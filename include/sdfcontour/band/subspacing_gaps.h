@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 
+#include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/samples.h"
 
 namespace sdfcontour {
@@ -30,5 +31,10 @@ SubspacingGaps count_subspacing_gaps(const GridView& grid, std::array<int, 3> ow
 
 /// The counts over the whole of `grid`.
 SubspacingGaps count_subspacing_gaps(const GridView& grid, double value_scale = 1.0);
+
+/// The counts over the whole of a grid read a block at a time: bricks of `brick` samples a side,
+/// each read with the samples its edges need around it; bricks that cannot hold the surface
+/// (BlockedGrid::may_hold_surface: no sign change, so no value within a spacing) go unread.
+SubspacingGaps count_subspacing_gaps(const BlockedGrid& grid, double value_scale, int brick);
 
 }  // namespace sdfcontour

@@ -269,20 +269,7 @@ Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& opti
   if (options.band.truncation_mode == TruncationMode::Auto)
     throw Error("a grid read block by block needs its truncation resolved (none, given or found)");
   const BlockRead read = [&](const Index3& lo, const Index3& hi, std::vector<float>& floats,
-                             std::vector<double>&) {
-    floats = grid.read(lo, hi);
-    GridView block;
-    block.bounds = grid.bounds;
-    block.first = lo;
-    block.whole = grid.dims;
-    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
-    if (floats.size() != block.size())
-      throw InternalError("a grid's reader gave " + std::to_string(floats.size()) +
-                          " values for a block of " + std::to_string(block.size()));
-    block.data = floats.data();
-    block.type = ScalarType::Float32;
-    return block;
-  };
+                             std::vector<double>&) { return read_block(grid, lo, hi, floats); };
   return mesh_in_bricks(grid.dims, read, nullptr, grid.may_hold_surface, options, brick, stats,
                         contact_points);
 }

@@ -87,36 +87,9 @@ SubspacingGaps subspacing_gaps_of(const GridView& grid, double value_scale) {
   return count_subspacing_gaps(grid, value_scale);
 }
 
-// ... of a grid read a block at a time: each brick's block with the samples its edges need around
-// it, bricks that cannot hold the surface unread (no sign change, no value within the band).
+// ... of a grid read a block at a time, in the bricks that its local reconstruction reads.
 SubspacingGaps subspacing_gaps_of(const BlockedGrid& grid, double value_scale) {
-  SubspacingGaps sum;
-  const int side = kLocalBrick;
-  std::array<int, 3> count;
-  for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] + side - 1) / side;
-  for (int b = 0; b < count[0] * count[1] * count[2]; ++b) {
-    const std::array<int, 3> at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
-    std::array<int, 3> own_first, own_end, lo, hi;
-    for (std::size_t a = 0; a < 3; ++a) {
-      own_first[a] = at[a] * side;
-      own_end[a] = std::min(own_first[a] + side, grid.dims[a]);
-      lo[a] = std::max(own_first[a] - 1, 0);
-      hi[a] = std::min(own_end[a] + 2, grid.dims[a]);
-    }
-    if (grid.may_hold_surface && !grid.may_hold_surface(lo, hi)) continue;
-    const std::vector<float> values = grid.read(lo, hi);
-    GridView block;
-    block.bounds = grid.bounds;
-    block.first = lo;
-    block.whole = grid.dims;
-    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
-    block.data = values.data();
-    block.type = ScalarType::Float32;
-    const SubspacingGaps piece = count_subspacing_gaps(block, own_first, own_end, value_scale);
-    sum.gaps += piece.gaps;
-    sum.crossings += piece.crossings;
-  }
-  return sum;
+  return count_subspacing_gaps(grid, value_scale, kLocalBrick);
 }
 
 bool truncation_found(const GridView& grid, const BandOptions& band) {
