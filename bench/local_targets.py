@@ -64,10 +64,10 @@ def run_all(results):
 
 def ratios(rows, method, res):
     """{mesh: L1 / MC's L1} of `method` at `res` (the last row of each wins)."""
-    mc = {r["mesh"]: r.get("L1") for r in rows if r["res"] == res and r["method"] == "mc"}
+    mc = {r["mesh"]: r.get("L1") for r in rows if r["res"] == res and r.get("method") == "mc"}
     out = {}
     for r in rows:
-        if r["res"] == res and r["method"] == method and r.get("L1") and mc.get(r["mesh"]):
+        if r["res"] == res and r.get("method") == method and r.get("L1") and mc.get(r["mesh"]):
             out[r["mesh"]] = r["L1"] / mc[r["mesh"]]
     return out
 
@@ -104,7 +104,7 @@ def coarse_rows(acc):
     local = ratios(acc, "gcp-local", 16)
     if not local:
         return []
-    fallback = [r["mesh"] for r in acc if r["res"] == 16 and r["method"] == "gcp-local" and
+    fallback = [r["mesh"] for r in acc if r["res"] == 16 and r.get("method") == "gcp-local" and
                 r.get("error")]
     mean = geomean(list(local.values()))
     return [f"| 16³: no whole-mesh fallback, geometric mean ≤ 0.45x MC's | {mean:.3f}x over "
@@ -114,10 +114,10 @@ def coarse_rows(acc):
 
 
 def topology_rows(acc):
-    bad = [f"{r['mesh']} {r['res']}³" for r in acc if r["method"] == "gcp-local" and
+    bad = [f"{r['mesh']} {r['res']}³" for r in acc if r.get("method") == "gcp-local" and
            r.get("L1") and not (r.get("closed") and r.get("manifold") and
                                 r.get("self_intersections") == 0)]
-    runs = sum(1 for r in acc if r["method"] == "gcp-local" and r.get("L1"))
+    runs = sum(1 for r in acc if r.get("method") == "gcp-local" and r.get("L1"))
     return [f"| closed, 2-manifold, no self-intersection on every shared mesh and grid | "
             f"{runs - len(bad)} of {runs} runs; not: {', '.join(bad) or 'none'} | "
             f"{verdict(not bad)} | |"]
@@ -125,9 +125,9 @@ def topology_rows(acc):
 
 def edge_rows(acc):
     at = {r["mesh"]: r.get("edge_distance_h") for r in acc
-          if r["res"] == 64 and r["method"] == "gcp-local" and r["mesh"] in SHARP}
+          if r["res"] == 64 and r.get("method") == "gcp-local" and r["mesh"] in SHARP}
     mc = {r["mesh"]: r.get("edge_distance_h") for r in acc
-          if r["res"] == 64 and r["method"] == "mc" and r["mesh"] in SHARP}
+          if r["res"] == 64 and r.get("method") == "mc" and r["mesh"] in SHARP}
     if not at:
         return []
     text = ", ".join(f"{m} {at[m]:.3f} h (MC {mc.get(m, float('nan')):.3f})" for m in SHARP
@@ -193,13 +193,14 @@ def cost_rows(scale):
 
 def write_page(results, out):
     acc = read_jsonl(os.path.join(results, "accuracy.jsonl"))
+    repo = os.path.join(HERE, "..")
+    link = os.path.relpath(results, os.path.dirname(os.path.abspath(out)))
     lines = ["# Issue 35's targets, measured", "",
-             "`/usr/bin/python3 bench/local_targets.py --results " + os.path.relpath(results) +
-             "` (bench/local_targets.py; `--run` measures again). GCP's local reconstruction "
-             "(`gcp-local`, the default on grids) against marching cubes (MC) on the 17 shared "
-             "meshes; ratios are of L1 to MC's on the same grid. Results: "
-             f"[{os.path.relpath(results, os.path.dirname(out))}]"
-             f"({os.path.relpath(results, os.path.dirname(out))}).", "",
+             "`/usr/bin/python3 bench/local_targets.py --results " +
+             os.path.relpath(results, repo) + "` (bench/local_targets.py; `--run` measures "
+             "again). GCP's local reconstruction (`gcp-local`, the default on grids) against "
+             "marching cubes (MC) on the 17 shared meshes; ratios are of L1 to MC's on the same "
+             f"grid. The results, and which run made each: [{link}]({link}).", "",
              "| target | measured | verdict | why, where missed |", "|---|---|---|---|"]
     lines += accuracy_rows(acc)
     lines += coarse_rows(acc)
@@ -253,7 +254,7 @@ def vdb_table(vdb):
              "|---|---|---|---|---|---|"]
     for res in sorted({r["res"] for r in vdb}):
         local, poisson = ratios(vdb, "gcp-local-vdb", res), ratios(vdb, "gcp-poisson-vdb", res)
-        secs = {(r["mesh"], r["method"]): r.get("seconds") for r in vdb if r["res"] == res}
+        secs = {(r["mesh"], r.get("method")): r.get("seconds") for r in vdb if r["res"] == res}
         for mesh in sorted(local):
             lines.append(f"| {mesh} | {res}³ | {local[mesh]:.3f} | {poisson.get(mesh, np.nan):.3f}"
                          f" | {secs.get((mesh, 'gcp-local-vdb'), np.nan):.1f}"
