@@ -219,10 +219,32 @@ def write_page(results, out):
               "`LocalBrick.BricksEqualOneBrickBitForBit`, `LocalBrick.GridReadBlockByBlockEquals"
               "TheGridInMemory`, tests/python/test_dask.py (Dask bricks equal one process) | "
               "**met** | |", ""]
+    lines += pictures(out)
     lines += per_mesh_tables(acc)
     lines += vdb_table(read_jsonl(os.path.join(results, "vdb.jsonl")))
     with open(out, "w") as f:
         f.write("\n".join(lines) + "\n")
+
+
+# The figures that go with the targets (made by the scripts named), where they exist.
+FIGURES = (
+    ("local_renders.png", "One CAD and one organic mesh at 32³: MC, GCP-Poisson, GCP-local "
+     "(bench/local_renders.py)"),
+    ("thin_part_renders.png", "Parts thinner than a spacing at 256³ (bench/local_renders.py "
+     "--thin-parts)"),
+    ("sharp_edges_hammer64.png", "The hammer's sharp-edge points at 64³ by their distance to MC's "
+     "and GCP-local's meshes (bench/sharp_edges.py)"),
+    ("scale_session22.png", "Time against scikit-image, 64³ to 512³ (bench/scale_plot.py)"),
+)
+
+
+def pictures(out):
+    img = os.path.join(os.path.dirname(os.path.abspath(out)), "img")
+    lines = ["## Pictures", ""]
+    for name, caption in FIGURES:
+        if os.path.exists(os.path.join(img, name)):
+            lines += [f"![{caption}](img/{name})", "", f"*{caption}*", ""]
+    return lines if len(lines) > 2 else []
 
 
 def per_mesh_tables(acc):
