@@ -175,26 +175,8 @@ TEST(LocalBrick, GridReadBlockByBlockEqualsTheGridInMemory) {
   const Mesh whole = local_mesh_in_bricks(view, o, 0);
   ASSERT_GT(whole.triangles.rows(), 1000);
 
-  BlockedGrid blocked;
-  static_cast<GridGeometry&>(blocked) = static_cast<const GridGeometry&>(view);
-  int reads = 0;
-  blocked.read = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
-    ++reads;
-    std::vector<float> block;
-    for (int i = lo[0]; i < hi[0]; ++i)
-      for (int j = lo[1]; j < hi[1]; ++j)
-        for (int k = lo[2]; k < hi[2]; ++k) block.push_back(values[view.index(i, j, k)]);
-    return block;
-  };
-  int unread = 0;
-  blocked.may_hold_surface = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
-    for (int i = lo[0]; i < hi[0]; ++i)
-      for (int j = lo[1]; j < hi[1]; ++j)
-        for (int k = lo[2]; k < hi[2]; ++k)
-          if (std::abs(values[view.index(i, j, k)]) < float(3 * h)) return true;
-    ++unread;
-    return false;
-  };
+  int reads = 0, unread = 0;
+  const BlockedGrid blocked = test::blocked_grid_of(view, values, float(3 * h), reads, unread);
   const Mesh pieces = local_mesh_in_bricks(blocked, o, 10);  // 64 bricks
   EXPECT_EQ(pieces.vertices, whole.vertices);
   EXPECT_EQ(pieces.triangles, whole.triangles);

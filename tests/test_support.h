@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/mesh_sdf.h"
 #include "sdfcontour/input/mesh_transform.h"
 #include "sdfcontour/input/samples.h"
@@ -143,6 +144,34 @@ inline double nearest_row_distance(const PointMatrix& rows, const Eigen::Vector3
   for (Eigen::Index r = 0; r < rows.rows(); ++r)
     nearest = std::min(nearest, (rows.row(r).transpose() - p).norm());
   return nearest;
+}
+
+/// The float32 grid `values` (viewed by `view`) as a grid read a block at a time: each read
+/// counted in `reads`, and a block whose every |value| is at least `band` said to hold no surface
+/// (counted in `unread`), as a level set's blocks outside its leaves.
+inline BlockedGrid blocked_grid_of(const GridView& view, const std::vector<float>& values,
+                                   float band, int& reads, int& unread) {
+  BlockedGrid blocked;
+  static_cast<GridGeometry&>(blocked) = static_cast<const GridGeometry&>(view);
+  auto each = [&view](const std::array<int, 3>& lo, const std::array<int, 3>& hi, auto&& f) {
+    for (int i = lo[0]; i < hi[0]; ++i)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        for (int k = lo[2]; k < hi[2]; ++k) f(view.index(i, j, k));
+  };
+  blocked.read = [&, each](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    ++reads;
+    std::vector<float> block;
+    each(lo, hi, [&](std::size_t at) { block.push_back(values[at]); });
+    return block;
+  };
+  blocked.may_hold_surface = [&, each, band](const std::array<int, 3>& lo,
+                                             const std::array<int, 3>& hi) {
+    bool near = false;
+    each(lo, hi, [&](std::size_t at) { near = near || std::abs(values[at]) < band; });
+    unread += !near;
+    return near;
+  };
+  return blocked;
 }
 
 }  // namespace sdfcontour::test
