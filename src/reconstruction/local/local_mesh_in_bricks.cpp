@@ -1,6 +1,6 @@
-// A whole grid's local reconstruction from its bricks (local_brick.h): each brick's block copied
-// out with a halo, one brick after another (each parallel inside), the pieces joined by their
-// vertices' keys.
+// A whole grid's local reconstruction from its bricks (local_brick.h): each brick's block read with
+// a halo (copied out of a grid in memory, or read from a file: BlockedGrid), one brick after
+// another (each parallel inside), the pieces joined by their vertices' keys.
 
 #include <tbb/parallel_for.h>
 
