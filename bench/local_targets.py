@@ -62,13 +62,14 @@ def run_all(results):
                    stdout=open(os.path.join(results, "scale.jsonl"), "a"))
 
 
-def ratios(rows, method, res):
-    """{mesh: L1 / MC's L1} of `method` at `res` (the last row of each wins)."""
-    mc = {r["mesh"]: r.get("L1") for r in rows if r["res"] == res and r.get("method") == "mc"}
+def ratios(rows, method, res, key="L1"):
+    """{mesh: L1 / MC's L1} (or another distance `key`) of `method` at `res` (the last row of
+    each mesh wins)."""
+    mc = {r["mesh"]: r.get(key) for r in rows if r["res"] == res and r.get("method") == "mc"}
     out = {}
     for r in rows:
-        if r["res"] == res and r.get("method") == method and r.get("L1") and mc.get(r["mesh"]):
-            out[r["mesh"]] = r["L1"] / mc[r["mesh"]]
+        if r["res"] == res and r.get("method") == method and r.get(key) and mc.get(r["mesh"]):
+            out[r["mesh"]] = r[key] / mc[r["mesh"]]
     return out
 
 
@@ -250,7 +251,7 @@ def pictures(out):
 def per_mesh_tables(acc):
     """Per mesh and grid: L1 / MC's of each method, and local's sharp-edge distance."""
     methods = ("mt-rt", "gcp-poisson", "gcp-local")
-    lines = ["## Per mesh (L1 over MC's)", ""]
+    lines = ["## Per mesh (L1 over MC's; the last row: L∞ over MC's)", ""]
     for res in sorted({r["res"] for r in acc}):
         table = {m: ratios(acc, m, res) for m in methods}
         meshes = sorted(set().union(*[set(t) for t in table.values()]))
@@ -264,6 +265,9 @@ def per_mesh_tables(acc):
         lines.append("| **geometric mean** | " + " | ".join(
             f"**{geomean(list(table[m].values())):.3f}**" if table[m] else "–"
             for m in methods) + " |")
+        linf = {m: ratios(acc, m, res, "Linf") for m in methods}
+        lines.append("| L∞ over MC's, geometric mean | " + " | ".join(
+            f"{geomean(list(linf[m].values())):.3f}" if linf[m] else "–" for m in methods) + " |")
         lines.append("")
     return lines
 
