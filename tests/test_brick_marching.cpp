@@ -81,6 +81,29 @@ TEST(BrickMarching, JoinedPiecesAreTheWholeGridsMeshBitForBit) {
   }
 }
 
+TEST(BrickMarching, GridReadBlockByBlockGivesTheWholeGridsMesh) {
+  // wingnut clamped at 3 spacings, as a level set holds it, read a block at a time (bricks of 6
+  // and 9 cells): marching cubes of the grid in memory, the blocks far from the surface unread.
+  const Grid grid = test::shared_mesh_grid("wingnut", 37);
+  const double h = grid.spacing().maxCoeff();
+  std::vector<float> values(std::size_t(grid.values.size()));
+  for (Eigen::Index i = 0; i < grid.values.size(); ++i)
+    values[std::size_t(i)] = float(std::clamp(grid.values[i], -3 * h, 3 * h));
+  Grid clamped = grid;
+  for (Eigen::Index i = 0; i < grid.values.size(); ++i) clamped.values[i] = values[std::size_t(i)];
+  const Mesh expected = marching_cubes(clamped);
+  GridView view = view_of(grid);
+  view.data = values.data();
+  view.type = ScalarType::Float32;
+  for (const int side : {6, 9}) {
+    int reads = 0, unread = 0;
+    const BlockedGrid blocked = test::blocked_grid_of(view, values, float(3 * h), reads, unread);
+    EXPECT_EQ(canonical(marching_cubes(blocked, side)), canonical(expected)) << side;
+    EXPECT_GT(unread, 0) << side;
+    EXPECT_GT(reads, 0) << side;
+  }
+}
+
 TEST(BrickMarching, AmbiguousFacesAndCentroidsAgreeAcrossSeams) {
   // Random signs: most faces ambiguous, many polygons that need a centroid vertex.
   Grid grid;

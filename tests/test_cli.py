@@ -352,6 +352,13 @@ with tempfile.TemporaryDirectory() as d:
               r.stderr)
         expect_error("vdb local knn", ["contour", p("spot.vdb"), "-o", out, "--reconstruction", "local",
                                        "--gradient", "knn"], "regular-triangulation gradients", [out])
+        # Marching cubes reads it box by box too: closed, and farther than GCP's local mesh.
+        r = run("contour", p("spot.vdb"), "-o", p("spot_vdb_mc.ply"), "--method", "mc", "-q")
+        check("contour vdb mc", r.returncode == 0 and r.stderr == "", r.stderr)
+        r = run("eval", p("spot_vdb_mc.ply"), p("spot_mesh.ply"), "--samples", "20000")
+        m = json.loads(r.stdout)
+        check("vdb mc closed, farther than local", r.returncode == 0 and m["recon_mesh"]["closed"] and
+              e["L1"] < m["L1"] < 0.5 * 2 / 39, r.stdout)
         expect_error("vdb grid name", ["contour", p("spot.vdb"), "-o", out, "--grid", "density"], "no float grid named",
                      [out])
         open(p("junk.vdb"), "w").write("not a vdb")

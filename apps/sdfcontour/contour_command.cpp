@@ -20,13 +20,14 @@ namespace sdfcontour::cli {
 
 namespace {
 
-// Whether a .vdb level set is read a box at a time for GCP's local reconstruction (else sparse,
-// as scattered samples).
+// Whether a .vdb level set is read a box at a time, for marching cubes or GCP's local
+// reconstruction (else sparse, as scattered samples).
 bool vdb_read_by_boxes(const ContourOptions& opt) {
   const bool local =
       opt.reconstruction == Reconstruction::Local ||
       (opt.reconstruction == Reconstruction::Auto &&
        opt.gradient_source == GradientSource::Regular && std::isfinite(opt.band.band));
+  if (opt.method == Method::Mc) return opt.want_mesh && !opt.want_points;
   return opt.method == Method::Gcp && opt.want_mesh && local;
 }
 

@@ -49,19 +49,21 @@ def _from_path(sdf, grid_name):
 
 
 def _vdb_by_boxes(sdf, method, reconstruction, gradient, band, level):
-    """The path of a .vdb level set that GCP's local reconstruction reads box by box (as the CLI
-    does: a mesh of GCP on a finite band, the level set's own zero set), or None."""
+    """The path of a .vdb level set that marching cubes or GCP's local reconstruction read box by
+    box (as the CLI does: a mesh, of GCP on a finite band, of the level set's own zero set), or
+    None."""
     import os
     if not isinstance(sdf, (str, os.PathLike)) or not os.fspath(sdf).lower().endswith(".vdb"):
         return None
     local = reconstruction == "local" or (reconstruction == "auto" and gradient == "regular" and
                                           not (isinstance(band, str) and band == "all"))
-    return os.fspath(sdf) if method == "gcp" and local and level == 0 else None
+    boxes = method == "mc" or (method == "gcp" and local)
+    return os.fspath(sdf) if boxes and level == 0 else None
 
 
 def _run_vdb(path, grid_name, options):
-    """A .vdb level set read box by box, never whole, for GCP's local reconstruction; its
-    background is its truncation unless one is given."""
+    """A .vdb level set read box by box, never whole, for marching cubes or GCP's local
+    reconstruction; its background is its truncation unless one is given."""
     options = dict(options)
     callback = options.pop("progress_callback", None)
     return _sdfcontour.contour_vdb(path, grid_name or "", options, callback)

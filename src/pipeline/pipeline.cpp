@@ -9,7 +9,9 @@
 
 #include "pipeline/enum_names.h"
 #include "pipeline/pipeline_stages.h"
+#include "sdfcontour/extraction/brick_marching.h"
 #include "sdfcontour/extraction/marching.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 
 namespace sdfcontour {
 
@@ -159,17 +161,26 @@ BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* sca
 // the values taken as distances (a level set's are), nothing measured of the whole grid.
 ContourResult contour_blocked_grid(const BlockedGrid& grid, const ContourOptions& options) {
   validate_grid_geometry(grid);
-  if (options.method != Method::Gcp || !options.want_mesh ||
-      options.reconstruction == Reconstruction::Poisson ||
-      options.gradient_source != GradientSource::Regular || !std::isfinite(options.band.band))
+  const bool mc = options.method == Method::Mc && !options.want_points;
+  if (!options.want_mesh ||
+      (!mc &&
+       (options.method != Method::Gcp || options.reconstruction == Reconstruction::Poisson ||
+        options.gradient_source != GradientSource::Regular || !std::isfinite(options.band.band))))
     throw Error(
-        "a grid read block by block (a .vdb level set) takes GCP's local reconstruction to a "
-        "mesh, with regular-triangulation gradients and a finite band: read it as scattered "
-        "samples for the rest");
+        "a grid read block by block (a .vdb level set) takes marching cubes or GCP's local "
+        "reconstruction to a mesh, with regular-triangulation gradients and a finite band: read "
+        "it as scattered samples for the rest");
   ContourResult result;
   const double samples = double(grid.dims[0]) * grid.dims[1] * grid.dims[2];
   result.samples = int(std::min(samples, double(std::numeric_limits<int>::max())));
   Stages stages(result, options);
+  if (mc) {
+    result.mesh = stages.run("marching", "marching cubes brick by brick",
+                             [&] { return marching_cubes(grid, kLocalBrick); });
+    if (result.mesh->triangles.rows() == 0)
+      throw Error("no surface: the values have no sign change inside the grid");
+    return result;
+  }
   detail::reconstruct_in_bricks(grid, options.band, options, result, stages);
   return result;
 }

@@ -250,6 +250,7 @@ def test_openvdb_level_set_read_box_by_box(client, tmp_path):
     whole = sdfcontour._sdfcontour.read_vdb_box(vdb, "", tuple(int(x) for x in reader.first),
                                                 reader.shape)
     assert_same_mesh((V, F), sdfcontour.contour(whole, bounds=reader.bounds, method="mc"))
+    assert_same_mesh((V, F), sdfcontour.contour(vdb, method="mc"))  # box by box in one process
     assert stats["bricks"] < len(sdfcontour.dask.bricks(reader.shape, 16))  # empty ones unread
     assert_closed_manifold(F)
     V_gcp, F_gcp = sdfcontour.contour(vdb)

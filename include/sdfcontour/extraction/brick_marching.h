@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/samples.h"
 #include "sdfcontour/types.h"
 
@@ -43,5 +44,11 @@ MeshPiece marching_cubes_brick(const GridView& block, const GridGeometry& grid,
 /// triangles follow in piece order. Throws InternalError if two pieces give one key two
 /// positions.
 Mesh join_mesh_pieces(const std::vector<MeshPiece>& pieces);
+
+/// Marching cubes of a grid read a block at a time (a .vdb level set): its cells in bricks of
+/// `brick` a side, in C order, each read with the next sample on its high sides; bricks that
+/// cannot hold the surface (BlockedGrid::may_hold_surface) go unread. The same triangles and
+/// vertex positions as marching_cubes of the whole grid, in the bricks' order.
+Mesh marching_cubes(const BlockedGrid& grid, int brick);
 
 }  // namespace sdfcontour
