@@ -88,7 +88,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Default (-1, 1). Ignored for scattered samples.
     method : {"gcp", "gtcp", "mc", "mt-rt", "mt-dt"}
         GCP (default), GTCP (exact contact points: built-in shapes, CLI only), marching cubes
-        (grids only), marching tetrahedra on the regular or the Delaunay triangulation.
+        (grids and .vdb level sets), marching tetrahedra on the regular or the Delaunay triangulation.
     resolution : int, optional
         Samples per axis for a callable ``sdf``.
     band : float, "auto" or "all"

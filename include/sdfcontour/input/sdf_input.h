@@ -33,9 +33,10 @@ struct SparseGridInput {
   double gradient_norm = 1;
 };
 
-/// A grid read a block at a time (an OpenVDB level set in its file: vdb_blocked_grid): GCP's
-/// local reconstruction runs on it brick by brick, its values taken as distances, with the
-/// options' band truncation (a level set's background) resolved, never found from the whole grid.
+/// A grid read a block at a time (an OpenVDB level set in its file: vdb_blocked_grid): marching
+/// cubes or GCP's local reconstruction run on it brick by brick, its values taken as distances,
+/// with the options' band truncation (a level set's background) resolved, never found from the
+/// whole grid.
 struct BlockedGridInput {
   BlockedGrid grid;
 };
