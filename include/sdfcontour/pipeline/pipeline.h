@@ -137,8 +137,8 @@ struct ContourOptions {
   /// GCP with regular-triangulation gradients runs in bricks (size 0: one global triangulation).
   BrickOptions bricks;
   /// GCP's mesh. Auto: local for grids (auto_local_reconstruction), and for a grid read block by
-  /// block (BlockedGridInput: a .vdb level set), which takes it or marching cubes. Local needs a grid's
-  /// cells: scattered samples always take Poisson.
+  /// block (BlockedGridInput: a .vdb level set), which takes it or marching cubes. Local needs a
+  /// grid's cells: scattered samples always take Poisson.
   Reconstruction reconstruction = Reconstruction::Auto;
   LocalReconstructionOptions local;
   /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no
