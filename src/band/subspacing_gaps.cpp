@@ -70,25 +70,20 @@ SubspacingGaps count_subspacing_gaps(const GridView& grid, double value_scale) {
 SubspacingGaps count_subspacing_gaps(const BlockedGrid& grid, double value_scale, int brick) {
   if (brick < 1) throw Error("the bricks must be at least one sample wide");
   SubspacingGaps sum;
-  std::array<int, 3> count;
-  for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] + brick - 1) / brick;
   std::vector<float> values;
-  for (long b = 0; b < long(count[0]) * count[1] * count[2]; ++b) {
-    const std::array<long, 3> at{b / (long(count[1]) * count[2]), b / count[2] % count[1],
-                                 b % count[2]};
-    std::array<int, 3> own_first, own_end, lo, hi;
-    for (std::size_t a = 0; a < 3; ++a) {
-      own_first[a] = int(at[a]) * brick;
-      own_end[a] = std::min(own_first[a] + brick, grid.dims[a]);
-      lo[a] = std::max(own_first[a] - 1, 0);
-      hi[a] = std::min(own_end[a] + 2, grid.dims[a]);
-    }
-    if (grid.may_hold_surface && !grid.may_hold_surface(lo, hi)) continue;
-    const GridView block = read_block(grid, lo, hi, values);
-    const SubspacingGaps piece = count_subspacing_gaps(block, own_first, own_end, value_scale);
-    sum.gaps += piece.gaps;
-    sum.crossings += piece.crossings;
-  }
+  for_each_brick(grid.dims, brick,
+                 [&](long, const std::array<int, 3>& own_first, const std::array<int, 3>& own_end) {
+                   std::array<int, 3> lo, hi;  // the samples its edges need
+                   for (std::size_t a = 0; a < 3; ++a) {
+                     lo[a] = std::max(own_first[a] - 1, 0);
+                     hi[a] = std::min(own_end[a] + 2, grid.dims[a]);
+                   }
+                   if (grid.may_hold_surface && !grid.may_hold_surface(lo, hi)) return;
+                   const SubspacingGaps piece = count_subspacing_gaps(
+                       read_block(grid, lo, hi, values), own_first, own_end, value_scale);
+                   sum.gaps += piece.gaps;
+                   sum.crossings += piece.crossings;
+                 });
   return sum;
 }
 

@@ -177,20 +177,14 @@ Mesh join_mesh_pieces(const std::vector<MeshPiece>& pieces) {
 Mesh marching_cubes(const BlockedGrid& grid, int brick) {
   if (brick < 1) throw Error("the bricks must be at least one cell wide");
   validate_grid_geometry(grid);
-  std::array<long, 3> count;
-  for (std::size_t a = 0; a < 3; ++a) count[a] = (grid.dims[a] - 1 + brick - 1) / brick;
   std::vector<MeshPiece> pieces;
   std::vector<float> values;
-  for (long b = 0; b < count[0] * count[1] * count[2]; ++b) {
-    const std::array<long, 3> at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
-    std::array<int, 3> lo, hi;
-    for (std::size_t a = 0; a < 3; ++a) {
-      lo[a] = int(at[a]) * brick;
-      hi[a] = std::min(lo[a] + brick + 1, grid.dims[a]);  // its cells' samples
-    }
-    if (grid.may_hold_surface && !grid.may_hold_surface(lo, hi)) continue;
-    pieces.push_back(marching_cubes_brick(read_block(grid, lo, hi, values), grid, lo));
-  }
+  const std::array<int, 3> cells{grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1};
+  for_each_brick(cells, brick, [&](long, const std::array<int, 3>& first, std::array<int, 3> end) {
+    for (int& e : end) ++e;  // its cells' samples
+    if (grid.may_hold_surface && !grid.may_hold_surface(first, end)) return;
+    pieces.push_back(marching_cubes_brick(read_block(grid, first, end, values), grid, first));
+  });
   return join_mesh_pieces(pieces);
 }
 

@@ -3,6 +3,7 @@
 // (local_mesh_in_bricks, reconstruction/local_brick.h).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <vector>
@@ -21,6 +22,30 @@ struct BlockedGrid : GridGeometry {
   /// such a block goes unread. Empty: any block may.
   std::function<bool(const std::array<int, 3>& lo, const std::array<int, 3>& hi)> may_hold_surface;
 };
+
+/// How many bricks of `side` partition [0, extent) on each axis (the last ones shorter).
+inline long brick_count(const std::array<int, 3>& extent, int side) {
+  long count = 1;
+  for (int n : extent) count *= (long(n) + side - 1) / side;
+  return count;
+}
+
+/// Calls visit(index, first, end) for each of those bricks, [first, end) on each axis, in C order
+/// (index counts them from 0).
+template <class Visit>
+void for_each_brick(const std::array<int, 3>& extent, int side, Visit&& visit) {
+  std::array<long, 3> count;
+  for (std::size_t a = 0; a < 3; ++a) count[a] = (long(extent[a]) + side - 1) / side;
+  for (long b = 0; b < count[0] * count[1] * count[2]; ++b) {
+    const std::array<long, 3> at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
+    std::array<int, 3> first, end;
+    for (std::size_t a = 0; a < 3; ++a) {
+      first[a] = int(at[a]) * side;
+      end[a] = std::min(first[a] + side, extent[a]);
+    }
+    visit(b, first, end);
+  }
+}
 
 /// The block of samples [lo, hi) as a view (GridGeometry::first and ::whole set) of `values`,
 /// which the grid's reader fills. Throws Error for a block outside the grid.

@@ -196,19 +196,14 @@ Mesh mesh_in_bricks(const Index3& dims, const BlockRead& read, const GridView* w
                     OrientedPoints* contact_points) {
   if (brick < 0) throw Error("the brick size must be positive (0: one brick)");
   const int side = brick > 0 ? brick : *std::max_element(dims.begin(), dims.end());
-  Index3 count;
-  for (std::size_t a = 0; a < 3; ++a) count[a] = (dims[a] + side - 1) / side;
-  const int total = count[0] * count[1] * count[2];
+  const int total = int(brick_count(dims, side));
   std::vector<LocalPiece> pieces(static_cast<std::size_t>(total));
   std::vector<int> wider(std::size_t(total), 0);
   // One brick at a time, each parallel inside: memory is one brick's and the pieces' (bricks
   // in parallel held as many bricks as the scheduler started: 27 GB at 1024³ on 16 threads).
-  for (int b = 0; b < total; ++b) {
-    const Index3 at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
-    Index3 first, end, near_first, near_end;
+  for_each_brick(dims, side, [&](long b, const Index3& first, const Index3& end) {
+    Index3 near_first, near_end;
     for (std::size_t a = 0; a < 3; ++a) {
-      first[a] = at[a] * side;
-      end[a] = std::min(first[a] + side, dims[a]);
       near_first[a] = std::max(first[a] - 1, 0);
       near_end[a] = std::min(end[a] + 1, dims[a]);
     }
@@ -219,8 +214,8 @@ Mesh mesh_in_bricks(const Index3& dims, const BlockRead& read, const GridView* w
       if (options.grid_read) options.grid_read();
       detail::return_free_memory();
     }
-    if (options.progress) options.progress(b + 1, total);
-  }
+    if (options.progress) options.progress(int(b) + 1, total);
+  });
   if (stats) {
     *stats = {};
     stats->thin_parts = local_thin_parts(options, dims);
