@@ -559,13 +559,16 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   return out;
 }
 
-// contour() of a .vdb level set read box by box (vdb_blocked_grid): GCP's local reconstruction.
+// contour() of a .vdb level set read box by box (vdb_blocked_grid): marching cubes or GCP's local
+// reconstruction; its background is its truncation unless the options give one.
 py::dict run_contour_vdb(const std::string& path, const std::string& grid_name,
                          const py::dict& options, const py::object& progress_callback) {
-  BlockedGrid grid = run_interruptible(
-      [path, grid_name](std::atomic<bool>&) { return vdb_blocked_grid(path, grid_name); });
-  return contour_input(BlockedGridInput{std::move(grid)}, py::none(), options, true, false,
-                       progress_callback);
+  BlockedGridInput input = run_interruptible([path, grid_name](std::atomic<bool>&) {
+    VdbLayout layout;
+    BlockedGrid grid = vdb_blocked_grid(path, grid_name, &layout);
+    return BlockedGridInput{std::move(grid), layout.background};
+  });
+  return contour_input(input, py::none(), options, true, false, progress_callback);
 }
 
 py::dict run_contour(const py::array& array, const std::array<double, 3>& lo,

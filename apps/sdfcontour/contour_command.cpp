@@ -46,8 +46,8 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
   }
   if (is_vdb_path(spec) && vdb_by_boxes) {
     VdbLayout layout;
-    loaded.input = BlockedGridInput{vdb_blocked_grid(spec, grid_name, &layout)};
-    loaded.vdb_background = layout.background;
+    BlockedGrid grid = vdb_blocked_grid(spec, grid_name, &layout);
+    loaded.input = BlockedGridInput{std::move(grid), layout.background};
     return loaded;
   }
   if (is_vdb_path(spec)) {

@@ -269,8 +269,6 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         if bounds is not None or spacing is not None or origin is not None:
             raise ValueError("a .vdb level set places itself (its transform): give no bounds, "
                              "spacing or origin")
-        if truncation == "auto":  # a level set's background is its truncation
-            truncation = repr(float(_sdfcontour.vdb_layout(vdb, grid_name or "")["background"]))
     else:
         sdf, sample_spacing, truncation_found = _from_path(sdf, grid_name)
         if truncation_found is not None and truncation == "auto":

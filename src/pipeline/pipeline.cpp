@@ -157,10 +157,17 @@ BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* sca
   });
 }
 
-// A grid read a block at a time (a .vdb level set): GCP's local reconstruction brick by brick,
-// the values taken as distances (a level set's are), nothing measured of the whole grid.
-ContourResult contour_blocked_grid(const BlockedGrid& grid, const ContourOptions& options) {
+// A grid read a block at a time (a .vdb level set): marching cubes or GCP's local reconstruction
+// brick by brick, the values taken as distances (a level set's are), nothing measured of the
+// whole grid; its own truncation (the background) unless the options give one.
+ContourResult contour_blocked_grid(const BlockedGridInput& input, const ContourOptions& given) {
+  const BlockedGrid& grid = input.grid;
   validate_grid_geometry(grid);
+  ContourOptions options = given;
+  if (options.band.truncation_mode == TruncationMode::Auto && input.truncation > 0) {
+    options.band.truncation_mode = TruncationMode::Given;
+    options.band.truncation = input.truncation;
+  }
   const bool mc = options.method == Method::Mc && !options.want_points;
   if (!options.want_mesh ||
       (!mc &&
@@ -189,7 +196,7 @@ ContourResult contour_blocked_grid(const BlockedGrid& grid, const ContourOptions
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
   if (const auto* blocked = std::get_if<BlockedGridInput>(&input))
-    return contour_blocked_grid(blocked->grid, options);
+    return contour_blocked_grid(*blocked, options);
   const detail::GridSource grid = detail::grid_source_of(input);
   const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
   check_input_for_method(grid, scattered, shape, options, measured);

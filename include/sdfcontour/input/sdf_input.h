@@ -34,11 +34,12 @@ struct SparseGridInput {
 };
 
 /// A grid read a block at a time (an OpenVDB level set in its file: vdb_blocked_grid): marching
-/// cubes or GCP's local reconstruction run on it brick by brick, its values taken as distances,
-/// with the options' band truncation (a level set's background) resolved, never found from the
-/// whole grid.
+/// cubes or GCP's local reconstruction run on it brick by brick, its values taken as distances.
+/// Its truncation is never found from the whole grid: the options' band gives it, or else
+/// `truncation` does.
 struct BlockedGridInput {
   BlockedGrid grid;
+  double truncation = 0;  ///< the values' own clamp (a level set's background); 0: none known
 };
 
 using SdfInput = std::variant<GridInput, ScatteredInput, SparseGridInput, BlockedGridInput>;
