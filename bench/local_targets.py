@@ -56,10 +56,9 @@ def run_all(results):
                      "--methods", "mc,gcp-local-vdb,gcp-poisson-vdb"])
     to("smooth.jsonl", [os.path.join(HERE, "smooth_shapes.py"), "--res", "64,256"])
     to("neural.jsonl", ["neural.py", "--res", "64,128"], cwd=HERE)
-    subprocess.run([py, os.path.join(HERE, "scale.py"), "--res", "64,128,256,512", "--meshes",
-                    "bunny", "--methods", "gcp,mc,skimage", "--vdb-res", "",
-                    "--out", os.path.join(results, "scale.md")], check=True,
-                   stdout=open(os.path.join(results, "scale.jsonl"), "a"))
+    to("scale.jsonl", [os.path.join(HERE, "scale.py"), "--res", "64,128,256,512", "--meshes",
+                       "bunny", "--methods", "gcp,mc,skimage", "--vdb-res", "",
+                       "--out", os.path.join(results, "scale.md")])
 
 
 def ratios(rows, method, res, key="L1"):
