@@ -152,6 +152,7 @@ TEST(Adaptivity, FitPutsTheMergedTrianglesThroughTheSurface) {
 }
 
 TEST(Adaptivity, MergesThatCrossTheMeshAreMadeAgainWithTheirRegionFrozen) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // The plane at 64^3, TOL 0.25: the first merging makes thin parts cross (measured: it needs a
   // second round; the armadillo did until the contact points at corners, the goathead and the
   // penguin until the quadric kept its rank); the result is free of self-intersections, closed and

@@ -83,6 +83,7 @@ TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
 }
 
 TEST(Approximate, ThinPartsWhoseRescalingFailsKeepGcpOnTheValuesAsGiven) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // The plane's exact distance at 16^3: central differences across its thin wings measure a
   // gradient norm of 0.77, rescaling by 1.3 then hides every contact point. GCP runs again on the
   // values as given, says so, and its mesh lies closer to the plane than marching cubes' (which
@@ -200,6 +201,7 @@ TEST(Approximate, GcpIsAtLeastAsCloseAsMarchingCubesOnSmoothShapes) {
 }
 
 TEST(Approximate, LocalReconstructionOfThinPartsKeepsTheValuesAsGiven) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // The hammer's exact distance at 32^3: its thin handle measures a gradient norm of 0.90, and
   // rescaling by 1.11 leaves no contact point at all. The local reconstruction would still make
   // a mesh, from every cell's edge crossings (0.62x MC's L1): it says that its points are too few

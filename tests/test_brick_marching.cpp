@@ -64,6 +64,7 @@ Grid rounded(Grid g) {
 }  // namespace
 
 TEST(BrickMarching, JoinedPiecesAreTheWholeGridsMeshBitForBit) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // wingnut: thin parts and sharp edges cut by the seams; bricks of 7 and 16 cells, the last
   // ones shorter, in float64 and float32.
   const Grid grid = test::shared_mesh_grid("wingnut", 37);
@@ -82,6 +83,7 @@ TEST(BrickMarching, JoinedPiecesAreTheWholeGridsMeshBitForBit) {
 }
 
 TEST(BrickMarching, GridReadBlockByBlockGivesTheWholeGridsMesh) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // wingnut clamped at 3 spacings, as a level set holds it, read a block at a time (bricks of 6
   // and 9 cells): marching cubes of the grid in memory, the blocks far from the surface unread.
   const Grid grid = test::shared_mesh_grid("wingnut", 37);

@@ -135,12 +135,15 @@ with tempfile.TemporaryDirectory() as d:
     # whose thin parts make rescaling it fail (the plane at 16^3) is contoured as given.
     plane = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "data",
                          "meshes", "plane.obj")
-    r = run("sample", plane, "--res", "16", "-o", p("plane"), "-q")
-    check("plane sampled", r.returncode == 0, r.stderr)
-    r = run("contour", p("plane.npy"), "-o", p("plane.ply"), "--stats", p("plane.json"), "-q")
-    check("rescaling dropped, said", r.returncode == 0 and "values as given" in r.stderr, r.stderr)
-    stats = json.load(open(p("plane.json")))
-    check("rescaling dropped, in the stats", "contact point" in stats.get("rescale_dropped", "") and
-          "fallback" not in stats and "value_scale" not in stats, stats)
+    if not os.path.exists(plane):
+        print(f"SKIP the shared-mesh check: no meshes at {os.path.dirname(plane)}")
+    else:
+        r = run("sample", plane, "--res", "16", "-o", p("plane"), "-q")
+        check("plane sampled", r.returncode == 0, r.stderr)
+        r = run("contour", p("plane.npy"), "-o", p("plane.ply"), "--stats", p("plane.json"), "-q")
+        check("rescaling dropped, said", r.returncode == 0 and "values as given" in r.stderr, r.stderr)
+        stats = json.load(open(p("plane.json")))
+        check("rescaling dropped, in the stats", "contact point" in stats.get("rescale_dropped", "") and
+              "fallback" not in stats and "value_scale" not in stats, stats)
 
 finish()

@@ -89,6 +89,7 @@ TEST(LocalBrick, SaggingEdgesSplitAlikeInBricksAndComeCloserToTheSurface) {
 }
 
 TEST(LocalBrick, ThinPartsAppearAlikeInBricksAndFollowTheSurface) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // The shared plane at 32^3: its wings are thinner than a spacing in places, where the samples on
   // their two sides have one sign. Without thin parts the mesh leaves those parts out; with them
   // (the grid at twice the resolution, its points between the wings' contact points inside) the
@@ -206,6 +207,7 @@ TEST(LocalBrick, NothingReadsTheGridAfterABrickSaysItIsDone) {
 }
 
 TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   const Grid g = shared_mesh_grid("wingnut", 48);
   LocalBrickOptions o;
   const Mesh whole = bricked(g, o, 0, 2), pieces = bricked(g, o, 20, 2);
@@ -232,6 +234,7 @@ TEST(LocalBrick, SharedMeshInBricksIsClosedAndNearTheSurface) {
 }
 
 TEST(LocalBrick, BandThatReachesTheGridSides) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // At 32^3 the band (8 spacings) reaches the grid's sides, where stars lie on the hull: one
   // brick certifies them as the whole set (no endless widening), bricks of 12 alike.
   const Grid g = shared_mesh_grid("armadillo", 32);
@@ -245,6 +248,7 @@ TEST(LocalBrick, BandThatReachesTheGridSides) {
 }
 
 TEST(LocalBrick, QuadricVerticesDoNotMakeTheMeshCrossItself) {
+  SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // Near a sharp feature or a thin part the quadrics can put two cells' vertices so that their
   // triangles cross (the plane at 32^3 and the boot at 48^3, before any later move; the boot and
   // the penguin at 32^3 did until the quadric kept its rank through the robust rounds); such

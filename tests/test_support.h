@@ -50,6 +50,11 @@ inline std::filesystem::path temp_dir(const std::string& name) {
     if (!std::filesystem::exists(path)) GTEST_SKIP() << "needs " << what << " at " << (path); \
   } while (0)
 
+/// Skips the calling test unless the shared test meshes (../shared/data/meshes) are there: a
+/// plain clone has none.
+#define SDFCONTOUR_REQUIRE_SHARED_MESHES() \
+  SDFCONTOUR_REQUIRE_PATH(SDFCONTOUR_SHARED_DIR "/data/meshes", "the shared test meshes")
+
 /// Skips the calling test unless Debian's python3 can import `module`.
 #define SDFCONTOUR_REQUIRE_PYTHON_MODULE(module)                                                   \
   do {                                                                                             \

@@ -6,6 +6,7 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import shared_mesh
 
 import sdfcontour
 
@@ -243,7 +244,7 @@ def test_openvdb_level_set_read_box_by_box(client, tmp_path):
     root = os.path.join(os.path.dirname(__file__), "..", "..")
     cli = os.environ.get("SDFCONTOUR_CLI", os.path.join(root, "build", "sdfcontour"))
     vdb = str(tmp_path / "spot.vdb")
-    subprocess.run([cli, "sample", os.path.join(root, "..", "shared", "data", "meshes", "spot.obj"),
+    subprocess.run([cli, "sample", shared_mesh("spot.obj"),
                     "--res", "64", "-o", vdb, "--quiet"], check=True, capture_output=True)
     V, F, stats = sdfcontour.dask.contour(vdb, brick=16, client=client, return_stats=True)
     reader = sdfcontour.dask._VdbReader(vdb, None)

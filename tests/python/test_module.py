@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import shared_mesh
 
 import sdfcontour
 
@@ -423,8 +424,7 @@ def test_pip_installs_the_command_beside_the_interpreter(tmp_path):
 def test_sample_places_the_mesh_as_the_cli_does(tmp_path):
     # Default scale 0.9: the CLI's normalisation, bit for bit; a mesh reaching past the box is
     # brought inside it instead of being cut off.
-    V, F = sdfcontour.read_mesh(os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared",
-                                             "data", "meshes", "spot.obj"))
+    V, F = sdfcontour.read_mesh(shared_mesh("spot.obj"))
     V = V * 1.7 + 0.3  # past [-1, 1]
     sdfcontour.write_mesh(tmp_path / "spot.obj", V, F)
     grid, V_unit = sdfcontour.sample(V, F, resolution=24, return_mesh=True)
@@ -441,8 +441,7 @@ def test_sample_places_the_mesh_as_the_cli_does(tmp_path):
 def test_gcp_output_follows_the_grid():
     # The automatic Poisson depth grows with the samples per axis: at 32^3 the mesh has tens of
     # times marching cubes' triangles at most (depth 8 gave 70x), and is still closer.
-    V_gt, F_gt = sdfcontour.read_mesh(os.path.join(os.path.dirname(__file__), "..", "..", "..",
-                                                   "shared", "data", "meshes", "spot.obj"))
+    V_gt, F_gt = sdfcontour.read_mesh(shared_mesh("spot.obj"))
     grid, V_gt = sdfcontour.sample(V_gt, F_gt, resolution=32, return_mesh=True)
     mc = sdfcontour.contour(grid, method="mc")
     gcp = sdfcontour.contour(grid, reconstruction="poisson")
@@ -490,8 +489,7 @@ def test_write_mesh_off_and_stl(tmp_path):
 
 def test_paths_as_input_npy_and_vdb(tmp_path):
     # A .vdb is read sparse as the CLI reads it: the same mesh bit for bit; a .npy is mapped.
-    subprocess.run([CLI, "sample", os.path.join(os.path.dirname(__file__), "..", "..", "..",
-                                                 "shared", "data", "meshes", "spot.obj"),
+    subprocess.run([CLI, "sample", shared_mesh("spot.obj"),
                     "--res", "32", "-o", str(tmp_path / "spot.vdb"), "--quiet"], check=True,
                    capture_output=True)
     subprocess.run([CLI, "contour", str(tmp_path / "spot.vdb"), "-o", str(tmp_path / "cli.ply"),

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import shared_mesh
 
 import sdfcontour
 
@@ -200,11 +201,12 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     assert stats["seconds"]["gcp (discarded)"] > 0 and "marching" in stats["seconds"]
     with pytest.raises(ValueError, match="distances"):
         sdfcontour.contour(implicit, reconstruction="poisson", strict=True)
+
+
+def test_an_exact_distance_with_thin_parts_keeps_its_values_and_says_so():
     # An exact distance whose thin parts make its measured gradient norm 0.77 (the plane at
     # 16^3): GCP fails on the rescaled values, runs again on the values as given, and says so.
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    plane = sdfcontour.sample(*sdfcontour.read_mesh(
-        os.path.join(root, "..", "shared", "data", "meshes", "plane.obj")), resolution=16)
+    plane = sdfcontour.sample(*sdfcontour.read_mesh(shared_mesh("plane.obj")), resolution=16)
     with pytest.warns(sdfcontour.FallbackWarning, match="values as given"):
         V, F, stats = sdfcontour.contour(plane, return_stats=True)
     assert "contact point" in stats["rescale_dropped"] and stats["value_scale"] == 1
