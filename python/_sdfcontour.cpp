@@ -224,7 +224,10 @@ ContourOptions contour_options(const py::dict& o) {
     c.band.truncation_mode = TruncationMode::None;
   } else if (truncation != "auto") {
     c.band.truncation_mode = TruncationMode::Given;
-    c.band.truncation = std::stod(truncation);
+    const std::optional<double> given = parse_number(truncation);
+    if (!given)
+      throw Error("truncation must be 'auto', 'none' or a number, got '" + truncation + "'");
+    c.band.truncation = *given;
   }
   c.bricks.size = get<int>(o, "brick_size", c.bricks.size);
   c.enforce_signs =
@@ -747,6 +750,13 @@ PYBIND11_MODULE(_sdfcontour, m) {
       PyErr_SetString(PyExc_MemoryError, "out of memory (try a smaller band or brick size)");
     }
   });
+  m.def(
+      "parse_number",
+      [](const std::string& text) -> py::object {
+        const std::optional<double> x = parse_number(text);
+        return x ? py::object(py::float_(*x)) : py::object(py::none());
+      },
+      py::arg("text"), "A number as text, read as the CLI reads it (None if it is none)");
   m.def("contour", &run_contour, py::arg("array"), py::arg("lo"), py::arg("hi"), py::arg("spacing"),
         py::arg("options"), py::arg("want_mesh"), py::arg("want_points"),
         py::arg("progress_callback") = py::none());

@@ -11,15 +11,7 @@
 namespace sdfcontour::cli {
 
 std::optional<double> parse_finite(const std::string& text) {
-  std::size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(x)) return std::nullopt;
-  return x;
+  return parse_number(text);
 }
 
 std::optional<int> parse_count_or_auto(const std::string& option, const std::string& text, int max,

@@ -35,9 +35,13 @@ int main(int argc, char** argv) {
   }
   remove_temporary_files_on_signals();
   try {
+    int status = 0;
     for (const cli::Command& c : commands)
-      if (c.app->parsed()) return c.run();
-    if (eval_points.app->parsed()) return eval_points.run();
+      if (c.app->parsed()) status = c.run();
+    if (eval_points.app->parsed()) status = eval_points.run();
+    // What went to standard output (a summary, eval's JSON) must have arrived (not /dev/full).
+    if (!std::cout.flush()) throw IoError("cannot write to standard output");
+    return status;
   } catch (const InternalError& e) {
     std::cerr << "sdfcontour: error: internal error (please report it): " << e.what() << "\n";
     return 2;

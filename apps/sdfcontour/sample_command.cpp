@@ -24,13 +24,14 @@ namespace {
 struct SampleArgs {
   std::string mesh, prefix, bounds = "-1,1";
   int resolution = 0;
-  std::size_t random = 0;
+  long random = 0;
   std::uint64_t seed = 0;
   double scale = 0.9, truncate = 0, half_width = 3;
   bool quiet = false, float32 = false;
 };
 
 void check(const SampleArgs& a, bool vdb) {
+  if (a.random != 0) require_in_range("--random", double(a.random), "--random");
   if ((a.resolution > 0) == (a.random > 0))
     throw Error("give exactly one of --res N and --random COUNT");
   if (a.resolution != 0) require_in_range("--res", a.resolution, "--res");
@@ -71,13 +72,14 @@ Samples write_grid(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds
 }
 
 Samples write_random(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds) {
-  Samples samples = sample_random(sdf, a.random, bounds, a.seed);
-  std::vector<double> rows(a.random * 4);
-  for (std::size_t i = 0; i < a.random; ++i) {
+  const std::size_t count = std::size_t(a.random);
+  Samples samples = sample_random(sdf, count, bounds, a.seed);
+  std::vector<double> rows(count * 4);
+  for (std::size_t i = 0; i < count; ++i) {
     for (int c = 0; c < 3; ++c) rows[4 * i + std::size_t(c)] = samples.points(Eigen::Index(i), c);
     rows[4 * i + 3] = samples.values[Eigen::Index(i)];
   }
-  write_npy(a.prefix + ".npy", {a.random, 4}, rows);
+  write_npy(a.prefix + ".npy", {count, 4}, rows);
   return samples;
 }
 

@@ -89,11 +89,9 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
         raise _checks.ArgumentTypeError(f"truncation must be 'auto', 'none' or a number as text, got "
                         f"{truncation!r}")
     if truncation not in ("auto", "none"):
-        try:
-            given = float(truncation)
-        except ValueError:
-            given = float("nan")
-        if not 0 < given < float("inf"):
+        from . import _sdfcontour  # the CLI's reading of a number ("0_1" is none)
+        given = _sdfcontour.parse_number(truncation)
+        if given is None or not 0 < given < float("inf"):
             raise ValueError(f"truncation must be 'auto', 'none' or a positive number as text, "
                              f"got {truncation!r}")
     o = dict(method=method, band=float(band), margin=_checks.in_range("margin", margin),

@@ -432,7 +432,8 @@ def _gcp_truncation(dask_client, reader, source, shape, brick, options):
     if given == "none" or isinstance(reader, _CallableReader):
         return (float("inf"), float("inf"))
     if given != "auto":
-        return (float(given), float(given))
+        value = _sdfcontour.parse_number(given)  # checked in _options: the core's reading
+        return (value, value)
     if isinstance(reader, _VdbReader):
         return (reader.background, reader.background)
     import dask

@@ -77,10 +77,14 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
     const auto target = std::filesystem::weakly_canonical(path, ec);
     if (!ec) path_ = target.string();
   }
-  // The pid and a random suffix keep concurrent writers of the same target apart.
+  // Beside the target (rename stays in one file system), named apart from it: a target name of
+  // the file system's longest still has a temporary one. The pid and a random number keep
+  // concurrent writers apart.
   std::random_device rd;
-  temporary_path_ =
-      path_ + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(rd() % 100000);
+  const std::filesystem::path target(path_);
+  temporary_path_ = (target.parent_path() / (".sdfcontour.tmp-" + std::to_string(::getpid()) + "-" +
+                                             std::to_string(rd() % 100000)))
+                        .string();
   register_temporary(temporary_path_);
   stream_.open(temporary_path_, std::ios::binary | std::ios::trunc);
   if (!stream_) {

@@ -1,6 +1,10 @@
 #include "sdfcontour/pipeline/option_ranges.h"
 
+#include <cctype>
+#include <cerrno>
+#include <clocale>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 
 #include "sdfcontour/types.h"
@@ -30,6 +34,7 @@ const std::vector<OptionRange>& option_ranges() {
       {"--adaptivity-fit", "", 0, 100},
       {"--side-passes", "side_passes", 0, 100},
       {"--res", "resolution", 2, 1024},
+      {"--random", "", 1, 1e8},  // sample's random points: 3.2 GB of rows at the top
       {"--threads", "", 0, 4096},
   };
   return ranges;
@@ -49,6 +54,19 @@ void require_in_range(const std::string& cli_name, double value, const std::stri
       << value;
     throw Error(m.str());
   }
+}
+
+std::optional<double> parse_number(const std::string& text) {
+  // (strtod skips leading blanks, which Python's float() also strips: refused here for both.)
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front()))) return std::nullopt;
+  const locale_t c = newlocale(LC_NUMERIC_MASK, "C", locale_t(0));
+  char* end = nullptr;
+  errno = 0;
+  const double x = c ? strtod_l(text.c_str(), &end, c) : std::strtod(text.c_str(), &end);
+  if (c) freelocale(c);
+  // (ERANGE with a finite result is an underflow to a subnormal or zero: a number still.)
+  if (end != text.c_str() + text.size() || !std::isfinite(x)) return std::nullopt;
+  return x;
 }
 
 }  // namespace sdfcontour

@@ -3,6 +3,7 @@
 // own words.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,5 +28,10 @@ const OptionRange& option_range(const std::string& cli_name);
 /// is in the range of the option whose CLI name is `cli_name`; `name` is how the caller spells
 /// the option (its CLI name, or its Python keyword).
 void require_in_range(const std::string& cli_name, double value, const std::string& name);
+
+/// A number written as text, the one way every entry point reads one: the whole text a decimal or
+/// hexadecimal floating-point number in the C locale ("1e-3", "0x1p-4"; a subnormal is kept),
+/// finite; nullopt for anything else ("0_1", " 1", "1 ", "nan", "inf", "").
+std::optional<double> parse_number(const std::string& text);
 
 }  // namespace sdfcontour

@@ -1,0 +1,52 @@
+"""Reliability round 4 (issue 65), through the command line: values that used to reach an
+internal assertion are refused where they enter, numbers are read one way, what goes to standard
+output arrives or the run fails, and an output name of the file system's longest is written.
+
+Usage: test_cli_round4.py PATH_TO_SDFCONTOUR
+"""
+import os
+import subprocess
+import tempfile
+
+from cli_checks import CLI, check, expect_error, finish, run
+
+with tempfile.TemporaryDirectory() as d:
+    p = lambda name: os.path.join(d, name)
+    r = run("contour", "builtin:box@12", "-o", p("box.obj"), "--method", "mc", "-q")
+    check("a mesh to sample", r.returncode == 0, r.stderr)
+
+    # A count that would wrap to a huge size (Eigen's assertion before) is refused up front.
+    for count in ("-1", "0x7fffffffffff", "1e12"):
+        expect_error(f"--random {count}", ["sample", p("box.obj"), "--random", count, "-o", p("r")],
+                     "--random", [p("r.npy")])
+    r = run("sample", p("box.obj"), "--random", "50", "--seed", "3", "-o", p("r"), "-q")
+    check("--random 50 samples", r.returncode == 0 and os.path.exists(p("r.npy")), r.stderr)
+
+    # Numbers as the CLI and Python both read them: "0_1" is no number (Python's float() says 1).
+    for text in ("0_1", " 0.1", "0.1 ", "nan", "inf", ""):
+        expect_error(f"--truncation {text!r}", ["contour", "builtin:sphere@12", "-o", p("t.ply"),
+                                                "--truncation", text], "truncation", [p("t.ply")])
+    # A subnormal truncation is a number: every value lies beyond it, which is said in one line.
+    r = run("contour", "builtin:sphere@12", "-o", p("sub.ply"), "--truncation", "1e-310", "-q")
+    check("subnormal truncation: an error line or a mesh, never a crash",
+          (r.returncode == 1 and r.stderr.strip().splitlines()[-1].startswith("sdfcontour: error:")
+           and not os.path.exists(p("sub.ply"))) or (r.returncode == 0 and os.path.exists(p("sub.ply"))),
+          (r.returncode, r.stderr))
+
+    # Output to a full device is an error, not a lost result with exit 0.
+    if os.path.exists("/dev/full"):
+        with open("/dev/full", "w") as full:
+            r = subprocess.run([CLI, "eval", p("box.obj"), p("box.obj")], stdout=full,
+                               stderr=subprocess.PIPE, text=True)
+        check("eval > /dev/full fails", r.returncode == 1 and
+              r.stderr.strip().splitlines()[-1].startswith("sdfcontour: error:"), (r.returncode, r.stderr))
+    else:
+        print("SKIP /dev/full: not on this system")
+
+    # The longest name a file may have (255 bytes) is written: the temporary name is its own.
+    longest = p("m" * 251 + ".ply")
+    r = run("contour", "builtin:sphere@12", "-o", longest, "--method", "mc", "-q")
+    check("255-byte output name written", r.returncode == 0 and os.path.exists(longest), r.stderr)
+    check("no temporary file left", not [f for f in os.listdir(d) if ".tmp-" in f], os.listdir(d))
+
+finish()
