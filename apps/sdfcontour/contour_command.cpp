@@ -23,10 +23,9 @@ namespace {
 // Whether a .vdb level set is read a box at a time, for marching cubes or GCP's local
 // reconstruction (else sparse, as scattered samples).
 bool vdb_read_by_boxes(const ContourOptions& opt) {
-  const bool local =
-      opt.reconstruction == Reconstruction::Local ||
-      (opt.reconstruction == Reconstruction::Auto &&
-       opt.gradient_source == GradientSource::Regular && std::isfinite(opt.band.band));
+  const bool local = opt.reconstruction == Reconstruction::Local ||
+                     (opt.reconstruction == Reconstruction::Auto &&
+                      local_gradients(opt.gradient_source) && std::isfinite(opt.band.band));
   if (opt.method == Method::Mc) return opt.want_mesh && !opt.want_points;
   return opt.method == Method::Gcp && opt.want_mesh && local;
 }
@@ -248,7 +247,8 @@ int run_contour(const ContourArgs& a) {
 // GCP's gradients, contact points and band.
 void add_contact_point_options(CLI::App* c, ContourArgs& a) {
   c->add_option("--gradient", a.gradient,
-                "GCP gradients from the regular or delaunay triangulation, or knn least squares")
+                "GCP gradients from the regular or delaunay triangulation, knn least squares, or a "
+                "grid's lattice (finite differences; the local reconstruction only)")
       ->capture_default_str();
   c->add_option("--weights", a.weights, "Averaging of tet gradients: uniform, volume or james")
       ->capture_default_str();

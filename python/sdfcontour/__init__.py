@@ -100,8 +100,9 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Samples up to this many spacings beyond the band close the band's stars.
     truncation : "auto", "none" or a number as text
         Values clamped at +-T (a TSDF) carry no distance: detect ("auto"), none, or given.
-    gradient : {"regular", "delaunay", "knn"}
-        Where GCP's gradients come from.
+    gradient : {"regular", "delaunay", "knn", "lattice"}
+        Where GCP's gradients come from ("lattice": a grid's finite differences, for the local
+        reconstruction of grids only).
     weights : {"james", "volume", "uniform"}
         Averaging of the incident tetrahedra's gradients.
     knn : int

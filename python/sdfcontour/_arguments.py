@@ -96,7 +96,7 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
                              f"got {truncation!r}")
     o = dict(method=method, band=float(band), margin=_checks.in_range("margin", margin),
              truncation=truncation,
-             gradient=_checks.choice("gradient", gradient, ("regular", "delaunay", "knn")),
+             gradient=_checks.choice("gradient", gradient, ("regular", "delaunay", "knn", "lattice")),
              weights=_checks.choice("weights", weights, ("james", "volume", "uniform")),
              knn=_checks.in_range("knn", knn, whole=True), fn=_checks.flag("fn", fn),
              tie_tolerance=_checks.in_range("tie_tolerance", tie_tolerance),

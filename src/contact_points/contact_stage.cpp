@@ -18,6 +18,7 @@ PointMatrix sample_gradients(const Samples& s, const SampleTriangulations& t,
     case GradientSource::Delaunay:
       return vertex_gradients(s.points, s.values, *t.delaunay, options.gradient);
     case GradientSource::Regular:
+    case GradientSource::Lattice:  // refused before (contact_point_stage)
       break;
   }
   return vertex_gradients(s.points, s.values, *t.regular, options.gradient);
@@ -30,6 +31,10 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
                                          Stages& stages) {
   const Method method = options.method;
   const Samples& s = band.samples;
+  if (options.gradient_source == GradientSource::Lattice)
+    throw Error(
+        "lattice gradients run with GCP's local reconstruction of a grid: use --gradient regular "
+        "here");
   const std::string n = std::to_string(s.values.size());
   // Only the band proper gives contact points; its margin closes their stars. (The local
   // reconstruction took the margin's too for a while: cube 128^3 L1 8.6e-5 -> 2.5e-6, bunny

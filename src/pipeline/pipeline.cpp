@@ -23,7 +23,8 @@ const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
                                             {"mt-dt", Method::MtDt}};
 const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
                                                             {"delaunay", GradientSource::Delaunay},
-                                                            {"knn", GradientSource::Knn}};
+                                                            {"knn", GradientSource::Knn},
+                                                            {"lattice", GradientSource::Lattice}};
 const detail::NameTable<Reconstruction> kReconstructions = {{"auto", Reconstruction::Auto},
                                                             {"poisson", Reconstruction::Poisson},
                                                             {"local", Reconstruction::Local}};
@@ -170,12 +171,11 @@ ContourResult contour_blocked_grid(const BlockedGridInput& input, const ContourO
   }
   const bool mc = options.method == Method::Mc && !options.want_points;
   if (!options.want_mesh ||
-      (!mc &&
-       (options.method != Method::Gcp || options.reconstruction == Reconstruction::Poisson ||
-        options.gradient_source != GradientSource::Regular || !std::isfinite(options.band.band))))
+      (!mc && (options.method != Method::Gcp || options.reconstruction == Reconstruction::Poisson ||
+               !local_gradients(options.gradient_source) || !std::isfinite(options.band.band))))
     throw Error(
         "a grid read block by block (a .vdb level set) takes marching cubes or GCP's local "
-        "reconstruction to a mesh, with regular-triangulation gradients and a finite band: read "
+        "reconstruction to a mesh, with regular or lattice gradients and a finite band: read "
         "it as scattered samples for the rest");
   ContourResult result;
   const double samples = double(grid.dims[0]) * grid.dims[1] * grid.dims[2];

@@ -32,12 +32,25 @@ enum class Method { Gcp, Gtcp, Mc, MtRt, MtDt };
 Method parse_method(const std::string& name);
 std::string method_name(Method method);
 
-/// Where GCP's per-sample gradients come from.
-enum class GradientSource { Regular, Delaunay, Knn };
+/// Where GCP's per-sample gradients (and the sphere filter's neighbours) come from.
+enum class GradientSource {
+  Regular,   ///< the regular triangulation's tetrahedra (the paper)
+  Delaunay,  ///< the Delaunay triangulation's tetrahedra
+  Knn,       ///< least squares over the k nearest samples
+  Lattice,   ///< a grid's own lattice: finite differences, every sphere in reach tested
+             ///< (lattice_contact_points.h); grids on the local reconstruction only
+};
 
-/// "regular", "delaunay", "knn" <-> GradientSource; parse throws Error for other names.
+/// "regular", "delaunay", "knn", "lattice" <-> GradientSource; parse throws Error for other
+/// names.
 GradientSource parse_gradient_source(const std::string& name);
 std::string gradient_source_name(GradientSource source);
+
+/// Whether GCP's local reconstruction can run brick by brick with these gradients: the regular
+/// triangulation's (certified stars) or the lattice's.
+inline bool local_gradients(GradientSource source) {
+  return source == GradientSource::Regular || source == GradientSource::Lattice;
+}
 
 /// How GCP's mesh is made from its contact points: the paper's global screened Poisson solve
 /// (with projection, carving and their repairs), or the local reconstruction

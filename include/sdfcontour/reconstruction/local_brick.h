@@ -73,6 +73,9 @@ struct LocalBrickOptions {
   /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
   BandOptions band;
   GradientOptions gradient;
+  /// Contact points from the grid's lattice (lattice_contact_points.h) instead of the band's
+  /// regular triangulation in certified bricks (brick_contact_points).
+  bool lattice_points = false;
   ContactPointOptions contact;
   LocalReconstructionOptions local;
   /// Lattice subdivisions of each triangle (2^s segments per edge), 0..4; -1: auto_subdivisions

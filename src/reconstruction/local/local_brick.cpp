@@ -19,6 +19,7 @@
 #include "reconstruction/local/lattice_subdivision.h"
 #include "reconstruction/local/thin_parts.h"
 #include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/contact_points/lattice_contact_points.h"
 #include "sdfcontour/metrics/self_intersections.h"
 #include "sdfcontour/pipeline/pipeline.h"
 
@@ -163,6 +164,28 @@ BandSamples brick_band(const GridView& block, const LocalBrickOptions& options) 
   }
 }
 
+// Throws HaloTooSmall unless every flagged sample lies lattice_contact_reach samples inside the
+// block's sides that are not the whole grid's: its point then reads what the whole grid's would.
+void require_lattice_reach(const GridView& block, const BandSamples& band,
+                           const std::vector<char>& flagged, const ContactPointOptions& contact) {
+  const int reach = lattice_contact_reach(block, band, contact);
+  const Index3 n = block.whole_dims();
+  Index3 lo, hi;  // the block's indices that the flagged samples may take
+  for (std::size_t a = 0; a < 3; ++a) {
+    lo[a] = block.first[a] == 0 ? 0 : reach;
+    hi[a] = block.first[a] + block.dims[a] == n[a] ? block.dims[a] - 1 : block.dims[a] - 1 - reach;
+  }
+  for (std::size_t s = 0; s < flagged.size(); ++s) {
+    if (!flagged[s]) continue;
+    const long p = band.source[s];
+    const Index3 at{int(p / (long(block.dims[1]) * block.dims[2])),
+                    int(p / block.dims[2] % block.dims[1]), int(p % block.dims[2])};
+    for (std::size_t a = 0; a < 3; ++a)
+      if (at[a] < lo[a] || at[a] > hi[a])
+        throw HaloTooSmall("a lattice contact point reads beyond its brick's block");
+  }
+}
+
 // The contact points of the band samples that the owned part [own_first, own_end) can use (within
 // flag_reach of it), from the block's triangulation with certified stars.
 ContactPoints owned_reach_contact_points(const GridView& block, const BandSamples& band,
@@ -184,6 +207,10 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
     const Eigen::Vector3d p = band.samples.points.row(i).transpose();
     flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
                               (p.array() <= flag_hi.array()).all();
+  }
+  if (options.lattice_points) {
+    require_lattice_reach(block, band, flagged, options.contact);
+    return lattice_contact_points(block, band, options.contact, &flagged);
   }
   const Bounds within = certain_box(block);
   BrickOptions bricks;

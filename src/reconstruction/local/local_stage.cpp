@@ -42,14 +42,19 @@ constexpr double kLocalPowerVertex = 3e-4;
 // 0.0034 h, but bunny 64^3 0.254x -> 0.278x, goathead 0.244x -> 0.273x, wingnut 32^3 0.169x ->
 // 0.204x.
 constexpr double kLocalNearMiss = 3e-3;
+// The lattice's contact points slide for fewer rounds: each round searches every sphere in reach
+// (the triangulation's, its neighbours only). Bunny 32^3: 10 rounds rescue 1,480 points in 0.49 s,
+// 50 rounds 2,733 in 1.49 s, at the same median distance (0.0023 h).
+constexpr int kLatticeSlideRounds = 10;
 
 LocalBrickOptions local_brick_options(const ContourOptions& options) {
   LocalBrickOptions lb;
   lb.band = options.band;
   lb.gradient = options.gradient;
+  lb.lattice_points = options.gradient_source == GradientSource::Lattice;
   lb.contact = options.contact;
   lb.contact.max_slope_miss = kLocalSlopeMiss;
-  lb.contact.sphere_slide_rounds = kLocalSlideRounds;
+  lb.contact.sphere_slide_rounds = lb.lattice_points ? kLatticeSlideRounds : kLocalSlideRounds;
   lb.contact.power_vertex_tolerance = kLocalPowerVertex;
   lb.contact.near_miss_tolerance = kLocalNearMiss;
   lb.local = options.local;
@@ -73,7 +78,7 @@ namespace sdfcontour::detail {
 bool bricked_local(const GridView* grid, const ContourOptions& options) {
   // Bricks need a band: with every sample (--band all), one sphere can reach across the grid.
   if (!grid || options.method != Method::Gcp || !options.want_mesh ||
-      options.gradient_source != GradientSource::Regular || !std::isfinite(options.band.band))
+      !local_gradients(options.gradient_source) || !std::isfinite(options.band.band))
     return false;
   return options.reconstruction == Reconstruction::Local ||
          (options.reconstruction == Reconstruction::Auto &&

@@ -1,0 +1,41 @@
+// GCP contact points of a grid's band from the lattice alone, without a triangulation.
+//
+// On a grid a sample's neighbours are known in advance: its gradient comes from finite
+// differences along the grid's axes (central where the field is smooth, one-sided on the
+// smoother side where a second difference says a crease or a medial axis lies between the
+// samples: ENO), and the filter tests the candidate c = p - value * n against every band sample
+// whose sphere can hold it, found through the grid's columns. That test is the power-cell test of
+// the regular triangulation's neighbours, over a superset of them: it keeps exactly the points
+// that lie in no band sample's sphere (to the tie tolerance).
+#pragma once
+
+#include <vector>
+
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/input/samples.h"
+
+namespace sdfcontour {
+
+/// The contact points of `band`'s core samples (select_band of the grid `grid` describes: its
+/// dims and spacing; `band.source` indexes it in C order). `options`:
+///   tie_tolerance: as ContactPointOptions says, against every band sample's sphere;
+///   max_slope_miss: the 26 lattice neighbours in the band stand for the triangulation's;
+///   sphere_slide_rounds: as for the triangulation, out of every sphere that holds the point;
+///   power_vertex_tolerance: without tetrahedra, the slid point is kept where its power to every
+///   sphere that holds it is within this fraction of value^2 (where spheres nearly meet, as at a
+///   power vertex); 0: only a point that no sphere holds;
+///   near_miss_tolerance, try_tet_gradients: not used.
+/// With `only` (one flag per band sample), just the flagged samples give points.
+/// A flagged sample reads the band samples within lattice_contact_reach samples of it; a
+/// block's result equals the whole grid's for samples that far from the block's inner sides.
+ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples& band,
+                                     const ContactPointOptions& options = {},
+                                     const std::vector<char>* only = nullptr);
+
+/// How far (in samples, along each axis) a sample's contact point reads the band: the sphere
+/// filter's reach (twice the largest |value| with a slide, once without) and the stencils' 2.
+int lattice_contact_reach(const GridGeometry& grid, const BandSamples& band,
+                          const ContactPointOptions& options);
+
+}  // namespace sdfcontour

@@ -1,0 +1,166 @@
+// Contact points from a grid's lattice (lattice_contact_points.h) against the regular
+// triangulation's, and the empty-sphere property that defines them.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <random>
+
+#include "metrics/statistics.h"
+#include "sdfcontour/band/band.h"
+#include "sdfcontour/contact_points/bricks.h"
+#include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/contact_points/lattice_contact_points.h"
+#include "sdfcontour/contact_points/triangulation.h"
+#include "sdfcontour/input/builtin_shapes.h"
+#include "sdfcontour/input/signed_distance.h"
+#include "sdfcontour/pipeline/pipeline.h"
+#include "sdfcontour/reconstruction/local_brick.h"
+#include "test_support.h"
+
+using namespace sdfcontour;
+using Eigen::Vector3d;
+
+namespace {
+
+// The local reconstruction's contact-point options (local_stage.cpp), as the bricks run them.
+ContactPointOptions local_contact() {
+  return local_brick_options(ContourOptions{}).contact;
+}
+
+BandSamples band_of(const Grid& g, double band = 8) {
+  BandOptions o;
+  o.band = band;
+  o.truncation_mode = TruncationMode::None;
+  return select_band(g, o);
+}
+
+// The regular triangulation's points of the band's core samples, as contour() computes them
+// without bricks (the margin's weights capped).
+ContactPoints regular_points(const BandSamples& band, const ContactPointOptions& contact) {
+  const Samples& s = band.samples;
+  const Triangulation t = triangulate(
+      s.points, capped_weight_values(s.values, band.core_inside, band.core_outside), {});
+  const PointMatrix g = vertex_gradients(s.points, s.values, t, {}, &band.core);
+  return gradient_contact_points(s.points, s.values, g, t, contact, &band.core);
+}
+
+std::vector<double> errors(const ContactPoints& cp, const AnalyticShape& shape, double h) {
+  std::vector<double> e;
+  for (Eigen::Index i = 0; i < cp.points.rows(); ++i)
+    e.push_back(std::abs(shape.distance(cp.points.row(i).transpose())) / h);
+  return e;
+}
+
+// Brute force: the deepest that any band sample's sphere but sample s's own holds c, less the
+// tie tolerance's allowance.
+double deepest_hold(const BandSamples& band, long s, const Vector3d& c, double tau) {
+  const Vector3d p = band.samples.points.row(s).transpose();
+  double deepest = -INFINITY;
+  for (Eigen::Index j = 0; j < band.samples.values.size(); ++j) {
+    if (j == s) continue;
+    const Vector3d q = band.samples.points.row(j).transpose();
+    const double radius = std::abs(band.samples.values[j]) - tau * (q - p).norm();
+    deepest = std::max(deepest, radius - (c - q).norm());
+  }
+  return deepest;
+}
+
+}  // namespace
+
+TEST(LatticeContactPoints, EqualTheRegularTriangulationsOnAPlane) {
+  // A tilted plane: both gradients are exact, every point lies on the plane.
+  Grid g = sample_grid(*make_builtin_shape("sphere"), 24, Bounds{});
+  const Vector3d n = Vector3d(0.3, -0.5, 0.8).normalized();
+  for (int i = 0; i < 24; ++i)
+    for (int j = 0; j < 24; ++j)
+      for (int k = 0; k < 24; ++k)
+        g.values[Eigen::Index(g.index(i, j, k))] = n.dot(g.point(i, j, k)) - 0.1;
+  const BandSamples band = band_of(g, 4);
+  const ContactPoints lattice = lattice_contact_points(g, band, {});
+  const ContactPoints regular = regular_points(band, {});
+  const long core = std::count(band.core.begin(), band.core.end(), 1);
+  EXPECT_EQ(lattice.size(), core);  // no sphere holds a point of the plane
+  ASSERT_GT(regular.size(), 1000);
+  int compared = 0;
+  for (int a = 0, b = 0; a < regular.size(); ++a) {
+    while (b < lattice.size() && lattice.samples[std::size_t(b)] < regular.samples[std::size_t(a)])
+      ++b;
+    ASSERT_LT(b, lattice.size());
+    ASSERT_EQ(lattice.samples[std::size_t(b)], regular.samples[std::size_t(a)]);
+    EXPECT_LT((lattice.points.row(b) - regular.points.row(a)).norm(), 1e-12);
+    EXPECT_LT((lattice.normals.row(b) - n.transpose()).norm(), 1e-12);
+    ++compared;
+  }
+  EXPECT_EQ(compared, regular.size());
+}
+
+TEST(LatticeContactPoints, AsCloseAsTheRegularTriangulationsOnASphereAndABox) {
+  for (const std::string name : {"sphere", "box", "torus"}) {
+    const auto shape = make_builtin_shape(name);
+    const Grid g = sample_grid(*shape, 40, Bounds{});
+    const double h = g.spacing().maxCoeff();
+    const BandSamples band = band_of(g);
+    const ContactPoints lattice = lattice_contact_points(g, band, local_contact());
+    const ContactPoints regular = regular_points(band, local_contact());
+    const std::vector<double> el = errors(lattice, *shape, h), er = errors(regular, *shape, h);
+    std::cout << name << " 40^3: lattice " << lattice.size() << " points, median "
+              << quantile(el, 0.5) << " h, p95 " << quantile(el, 0.95) << " h; regular "
+              << regular.size() << ", " << quantile(er, 0.5) << " h, " << quantile(er, 0.95)
+              << " h\n";
+    EXPECT_LE(quantile(el, 0.5), quantile(er, 0.5) * 1.01 + 1e-9) << name;
+    EXPECT_LE(quantile(el, 0.95), quantile(er, 0.95) * 1.01 + 1e-9) << name;
+    EXPECT_GE(lattice.size(), 0.95 * regular.size()) << name;
+  }
+}
+
+TEST(LatticeContactPoints, NoKeptPointLiesInAnotherSamplesSphere) {
+  // Random grids: smooth fields, random signs, noise and clamps; with the paper's options and the
+  // local reconstruction's (slides and near misses allowed their stated depth).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 12; ++trial) {
+    const int n = 6 + trial % 5;
+    Grid g = sample_grid(*make_builtin_shape(trial % 2 ? "csg" : "torus"), n, Bounds{});
+    for (Eigen::Index i = 0; i < g.values.size(); ++i) {
+      if (trial % 3 == 1) g.values[i] += 0.3 * u(rng);
+      if (trial % 3 == 2) g.values[i] = u(rng);
+    }
+    const BandSamples band = band_of(g, trial % 4 + 1);
+    for (const bool local : {false, true}) {
+      ContactPointOptions o = local ? local_contact() : ContactPointOptions{};
+      const ContactPoints cp = lattice_contact_points(g, band, o);
+      for (int a = 0; a < cp.size(); ++a) {
+        const long s = cp.samples[std::size_t(a)];
+        // (A slid point may lie in spheres that nearly meet there: its power within the
+        // tolerance of value^2, a depth of about half that fraction of |value|.)
+        const double allowed =
+            local ? o.power_vertex_tolerance / 2 * std::abs(band.samples.values[s]) : 0.0;
+        EXPECT_LE(deepest_hold(band, s, cp.points.row(a).transpose(), o.tie_tolerance), allowed)
+            << "trial " << trial << " sample " << s;
+        EXPECT_NEAR((cp.points.row(a) - band.samples.points.row(s)).norm(),
+                    std::abs(band.samples.values[s]), 1e-9);
+      }
+    }
+  }
+}
+
+TEST(LatticeContactPoints, LocalBricksEqualOneBrick) {
+  // A CSG shape (edges, corners, a hole) at 40^3: bricks of 13 and 20 samples cut through its
+  // features and corners. (Each brick reads its block with the repair stages' halo, ~60 samples:
+  // at 40^3 bricks of 8 cost 125 times the whole grid's work.)
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 40, Bounds{});
+  LocalBrickOptions o = local_brick_options(ContourOptions{});
+  o.band.truncation_mode = TruncationMode::None;
+  o.lattice_points = true;
+  o.subdivisions = 1;
+  o.thin_parts = 0;
+  const Mesh whole = local_mesh_in_bricks(view_of(g), o, 0);
+  ASSERT_GT(whole.triangles.rows(), 1000);
+  test::expect_closed_and_outward(whole);
+  for (const auto& [brick, threads] : {std::pair{13, 1}, std::pair{20, 2}}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    const Mesh m = local_mesh_in_bricks(view_of(g), o, brick);
+    EXPECT_EQ(m.vertices, whole.vertices) << brick;
+    EXPECT_EQ(m.triangles, whole.triangles) << brick;
+  }
+}
