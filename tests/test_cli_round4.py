@@ -1,6 +1,7 @@
 """Reliability round 4 (issue 65), through the command line: values that used to reach an
 internal assertion are refused where they enter, numbers are read one way, what goes to standard
 output arrives or the run fails, and an output name of the file system's longest is written.
+And the command line by levels (issue 66): --help on one screen, --help-all with the rest.
 
 Usage: test_cli_round4.py PATH_TO_SDFCONTOUR
 """
@@ -48,5 +49,17 @@ with tempfile.TemporaryDirectory() as d:
     r = run("contour", "builtin:sphere@12", "-o", longest, "--method", "mc", "-q")
     check("255-byte output name written", r.returncode == 0 and os.path.exists(longest), r.stderr)
     check("no temporary file left", not [f for f in os.listdir(d) if ".tmp-" in f], os.listdir(d))
+
+    # The command line by levels: --help lists what a user decides, on one screen; --help-all the
+    # tuning knobs too, which are accepted either way.
+    r = run("contour", "--help")
+    check("contour --help fits a screen", r.returncode == 0 and len(r.stdout.splitlines()) <= 40 and
+          "--projection-radius" not in r.stdout and "--help-all" in r.stdout, r.stdout)
+    r = run("contour", "--help-all")
+    check("contour --help-all lists the tuning options", r.returncode == 0 and
+          "--projection-radius" in r.stdout and "--local-reach" in r.stdout and "--depth" in r.stdout, r.stdout)
+    r = run("contour", "builtin:sphere@12", "-o", p("k.ply"), "--gradient", "knn", "--knn", "6",
+            "--reconstruction", "poisson", "-q")
+    check("a tuning option is still accepted", r.returncode == 0 and os.path.exists(p("k.ply")), r.stderr)
 
 finish()

@@ -11,6 +11,10 @@ struct Command {
   std::function<int()> run;  ///< returns the exit code; throws Error for bad input
 };
 
+/// Whether `contour --help-all` was asked for: its tuning options are then listed (else hidden
+/// from --help, and still accepted). Set by main before the commands are added.
+extern bool show_all_options;
+
 Command add_contour_command(CLI::App& app);                      ///< sdfcontour contour
 Command add_poisson_command(CLI::App& app);                      ///< sdfcontour poisson
 Command add_sample_command(CLI::App& app);                       ///< sdfcontour sample

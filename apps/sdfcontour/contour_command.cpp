@@ -456,7 +456,33 @@ void add_input_options(CLI::App* c, ContourArgs& a) {
   c->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
 }
 
+// The options a user decides; the rest are tuning knobs, listed by --help-all.
+bool user_option(const CLI::Option* o) {
+  static const std::set<std::string> user = {
+      "output", "points", "method",  "bounds", "band", "truncation", "reconstruction", "adaptivity",
+      "grid",   "stats",  "threads", "ascii",  "seed", "quiet",      "help",           "help-all"};
+  const std::vector<std::string>& names = o->get_lnames();
+  return names.empty() || user.count(names.front()) > 0;  // (the input is positional)
+}
+
+// One sentence each for the options a user decides (the long accounts stay in --help-all's
+// tuning group and in the docs).
+void shorten_user_help(CLI::App* c) {
+  const std::pair<const char*, const char*> short_help[] = {
+      {"--band",
+       "GCP uses the samples within this many spacings of the surface ('auto', or 'all')"},
+      {"--reconstruction",
+       "GCP's mesh: 'local' (per cell, brick by brick), 'poisson' (the paper's), or 'auto' "
+       "(local for grids and .vdb, poisson for scattered samples)"},
+      {"--truncation", "Values clamped at +-T carry no distance: T, 'none' or 'auto' (detected)"},
+      {"--adaptivity",
+       "Merge flat regions while the error stays under this many spacings (0: no merging)"}};
+  for (const auto& [name, text] : short_help) c->get_option(name)->description(text);
+}
+
 }  // namespace
+
+bool show_all_options = false;
 
 Command add_contour_command(CLI::App& app) {
   auto a = std::make_shared<ContourArgs>();
@@ -465,11 +491,9 @@ Command add_contour_command(CLI::App& app) {
       "Contour SDF samples (grid .npy, scattered .npy, OpenVDB level set .vdb or builtin:NAME@N)");
   c->add_option(
        "input", a->input,
-       "Grid .npy of shape (nx,ny,nz), scattered samples .npy of shape (n,4) with rows "
-       "x,y,z,value, an OpenVDB float level set .vdb (its transform places it; for GCP's "
-       "local reconstruction read box by box on its voxels' grid, else sparse as "
-       "scattered samples; never densified whole), or a built-in shape builtin:NAME@N (N^3 grid) / "
-       "builtin:NAME@random:COUNT; NAME is one of sphere, torus, box, plate, shell, csg")
+       "A grid .npy (nx,ny,nz), scattered samples .npy (n,4: x,y,z,value), an OpenVDB level "
+       "set .vdb, or builtin:NAME@N / builtin:NAME@random:COUNT (NAME: sphere, torus, box, "
+       "plate, shell, csg)")
       ->required();
   c->add_option("-o,--output", a->output,
                 "Mesh to write (.ply binary by default, .obj, .off or binary .stl)");
@@ -491,6 +515,13 @@ Command add_contour_command(CLI::App& app) {
   c->add_flag("--serial-triangulation", a->serial_triangulation,
               "Insert points sequentially (same result, slower)");
   a->poisson.add_to(c);
+  c->add_flag("--help-all",
+              "List the tuning options too (gradients, bricks, signs, carving, "
+              "projection, the local cells, the Poisson solver)");
+  if (!show_all_options) shorten_user_help(c);
+  for (CLI::Option* o : c->get_options())
+    if (!user_option(o)) o->group(show_all_options ? "Tuning" : "");
+  c->footer("Tuning options: sdfcontour contour --help-all");
   return {c, [a] { return run_contour(*a); }};
 }
 

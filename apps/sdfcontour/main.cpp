@@ -14,13 +14,22 @@ using namespace sdfcontour;
 int main(int argc, char** argv) {
   cli::rerun_with_huge_pages(argv);
   CLI::App app{"sdfcontour: contour samples of a signed distance function into a triangle mesh"};
+  // `contour --help-all`: the contour command's help with its tuning options listed.
+  std::vector<std::string> args(argv, argv + argc);
+  for (std::string& arg : args)
+    if (arg == "--help-all") {
+      cli::show_all_options = true;
+      arg = "--help";
+    }
+  std::vector<char*> pointers;
+  for (std::string& arg : args) pointers.push_back(arg.data());
   app.require_subcommand(1);
   cli::Command eval_points;
   const std::vector<cli::Command> commands = {
       cli::add_contour_command(app), cli::add_poisson_command(app), cli::add_sample_command(app),
       cli::add_eval_commands(app, eval_points)};
   try {
-    app.parse(argc, argv);
+    app.parse(int(pointers.size()), pointers.data());
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
