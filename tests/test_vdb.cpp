@@ -235,3 +235,46 @@ TEST(Vdb, FarApartLevelSetsCostTheirVoxelsOnly) {
   EXPECT_EQ(r.isolated_samples, 1);
   EXPECT_LT(r.mesh->vertices.cwiseAbs().maxCoeff(), 4 * voxel);
 }
+
+TEST(Vdb, FarApartLevelSetsReadBoxByBoxCostTheirLeavesOnly) {
+  // Two spheres 1e5 voxels apart on the diagonal: 4e4 bricks of 256 per axis span the box, and
+  // only those that meet a leaf are visited (the local reconstruction and marching cubes alike);
+  // at 1e6 apart the box outgrows the local reconstruction's vertex names: refused in one line.
+  openvdb::initialize();
+  const auto dir = test::temp_dir("vdb_far_boxes");
+  const double voxel = 0.05, radius = 0.6;
+  for (const double apart : {1e5, 1e6}) {
+    SCOPED_TRACE(apart);
+    const float far = float(apart * voxel);
+    auto scene = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.f);
+    auto other = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        float(radius), openvdb::Vec3f(far, far, far), float(voxel), 3.f);
+    openvdb::tools::csgUnion(*scene, *other);
+    scene->setName("surface");
+    const std::string path = (dir / "scene.vdb").string();
+    write_grids(path, {scene});
+    VdbLayout layout;
+    BlockedGridInput input{vdb_blocked_grid(path, "", &layout), 0};
+    input.truncation = layout.background;
+    for (const Method method : {Method::Gcp, Method::Mc}) {
+      ContourOptions o;
+      o.method = method;
+      if (method == Method::Gcp && apart > 1e5) {
+        EXPECT_THROW(contour(input, nullptr, o), Error);
+        continue;
+      }
+      const ContourResult r = contour(input, nullptr, o);
+      int near = 0, away = 0;
+      for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i) {
+        Eigen::Vector3d p = r.mesh->vertices.row(i).transpose();
+        const bool is_far = p.x() > far / 2;
+        if (is_far) p -= Eigen::Vector3d::Constant(far);
+        (is_far ? away : near) += 1;
+        EXPECT_LT(std::abs(p.norm() - radius), 0.5 * voxel);
+      }
+      EXPECT_GT(near, 100) << int(method);
+      EXPECT_GT(away, 100) << int(method);
+    }
+  }
+}

@@ -71,7 +71,8 @@ SubspacingGaps count_subspacing_gaps(const BlockedGrid& grid, double value_scale
   if (brick < 1) throw Error("the bricks must be at least one sample wide");
   SubspacingGaps sum;
   std::vector<float> values;
-  for_each_brick(grid.dims, brick,
+  const std::vector<long> visit = bricks_to_visit(grid, grid.dims, brick, 2);
+  for_each_listed_brick(grid.dims, brick, visit,
                  [&](long, const std::array<int, 3>& own_first, const std::array<int, 3>& own_end) {
                    std::array<int, 3> lo, hi;  // the samples its edges need
                    for (std::size_t a = 0; a < 3; ++a) {

@@ -180,7 +180,10 @@ Mesh marching_cubes(const BlockedGrid& grid, int brick) {
   std::vector<MeshPiece> pieces;
   std::vector<float> values;
   const std::array<int, 3> cells{grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1};
-  for_each_brick(cells, brick, [&](long, const std::array<int, 3>& first, std::array<int, 3> end) {
+  // (A brick's cells [first, end) read samples up to end: grown by one.)
+  const std::vector<long> visit = bricks_to_visit(grid, cells, brick, 1);
+  for_each_listed_brick(cells, brick, visit, [&](long, const std::array<int, 3>& first,
+                                                 std::array<int, 3> end) {
     for (int& e : end) ++e;  // its cells' samples
     if (grid.may_hold_surface && !grid.may_hold_surface(first, end)) return;
     pieces.push_back(marching_cubes_brick(read_block(grid, first, end, values), grid, first));

@@ -235,17 +235,16 @@ BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_na
   };
   // The leaves (8^3 voxels) in grid indices: outside them every voxel is inactive, its value the
   // signed background (the band's half width), so no sign changes there.
-  std::vector<std::array<int, 3>> leaves;
-  for (const auto& o : layout.leaf_origins)
-    leaves.push_back({o[0] - first[0], o[1] - first[1], o[2] - first[2]});
-  grid.may_hold_surface = [leaves](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
-    for (const auto& o : leaves) {
-      bool meets = true;
-      for (int a = 0; a < 3; ++a) meets = meets && o[a] < hi[a] && o[a] + 8 > lo[a];
-      if (meets) return true;
+  std::vector<SampleBox> leaves;
+  for (const auto& o : layout.leaf_origins) {
+    SampleBox box;
+    for (std::size_t a = 0; a < 3; ++a) {
+      box.lo[a] = o[a] - first[a];
+      box.hi[a] = box.lo[a] + 8;
     }
-    return false;
-  };
+    leaves.push_back(box);
+  }
+  grid.surface_boxes = std::move(leaves);
   if (layout_out) *layout_out = layout;
   return grid;
 }

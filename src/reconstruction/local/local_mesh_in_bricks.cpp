@@ -188,20 +188,38 @@ OrientedPoints join_owned_contact_points(const std::vector<LocalPiece>& pieces) 
 
 namespace {
 
+// Throws Error unless every vertex and triangle of a grid `dims` across has a distinct 64-bit
+// name: a triangle's is 2048 times its grid edge's index and more (3 edges a sample; on the grid
+// at twice the resolution with thin parts), so the samples must stay under 2^64 / 6144.
+void require_nameable(const Index3& dims, const LocalBrickOptions& options) {
+  const double samples =
+      double(dims[0]) * dims[1] * dims[2] * (local_thin_parts(options, dims) ? 8 : 1);
+  constexpr double kMostSamples = 18446744073709551616.0 / 6144;
+  if (samples > kMostSamples)
+    throw Error("the grid's box is too large for the local reconstruction (" +
+                std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                std::to_string(dims[2]) +
+                " samples; at most 3e15): use --reconstruction poisson "
+                "or --method mc");
+}
+
 // local_mesh_in_bricks of a grid `dims` across, read by `read`; bricks whose own samples grown by
-// one cannot hold the surface (`may_hold_surface`, if set) are left out unread.
+// one cannot hold the surface (`may_hold_surface`, if set) are left out unread, and where `boxes`
+// is set only the bricks that meet one of them are visited at all.
 Mesh mesh_in_bricks(const Index3& dims, const BlockRead& read, const GridView* whole_grid,
                     const std::function<bool(const Index3&, const Index3&)>& may_hold_surface,
-                    const LocalBrickOptions& options, int brick, LocalBricksStats* stats,
-                    OrientedPoints* contact_points) {
+                    const std::vector<SampleBox>* boxes, const LocalBrickOptions& options,
+                    int brick, LocalBricksStats* stats, OrientedPoints* contact_points) {
   if (brick < 0) throw Error("the brick size must be positive (0: one brick)");
+  require_nameable(dims, options);
   const int side = brick > 0 ? brick : *std::max_element(dims.begin(), dims.end());
-  const int total = int(brick_count(dims, side));
-  std::vector<LocalPiece> pieces(static_cast<std::size_t>(total));
-  std::vector<int> wider(std::size_t(total), 0);
+  const std::vector<long> visit = bricks_meeting(dims, side, boxes, 1);
+  const int total = int(visit.size());
+  std::vector<LocalPiece> pieces(visit.size());
+  std::vector<int> wider(visit.size(), 0);
   // One brick at a time, each parallel inside: memory is one brick's and the pieces' (bricks
   // in parallel held as many bricks as the scheduler started: 27 GB at 1024³ on 16 threads).
-  for_each_brick(dims, side, [&](long b, const Index3& first, const Index3& end) {
+  for_each_listed_brick(dims, side, visit, [&](long b, const Index3& first, const Index3& end) {
     Index3 near_first, near_end;
     for (std::size_t a = 0; a < 3; ++a) {
       near_first[a] = std::max(first[a] - 1, 0);
@@ -254,7 +272,7 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
     return grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
                                             : copy_block(grid, lo, hi, doubles);
   };
-  return mesh_in_bricks(grid.dims, copy, &grid, {}, options, brick, stats, contact_points);
+  return mesh_in_bricks(grid.dims, copy, &grid, {}, nullptr, options, brick, stats, contact_points);
 }
 
 Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& options, int brick,
@@ -265,7 +283,8 @@ Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& opti
     throw Error("a grid read block by block needs its truncation resolved (none, given or found)");
   const BlockRead read = [&](const Index3& lo, const Index3& hi, std::vector<float>& floats,
                              std::vector<double>&) { return read_block(grid, lo, hi, floats); };
-  return mesh_in_bricks(grid.dims, read, nullptr, grid.may_hold_surface, options, brick, stats,
+  return mesh_in_bricks(grid.dims, read, nullptr, grid.may_hold_surface,
+                        grid.surface_boxes ? &*grid.surface_boxes : nullptr, options, brick, stats,
                         contact_points);
 }
 
