@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace sdfcontour {
 
@@ -19,38 +21,38 @@ constexpr double kKink = 0.5;
 // Gradients shorter than this have no usable direction.
 constexpr double kTinyGradient = 1e-300;
 
-// Band samples per chunk of the sphere search's bound (a column's run through the surface holds
-// about twice the band's width).
-constexpr long kChunk = 4;
+// Lattice samples per chunk of a column that the sphere search bounds by its largest radius.
+constexpr int kChunk = 4;
 
 enum class Outcome : char { Skipped, ZeroGradient, Discarded, Kept, Rescued };
 
-// The band samples on their lattice: column (i, j) holds band samples column_start[i * ny + j]
-// .. column_start[i * ny + j + 1], ascending in k.
+// The band samples on their lattice: each lattice sample's band index (or -1), and the largest
+// radius |value| of the band samples in each column and in each chunk of kChunk along a column.
 class Lattice {
  public:
   Lattice(const GridGeometry& grid, const BandSamples& band)
       : band_(band),
         n_(grid.dims),
+        chunks_((n_[2] + kChunk - 1) / kChunk),
         origin_(grid.point(0, 0, 0)),
         h_(grid.spacing()),
-        column_start_(std::size_t(n_[0]) * n_[1] + 1, 0),
-        k_(band.source.size()),
+        slot_(grid.size(), -1),
         radius_(band.source.size()),
-        column_max_(std::size_t(n_[0]) * n_[1], 0.0) {
-    const long per_column = n_[2];
+        column_max_(std::size_t(n_[0]) * n_[1], 0.0),
+        chunk_max_(std::size_t(n_[0]) * n_[1] * std::size_t(chunks_), 0.0) {
+    if (band.source.size() > std::size_t(std::numeric_limits<int>::max()))
+      throw Error("too many band samples in one brick: use smaller bricks (--brick-size)");
     for (std::size_t s = 0; s < band.source.size(); ++s) {
-      const long column = band.source[s] / per_column;
-      k_[s] = int(band.source[s] % per_column);
-      radius_[s] = std::abs(band.samples.values[Eigen::Index(s)]);
-      ++column_start_[std::size_t(column) + 1];
-      column_max_[std::size_t(column)] = std::max(column_max_[std::size_t(column)], radius_[s]);
-      largest_ = std::max(largest_, radius_[s]);
+      const std::size_t p = std::size_t(band.source[s]), column = p / std::size_t(n_[2]);
+      const int k = int(p % std::size_t(n_[2]));
+      slot_[p] = int(s);
+      const double r = radius_[s] = std::abs(band.samples.values[Eigen::Index(s)]);
+      double& in_column = column_max_[column];
+      double& in_chunk = chunk_max_[column * std::size_t(chunks_) + std::size_t(k / kChunk)];
+      in_column = std::max(in_column, r);
+      in_chunk = std::max(in_chunk, r);
+      largest_ = std::max(largest_, r);
     }
-    for (std::size_t c = 1; c < column_start_.size(); ++c) column_start_[c] += column_start_[c - 1];
-    chunk_max_.assign(radius_.size() / kChunk + 1, 0.0);
-    for (std::size_t s = 0; s < radius_.size(); ++s)
-      chunk_max_[s / kChunk] = std::max(chunk_max_[s / kChunk], radius_[s]);
   }
 
   const Eigen::Vector3d& spacing() const { return h_; }
@@ -58,26 +60,29 @@ class Lattice {
   double value(long s) const { return band_.samples.values[Eigen::Index(s)]; }
   Eigen::Vector3d point(long s) const { return band_.samples.points.row(Eigen::Index(s)); }
   std::array<int, 3> index(long s) const {
-    const long column = band_.source[std::size_t(s)] / n_[2];
-    return {int(column / n_[1]), int(column % n_[1]), k_[std::size_t(s)]};
+    const long p = band_.source[std::size_t(s)];
+    return {int(p / (long(n_[1]) * n_[2])), int(p / n_[2] % n_[1]), int(p % n_[2])};
   }
 
   // The band sample at lattice (i, j, k), or -1.
   long find(int i, int j, int k) const {
     if (i < 0 || j < 0 || k < 0 || i >= n_[0] || j >= n_[1] || k >= n_[2]) return -1;
-    const std::size_t column = std::size_t(i) * n_[1] + j;
-    const auto first = k_.begin() + column_start_[column],
-               last = k_.begin() + column_start_[column + 1];
-    const auto at = std::lower_bound(first, last, k);
-    return at != last && *at == k ? long(at - k_.begin()) : -1;
+    return slot_[(std::size_t(i) * n_[1] + j) * n_[2] + k];
   }
 
   // Calls f(j, squared distance from c to p_j) for each band sample j != self whose sphere holds
   // c (|c - p_j| < |value_j|), until f returns true; returns whether one did.
   template <class F>
   bool any_sphere_holding(const Eigen::Vector3d& c, long self, F&& f) const {
-    const Eigen::Vector3d lo = (c.array() - largest_ - origin_.array()) / h_.array();
-    const Eigen::Vector3d hi = (c.array() + largest_ - origin_.array()) / h_.array();
+    return any_sphere_near(c, 0.0, self, std::forward<F>(f));
+  }
+
+  // The same for the spheres that come within `extra` of c (|c - p_j| < |value_j| + extra).
+  template <class F>
+  bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
+    const double far = largest_ + extra;
+    const Eigen::Vector3d lo = (c.array() - far - origin_.array()) / h_.array();
+    const Eigen::Vector3d hi = (c.array() + far - origin_.array()) / h_.array();
     if (!(lo.allFinite() && hi.allFinite())) return false;
     const int i0 = std::max(0, int(std::ceil(lo[0]))), i1 = std::min(n_[0] - 1, int(hi[0]));
     const int j0 = std::max(0, int(std::ceil(lo[1]))), j1 = std::min(n_[1] - 1, int(hi[1]));
@@ -86,28 +91,27 @@ class Lattice {
       for (int j = j0; j <= j1; ++j) {
         const std::size_t column = std::size_t(i) * n_[1] + j;
         const double dy = origin_[1] + j * h_[1] - c[1];
-        const double across = dx * dx + dy * dy, top = column_max_[column];
+        const double across = dx * dx + dy * dy, top = column_max_[column] + extra;
         if (across >= top * top) continue;
         const double reach = std::sqrt(top * top - across);
-        const int k0 = int(std::ceil((c[2] - reach - origin_[2]) / h_[2]));
-        const long last = column_start_[column + 1];
-        long s = std::lower_bound(k_.begin() + column_start_[column], k_.begin() + last, k0) -
-                 k_.begin();
-        // In runs of the band's chunks, each skipped where its largest sphere cannot reach c.
-        while (s < last) {
-          const long chunk = s / kChunk, end = std::min(last, (chunk + 1) * kChunk);
-          const double below = origin_[2] + k_[std::size_t(s)] * h_[2] - c[2];
-          if (below >= reach) break;
-          const double above = origin_[2] + k_[std::size_t(end - 1)] * h_[2] - c[2];
-          const double dz = below > 0 ? below : (above < 0 ? -above : 0.0);
-          const double m = chunk_max_[std::size_t(chunk)];
-          if (across + dz * dz < m * m)
-            for (long t = s; t < end; ++t) {
-              const double z = origin_[2] + k_[std::size_t(t)] * h_[2] - c[2];
-              const double d2 = across + z * z, r = radius_[std::size_t(t)];
-              if (t != self && d2 < r * r && f(t, d2)) return true;
-            }
-          s = end;
+        const int k0 = std::max(0, int(std::ceil((c[2] - reach - origin_[2]) / h_[2])));
+        const int k1 = std::min(n_[2] - 1, int((c[2] + reach - origin_[2]) / h_[2]));
+        const double* chunk_max = &chunk_max_[column * std::size_t(chunks_)];
+        const int* slot = &slot_[column * std::size_t(n_[2])];
+        // Chunk by chunk, each skipped where its largest sphere cannot reach c.
+        for (int q = k0 / kChunk; q * kChunk <= k1; ++q) {
+          const int a = std::max(k0, q * kChunk), b = std::min(k1, q * kChunk + kChunk - 1);
+          const double below = origin_[2] + a * h_[2] - c[2], above = origin_[2] + b * h_[2] - c[2];
+          const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
+                       m = chunk_max[q] + extra;
+          if (across + dz * dz >= m * m) continue;
+          for (int k = a; k <= b; ++k) {
+            const int t = slot[k];
+            if (t < 0 || t == self) continue;
+            const double z = origin_[2] + k * h_[2] - c[2];
+            const double d2 = across + z * z, r = radius_[std::size_t(t)] + extra;
+            if (d2 < r * r && f(long(t), d2)) return true;
+          }
         }
       }
     }
@@ -117,12 +121,11 @@ class Lattice {
  private:
   const BandSamples& band_;
   std::array<int, 3> n_;
+  int chunks_;  // per column
   Eigen::Vector3d origin_, h_;
-  std::vector<long> column_start_;
-  std::vector<int> k_;
+  std::vector<int> slot_;
   std::vector<double> radius_;
-  std::vector<double> column_max_;
-  std::vector<double> chunk_max_;  // the largest radius of band samples kChunk * c .. + kChunk
+  std::vector<double> column_max_, chunk_max_;
   double largest_ = 0;
 };
 
@@ -223,29 +226,46 @@ class SamplePoint {
   bool slide(const Eigen::Vector3d& start) {
     if (!(o_.sphere_slide_rounds > 0)) return false;
     const double radius = std::abs(v_);
+    // The rounds read the spheres that come within `reach` of where the list was gathered, which
+    // hold every point within `reach` of there; farther, the list is gathered again.
+    struct Sphere {
+      Eigen::Vector3d centre;
+      double radius;
+    };
+    thread_local std::vector<Sphere> near;
+    const double reach = l_.spacing().minCoeff() / 2;
+    Eigen::Vector3d gathered = Eigen::Vector3d::Constant(INFINITY);
     Eigen::Vector3d c = start;
     for (int round = 0; round < o_.sphere_slide_rounds; ++round) {
+      if (!((c - gathered).norm() <= reach)) {
+        near.clear();
+        gathered = c;
+        l_.any_sphere_near(c, reach, s_, [&](long t, double) {
+          near.push_back({l_.point(t), std::abs(l_.value(t))});
+          return false;
+        });
+      }
       Eigen::Vector3d push = Eigen::Vector3d::Zero();
-      l_.any_sphere_holding(c, s_, [&](long t, double d2) {
-        const Eigen::Vector3d away = c - l_.point(t);
-        if (d2 > 0) push += (std::abs(l_.value(t)) - std::sqrt(d2)) * away / std::sqrt(d2);
-        return false;
-      });
+      for (const Sphere& q : near) {
+        const Eigen::Vector3d away = c - q.centre;
+        const double d = away.norm();
+        if (d < q.radius && d > 0) push += (q.radius - d) * away / d;
+      }
       if (push.squaredNorm() == 0) break;
       c = p_ + radius * (c + push - p_).normalized();
+      if (!c.allFinite()) return false;
     }
     // (Farther than the radius, the gradient said little about where the point lies.)
-    if (!c.allFinite() || (c - start).norm() > radius) return false;
+    if ((c - start).norm() > radius) return false;
     // A point where the spheres (nearly) meet, as the triangulation's power vertex: its power to
-    // each holding sphere, about 2 |value| times its depth, within the tolerance of value^2.
+    // each holding sphere, about 2 |value| times its depth, within the tolerance of value^2;
+    // without a tolerance, the strict test with its tie tolerance. Over every sphere.
     const double tol = o_.power_vertex_tolerance / 2;
     if (tol > 0) {
-      double deepest = 0;
-      l_.any_sphere_holding(c, s_, [&](long t, double d2) {
-        deepest = std::max(deepest, std::abs(l_.value(t)) - std::sqrt(d2));
-        return false;
+      const bool deep = l_.any_sphere_holding(c, s_, [&](long t, double d2) {
+        return std::abs(l_.value(t)) - std::sqrt(d2) > tol * radius;
       });
-      if (deepest > tol * radius) return false;
+      if (deep) return false;
     } else if (held(c)) {
       return false;
     }
