@@ -237,3 +237,22 @@ def test_an_exact_distance_with_thin_parts_keeps_its_values_and_says_so():
     with pytest.raises(ValueError, match=r"\[3, 4, 5\]"):
         sdfcontour.contour(sphere)
     assert "np" not in dir(sdfcontour)
+
+
+@pytest.mark.parametrize("text", ["0_1", " 0.1", "0.1 ", "nan", "inf", "0x"])
+def test_a_truncation_is_read_as_the_cli_reads_it(text):
+    # Python's float() reads "0_1" as 1.0 and strips blanks; the core's one parser refuses both.
+    grid = np.linspace(-1, 1, 8)[:, None, None] + np.zeros((8, 8, 8))
+    with pytest.raises(ValueError, match="truncation"):
+        sdfcontour.contour(grid, truncation=text)
+
+
+def test_lattice_gradients_run_the_local_reconstruction_and_are_refused_elsewhere():
+    x = np.linspace(-1, 1, 24)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.6
+    V, F, stats = sdfcontour.contour(sphere, gradient="lattice", return_stats=True)
+    assert stats["closed"] and stats["reconstruction"] == "local"
+    assert np.abs(np.linalg.norm(V, axis=1) - 0.6).max() < 0.05 * (x[1] - x[0])
+    with pytest.raises(ValueError, match="lattice"):
+        sdfcontour.contour(sphere, gradient="lattice", reconstruction="poisson")
