@@ -52,6 +52,13 @@ def report(text, out):
             f.write(text)
 
 
+def mesh_names(given):
+    """The shared meshes a benchmark runs: `given` (comma-separated names) or every one."""
+    if given:
+        return given.split(",")
+    return sorted(f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
+
+
 def sample_shared_mesh(name, res, folder, truncate=None):
     """Samples the shared mesh `name` on a res^3 grid into `folder` (`sdfcontour sample`; with
     `truncate`, the distances truncated at that many spacings): the prefix of its `.npy` grid and

@@ -20,6 +20,19 @@ void write_grids(const std::string& path, openvdb::GridPtrVec grids) {
   openvdb::io::File(path).write(grids);
 }
 
+// A scene of two level-set spheres of `radius` (voxels of `voxel`), at the origin and at `at`,
+// written as the grid "surface".
+void write_two_spheres(const std::string& path, double voxel, double radius,
+                       const openvdb::Vec3f& at) {
+  auto scene = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+      float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.f);
+  auto other = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(radius), at,
+                                                                        float(voxel), 3.f);
+  openvdb::tools::csgUnion(*scene, *other);
+  scene->setName("surface");
+  write_grids(path, {scene});
+}
+
 void expect_error(const std::string& path, const std::string& grid, const std::string& needle) {
   try {
     read_vdb_level_set(path, grid);
@@ -192,14 +205,8 @@ TEST(Vdb, FarApartLevelSetsCostTheirVoxelsOnly) {
   const double voxel = 0.05, radius = 0.6;
   for (const double apart : {1e5, 1e6}) {
     SCOPED_TRACE(apart);
-    auto scene = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-        float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.f);
-    auto other = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-        float(radius), openvdb::Vec3f(float(apart * voxel), 0, 0), float(voxel), 3.f);
-    openvdb::tools::csgUnion(*scene, *other);
-    scene->setName("surface");
     const std::string path = (dir / "scene.vdb").string();
-    write_grids(path, {scene});
+    write_two_spheres(path, voxel, radius, openvdb::Vec3f(float(apart * voxel), 0, 0));
     const VdbLevelSet ls = read_vdb_level_set(path);
     ContourOptions o;
     o.band.truncation_mode = TruncationMode::Given;
@@ -246,14 +253,8 @@ TEST(Vdb, FarApartLevelSetsReadBoxByBoxCostTheirLeavesOnly) {
   for (const double apart : {1e5, 1e6}) {
     SCOPED_TRACE(apart);
     const float far = float(apart * voxel);
-    auto scene = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-        float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.f);
-    auto other = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-        float(radius), openvdb::Vec3f(far, far, far), float(voxel), 3.f);
-    openvdb::tools::csgUnion(*scene, *other);
-    scene->setName("surface");
     const std::string path = (dir / "scene.vdb").string();
-    write_grids(path, {scene});
+    write_two_spheres(path, voxel, radius, openvdb::Vec3f(far, far, far));
     VdbLayout layout;
     BlockedGridInput input{vdb_blocked_grid(path, "", &layout), 0};
     input.truncation = layout.background;
