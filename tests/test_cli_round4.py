@@ -50,6 +50,21 @@ with tempfile.TemporaryDirectory() as d:
     check("255-byte output name written", r.returncode == 0 and os.path.exists(longest), r.stderr)
     check("no temporary file left", not [f for f in os.listdir(d) if ".tmp-" in f], os.listdir(d))
 
+    # Degenerate inputs give an error, not an empty or speck mesh with exit 0.
+    header = ("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+              "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n")
+    with open(p("coincident.ply"), "w") as f:
+        f.write(header % 6 + "0.5 0.5 0.5 1 0 0\n" * 6)
+    expect_error("poisson from coincident points", ["poisson", p("coincident.ply"), "-o", p("co.ply")],
+                 "one place", [p("co.ply")])
+    with open(p("one.ply"), "w") as f:
+        f.write(header % 1 + "0.5 0.5 0.5 1 0 0\n")
+    expect_error("poisson from one point", ["poisson", p("one.ply"), "-o", p("one_mesh.ply")],
+                 "no surface", [p("one_mesh.ply")])
+    with open(p("none.ply"), "w") as f:
+        f.write(header % 0)
+    expect_error("eval-points with no points", ["eval-points", p("none.ply"), p("box.obj")], "no points")
+
     # The command line by levels: --help lists what a user decides, on one screen; --help-all the
     # tuning knobs too, which are accepted either way.
     r = run("contour", "--help")

@@ -52,6 +52,7 @@ int run_eval(const EvalArgs& a) {
 int run_eval_points(const EvalArgs& a) {
   require_distinct_files({a.recon, a.gt}, {a.output});
   const OrientedPoints points = read_oriented_points(a.recon);
+  if (points.points.rows() == 0) throw Error("'" + a.recon + "' holds no points to evaluate");
   const MeshSdf sdf(read_mesh(a.gt));
   const ContactPointErrors e = contact_point_errors(points.points, points.normals, sdf);
   auto summary = [](const std::vector<double>& v) {

@@ -256,3 +256,10 @@ def test_lattice_gradients_run_the_local_reconstruction_and_are_refused_elsewher
     assert np.abs(np.linalg.norm(V, axis=1) - 0.6).max() < 0.05 * (x[1] - x[0])
     with pytest.raises(ValueError, match="lattice"):
         sdfcontour.contour(sphere, gradient="lattice", reconstruction="poisson")
+
+
+def test_poisson_from_too_few_or_coincident_points_is_a_value_error():
+    n = np.tile([[1.0, 0, 0]], (6, 1))
+    for P in (np.zeros((1, 3)) + 0.5, np.zeros((6, 3)) + 0.5):
+        with pytest.raises(ValueError, match="no surface|one place"):
+            sdfcontour.poisson(P, n[:len(P)])

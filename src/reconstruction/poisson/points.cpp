@@ -63,6 +63,12 @@ void validate(const OrientedPoints& input, const PoissonOptions& o) {
     if (!(input.normals.row(i).norm() > 0))
       throw Error("poisson: point " + std::to_string(i) + " has a zero normal");
   }
+  // Fewer than four points, or all at one spot, make no surface: the solve gave an empty mesh
+  // or a speck of six vertices at one place.
+  const Eigen::RowVector3d extent =
+      input.points.colwise().maxCoeff() - input.points.colwise().minCoeff();
+  if (n < 4) throw Error("poisson: " + std::to_string(n) + " points make no surface (at least 4)");
+  if (!(extent.maxCoeff() > 0)) throw Error("poisson: all the points lie at one place");
 }
 
 UnitPoints to_unit_cube(const OrientedPoints& input, double scale) {
