@@ -129,7 +129,7 @@ with tempfile.TemporaryDirectory() as d:
     open(p("one.ply"), "w").write("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                                  "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
                                  "end_header\n0 0 0 0 0 1\n")
-    expect_error("poisson one point", ["poisson", p("one.ply"), "-o", out], "empty", [out])
+    expect_error("poisson one point", ["poisson", p("one.ply"), "-o", out], "no surface", [out])
 
     # The band, truncation and bricks: bad values, and a band without a surface.
     for opt, value, needle in [("--band", "0", "--band"), ("--band", "wide", "--band"), ("--band", "nan", "--band"),
@@ -351,7 +351,7 @@ with tempfile.TemporaryDirectory() as d:
         check("vdb local warns of Poisson options", r.returncode == 0 and "--depth set the Poisson" in r.stderr,
               r.stderr)
         expect_error("vdb local knn", ["contour", p("spot.vdb"), "-o", out, "--reconstruction", "local",
-                                       "--gradient", "knn"], "regular-triangulation gradients", [out])
+                                       "--gradient", "knn"], "regular or lattice gradients", [out])
         # Marching cubes reads it box by box too: closed, and farther than GCP's local mesh.
         r = run("contour", p("spot.vdb"), "-o", p("spot_vdb_mc.ply"), "--method", "mc", "-q")
         check("contour vdb mc", r.returncode == 0 and r.stderr == "", r.stderr)

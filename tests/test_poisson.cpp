@@ -225,13 +225,15 @@ TEST(Poisson, SparseAndTinyInputs) {
   // A few hundred points: coarse splats, the tree stays shallow, the mesh still closes.
   const OrientedPoints sparse = even_points("sphere", 300);
   expect_watertight(poisson_reconstruct(sparse, {}).mesh, 2);
-  // One point: no surface to speak of, but no crash and nothing open.
-  OrientedPoints one;
-  one.points = PointMatrix::Zero(1, 3);
-  one.normals = PointMatrix::Zero(1, 3);
-  one.normals(0, 2) = 1;
-  const PoissonResult r = poisson_reconstruct(one, {});
-  EXPECT_TRUE(mesh_topology(r.mesh).closed);
+  // One point, or several at one place: no surface, said as an error (not an empty mesh or a
+  // speck of vertices at one spot).
+  for (const int n : {1, 6}) {
+    OrientedPoints same;
+    same.points = PointMatrix::Constant(n, 3, 0.25);
+    same.normals = PointMatrix::Zero(n, 3);
+    same.normals.col(2).setOnes();
+    EXPECT_THROW(poisson_reconstruct(same, {}), Error) << n;
+  }
 }
 
 // A thin plate sampled from both sides: the normals nearly cancel in the splatted field, and with

@@ -456,6 +456,19 @@ void add_input_options(CLI::App* c, ContourArgs& a) {
   c->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
 }
 
+// The tuning knobs' group, which --help leaves out and --help-all lists. (CLI11 2.1's hidden
+// group, "", also stops counting its options as given: their warnings would go.)
+constexpr const char* kTuning = "Tuning";
+
+class LevelsFormatter : public CLI::Formatter {
+ public:
+  std::string make_group(std::string group, bool is_positional,
+                         std::vector<const CLI::Option*> opts) const override {
+    if (group == kTuning && !show_all_options) return "";
+    return CLI::Formatter::make_group(std::move(group), is_positional, std::move(opts));
+  }
+};
+
 // The options a user decides; the rest are tuning knobs, listed by --help-all.
 bool user_option(const CLI::Option* o) {
   static const std::set<std::string> user = {
@@ -520,7 +533,8 @@ Command add_contour_command(CLI::App& app) {
               "projection, the local cells, the Poisson solver)");
   if (!show_all_options) shorten_user_help(c);
   for (CLI::Option* o : c->get_options())
-    if (!user_option(o)) o->group(show_all_options ? "Tuning" : "");
+    if (!user_option(o)) o->group(kTuning);
+  c->formatter(std::make_shared<LevelsFormatter>());
   c->footer("Tuning options: sdfcontour contour --help-all");
   return {c, [a] { return run_contour(*a); }};
 }

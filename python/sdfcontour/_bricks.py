@@ -25,6 +25,21 @@ def bricks(shape, brick):
     return out
 
 
+def bricks_among(shape, brick, indices=None):
+    """The bricks of ``bricks(shape, brick)`` whose index is in `indices` (a set of 3-tuples), in
+    C order, without listing the others (a level set's leaves far apart span bricks by the
+    billion); all of them where `indices` is None."""
+    if indices is None:
+        return bricks(shape, brick)
+    out = []
+    for index in sorted(indices):
+        first = tuple(int(i) * brick for i in index)
+        if any(f >= n - 1 for f, n in zip(first, shape)):
+            continue  # past the grid's last cell
+        out.append((tuple(index), first, tuple(min(brick, n - 1 - f) + 1 for f, n in zip(first, shape))))
+    return out
+
+
 def brick_piece(block, index, first, shape, lo, hi):
     """The piece of the marching cubes mesh that one brick owns, from its block of samples (the
     samples [first, first + block.shape) of a grid of `shape` samples over [lo, hi]).

