@@ -65,6 +65,25 @@ with tempfile.TemporaryDirectory() as d:
         f.write(header % 0)
     expect_error("eval-points with no points", ["eval-points", p("none.ply"), p("box.obj")], "no points")
 
+    # An input .npy cut short while it is read (mapped): one error line and exit 1, or a mesh if
+    # the read was done first; never SIGBUS.
+    import numpy as np
+    import time
+    np.save(p("big.npy"), np.random.default_rng(1).uniform(-1, 1, (200, 200, 200)))
+    header = 128
+    proc = subprocess.Popen([CLI, "contour", p("big.npy"), "-o", p("big.ply"), "--method", "mc", "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.2)
+    os.truncate(p("big.npy"), header + 8 * 1000)
+    out, err = proc.communicate(timeout=300)
+    lines = err.strip().splitlines()
+    check("input cut short: exit 1 with one error line, or a mesh",
+          (proc.returncode == 1 and lines and lines[-1].startswith("sdfcontour: error:") and
+           not os.path.exists(p("big.ply"))) or (proc.returncode == 0 and os.path.exists(p("big.ply"))),
+          (proc.returncode, err))
+    check("no temporary file left after a cut input", not [f for f in os.listdir(d) if ".tmp-" in f],
+          os.listdir(d))
+
     # The command line by levels: --help lists what a user decides, on one screen; --help-all the
     # tuning knobs too, which are accepted either way.
     r = run("contour", "--help")

@@ -59,6 +59,19 @@ extern "C" void remove_and_die(int signal) {
   std::raise(signal);
 }
 
+// A mapped input cut short under us (the file truncated while it is read) raises SIGBUS at the
+// first page past its new end: one error line, the temporary files removed, exit 1. (Only
+// async-signal-safe calls.)
+extern "C" void input_cut_short(int) {
+  for (int s = 0; s < kSlots; ++s)
+    if (g_used[s]) ::unlink(g_paths[s]);
+  static const char message[] =
+      "sdfcontour: error: an input file was truncated or removed while it was read\n";
+  const ssize_t written = ::write(2, message, sizeof message - 1);
+  (void)written;
+  ::_exit(1);
+}
+
 }  // namespace
 
 AtomicFile::AtomicFile(const std::string& path) : path_(path) {
@@ -173,6 +186,7 @@ void remove_temporary_files_on_signals() {
   for (int signal : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGALRM, SIGUSR1, SIGUSR2, SIGXCPU,
                      SIGXFSZ, SIGVTALRM, SIGPROF})
     std::signal(signal, remove_and_die);
+  std::signal(SIGBUS, input_cut_short);
 }
 
 }  // namespace sdfcontour

@@ -50,7 +50,9 @@ class OutputBatch {
 void require_writable(const std::string& path);
 
 /// On every terminating signal (SIGINT, SIGTERM, SIGHUP, SIGPIPE, ...), removes every temporary
-/// output file, then dies of the signal.
+/// output file, then dies of the signal. On SIGBUS (a mapped input truncated while it is read),
+/// removes them, says so in one error line and exits with status 1. For the command-line tool: a
+/// library inside another program leaves that program's signals alone.
 void remove_temporary_files_on_signals();
 
 }  // namespace sdfcontour

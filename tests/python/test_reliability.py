@@ -201,6 +201,16 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     assert stats["seconds"]["gcp (discarded)"] > 0 and "marching" in stats["seconds"]
     with pytest.raises(ValueError, match="distances"):
         sdfcontour.contour(implicit, reconstruction="poisson", strict=True)
+    # A distance scaled by 3: rescaled, and said.
+    sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.6
+    with pytest.warns(sdfcontour.RescaleWarning, match="rescaled"):
+        V, F, stats = sdfcontour.contour(3 * sphere, return_stats=True)
+    assert stats["value_scale"] == pytest.approx(1 / 3, rel=0.05)
+    # A NaN is named by its (i, j, k).
+    sphere[3, 4, 5] = np.nan
+    with pytest.raises(ValueError, match=r"\[3, 4, 5\]"):
+        sdfcontour.contour(sphere)
+    assert "np" not in dir(sdfcontour)
 
 
 def test_an_exact_distance_with_thin_parts_keeps_its_values_and_says_so():
@@ -227,16 +237,6 @@ def test_an_exact_distance_with_thin_parts_keeps_its_values_and_says_so():
     from sdfcontour.dask import canonical_mesh
     (A, B), (C, D) = canonical_mesh(V, F), canonical_mesh(Vc, Fc)
     assert np.array_equal(A, C) and np.array_equal(B, D)
-    # A distance scaled by 3: rescaled, and said.
-    sphere = np.sqrt(X**2 + Y**2 + Z**2) - 0.6
-    with pytest.warns(sdfcontour.RescaleWarning, match="rescaled"):
-        V, F, stats = sdfcontour.contour(3 * sphere, return_stats=True)
-    assert stats["value_scale"] == pytest.approx(1 / 3, rel=0.05)
-    # A NaN is named by its (i, j, k).
-    sphere[3, 4, 5] = np.nan
-    with pytest.raises(ValueError, match=r"\[3, 4, 5\]"):
-        sdfcontour.contour(sphere)
-    assert "np" not in dir(sdfcontour)
 
 
 @pytest.mark.parametrize("text", ["0_1", " 0.1", "0.1 ", "nan", "inf", "0x"])
