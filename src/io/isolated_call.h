@@ -10,7 +10,9 @@ namespace sdfcontour::detail {
 
 struct IsolationLimits {
   std::size_t memory_bytes = 0;  ///< the child's data segment (heap); 0: no limit
-  double seconds = 60;           ///< the child is killed after this long
+  /// The child's CPU time (it dies of SIGXCPU past it); the parent kills it after 4 times this
+  /// plus 10 s of wall-clock time whatever it does.
+  double seconds = 60;
 };
 
 /// Runs `work` in a forked child and returns the bytes it returned. The child's sdfcontour::Error
