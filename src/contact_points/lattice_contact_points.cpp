@@ -287,12 +287,12 @@ class SamplePoint {
 
 }  // namespace
 
-int lattice_contact_reach(const GridGeometry& grid, const BandSamples& band,
+int lattice_contact_reach(const GridGeometry& grid, double largest,
                           const ContactPointOptions& options) {
-  const double largest = band.samples.values.size() ? band.samples.values.cwiseAbs().maxCoeff() : 0;
-  const double h = grid.spacing().minCoeff();
-  const double spheres = (options.sphere_slide_rounds > 0 ? 2 : 1) * largest + largest;
-  return int(std::ceil(spheres / h)) + 2;
+  // The candidate lies |value| <= largest from its sample, a slid point |value| farther; a sphere
+  // holding either has its centre within `largest` of it.
+  const double spheres = (options.sphere_slide_rounds > 0 ? 3 : 2) * largest;
+  return int(std::ceil(spheres / grid.spacing().minCoeff())) + 2;
 }
 
 ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples& band,

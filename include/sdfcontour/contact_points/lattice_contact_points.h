@@ -3,10 +3,10 @@
 // On a grid a sample's neighbours are known in advance: its gradient comes from finite
 // differences along the grid's axes (central, of fourth order where five samples are smooth,
 // one-sided on the smoother side where a second difference says a crease or a medial axis lies
-// between the samples: ENO), and the filter tests the candidate c = p - value * n against every band sample
-// whose sphere can hold it, found through the grid's columns. That test is the power-cell test of
-// the regular triangulation's neighbours, over a superset of them: it keeps exactly the points
-// that lie in no band sample's sphere (to the tie tolerance).
+// between the samples: ENO), and the filter tests the candidate c = p - value * n against every
+// band sample whose sphere can hold it, found through the grid's columns. That test is the
+// power-cell test of the regular triangulation's neighbours, over a superset of them: it keeps
+// exactly the points that lie in no band sample's sphere (to the tie tolerance).
 #pragma once
 
 #include <vector>
@@ -33,9 +33,10 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
                                      const ContactPointOptions& options = {},
                                      const std::vector<char>* only = nullptr);
 
-/// How far (in samples, along each axis) a sample's contact point reads the band: the sphere
-/// filter's reach (twice the largest |value| with a slide, once without) and the stencils' 2.
-int lattice_contact_reach(const GridGeometry& grid, const BandSamples& band,
+/// How far (in samples, along each axis) a sample's contact point reads the band when no band
+/// sample's |value| exceeds `largest` (distance units; the whole grid's bound, not a block's): the
+/// sphere filter's reach (three times `largest` with a slide, twice without) and the stencils' 2.
+int lattice_contact_reach(const GridGeometry& grid, double largest,
                           const ContactPointOptions& options);
 
 }  // namespace sdfcontour

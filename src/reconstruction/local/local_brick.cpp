@@ -167,9 +167,12 @@ BandSamples brick_band(const GridView& block, const LocalBrickOptions& options) 
 
 // Throws HaloTooSmall unless every flagged sample lies lattice_contact_reach samples inside the
 // block's sides that are not the whole grid's: its point then reads what the whole grid's would.
+// (The reach is the whole grid's: any band sample's |value| is at most `largest`, a block's own
+// largest may be smaller than a sphere just outside it.)
 void require_lattice_reach(const GridView& block, const BandSamples& band,
-                           const std::vector<char>& flagged, const ContactPointOptions& contact) {
-  const int reach = lattice_contact_reach(block, band, contact);
+                           const std::vector<char>& flagged, const ContactPointOptions& contact,
+                           double largest) {
+  const int reach = lattice_contact_reach(block, largest, contact);
   const Index3 n = block.whole_dims();
   Index3 lo, hi;  // the block's indices that the flagged samples may take
   for (std::size_t a = 0; a < 3; ++a) {
@@ -210,7 +213,7 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
                               (p.array() <= flag_hi.array()).all();
   }
   if (options.lattice_points) {
-    require_lattice_reach(block, band, flagged, options.contact);
+    require_lattice_reach(block, band, flagged, options.contact, largest);
     return lattice_contact_points(block, band, options.contact, &flagged);
   }
   const Bounds within = certain_box(block);
