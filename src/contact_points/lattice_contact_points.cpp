@@ -56,7 +56,6 @@ class Lattice {
   }
 
   const Eigen::Vector3d& spacing() const { return h_; }
-  double largest() const { return largest_; }
   double value(long s) const { return band_.samples.values[Eigen::Index(s)]; }
   Eigen::Vector3d point(long s) const { return band_.samples.points.row(Eigen::Index(s)); }
   std::array<int, 3> index(long s) const {

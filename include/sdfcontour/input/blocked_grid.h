@@ -34,8 +34,8 @@ struct BlockedGrid : GridGeometry {
   std::optional<std::vector<SampleBox>> surface_boxes;
 };
 
-/// The C-order indices, ascending, of the bricks of `side` that partition [0, extent) (as
-/// for_each_brick counts them) whose samples, grown by `grow` on each side, meet one of `boxes`;
+/// The C-order indices, ascending, of the bricks of `side` that partition [0, extent) (the last
+/// ones shorter on each axis) whose samples, grown by `grow` on each side, meet one of `boxes`;
 /// every brick where `boxes` is null.
 std::vector<long> bricks_meeting(const std::array<int, 3>& extent, int side,
                                  const std::vector<SampleBox>* boxes, int grow);
@@ -45,30 +45,6 @@ std::vector<long> bricks_meeting(const std::array<int, 3>& extent, int side,
 inline std::vector<long> bricks_to_visit(const BlockedGrid& grid, const std::array<int, 3>& extent,
                                          int side, int grow) {
   return bricks_meeting(extent, side, grid.surface_boxes ? &*grid.surface_boxes : nullptr, grow);
-}
-
-/// How many bricks of `side` partition [0, extent) on each axis (the last ones shorter).
-inline long brick_count(const std::array<int, 3>& extent, int side) {
-  long count = 1;
-  for (int n : extent) count *= (long(n) + side - 1) / side;
-  return count;
-}
-
-/// Calls visit(index, first, end) for each of those bricks, [first, end) on each axis, in C order
-/// (index counts them from 0).
-template <class Visit>
-void for_each_brick(const std::array<int, 3>& extent, int side, Visit&& visit) {
-  std::array<long, 3> count;
-  for (std::size_t a = 0; a < 3; ++a) count[a] = (long(extent[a]) + side - 1) / side;
-  for (long b = 0; b < count[0] * count[1] * count[2]; ++b) {
-    const std::array<long, 3> at{b / (count[1] * count[2]), b / count[2] % count[1], b % count[2]};
-    std::array<int, 3> first, end;
-    for (std::size_t a = 0; a < 3; ++a) {
-      first[a] = int(at[a]) * side;
-      end[a] = std::min(first[a] + side, extent[a]);
-    }
-    visit(b, first, end);
-  }
 }
 
 /// Calls visit(position, first, end) for the bricks of `side` with C-order indices `bricks` (as
