@@ -110,10 +110,7 @@ void poisson_stage(ReconstructionInputs& in, const ContourOptions& options, Cont
             if (cluster[r] == c) rows.push_back(int(r));
           part.points = lent.points(rows, Eigen::all);
           part.normals = lent.normals(rows, Eigen::all);
-          // (A cluster of fewer than 4 points, or of points at one place, holds no surface.)
-          const Eigen::RowVector3d extent =
-              part.points.colwise().maxCoeff() - part.points.colwise().minCoeff();
-          if (rows.size() < 4 || !(extent.maxCoeff() > 0)) continue;
+          if (!poisson_no_surface(part.points).empty()) continue;  // a cluster without one
           // The sides that matter: samples near this cluster's points.
           const Eigen::AlignedBox3d box(
               part.points.colwise().minCoeff().transpose().array() - cell,

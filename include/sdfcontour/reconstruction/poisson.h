@@ -119,11 +119,16 @@ struct SignConstraintOptions {
   double radius = 0;
 };
 
+/// Why `points` (n x 3) make no surface for the screened Poisson solve: fewer than 4 of them, or
+/// all at one place (the solve gave an empty mesh or a speck); empty where they can make one.
+std::string poisson_no_surface(const PointMatrix& points);
+
 /// Reconstructs a surface from points (n x 3) and normals (n x 3, any length > 0, outward).
 /// Minimises  int |grad chi - V|^2 + alpha * (A/N) * 2^d * sum_i (chi(p_i) - 1/2)^2,
 /// with V the normals splatted at adaptive depths (each weighted by its sample's area, A/N the
 /// mean), solved coarse to fine, and extracts chi = (average of chi at the samples).
-/// Throws Error for no points, NaN or infinite values, or a zero normal.
+/// Throws Error for no points, NaN or infinite values, a zero normal, or points that make no
+/// surface (poisson_no_surface).
 PoissonResult poisson_reconstruct(const OrientedPoints& points, const PoissonOptions& options = {});
 
 /// The same, then chi is corrected where `sides` disagree with it (see enforce_signs in

@@ -63,12 +63,8 @@ void validate(const OrientedPoints& input, const PoissonOptions& o) {
     if (!(input.normals.row(i).norm() > 0))
       throw Error("poisson: point " + std::to_string(i) + " has a zero normal");
   }
-  // Fewer than four points, or all at one spot, make no surface: the solve gave an empty mesh
-  // or a speck of six vertices at one place.
-  const Eigen::RowVector3d extent =
-      input.points.colwise().maxCoeff() - input.points.colwise().minCoeff();
-  if (n < 4) throw Error("poisson: " + std::to_string(n) + " points make no surface (at least 4)");
-  if (!(extent.maxCoeff() > 0)) throw Error("poisson: all the points lie at one place");
+  if (const std::string why = poisson_no_surface(input.points); !why.empty())
+    throw Error("poisson: " + why);
 }
 
 UnitPoints to_unit_cube(const OrientedPoints& input, double scale) {
@@ -97,3 +93,15 @@ MortonRuns::MortonRuns(const std::vector<UnitPoint>& points, int depth)
 }
 
 }  // namespace sdfcontour::poisson
+
+namespace sdfcontour {
+
+std::string poisson_no_surface(const PointMatrix& points) {
+  const Eigen::Index n = points.rows();
+  if (n < 4) return std::to_string(n) + " points make no surface (at least 4)";
+  const Eigen::RowVector3d extent = points.colwise().maxCoeff() - points.colwise().minCoeff();
+  if (!(extent.maxCoeff() > 0)) return "all the points lie at one place";
+  return "";
+}
+
+}  // namespace sdfcontour
