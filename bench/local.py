@@ -5,6 +5,12 @@ spacings, closedness, triangles, wall time and peak memory. One JSON line per me
 method on stdout; with --markdown, the tables (geometric means of the ratios to MC) there too.
 
     /usr/bin/python3 bench/local.py --res 32,64 --markdown docs/results/local.md
+
+A constant's sweep: each --variant LABEL:OPTIONS adds a method, GCP's local reconstruction with
+those options, e.g.
+
+    /usr/bin/python3 bench/local.py --res 128 --methods mc --variant band4:"--band 4" \
+        --variant band8:"--band 8"
 """
 import argparse
 import json
@@ -130,10 +136,17 @@ def main():
     ap.add_argument("--markdown", default="")
     ap.add_argument("--truncate", type=float, default=0,
                     help="sample the grids truncated at this many spacings (fast at 256^3); 0: exact")
+    ap.add_argument("--variant", action="append", default=[], metavar="LABEL:OPTIONS",
+                    help="one more method: gcp-local with these contour options (repeatable)")
     args = ap.parse_args()
+    for v in args.variant:
+        label, _, options = v.partition(":")
+        if not label or label in METHODS:
+            ap.error(f"--variant {v!r}: give a new label, then ':' and the options")
+        METHODS[label] = METHODS["gcp-local"] + options.split()
     names = [m for m in args.meshes.split(",") if m] or sorted(
         f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
-    methods = args.methods.split(",")
+    methods = args.methods.split(",") + [v.partition(":")[0] for v in args.variant]
     os.makedirs(args.work, exist_ok=True)
     rows = []
     for res in [int(r) for r in args.res.split(",")]:

@@ -102,7 +102,8 @@ double auto_band(double samples_per_axis);
 /// of the samples around their cells, and farther samples' points are still exact there: bunny
 /// 128^3 L1 7.38e-5 (band 4) -> 6.54e-5 (6) -> 5.78e-5 (8), boot 4.08e-4 -> 3.84e-4 (8); bunny
 /// 256^3 2.18e-5 (band 3) -> 2.03e-5 (4) -> 1.77e-5 (6) -> 1.61e-5 (8), boot 1.19e-4 -> 1.01e-4
-/// (8), for 1.5-1.9x the time and up to 1.6x the memory (docs/local.md, session 21). From 384 the
+/// (8), for 1.5-1.9x the time and up to 1.6x the memory (`bench/local.py --res 128,256 --methods mc
+/// --variant b4:"--band 4" --variant b8:"--band 8"`). From 384 the
 /// narrower band keeps large grids' time and memory (1024^3 within 4 GB).
 double auto_local_band(double samples_per_axis);
 

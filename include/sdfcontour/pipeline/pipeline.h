@@ -62,31 +62,31 @@ Reconstruction parse_reconstruction(const std::string& name);
 std::string reconstruction_name(Reconstruction reconstruction);
 
 /// Whether Reconstruction::Auto takes the local reconstruction for a grid `samples_per_axis`
-/// across (its largest dimension): at every size since session 20. The 17 shared meshes' L1 over
-/// MC's (geometric means, docs/local.md, session 20): 32^3 local 0.217x against Poisson's 0.311x,
-/// 64^3 0.200x against 0.337x, 128^3 0.272x (with thin parts); 16^3 0.264x against 0.275x
-/// (session 19); 256^3 0.505x against 0.590x (bunny and spot, session 27) in about the time. Below
-/// 256 Poisson was kept while the local mesh's worst vertex on the analytic torus at 64^3 lay
-/// beyond marching cubes' (power vertices on its mirror planes; now 0.0093 h against 0.0152 h,
-/// kLocalNearMiss).
+/// across (its largest dimension): at every size. The 17 shared meshes' L1 over MC's (geometric
+/// means): 16^3 local 0.264x against Poisson's 0.275x, 32^3 0.217x against 0.311x, 64^3 0.200x
+/// against 0.337x; 256^3 0.505x against 0.590x (bunny and spot) in about the time
+/// (`bench/local.py --res 16,32,64 --methods mc,gcp-local,gcp-poisson`).
 bool auto_local_reconstruction(double samples_per_axis);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
 /// dimension): 2 below 96, else 1, and then auto_split_sag's edges once more (64^3: bunny 4.00e-4
-/// with 2 against 4.57e-4 with 1; docs/local.md, session 18: at 128^3 a second uniform level is
-/// 2% closer than one level and the split, for 2.5x the triangles and 1.7x the time).
+/// with 2 against 4.57e-4 with 1; at 128^3 a second uniform level is 2% closer than one level and
+/// the split, for 2.5x the triangles and 1.7x the time: `bench/local.py --methods mc --variant
+/// s1:"--subdivisions 1" --variant s2:"--subdivisions 2 --split-sag 0"`).
 int auto_subdivisions(double samples_per_axis);
 
 /// The local reconstruction's split_sag (LocalBrickOptions) for a grid `samples_per_axis` across:
-/// 0.004 spacings at any size. The 17 shared meshes' L1 over MC's (geometric means, session 18):
+/// 0.004 spacings at any size. The 17 shared meshes' L1 over MC's (geometric means,
+/// `bench/local.py --res 32,64,128 --methods mc,gcp-local --variant nosplit:"--split-sag 0"`):
 /// 128^3 0.390x -> 0.356x for 1.6x the triangles, 64^3 0.257x -> 0.253x, 32^3 0.295x -> 0.292x;
 /// the analytic torus at 256^3 splits no edge (its chords sag less).
 double auto_split_sag(double samples_per_axis);
 /// Whether the local reconstruction looks for parts thinner than a spacing
 /// (LocalBrickOptions::thin_parts) on a grid `samples_per_axis` across: below 192, where the grid
 /// at twice the resolution with one subdivision fewer replaces the grid's own cells (the 17 shared
-/// meshes' L1 over MC's, session 19: 32^3 0.292x -> 0.216x, 64^3 0.253x -> 0.199x; session 20:
-/// 128^3 0.356x -> 0.267x without the exact cube, 0.193x -> 0.272x with it; the sword's blade and
+/// meshes' L1 over MC's, `bench/local.py --methods mc,gcp-local-thin --variant
+/// thick:"--thin-parts off"`: 32^3 0.292x -> 0.216x, 64^3
+/// 0.253x -> 0.199x, 128^3 0.356x -> 0.267x without the exact cube, 0.193x -> 0.272x with it; the sword's blade and
 /// the plane's wings appear). An exact axis-aligned box loses its exactness on that grid (at
 /// 128^3 from 1e-5 to 0.36x MC's: its narrow cells next to the edges hold one or two contact
 /// points, one of them often with a bent normal). Not from 192: at 256^3 the exact cube is 1.02x
@@ -162,7 +162,7 @@ struct ContourOptions {
   /// (wingnut 64^3 0.271x -> 0.226x; 0.01 spacings: 0.310x / 0.280x). Chord offsets and a
   /// second fit within 2 spacings where the first has no height (with the local contact points'
   /// near misses): 0.305x -> 0.300x at 32^3, 0.278x -> 0.267x at 64^3; the analytic torus at
-  /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (docs/local.md, session 9).
+  /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (bench/smooth_shapes.py).
   ContactProjectionOptions local_projection = local_projection_options();
   /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
   /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.

@@ -49,8 +49,8 @@ struct ContactProjectionOptions {
   /// between its normal and the fit's normal where it lies (the vertex's normal in the first
   /// fit). Points whose normal disagrees with their place (gradients blended across an edge or
   /// a medial axis, which land a few hundredths of a spacing inside a face) then lose their
-  /// pull on curved and flat regions alike (after Poisson, session 15: shared meshes' L1 0.314x
-  /// -> 0.311x MC's at 32^3, 0.340x -> 0.337x at 64^3, wingnut 0.411x -> 0.396x). 0: off.
+  /// pull on curved and flat regions alike (after Poisson: shared meshes' L1 0.340x -> 0.337x
+  /// MC's at 64^3, `bench/local.py --res 64 --methods mc,gcp-poisson`). 0: off.
   double normal_turn_scale = 5;
   /// Where the fit within radius gives no reliable height although at least min_points points
   /// there agree with the vertex's normal (points on lines further apart than the radius, as

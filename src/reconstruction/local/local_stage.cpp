@@ -13,38 +13,28 @@ namespace sdfcontour::detail {}  // namespace sdfcontour::detail
 
 namespace sdfcontour {
 
-// The local reconstruction's contact points: none from samples whose neighbours miss their
-// gradient's linear prediction by more than 0.45 of their distance (across a crease or a medial
-// axis), and discarded ones slid over their sphere out of the neighbours' (50 rounds), which
-// finds convex edges and corners. Measured (bench/local.py --res 32,64 --methods mc,gcp-local,
-// every shared mesh, same session): geometric mean L1 0.379x -> 0.371x MC's at 32^3 and 0.365x
-// -> 0.343x at 64^3 (hammer 64^3 0.321x -> 0.237x, cube 0.032x -> 0.019x; boot, cat, goathead,
-// penguin 4-8% worse at 32^3); slope 0.6 alone 0.369x / 0.352x, 0.3 or 0.8 with sliding worse,
-// sliding alone worse (0.392x / 0.381x). The Poisson path keeps the paper's points.
+// The local reconstruction's contact points (the Poisson path keeps the paper's). The values
+// below were chosen on the shared meshes' L1 over marching cubes' at 32^3 and 64^3; measure again
+// with `bench/local.py --res 32,64 --methods mc,gcp-local` (docs/notes/local.md has the sweeps).
+//
+// No point from a sample whose neighbours miss its gradient's linear prediction by more than 0.45
+// of its distance (across a crease or a medial axis); discarded points slide over their sphere out
+// of the neighbours' (50 rounds), which finds convex edges and corners (64^3: 0.365x -> 0.343x MC's
+// L1; 0.3, 0.6 and 0.8 were worse).
 constexpr double kLocalSlopeMiss = 0.45;
 constexpr int kLocalSlideRounds = 50;
 // Samples still without a point take a vertex of their power cell on their sphere (power within
-// 3e-4 value^2 of zero): the box's corners exactly, and where a sphere is nearly covered.
-// Measured (bench/local.py --res 32,64 --methods mc,gcp-local, every shared mesh, with the band's
-// margin no longer hiding band samples and thin shapes kept on their values as given, same
-// session): geometric mean L1 0.371x -> 0.318x MC's at 32^3 and 0.343x -> 0.291x at 64^3 (wingnut
-// 64^3 0.593x -> 0.283x, bunny 0.413x -> 0.311x, torus 0.347x -> 0.285x; sphere 0.259x alike).
-// 1e-3 gave 0.315x / 0.287x but left a koala sample 0.05 h on the wrong side; 1e-6 0.349x /
-// 0.316x, 1e-4 0.338x / 0.300x, 1e-2 0.349x / 0.301x (before the margin change).
+// 3e-4 value^2 of zero): the box's corners exactly, and where a sphere is nearly covered (64^3:
+// 0.343x -> 0.291x MC's L1; 1e-3 left a sample 0.05 h on the wrong side, 1e-4 and 1e-2 were worse).
 constexpr double kLocalPowerVertex = 3e-4;
-// A candidate that a neighbour's sphere holds less than 3e-3 of its |value| deep is kept: on
-// smooth shapes those are a few thousandths of a spacing off, the power vertices that replaced
-// them 0.016 h (torus 64^3: 1,085 of 1,163 power vertices; the box's lie 0.02-0.5 h deep). At
-// 1e-3 the analytic torus at 64^3 kept power vertices in the gaps on its mirror planes, which the
-// projection followed: its worst vertex 0.0188 h off, beyond marching cubes' 0.0152 h; at 3e-3
-// (and 1e-2) 0.0093 h. The 17 shared meshes' L1 over MC's: 32^3 0.2164x -> 0.2168x, 64^3 0.1993x
-// -> 0.1997x (session 20). Dropping the inexact power vertices (tolerance 1e-5) instead: torus
-// 0.0034 h, but bunny 64^3 0.254x -> 0.278x, goathead 0.244x -> 0.273x, wingnut 32^3 0.169x ->
-// 0.204x.
+// A candidate that a neighbour's sphere holds less than 3e-3 of its |value| deep is kept: on smooth
+// shapes those are a few thousandths of a spacing off, the power vertices that would replace them
+// 0.016 h. At 1e-3 the analytic torus at 64^3 kept power vertices on its mirror planes and its worst
+// vertex went beyond marching cubes' (bench/smooth_shapes.py).
 constexpr double kLocalNearMiss = 3e-3;
 // The lattice's contact points slide for fewer rounds: each round searches every sphere in reach
 // (the triangulation's, its neighbours only). Bunny 32^3: 10 rounds rescue 1,480 points in 0.49 s,
-// 50 rounds 2,733 in 1.49 s, at the same median distance (0.0023 h).
+// 50 rounds 2,733 in 1.49 s, at the same median distance (bench/lattice_points.py --res 32).
 constexpr int kLatticeSlideRounds = 10;
 
 LocalBrickOptions local_brick_options(const ContourOptions& options) {
