@@ -5,8 +5,8 @@ Garland-Heckbert decimation of the TOL-0 mesh and OpenVDB's adaptive mesher at t
 One panel per mesh, both axes logarithmic; rows of several grids (e.g. 128 and 256) share a
 panel with one line style per grid.
 
-Usage: /usr/bin/python3 bench/adaptivity_plot.py docs/results/adaptivity_128_session17.jsonl \
-           docs/results/adaptivity_256_session17.jsonl --png docs/img/adaptivity_l1.png \
+Usage: /usr/bin/python3 bench/adaptivity_plot.py docs/notes/results/adaptivity_128_session17.jsonl \
+           docs/notes/results/adaptivity_256_session17.jsonl --png docs/img/adaptivity_l1.png \
            --edges-png docs/img/adaptivity_edges.png
 """
 import argparse

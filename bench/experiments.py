@@ -117,8 +117,9 @@ def depth_for(res):
 
 
 def section(name, text):
+    # The section's own file sits beside its plots; docs/results.md one folder up.
     with open(os.path.join(RESULTS, name + ".md"), "w") as f:
-        f.write(text)
+        f.write(text.replace("](results/", "]("))
     order = ["findings", "gradients", "screening", "resolution", "random", "timing"]
     parts = ["# Results\n\nThe paper's experiments reproduced with sdfcontour on the 17 test meshes of "
              "`../shared/data/meshes` (scaled to [-0.9, 0.9]³, SDFs over [-1, 1]³), on the 2-core machine. "
@@ -126,7 +127,7 @@ def section(name, text):
     for n in order:
         p = os.path.join(RESULTS, n + ".md")
         if os.path.exists(p):
-            parts.append(open(p).read())
+            parts.append(open(p).read().replace("](", "](results/").replace("](results/http", "](http"))
     with open(os.path.join(ROOT, "docs", "results.md"), "w") as f:
         f.write("\n".join(parts))
 

@@ -1,4 +1,4 @@
-"""Renders for docs/local.md: one CAD mesh and one organic mesh from the shared meshes at a coarse
+"""Renders for docs/notes/local.md: one CAD mesh and one organic mesh from the shared meshes at a coarse
 grid, contoured by marching cubes, GCP with its Poisson reconstruction and GCP with its local
 reconstruction (brick by brick), side by side, each titled with its L1 to the ground truth
 (rendered with VTK, bench/vtk_render.py; runs itself under xvfb-run where there is no display).

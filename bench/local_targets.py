@@ -94,7 +94,7 @@ def accuracy_rows(acc):
                "the boot's facets, tread and seams are smaller than a spacing: 39% of its area "
                "lies within 0.75 h of a turn of more than 60°, where its error is 0.10 h (MC "
                "0.16 h) against 0.003 h on its flat parts; no option tried brought it under 0.6x "
-               "(docs/local.md, sessions 20 and 23)")
+               "(docs/notes/local.md, sessions 20 and 23)")
         lines.append(f"| no mesh worse than 0.6x MC's at {res}³ | worst: {worst} "
                      f"{local[worst]:.3f}x | {verdict(local[worst] <= 0.6)} | {why} |")
     return lines
@@ -136,7 +136,7 @@ def edge_rows(acc):
     why = ("" if ok else "the edges missed lie on facets smaller than a spacing (937 of the "
            "hammer's 949 edge points on mesh edges shorter than h/2; the sword's blade is "
            "thinner than a spacing): no contact point lands on them, the nearest 0.3-0.4 h away "
-           "(docs/local.md, session 10)")
+           "(docs/notes/local.md, session 10)")
     return [f"| sharp edges ≤ 0.05 h at 64³ | {text} | {verdict(ok)} | {why} |"]
 
 
@@ -183,7 +183,7 @@ def cost_rows(scale):
         why = ("the band's regular triangulation alone (CGAL, 2 M weighted samples at band 8) "
                "takes 62x scikit-image's time at 256³ (28x with --band 3), and CGAL runs as fast "
                "on random points: no reconstruction of GCP's contact points reaches 5x on 2 "
-               "cores (docs/local.md, session 22)") if target and ratio > 5 else ""
+               "cores (docs/notes/local.md, session 22)") if target and ratio > 5 else ""
         goal = "≤ 5x scikit-image on 2 cores" if target else "(cost)"
         lines.append(f"| bunny {res}³ {goal} | {gcp['seconds']:.1f} s = {ratio:.0f}x "
                      f"scikit-image's {sk['seconds']:.2f} s; peak {gcp.get('rss_mb', 0):.0f} MB "

@@ -10,7 +10,7 @@ Usage:
     /usr/bin/python3 bench/memory_trace.py record trace.tsv -- build/sdfcontour contour \
         bunny_1024.npy -o b.ply --quiet
     /usr/bin/python3 bench/memory_trace.py plot --png docs/img/memory_1024.png \
-        "session 11=docs/results/memory_1024_session11.tsv" "session 12=trace.tsv"
+        "session 11=docs/notes/results/memory_1024_session11.tsv" "session 12=trace.tsv"
 """
 import argparse
 import subprocess

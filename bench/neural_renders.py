@@ -1,4 +1,4 @@
-"""Renders for docs/local.md: the neural SDF fixture (bench/data/neural_bunny.npz) sampled on a
+"""Renders for docs/notes/local.md: the neural SDF fixture (bench/data/neural_bunny.npz) sampled on a
 grid, as a saved .npy is passed, contoured by marching cubes, by GCP taking the values as
 distances (zero_set=False: its contact points miss by the samples' depth times the slope's
 error), and by GCP as it chooses (the values found no exact distances: every vertex on the grid's

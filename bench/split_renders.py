@@ -1,4 +1,4 @@
-"""Where the local reconstruction splits its sagging edges (docs/local.md, session 18): a close-up
+"""Where the local reconstruction splits its sagging edges (docs/notes/local.md, session 18): a close-up
 of the bunny's ear tip at 128^3 (the triangles within 0.05 of a point just under its highest
 vertex) with the triangles' edges drawn, for one subdivision level without
 the split, one level with it (the default) and two uniform levels; each panel titled with its

@@ -1,9 +1,9 @@
 """Draws the thread scaling that ../shared/tools/scaling.py measures (its scaling.jsonl, with each
-run's `local_seconds` copied in, as docs/results/device_session11.jsonl holds them): GCP's wall time
+run's `local_seconds` copied in, as docs/notes/results/device_session11.jsonl holds them): GCP's wall time
 against the thread count per grid, scikit-image's marching cubes (one thread) as a line, and the
 local reconstruction's stages against the thread count for one grid.
 
-Usage: /usr/bin/python3 bench/threads_plot.py docs/results/device_session11.jsonl \
+Usage: /usr/bin/python3 bench/threads_plot.py docs/notes/results/device_session11.jsonl \
            --png docs/img/threads_device.png [--stages-res 256]
 """
 import argparse

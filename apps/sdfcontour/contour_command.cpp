@@ -307,7 +307,7 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                 "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
                 "and carving), or 'auto' (local for grids, .vdb level sets and Python's callables: "
                 "0.22x / 0.20x marching cubes' L1 on the shared meshes at 32^3 / 64^3, Poisson "
-                "0.31x / 0.34x; docs/local.md). A .vdb level set is then read box by box, never "
+                "0.31x / 0.34x; docs/notes/local.md). A .vdb level set is then read box by box, never "
                 "whole; scattered samples always take poisson")
       ->capture_default_str();
   c->add_option("--adaptivity", a.adaptivity,

@@ -95,7 +95,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Triangulation methods use the samples with ``|value| <= band`` grid spacings; "auto"
         is 8 below 128 samples per axis, 4 from 128 and 3 from 256 (docs/band.md), and for GCP's
         local reconstruction (the default on grids and callables) 8 below 384 and 3 from 384
-        (docs/local.md); "all" keeps every sample (the paper's GCP, far slower).
+        (docs/notes/local.md); "all" keeps every sample (the paper's GCP, far slower).
     margin : float
         Samples up to this many spacings beyond the band close the band's stars.
     truncation : "auto", "none" or a number as text
@@ -138,7 +138,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         grids and callables only), or
         "auto": local for grids and callables (the shared meshes' L1 over marching cubes' at
         32^3 / 64^3: 0.22x / 0.20x, Poisson's 0.31x / 0.34x; a callable refined on it, 0.15x /
-        0.17x on a neural SDF at 64^3 / 128^3, Poisson 0.19x / 0.55x; docs/local.md), poisson
+        0.17x on a neural SDF at 64^3 / 128^3, Poisson 0.19x / 0.55x; docs/notes/local.md), poisson
         for scattered samples. CLI ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
@@ -155,7 +155,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         that the surface crosses have a gap beside them, two samples on one side closer together
         than their values allow; off for callables, which may be neural SDFs whose values are no
         distances; the shared meshes' L1 over marching cubes' at 64^3 0.253x -> 0.199x,
-        docs/local.md). ``stats["local_thin_points"]`` counts the points put in a thin part.
+        docs/notes/local.md). ``stats["local_thin_points"]`` counts the points put in a thin part.
         CLI ``--thin-parts``.
     zero_set : bool or "auto"
         Local reconstruction: move the vertices onto the zero set of the grid's tricubic

@@ -90,7 +90,7 @@ double auto_split_sag(double samples_per_axis);
 /// the plane's wings appear). An exact axis-aligned box loses its exactness on that grid (at
 /// 128^3 from 1e-5 to 0.36x MC's: its narrow cells next to the edges hold one or two contact
 /// points, one of them often with a bent normal). Not from 192: at 256^3 the exact cube is 1.02x
-/// MC's with it, and it costs twice the time and 2-3x the memory (docs/local.md).
+/// MC's with it, and it costs twice the time and 2-3x the memory (docs/notes/local.md).
 bool auto_thin_parts(double samples_per_axis);
 /// The same, knowing the grid's `gaps` (count_subspacing_gaps): on below 192 samples per axis,
 /// and from 192 up to kThinPartGridLimit where at least kThinPartGapShare of the edges that the
