@@ -410,20 +410,23 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
 // The gradient norms next to sign changes (band.h's crossing_gradient_norms) at the samples
 // [own_first, own_end) of a grid of `dims` over [lo, hi], from `block`, its samples [first,
 // first + block.shape) (2 more on every side of the owned ones, where the grid has them).
-py::array_t<double> run_crossing_gradient_norms(
+py::tuple run_crossing_gradient_norms(
     const py::array& block, const std::array<int, 3>& first, const std::array<int, 3>& dims,
     const std::array<double, 3>& lo, const std::array<double, 3>& hi,
     const std::array<int, 3>& own_first, const std::array<int, 3>& own_end) {
   py::object keep;
   const GridView view = block_view(block, first, dims, lo, hi, keep);
-  std::vector<double> norms;
+  CrossingNorms norms;
   {
     py::gil_scoped_release release;
     norms = crossing_gradient_norms(view, {}, own_first, own_end);
   }
-  py::array_t<double> out(py::ssize_t(norms.size()));
-  std::copy(norms.begin(), norms.end(), out.mutable_data());
-  return out;
+  auto array = [](const std::vector<double>& v) {
+    py::array_t<double> out(py::ssize_t(v.size()));
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return out;
+  };
+  return py::make_tuple(array(norms.all), array(norms.kinkless));
 }
 
 // The subspacing gaps (subspacing_gaps.h) over the edges from the samples [own_first, own_end)
@@ -518,7 +521,6 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   stats["poisson_depth"] = r.poisson_depth;
   stats["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) stats["fallback"] = r.fallback;
-  if (!r.rescale_dropped.empty()) stats["rescale_dropped"] = r.rescale_dropped;
   stats["noise_level"] = r.noise_level;
   stats["smoothed"] = r.smoothed;
   stats["approximate_distances"] = r.approximate_distances;
@@ -787,13 +789,16 @@ PYBIND11_MODULE(_sdfcontour, m) {
       "subspacing gaps (the single process's rule).");
   m.def(
       "distance_value_scale",
-      [](py::array_t<double, py::array::c_style | py::array::forcecast> norms) {
+      [](py::array_t<double, py::array::c_style | py::array::forcecast> all,
+         py::array_t<double, py::array::c_style | py::array::forcecast> kinkless) {
         const GradientNormSummary s = summarize_gradient_norms(
-            std::vector<double>(norms.data(), norms.data() + norms.size()));
-        return py::make_tuple(distance_value_scale(s.median), s.median);
+            {std::vector<double>(all.data(), all.data() + all.size()),
+             std::vector<double>(kinkless.data(), kinkless.data() + kinkless.size())});
+        return py::make_tuple(distance_value_scale(s.slope), s.median);
       },
-      py::arg("norms"),
-      "(value_scale, median) of gradient norms: the factor that makes the values distances.");
+      py::arg("all"), py::arg("kinkless"),
+      "(value_scale, median) of crossing_gradient_norms' two lists: the factor that makes the "
+      "values distances.");
   m.def(
       "contour_values_reach",
       [](const py::dict& options, const std::array<int, 3>& dims) {

@@ -82,16 +82,18 @@ TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
   EXPECT_TRUE(local.mesh->triangles == mc.triangles);
 }
 
-TEST(Approximate, ThinPartsWhoseRescalingFailsKeepGcpOnTheValuesAsGiven) {
+TEST(Approximate, ThinPartsAreNotTakenForScaledValues) {
   SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // The plane's exact distance at 16^3: central differences across its thin wings measure a
-  // gradient norm of 0.77, rescaling by 1.3 then hides every contact point. GCP runs again on the
-  // values as given, says so, and its mesh lies closer to the plane than marching cubes' (which
-  // misses the wings).
+  // gradient norm of 0.77 over all points, and rescaling by 1.3 would hide every contact point.
+  // No point without a kink measures the slope, so the values are taken as given, once, and the
+  // mesh lies closer to the plane than marching cubes' (which misses the wings).
   const Grid g = test::shared_mesh_grid("plane", 16);
+  const GradientNormSummary norms = gradient_norm_summary(view_of(g));
+  EXPECT_LT(norms.median, 0.8);
+  EXPECT_EQ(norms.slope, 1.0);
   const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
   EXPECT_TRUE(r.fallback.empty()) << r.fallback;
-  EXPECT_NE(r.rescale_dropped.find("contact point"), std::string::npos) << r.rescale_dropped;
   EXPECT_EQ(r.value_scale, 1.0);
   ASSERT_TRUE(r.mesh);
   test::expect_closed_and_outward(*r.mesh);
@@ -99,9 +101,10 @@ TEST(Approximate, ThinPartsWhoseRescalingFailsKeepGcpOnTheValuesAsGiven) {
   const Mesh plane = normalize_mesh(read_mesh(SDFCONTOUR_SHARED_DIR "/data/meshes/plane.obj"), 0.9);
   EXPECT_LT(2 * surface_distances(*r.mesh, plane, 20000).l1,
             surface_distances(marching_cubes(g), plane, 20000).l1);
-  ContourOptions strict = gcp_options();
-  strict.fallback_to_mc = false;
-  EXPECT_THROW(contour(grid_input(g), nullptr, strict), Error);
+  // Scaled by 3, the same field is rescaled (its median over all points is far from 1).
+  Grid scaled = g;
+  scaled.values *= 3;
+  EXPECT_NEAR(gradient_norm_summary(view_of(scaled)).slope, 3 * norms.median, 1e-9);
 }
 
 // Noise of 0.1 h and 0.5 h: measured as such, smoothed, then one closed piece (marching cubes
@@ -202,18 +205,20 @@ TEST(Approximate, GcpIsAtLeastAsCloseAsMarchingCubesOnSmoothShapes) {
 
 TEST(Approximate, LocalReconstructionOfThinPartsKeepsTheValuesAsGiven) {
   SDFCONTOUR_REQUIRE_SHARED_MESHES();
-  // The hammer's exact distance at 32^3: its thin handle measures a gradient norm of 0.90, and
-  // rescaling by 1.11 leaves no contact point at all. The local reconstruction would still make
-  // a mesh, from every cell's edge crossings (0.62x MC's L1): it says that its points are too few
-  // instead, and GCP runs on the values as given (0.27x, measured).
+  // The hammer's exact distance at 32^3: its thin handle measures a gradient norm of 0.90 over
+  // all points, and rescaling by 1.11 would leave no contact point (every cell from its edge
+  // crossings, 0.62x MC's L1). No point without a kink measures the slope: the values are taken
+  // as given (0.27x, measured), with contact points asked for too (the run is the same).
   const Grid g = test::shared_mesh_grid("hammer", 32);
   ContourOptions o = gcp_options();
   o.reconstruction = Reconstruction::Local;
   o.thin_parts = Switch::Off;  // (the grid's own cells: narrower ones take more crossings)
+  o.want_points = true;
   const ContourResult r = contour(grid_input(g), nullptr, o);
   EXPECT_TRUE(r.fallback.empty()) << r.fallback;
-  EXPECT_NE(r.rescale_dropped.find("contact points for"), std::string::npos) << r.rescale_dropped;
   EXPECT_EQ(r.value_scale, 1.0);
+  ASSERT_TRUE(r.contact_points);
+  EXPECT_GT(r.contact_points->points.rows(), r.local->cells / 2);
   EXPECT_EQ(r.reconstruction, Reconstruction::Local);
   ASSERT_TRUE(r.mesh && r.local);
   EXPECT_LT(10 * r.local->crossing_cells, r.local->cells);

@@ -131,8 +131,8 @@ with tempfile.TemporaryDirectory() as d:
     expect_error("huge coordinates, eval", ["eval", p("huge.obj"), p("cube.obj")], "too large")
     expect_error("huge coordinates, sample", ["sample", p("huge.obj"), "--res", "8", "-o", p("h")], "too large")
 
-    # Decisions are said on stderr even with --quiet, and recorded in --stats: an exact distance
-    # whose thin parts make rescaling it fail (the plane at 16^3) is contoured as given.
+    # An exact distance whose thin parts lower its gradient norm over all points (the plane at
+    # 16^3) is contoured as given, without a warning; a rescaled field is said even with --quiet.
     plane = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "data",
                          "meshes", "plane.obj")
     if not os.path.exists(plane):
@@ -141,9 +141,13 @@ with tempfile.TemporaryDirectory() as d:
         r = run("sample", plane, "--res", "16", "-o", p("plane"), "-q")
         check("plane sampled", r.returncode == 0, r.stderr)
         r = run("contour", p("plane.npy"), "-o", p("plane.ply"), "--stats", p("plane.json"), "-q")
-        check("rescaling dropped, said", r.returncode == 0 and "values as given" in r.stderr, r.stderr)
+        check("thin parts, no warning", r.returncode == 0 and "warning" not in r.stderr, r.stderr)
         stats = json.load(open(p("plane.json")))
-        check("rescaling dropped, in the stats", "contact point" in stats.get("rescale_dropped", "") and
-              "fallback" not in stats and "value_scale" not in stats, stats)
+        check("thin parts, values as given", "fallback" not in stats and "value_scale" not in stats,
+              stats)
+        scaled = np.load(p("plane.npy")) * 3
+        np.save(p("plane3.npy"), scaled)
+        r = run("contour", p("plane3.npy"), "-o", p("plane3.ply"), "-q")
+        check("a scaled field, said", r.returncode == 0 and "rescaled" in r.stderr, r.stderr)
 
 finish()

@@ -210,9 +210,6 @@ int run_contour(const ContourArgs& a) {
   // Every decision that changes what the user gets is said, even with --quiet.
   if (!r.fallback.empty())
     std::cerr << "sdfcontour: warning: GCP returned marching cubes' mesh: " << r.fallback << "\n";
-  if (!r.rescale_dropped.empty())
-    std::cerr << "sdfcontour: warning: GCP failed on the values rescaled to distances ("
-              << r.rescale_dropped << "): this is GCP's mesh of the values as given\n";
   if (r.value_scale != 1)
     std::cerr << "sdfcontour: warning: the values were rescaled by " << r.value_scale
               << " to distances (they change by " << 1 / r.value_scale

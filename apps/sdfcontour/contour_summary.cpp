@@ -187,7 +187,6 @@ nlohmann::json contour_summary_json(const ContourArgs& a, const ContourOptions& 
   if (r.smoothed) j["smoothed"] = {{"sigma_samples", 1.0}};
   if (r.value_scale != 1) j["value_scale"] = r.value_scale;
   if (!r.fallback.empty()) j["fallback"] = {{"method", "mc"}, {"reason", r.fallback}};
-  if (!r.rescale_dropped.empty()) j["rescale_dropped"] = r.rescale_dropped;
   if (r.poisson_depth > 0) j["poisson_depth"] = r.poisson_depth;
   if (r.mesh)
     j["mesh"] = {{"vertices", r.mesh->vertices.rows()},

@@ -189,10 +189,10 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     batch_size : int
         Points per call of a callable ``sdf``.
     strict : bool
-        Where GCP cannot trust the values rescaled to distances, it runs again on the values
-        as given (``stats["rescale_dropped"]``), and where it cannot trust those either it
-        returns marching cubes' mesh (``stats["fallback"]``), each with a ``FallbackWarning``;
-        ``strict=True`` raises ValueError instead.
+        Where GCP cannot trust the values as distances (no contact point, or far fewer than
+        the cells crossing the surface), it returns marching cubes' mesh
+        (``stats["fallback"]``) with a ``FallbackWarning``; ``strict=True`` raises ValueError
+        instead.
     refine : bool or "auto"
         GCP with a callable ``sdf``: move each vertex along its normal onto the callable's zero
         set (two secant steps, each move at most half a spacing; a vertex whose field does not

@@ -154,7 +154,10 @@ class NearSurfaceGrid:
             norms.append(_sdfcontour.crossing_gradient_norms(
                 block, tuple(first), self.shape, tuple(self.lo), tuple(self.hi),
                 tuple(own_first), tuple(own_end)))
-        return _sdfcontour.distance_value_scale(np.concatenate(norms) if norms else np.zeros(0))
+        if not norms:
+            return _sdfcontour.distance_value_scale(np.zeros(0), np.zeros(0))
+        every, kinkless = zip(*norms)
+        return _sdfcontour.distance_value_scale(np.concatenate(every), np.concatenate(kinkless))
 
 
 def _report_bricks(progress, stage, done, total, report):

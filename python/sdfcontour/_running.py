@@ -159,10 +159,6 @@ def _run(sdf, bounds, resolution, batch_size, options, want_mesh, want_points, s
     if out["stats"].get("fallback"):
         _warnings.warn(f"GCP returned marching cubes' mesh: {out['stats']['fallback']}",
                        FallbackWarning, stacklevel=3)
-    if out["stats"].get("rescale_dropped"):
-        _warnings.warn(f"GCP failed on the values rescaled to distances "
-                       f"({out['stats']['rescale_dropped']}): this is GCP's mesh of the values "
-                       f"as given", FallbackWarning, stacklevel=3)
     if out["stats"].get("value_scale", 1.0) != 1.0:
         _warnings.warn(f"the values were rescaled by {out['stats']['value_scale']:.4g} to "
                        f"distances (they change by {1 / out['stats']['value_scale']:.4g} per unit "

@@ -13,7 +13,7 @@ namespace sdfcontour {
 namespace {
 
 // crossing_gradient_norms, with the norms where the field is smooth also in `smooth` (if given).
-std::vector<double> crossing_norms(const GridView& grid, const Truncation& truncation,
+CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
                                    std::array<int, 3> own_first, std::array<int, 3> own_end,
                                    std::vector<double>* smooth) {
   const std::array<int, 3> whole = grid.whole_dims();
@@ -25,11 +25,13 @@ std::vector<double> crossing_norms(const GridView& grid, const Truncation& trunc
       throw Error("the block must hold 2 samples beyond the samples whose gradients it measures");
   }
   if (from[0] >= to[0] || from[1] >= to[1] || from[2] >= to[2]) return {};
+  struct Slab {
+    std::vector<double> all, kinkless, smooth;
+  };
   const Eigen::Vector3d h = grid.spacing();
   const std::size_t stride[3] = {std::size_t(grid.dims[1]) * std::size_t(grid.dims[2]),
                                  std::size_t(grid.dims[2]), 1};
-  std::vector<std::vector<double>> per_slab(std::size_t(to[0] - from[0]));
-  std::vector<std::vector<double>> smooth_per_slab(per_slab.size());
+  std::vector<Slab> per_slab(std::size_t(to[0] - from[0]));
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, from[0], to[0], 2, [&](int i) {
       for (int j = from[1]; j < to[1]; ++j)
@@ -61,28 +63,38 @@ std::vector<double> crossing_norms(const GridView& grid, const Truncation& trunc
                              std::abs(plus2 - centre + minus2) / (4 * h[a])});
           }
           const double norm = (4 * std::sqrt(near) - std::sqrt(far)) / 3;
-          per_slab[std::size_t(i - from[0])].push_back(norm);
-          if (bend < kSmoothCurvature) smooth_per_slab[std::size_t(i - from[0])].push_back(norm);
+          Slab& slab = per_slab[std::size_t(i - from[0])];
+          slab.all.push_back(norm);
+          if (bend < kSmoothCurvature) slab.smooth.push_back(norm);
+          if (bend < kSmoothCurvature * std::abs(norm)) slab.kinkless.push_back(norm);
         }
     });
   });
-  std::vector<double> norms;
-  for (const auto& s : per_slab) norms.insert(norms.end(), s.begin(), s.end());
-  if (smooth)
-    for (const auto& s : smooth_per_slab) smooth->insert(smooth->end(), s.begin(), s.end());
+  CrossingNorms norms;
+  for (const Slab& s : per_slab) {
+    norms.all.insert(norms.all.end(), s.all.begin(), s.all.end());
+    norms.kinkless.insert(norms.kinkless.end(), s.kinkless.begin(), s.kinkless.end());
+    if (smooth) smooth->insert(smooth->end(), s.smooth.begin(), s.smooth.end());
+  }
   return norms;
+}
+
+double median_of(std::vector<double>& v) {
+  const auto at = v.begin() + long(v.size() / 2);
+  std::nth_element(v.begin(), at, v.end());
+  return *at;
 }
 
 }  // namespace
 
-std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
-                                            std::array<int, 3> own_first,
-                                            std::array<int, 3> own_end) {
+CrossingNorms crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                      std::array<int, 3> own_first, std::array<int, 3> own_end) {
   return crossing_norms(grid, truncation, own_first, own_end, nullptr);
 }
 
-GradientNormSummary summarize_gradient_norms(std::vector<double> norms) {
+GradientNormSummary summarize_gradient_norms(CrossingNorms crossing) {
   GradientNormSummary summary;
+  std::vector<double>& norms = crossing.all;
   summary.count = long(norms.size());
   if (norms.size() < 16) return summary;
   auto percentile = [&](std::size_t q) {
@@ -93,6 +105,12 @@ GradientNormSummary summarize_gradient_norms(std::vector<double> norms) {
   summary.low = percentile(10);
   summary.median = percentile(50);
   summary.high = percentile(90);
+  // The points without a kink confirm a rescaling, or veto it; with too few of them, only a
+  // field scaled outright is rescaled.
+  const bool scaled = crossing.kinkless.size() >= 16
+                          ? distance_value_scale(median_of(crossing.kinkless)) != 1
+                          : std::abs(summary.median - 1) > kScaledSlope;
+  if (scaled) summary.slope = summary.median;
   return summary;
 }
 
@@ -102,14 +120,14 @@ GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation
   GradientNormSummary summary =
       summarize_gradient_norms(crossing_norms(grid, truncation, grid.first, end, &smooth));
   if (summary.count > 0) summary.smooth_fraction = double(smooth.size()) / double(summary.count);
-  const double scale = distance_value_scale(summary.median);
+  const double scale = distance_value_scale(summary.slope);
   for (double& n : smooth) n = std::abs(n * scale - 1);
-  summary.smooth_spread = summarize_gradient_norms(std::move(smooth)).median;
+  summary.smooth_spread = summarize_gradient_norms({std::move(smooth), {}}).median;
   return summary;
 }
 
-double distance_value_scale(double median_norm) {
-  const double m = median_norm;
+double distance_value_scale(double slope) {
+  const double m = slope;
   return std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1 ? 1 / m : 1.0;
 }
 

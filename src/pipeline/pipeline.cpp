@@ -127,7 +127,7 @@ void rescale_to_distances(const GridView& grid, const ContourOptions& options,
                               ? measured->gradient_norms
                               : gradient_norm_summary(grid, resolve_truncation(grid, band_options));
   result.gradient_norm = result.gradient_norms.median;
-  const double m = result.gradient_norm;
+  const double m = result.gradient_norms.slope;
   if (distance_value_scale(m) != 1.0) {
     result.value_scale = band_options.value_scale = distance_value_scale(m);
     if (options.progress)
@@ -280,17 +280,6 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
 
 namespace {
 
-// Whether contour_or_throw rescales the values (rescale_to_distances) with these options.
-bool rescaled(const SdfInput& input, const ContourOptions& options, const GridMeasures* measured) {
-  if (const auto* sparse = std::get_if<SparseGridInput>(&input)) return sparse->value_scale != 1;
-  const GridView* dense = grid_view_of(input);
-  if (!dense || !options.normalize_values) return false;
-  const double norm =
-      measured ? measured->gradient_norms.median
-               : gradient_norm_summary(*dense, resolve_truncation(*dense, options.band)).median;
-  return distance_value_scale(norm) != 1.0;
-}
-
 // contour_or_throw, or marching cubes' mesh when GCP's cannot be trusted.
 ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* shape,
                                     const ContourOptions& options,
@@ -306,26 +295,6 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
     if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
         !options.fallback_to_mc)
       throw Error(std::string(e.what()) + ": the values do not behave as distances");
-    if (rescaled(input, options, measured)) {
-      // Thin parts make central differences across a sheet: the measured norm of an exact
-      // distance can fall far under 1 (plane at 16^3: 0.77), and rescaling it then hides every
-      // contact point. The values as given, next.
-      const double discarded = since_start();
-      ContourOptions as_given = options;
-      as_given.normalize_values = false;
-      SdfInput given = input;  // (a copy of views, for a grid)
-      if (auto* sparse = std::get_if<SparseGridInput>(&given)) sparse->value_scale = 1;
-      try {
-        ContourResult result = contour_or_throw(given, shape, as_given, measured);
-        result.rescale_dropped = e.what();
-        result.stages.insert(result.stages.begin(), {"gcp rescaled (discarded)", discarded});
-        if (options.progress)
-          options.progress(std::string("GCP on the rescaled values: ") + e.what() +
-                           "; this is GCP's mesh of the values as given");
-        return result;
-      } catch (const NotDistances&) {
-      }
-    }
     const double discarded = since_start();
     ContourResult result;
     result.samples = int(grid.geometry().size());

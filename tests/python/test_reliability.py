@@ -213,27 +213,25 @@ def test_fallbacks_and_rescalings_are_warned_and_strict_refuses():
     assert "np" not in dir(sdfcontour)
 
 
-def test_an_exact_distance_with_thin_parts_keeps_its_values_and_says_so():
-    # An exact distance whose thin parts make its measured gradient norm 0.77 (the plane at
-    # 16^3): GCP fails on the rescaled values, runs again on the values as given, and says so.
+def test_an_exact_distance_with_thin_parts_keeps_its_values():
+    # An exact distance whose thin parts make its gradient norm over all points 0.77 (the plane
+    # at 16^3) is no scaled field: its values are taken as given, once, without a warning.
     plane = sdfcontour.sample(*sdfcontour.read_mesh(shared_mesh("plane.obj")), resolution=16)
-    with pytest.warns(sdfcontour.FallbackWarning, match="values as given"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         V, F, stats = sdfcontour.contour(plane, return_stats=True)
-    assert "contact point" in stats["rescale_dropped"] and stats["value_scale"] == 1
-    assert "fallback" not in stats and stats["closed"]
-    with pytest.raises(ValueError, match="distances"):
+        assert stats["value_scale"] == 1 and "fallback" not in stats and stats["closed"]
         sdfcontour.contour(plane, strict=True)
     # The same field as a callable (its grid's nearest sample), through the sparse grid's
     # Poisson path: the same decision, the same mesh.
     from scipy.interpolate import RegularGridInterpolator
     axis = np.linspace(-1, 1, 16)
     nearest = RegularGridInterpolator((axis, axis, axis), plane, method="nearest")
-    with pytest.warns(sdfcontour.FallbackWarning, match="values as given"):
-        Vc, Fc, cstats = sdfcontour.contour(nearest, resolution=16, reconstruction="poisson",
-                                            refine=False, return_stats=True)
+    Vc, Fc, cstats = sdfcontour.contour(nearest, resolution=16, reconstruction="poisson",
+                                        refine=False, return_stats=True)
     # (The grid through the same Poisson path; its default is the local reconstruction, above.)
     V, F, stats = sdfcontour.contour(plane, reconstruction="poisson", return_stats=True)
-    assert cstats["rescale_dropped"] == stats["rescale_dropped"]
+    assert cstats["value_scale"] == stats["value_scale"] == 1
     from sdfcontour.dask import canonical_mesh
     (A, B), (C, D) = canonical_mesh(V, F), canonical_mesh(Vc, Fc)
     assert np.array_equal(A, C) and np.array_equal(B, D)

@@ -146,7 +146,20 @@ struct GradientNormSummary {
   /// for a neural SDF. NaN for fewer than 16 such points.
   double smooth_spread = NAN;
   double smooth_fraction = 0;  ///< the share of the points measured that are smooth
+  /// The slope that decides whether the values are rescaled into distances
+  /// (distance_value_scale): the median, or 1 (the values as given) unless the points where the
+  /// field has no kink within two samples (second differences under kSmoothCurvature times the
+  /// norm, at any scale) are off 1 too. Central differences across a thin part or a medial axis
+  /// read both sides and measure less than the slope (the hammer at 32^3: 0.90 over all points,
+  /// and no point without a kink). With fewer than 16 such points, the median is taken only
+  /// where it is off 1 by more than kScaledSlope (a field scaled outright).
+  double slope = 1;
 };
+
+/// How far the median norm over every point must be from 1 to rescale a field with no kinkless
+/// point: thin shapes measure 0.76-0.90 (the plane at 16^3, the sword at 64^3, the hammer at
+/// 32^3), a field scaled by 2 or 0.5 measures 2 or 0.5.
+constexpr double kScaledSlope = 0.4;
 
 /// Second differences (over h, and over 2h halved) below this many spacings count as smooth
 /// for GradientNormSummary::smooth_spread: kinks measure ~0.3 or more (a turn of 20 degrees),
@@ -158,15 +171,18 @@ GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation
 /// GridGeometry::first and whole) whose whole-grid indices lie in [own_first, own_end): blocks
 /// that own disjoint parts give together the whole grid's norms. The block must hold 2 samples
 /// beyond the owned ones, where the whole grid has them (throws Error otherwise).
-std::vector<double> crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
-                                            std::array<int, 3> own_first,
-                                            std::array<int, 3> own_end);
-/// The percentiles of `norms` (any order).
-GradientNormSummary summarize_gradient_norms(std::vector<double> norms);
+struct CrossingNorms {
+  std::vector<double> all;       ///< every point's norm
+  std::vector<double> kinkless;  ///< those without a kink (GradientNormSummary::slope)
+};
+CrossingNorms crossing_gradient_norms(const GridView& grid, const Truncation& truncation,
+                                      std::array<int, 3> own_first, std::array<int, 3> own_end);
+/// The percentiles of `norms.all` (any order) and the slope (GradientNormSummary::slope).
+GradientNormSummary summarize_gradient_norms(CrossingNorms norms);
 
-/// The factor that turns values changing by `median_norm` per unit length near the surface into
-/// distances: 1 / median_norm where that is more than 10% from 1, else 1.
-double distance_value_scale(double median_norm);
+/// The factor that turns values changing by `slope` per unit length near the surface into
+/// distances (GradientNormSummary::slope): 1 / slope where that is more than 10% from 1, else 1.
+double distance_value_scale(double slope);
 
 /// The band's samples proper, without the margin that only closes their stars.
 Samples core_samples(const BandSamples& band);

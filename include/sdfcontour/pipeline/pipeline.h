@@ -215,15 +215,15 @@ struct ContourOptions {
   /// iteration) by throwing Cancelled.
   const std::atomic<bool>* cancel = nullptr;
   /// Fields that are not distances (a distance times m, a smooth implicit): on a grid, measure
-  /// the gradient norm next to the surface and, if it is off 1 by more than 10%, rescale the
-  /// values by its inverse before the band is chosen (all methods but mc and gtcp). Not less: an
-  /// exact distance to a detailed mesh measures up to ~1% off at 64^3 (thin parts, medial axis),
-  /// and rescaling an exact distance by 1% hides most samples.
+  /// the slope next to the surface (GradientNormSummary::slope: where the field has no kink) and,
+  /// if it is off 1 by more than 10%, rescale the values by its inverse before the band is chosen
+  /// (all methods but mc and gtcp), once: nothing runs again on other values. Not less: an exact
+  /// distance to a detailed mesh measures up to ~1% off at 64^3, and rescaling an exact distance
+  /// by 1% hides most samples.
   bool normalize_values = true;
   /// When GCP's mesh on a grid cannot be trusted (no usable band in a truncated grid, no contact
   /// point, or fewer than a tenth as many as grid edges crossing the surface: the values do not
-  /// behave as distances), GCP first runs again on the values as given if they were rescaled
-  /// (ContourResult::rescale_dropped), then returns marching cubes' mesh instead, and says why in
+  /// behave as distances), GCP returns marching cubes' mesh instead, and says why in
   /// ContourResult::fallback. Without it, those cases throw Error.
   bool fallback_to_mc = true;
   /// GCP on a noisy grid (noise_level() above 5% of a spacing, times the gradient norm): the
@@ -301,9 +301,6 @@ struct ContourResult {
   bool approximate_distances = false;
   double value_scale = 1;  ///< the factor the values were rescaled by (1: none)
   std::string fallback;    ///< why marching cubes' mesh was returned instead of GCP's
-  /// Why GCP ran again on the values as given after the rescaled values failed (empty: it did
-  /// not); value_scale is then 1.
-  std::string rescale_dropped;
 };
 
 /// The Poisson depth for samples `spacing` apart spanning `points`' extent: 7 up to 48 samples
