@@ -410,10 +410,12 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
 // The gradient norms next to sign changes (band.h's crossing_gradient_norms) at the samples
 // [own_first, own_end) of a grid of `dims` over [lo, hi], from `block`, its samples [first,
 // first + block.shape) (2 more on every side of the owned ones, where the grid has them).
-py::tuple run_crossing_gradient_norms(
-    const py::array& block, const std::array<int, 3>& first, const std::array<int, 3>& dims,
-    const std::array<double, 3>& lo, const std::array<double, 3>& hi,
-    const std::array<int, 3>& own_first, const std::array<int, 3>& own_end) {
+py::tuple run_crossing_gradient_norms(const py::array& block, const std::array<int, 3>& first,
+                                      const std::array<int, 3>& dims,
+                                      const std::array<double, 3>& lo,
+                                      const std::array<double, 3>& hi,
+                                      const std::array<int, 3>& own_first,
+                                      const std::array<int, 3>& own_end) {
   py::object keep;
   const GridView view = block_view(block, first, dims, lo, hi, keep);
   CrossingNorms norms;
@@ -571,7 +573,7 @@ py::dict run_contour_vdb(const std::string& path, const std::string& grid_name,
   BlockedGridInput input = run_interruptible([path, grid_name](std::atomic<bool>&) {
     VdbLayout layout;
     BlockedGrid grid = vdb_blocked_grid(path, grid_name, &layout);
-    return BlockedGridInput{std::move(grid), layout.background};
+    return BlockedGridInput{std::move(grid), layout.background, vdb_world_from_grid(layout)};
   });
   return contour_input(input, py::none(), options, true, false, progress_callback);
 }
@@ -832,6 +834,10 @@ PYBIND11_MODULE(_sdfcontour, m) {
         out["max"] = l.max;
         out["voxel_size"] = l.voxel_size;
         out["origin"] = std::array<double, 3>{l.origin[0], l.origin[1], l.origin[2]};
+        py::array_t<double> rotation({py::ssize_t(3), py::ssize_t(3)});
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) rotation.mutable_at(a, b) = l.rotation(a, b);
+        out["rotation"] = rotation;
         out["background"] = l.background;
         py::array_t<int> leaves({py::ssize_t(l.leaf_origins.size()), py::ssize_t(3)});
         for (std::size_t i = 0; i < l.leaf_origins.size(); ++i)

@@ -2,6 +2,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/LevelSetSphere.h>
+#include <openvdb/tools/SignedFloodFill.h>
 
 #include <cmath>
 #include <fstream>
@@ -256,7 +257,7 @@ TEST(Vdb, FarApartLevelSetsReadBoxByBoxCostTheirLeavesOnly) {
     const std::string path = (dir / "scene.vdb").string();
     write_two_spheres(path, voxel, radius, openvdb::Vec3f(far, far, far));
     VdbLayout layout;
-    BlockedGridInput input{vdb_blocked_grid(path, "", &layout), 0};
+    BlockedGridInput input{vdb_blocked_grid(path, "", &layout), 0, std::nullopt};
     input.truncation = layout.background;
     for (const Method method : {Method::Gcp, Method::Mc}) {
       ContourOptions o;
@@ -278,4 +279,105 @@ TEST(Vdb, FarApartLevelSetsReadBoxByBoxCostTheirLeavesOnly) {
       EXPECT_GT(away, 100) << int(method);
     }
   }
+}
+
+namespace {
+
+// The exact distance to a box of half sides `half` centred at `centre` (world space).
+double box_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& centre,
+                    const Eigen::Vector3d& half) {
+  const Eigen::Vector3d q = (p - centre).cwiseAbs() - half;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+// A level set of an off-centre box, written with `xform` and the background `background` (in
+// voxels; a level set's is +3).
+void write_box_level_set(const std::string& path, openvdb::math::Transform::Ptr xform,
+                         const Eigen::Vector3d& centre, const Eigen::Vector3d& half, double voxel,
+                         float background = 3) {
+  auto grid = openvdb::FloatGrid::create(background * float(voxel));
+  grid->setGridClass(openvdb::GRID_LEVEL_SET);
+  grid->setTransform(xform);
+  grid->setName("surface");
+  auto accessor = grid->getAccessor();
+  const int reach = int(std::ceil((half.norm() + centre.norm() + 4 * voxel) / voxel));
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -reach; k <= reach; ++k) {
+        const openvdb::Vec3d w = xform->indexToWorld(openvdb::Coord(i, j, k));
+        const double d = box_distance(Eigen::Vector3d(w[0], w[1], w[2]), centre, half);
+        if (std::abs(d) < 3 * voxel) accessor.setValue(openvdb::Coord(i, j, k), float(d));
+      }
+  openvdb::tools::signedFloodFill(grid->tree());
+  // (The fill takes the background's magnitude; a file can still hold another.)
+  grid->tree().root().setBackground(background * float(voxel), /*updateChildNodes=*/false);
+  write_grids(path, {grid});
+}
+
+}  // namespace
+
+// A level set whose transform rotates and offsets it: every path puts the surface where the
+// transform says (the box-by-box reader contours in the grid's frame, then places the mesh).
+TEST(Vdb, RotatedTransformsPlaceTheMeshInTheWorld) {
+  const auto dir = test::temp_dir("vdb_rotated");
+  const std::string path = (dir / "rotated.vdb").string();
+  const double voxel = 0.025;
+  auto xform = openvdb::math::Transform::createLinearTransform(voxel);
+  xform->preRotate(0.5, openvdb::math::Z_AXIS);
+  xform->preRotate(0.3, openvdb::math::X_AXIS);
+  xform->postTranslate(openvdb::Vec3d(0.1, -0.2, 0.3));
+  const Eigen::Vector3d centre(0.15, 0.05, 0.25), half(0.3, 0.2, 0.12);
+  write_box_level_set(path, xform, centre, half, voxel);
+  VdbLayout layout;
+  BlockedGrid grid = vdb_blocked_grid(path, "", &layout);
+  ASSERT_TRUE(vdb_world_from_grid(layout));
+  std::array<double, 2> mean{};  // mc, gcp
+  for (int m = 0; m < 2; ++m) {
+    ContourOptions options;
+    options.method = m == 0 ? Method::Mc : Method::Gcp;
+    const ContourResult r = contour(
+        BlockedGridInput{grid, layout.background, vdb_world_from_grid(layout)}, nullptr, options);
+    ASSERT_TRUE(r.mesh && r.mesh->vertices.rows() > 0) << m;
+    double worst = 0;
+    for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v) {
+      const double d = std::abs(box_distance(r.mesh->vertices.row(v).transpose(), centre, half));
+      worst = std::max(worst, d);
+      mean[std::size_t(m)] += d / double(r.mesh->vertices.rows());
+    }
+    EXPECT_LT(worst, 0.5 * voxel) << m;  // (a misplaced mesh would be a whole offset off)
+    test::expect_closed_and_outward(*r.mesh);
+  }
+  // Unplaced, the mesh would lie the transform's offset (10 voxels and more) away.
+  EXPECT_LT(mean[0], 0.05 * voxel);
+  EXPECT_LT(mean[1], 0.05 * voxel);
+  // The sparse reader (the Poisson path) agrees on where the samples are.
+  const VdbLevelSet sparse = read_vdb_level_set(path);
+  for (Eigen::Index s = 0; s < sparse.samples.points.rows(); s += 97)
+    EXPECT_NEAR(box_distance(sparse.samples.points.row(s).transpose(), centre, half),
+                sparse.samples.values[s], 1e-6);
+}
+
+TEST(Vdb, BackgroundsNoLevelSetHasAndShearedVoxelsAreRefused) {
+  const auto dir = test::temp_dir("vdb_background");
+  const double voxel = 0.05;
+  const Eigen::Vector3d centre(0, 0, 0), half(0.3, 0.3, 0.3);
+  for (float background : {0.f, -3.f}) {
+    const std::string path = (dir / "background.vdb").string();
+    write_box_level_set(path, openvdb::math::Transform::createLinearTransform(voxel), centre, half,
+                        voxel, background);
+    for (int reader = 0; reader < 2; ++reader) try {
+        if (reader == 0) read_vdb_layout(path);
+        if (reader == 1) read_vdb_level_set(path);
+        ADD_FAILURE() << "background " << background << " accepted by reader " << reader;
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("background"), std::string::npos) << e.what();
+      }
+  }
+  openvdb::math::Mat4d shear = openvdb::math::Mat4d::identity();
+  shear.setToScale(openvdb::Vec3d(voxel));
+  shear(1, 0) = 0.3 * voxel;
+  const std::string path = (dir / "sheared.vdb").string();
+  write_box_level_set(path, openvdb::math::Transform::createLinearTransform(shear), centre, half,
+                      voxel);
+  EXPECT_THROW(vdb_blocked_grid(path), Error);
 }

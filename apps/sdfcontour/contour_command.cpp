@@ -46,7 +46,8 @@ LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint6
   if (is_vdb_path(spec) && vdb_by_boxes) {
     VdbLayout layout;
     BlockedGrid grid = vdb_blocked_grid(spec, grid_name, &layout);
-    loaded.input = BlockedGridInput{std::move(grid), layout.background};
+    loaded.input =
+        BlockedGridInput{std::move(grid), layout.background, vdb_world_from_grid(layout)};
     return loaded;
   }
   if (is_vdb_path(spec)) {
@@ -298,14 +299,15 @@ void add_carving_options(CLI::App* c, ContourArgs& a) {
 
 // The reconstruction: local or Poisson, adaptivity, subdivisions, the local options.
 void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
-  c->add_option("--reconstruction", a.reconstruction,
-                "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
-                "crosses, from the contact points near it; topology from the samples' signs; "
-                "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
-                "and carving), or 'auto' (local for grids, .vdb level sets and Python's callables: "
-                "0.22x / 0.20x marching cubes' L1 on the shared meshes at 32^3 / 64^3, Poisson "
-                "0.31x / 0.34x; docs/notes/local.md). A .vdb level set is then read box by box, never "
-                "whole; scattered samples always take poisson")
+  c->add_option(
+       "--reconstruction", a.reconstruction,
+       "GCP's mesh from its contact points: 'local' (a vertex per grid cell the surface "
+       "crosses, from the contact points near it; topology from the samples' signs; "
+       "brick by brick), 'poisson' (the paper's screened Poisson solve, then projection "
+       "and carving), or 'auto' (local for grids, .vdb level sets and Python's callables: "
+       "0.22x / 0.20x marching cubes' L1 on the shared meshes at 32^3 / 64^3, Poisson "
+       "0.31x / 0.34x; docs/notes/local.md). A .vdb level set is then read box by box, never "
+       "whole; scattered samples always take poisson")
       ->capture_default_str();
   c->add_option("--adaptivity", a.adaptivity,
                 "Merge the mesh where the surface is flat enough: edges collapse while the merged "

@@ -75,9 +75,22 @@ class _VdbReader:
         self.dtype = np.dtype(np.float32)
         self.background = float(layout["background"])
         voxel, origin = layout["voxel_size"], np.array(layout["origin"])
+        rotation = np.asarray(layout["rotation"], dtype=np.float64)
+        # A rotated level set is contoured in its own frame (origin at voxel (0, 0, 0)) and its
+        # vertices placed after, as the core's vdb_world_from_grid does.
+        self.placement = None
+        if not np.array_equal(rotation, np.eye(3)):
+            self.placement, origin = (rotation, origin), np.zeros(3)
         self.bounds = (origin + voxel * self.first,
                        origin + voxel * (self.first + np.array(self.shape) - 1))
         self.leaves = np.asarray(layout["leaf_origins"]) - self.first  # in grid indices
+
+    def place(self, arrivals):
+        """The pieces of `arrivals` with their vertices in the world (a rotated level set)."""
+        rotation, origin = self.placement
+        for b, piece in arrivals:
+            V = np.asarray(piece[1], np.float64).reshape(-1, 3)
+            yield b, (piece[0], V @ rotation + origin, *piece[2:])
 
     def read(self, first, dims):
         return _sdfcontour.read_vdb_box(self.path, self.grid_name,
@@ -505,6 +518,8 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
         order = {f.key: b for b, f in enumerate(futures)}
         done = _Progress(len(futures), progress)
         results = _arrivals(futures, order, done)
+        if isinstance(reader, _VdbReader) and reader.placement is not None:
+            results = reader.place(results)
         if out is None:
             V, F, stats = join_pieces(results, len(futures))
         else:

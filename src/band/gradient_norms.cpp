@@ -14,8 +14,8 @@ namespace {
 
 // crossing_gradient_norms, with the norms where the field is smooth also in `smooth` (if given).
 CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
-                                   std::array<int, 3> own_first, std::array<int, 3> own_end,
-                                   std::vector<double>* smooth) {
+                             std::array<int, 3> own_first, std::array<int, 3> own_end,
+                             std::vector<double>* smooth) {
   const std::array<int, 3> whole = grid.whole_dims();
   std::array<int, 3> from{}, to{};  // block indices of the owned samples measured
   for (int a = 0; a < 3; ++a) {

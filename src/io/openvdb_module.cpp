@@ -11,6 +11,7 @@
 #include <cmath>
 #include <mutex>
 #include <new>
+#include <sstream>
 #include <vector>
 
 namespace sdfcontour::detail {
@@ -80,6 +81,15 @@ openvdb::FloatGrid::Ptr read_float_level_set(openvdb::io::File& file, const std:
   });
 }
 
+// A level set's background is the positive half width of its band (outside); a zero or negative
+// one would read the inactive voxels outside as inside.
+std::string background_error(const openvdb::FloatGrid& grid) {
+  std::ostringstream message;
+  message << "grid '" << grid.getName() << "' has the background " << grid.background()
+          << "; a level set's is its band's half width, a positive distance";
+  return message.str();
+}
+
 void read_level_set(const std::string& path, const std::string& grid_name, VdbLevelSet& out) {
   openvdb::io::File file(path);
   const openvdb::FloatGrid::Ptr grid =
@@ -88,7 +98,9 @@ void read_level_set(const std::string& path, const std::string& grid_name, VdbLe
   const openvdb::Vec3d voxel = xform.voxelSize();
   out.grid_name = grid->getName();
   out.voxel_size = std::max({voxel[0], voxel[1], voxel[2]});
-  out.background = std::abs(double(grid->background()));
+  out.background = double(grid->background());
+  if (!(out.background > 0) || !std::isfinite(out.background))
+    throw Failure{OpenVdbStatus::BadInput, background_error(*grid)};
   if (!(out.voxel_size > 0) || !std::isfinite(out.voxel_size))
     throw Failure{OpenVdbStatus::BadInput,
                   "grid '" + out.grid_name + "' has a degenerate transform"};
@@ -126,6 +138,26 @@ void read_layout(const std::string& path, const std::string& grid_name, OpenVdbL
       std::abs(voxel[0] - voxel[2]) > 1e-9 * voxel[0])
     throw Failure{OpenVdbStatus::BadInput,
                   "grid '" + grid->getName() + "' does not have uniform voxels"};
+  // The index axes in world space: a rotation (distances kept) is contoured in index space and
+  // turned after; a shear or a mirror is refused.
+  const openvdb::Vec3d zero = xform.indexToWorld(openvdb::Vec3d(0, 0, 0));
+  openvdb::Vec3d axes[3];
+  for (int a = 0; a < 3; ++a) {
+    openvdb::Vec3d unit(0, 0, 0);
+    unit[a] = 1;
+    axes[a] = (xform.indexToWorld(unit) - zero) / voxel[0];
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (std::abs(axes[a].dot(axes[b]) - (a == b ? 1 : 0)) > 1e-9)
+        throw Failure{OpenVdbStatus::BadInput,
+                      "grid '" + grid->getName() + "' has a transform that shears its voxels"};
+  if (axes[0].cross(axes[1]).dot(axes[2]) < 0)
+    throw Failure{OpenVdbStatus::BadInput, "grid '" + grid->getName() +
+                                               "' has a mirrored transform (its index axes are "
+                                               "left-handed); mirror the mesh instead"};
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) out.rotation[3 * a + b] = axes[a][b];
   const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
   if (box.empty())
     throw Failure{OpenVdbStatus::BadInput, "grid '" + grid->getName() + "' has no active voxels"};
@@ -134,7 +166,9 @@ void read_layout(const std::string& path, const std::string& grid_name, OpenVdbL
   out.voxel = voxel[0];
   const openvdb::Vec3d origin = xform.indexToWorld(openvdb::Vec3d(0, 0, 0));
   for (int a = 0; a < 3; ++a) out.origin[a] = origin[a];
-  out.background = std::abs(double(grid->background()));
+  out.background = double(grid->background());
+  if (!(out.background > 0) || !std::isfinite(out.background))
+    throw Failure{OpenVdbStatus::BadInput, background_error(*grid)};
   for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf)
     if (leaf->onVoxelCount() > 0)
       for (int a = 0; a < 3; ++a) out.leaf_origins.push_back(leaf->origin()[a]);

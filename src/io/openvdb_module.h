@@ -35,6 +35,8 @@ struct OpenVdbLayout {
   std::string grid_name;
   int min[3] = {0, 0, 0}, max[3] = {0, 0, 0};  ///< active voxels' bounding box, inclusive
   double voxel = 0, origin[3] = {0, 0, 0};
+  /// The index axes' world directions, row a for index axis a (unit and orthogonal).
+  double rotation[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   double background = 0;
   std::vector<int> leaf_origins;  ///< 3 per leaf with active voxels
 };

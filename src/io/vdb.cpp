@@ -154,6 +154,7 @@ VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name)
         put(out, l.max, 3);
         put(out, &l.voxel, 1);
         put(out, l.origin, 3);
+        put(out, l.rotation, 9);
         put(out, &l.background, 1);
         put(out, &leaves, 1);
         put(out, l.leaf_origins.data(), leaves);
@@ -171,6 +172,10 @@ VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name)
   take(bytes, at, l.max.data(), 3);
   take(bytes, at, &l.voxel_size, 1);
   take(bytes, at, l.origin.data(), 3);
+  double rotation[9];
+  take(bytes, at, rotation, 9);
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) l.rotation(a, b) = rotation[3 * a + b];
   take(bytes, at, &l.background, 1);
   take(bytes, at, &leaves, 1);
   if (leaves % 3 != 0 || leaves > bytes.size()) throw InternalError("the .vdb reply is malformed");
@@ -178,7 +183,8 @@ VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name)
   take(bytes, at, origins.data(), leaves);
   for (std::size_t i = 0; i < leaves; i += 3)
     l.leaf_origins.push_back({origins[i], origins[i + 1], origins[i + 2]});
-  if (!(l.voxel_size > 0) || !std::isfinite(l.voxel_size) || !l.origin.allFinite())
+  if (!(l.voxel_size > 0) || !std::isfinite(l.voxel_size) || !l.origin.allFinite() ||
+      !l.rotation.allFinite())
     throw Error("grid '" + l.grid_name + "' in '" + path + "' has a degenerate transform");
   return l;
 }
@@ -219,13 +225,16 @@ BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_na
     throw Error("grid '" + layout.grid_name + "' in '" + path + "' has no active voxels");
   BlockedGrid grid;
   std::array<int, 3> first;
+  // A rotated grid is contoured in its own frame, origin at voxel (0, 0, 0).
+  const Eigen::Vector3d origin =
+      vdb_world_from_grid(layout) ? Eigen::Vector3d::Zero() : layout.origin;
   for (int a = 0; a < 3; ++a) {
     first[a] = layout.min[a] - 1;
     const long long n = (long long)layout.max[a] - first[a] + 2;
     if (n > (1 << 30)) throw Error("the level set in '" + path + "' is too large a grid");
     grid.dims[a] = int(n);
-    grid.bounds.min[a] = layout.origin[a] + layout.voxel_size * first[a];
-    grid.bounds.max[a] = layout.origin[a] + layout.voxel_size * (first[a] + grid.dims[a] - 1);
+    grid.bounds.min[a] = origin[a] + layout.voxel_size * first[a];
+    grid.bounds.max[a] = origin[a] + layout.voxel_size * (first[a] + grid.dims[a] - 1);
   }
   const std::string name = layout.grid_name;
   grid.read = [path, name, first](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
@@ -247,6 +256,14 @@ BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_na
   grid.surface_boxes = std::move(leaves);
   if (layout_out) *layout_out = layout;
   return grid;
+}
+
+std::optional<Eigen::Affine3d> vdb_world_from_grid(const VdbLayout& layout) {
+  if (layout.rotation == Eigen::Matrix3d::Identity()) return std::nullopt;
+  Eigen::Affine3d placed = Eigen::Affine3d::Identity();
+  placed.linear() = layout.rotation.transpose();
+  placed.translation() = layout.origin;
+  return placed;
 }
 
 void write_vdb_level_set(const std::string& path, const Grid& grid, double half_width,

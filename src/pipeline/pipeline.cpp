@@ -192,11 +192,32 @@ ContourResult contour_blocked_grid(const BlockedGridInput& input, const ContourO
   return result;
 }
 
+// The outputs of a grid contoured in its own frame, placed in the world (a rigid motion: the
+// distances, and so the mesh, are the same).
+void place_in_world(const Eigen::Affine3d& world_from_grid, ContourResult& result) {
+  auto place = [&](PointMatrix& points, bool directions) {
+    for (Eigen::Index r = 0; r < points.rows(); ++r) {
+      const Eigen::Vector3d p = points.row(r).transpose();
+      points.row(r) = (directions ? Eigen::Vector3d(world_from_grid.linear() * p)
+                                  : Eigen::Vector3d(world_from_grid * p))
+                          .transpose();
+    }
+  };
+  if (result.mesh) place(result.mesh->vertices, false);
+  if (result.contact_points) {
+    place(result.contact_points->points, false);
+    place(result.contact_points->normals, true);
+  }
+}
+
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
-  if (const auto* blocked = std::get_if<BlockedGridInput>(&input))
-    return contour_blocked_grid(*blocked, options);
+  if (const auto* blocked = std::get_if<BlockedGridInput>(&input)) {
+    ContourResult result = contour_blocked_grid(*blocked, options);
+    if (blocked->world_from_grid) place_in_world(*blocked->world_from_grid, result);
+    return result;
+  }
   const detail::GridSource grid = detail::grid_source_of(input);
   const ScatteredInput* scattered = std::get_if<ScatteredInput>(&input);
   check_input_for_method(grid, scattered, shape, options, measured);

@@ -14,3 +14,9 @@ def shared_mesh(name):
     if not os.path.exists(path):
         pytest.skip(f"needs the shared test meshes at {os.path.normpath(SHARED_MESHES)}")
     return path
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        "markers", "slow: over ~15 s on 2 cores; `bash scripts/test.sh` leaves it out, "
+        "`bash scripts/test.sh --all` (CI) runs it")

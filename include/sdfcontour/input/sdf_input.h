@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <variant>
 
 #include "sdfcontour/input/blocked_grid.h"
@@ -40,6 +41,9 @@ struct SparseGridInput {
 struct BlockedGridInput {
   BlockedGrid grid;
   double truncation = 0;  ///< the values' own clamp (a level set's background); 0: none known
+  /// Where the grid's frame lies in the world (a rotated level set: vdb_world_from_grid); the
+  /// mesh and contact points are placed by it. None: the grid's positions are the world's.
+  std::optional<Eigen::Affine3d> world_from_grid;
 };
 
 using SdfInput = std::variant<GridInput, ScatteredInput, SparseGridInput, BlockedGridInput>;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,8 +36,11 @@ struct VdbLayout {
   std::array<int, 3> min{0, 0, 0}, max{0, 0, 0};     ///< active voxels' bounding box, inclusive
   double voxel_size = 0;                             ///< uniform voxel side, in world units
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< world position of voxel (0, 0, 0)
-  double background = 0;                             ///< the band's half width (outside value)
-  std::vector<std::array<int, 3>> leaf_origins;      ///< leaves (8^3 voxels) with active voxels
+  /// Row a: the world direction of index axis a (a rotation; shears and mirrors are refused):
+  /// voxel (i, j, k) lies at origin + voxel_size * rotation^T * (i, j, k).
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  double background = 0;                         ///< the band's half width (outside value)
+  std::vector<std::array<int, 3>> leaf_origins;  ///< leaves (8^3 voxels) with active voxels
 };
 
 /// The layout of the float level set `grid_name` (empty: the first) in a .vdb file, from its
@@ -50,11 +54,16 @@ std::vector<float> read_vdb_box(const std::string& path, const std::string& grid
 
 /// The level set as a grid read box by box, never densified whole (as sdfcontour.dask reads it):
 /// the active voxels' bounding box grown by one voxel, its samples at the voxels' world
-/// positions; a block is read from the part of the file it needs (inactive voxels hold the signed
+/// positions (for a rotated transform, at voxel_size * (i, j, k): vdb_world_from_grid places
+/// them); a block is read from the part of the file it needs (inactive voxels hold the signed
 /// background), and a block that meets no leaf with active voxels cannot hold the surface.
 /// `layout` (optional) gets the file's layout (the background is the band's half width).
 BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_name = "",
                              VdbLayout* layout = nullptr);
+
+/// Where vdb_blocked_grid's grid lies in the world: none for an axis-aligned transform (its
+/// samples are at their world positions), else the rotation and origin of the layout.
+std::optional<Eigen::Affine3d> vdb_world_from_grid(const VdbLayout& layout);
 
 /// Writes `grid` as a float level set named `name`: voxels with |value| < half_width * h are
 /// active, the rest is background (+-half_width * h); the transform maps voxel (i,j,k) to the
