@@ -158,6 +158,7 @@ def test_a_bad_brick_stops_the_run_with_its_index(grid, client, tmp_path):
     assert list(tmp_path.iterdir()) == []  # no output, no temporary
 
 
+@pytest.mark.slow
 def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_path):
     # GCP's local reconstruction, brick-local from end to end: each brick reads a halo for its
     # contact points' stars, and the joined pieces are the single process's mesh bit for bit,
@@ -184,6 +185,7 @@ def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_
         sdfcontour.dask.contour(bad, method="gcp", brick=64, client=client, truncation="none")
 
 
+@pytest.mark.slow
 def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
     # Each brick samples the callable near the surface, exactly wherever the local
     # reconstruction reads a value (not only at the crossings, as marching cubes needs).
@@ -197,6 +199,7 @@ def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
     assert_same_mesh((V, F), single)
 
 
+@pytest.mark.slow
 def test_gcp_onto_the_zero_set_in_bricks_is_the_single_process_mesh(client):
     # zero_set=True (for values that are no exact distances, which no pass measures on Dask):
     # the bricks' vertices go onto their blocks' tricubic zero set, as in one process.
@@ -236,6 +239,7 @@ def test_bad_input_is_one_clear_error(client, call, kind, words):
         call(client)
 
 
+@pytest.mark.slow
 def test_openvdb_level_set_read_box_by_box(client, tmp_path):
     # Split by its active leaves, never densified whole: the same mesh as marching cubes on the
     # level set's box read in one piece, and next to GCP's mesh of the same file, which is the

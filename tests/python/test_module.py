@@ -54,6 +54,7 @@ def test_same_mesh_as_the_cli_on_a_grid_file(tmp_path, method):
     np.testing.assert_array_equal(F, F_cli)
 
 
+@pytest.mark.slow
 def test_same_mesh_as_the_cli_on_a_shared_mesh(tmp_path):
     mesh = os.path.join(MESHES, "bunny.obj")
     if not os.path.exists(mesh):
@@ -220,6 +221,7 @@ def test_memory_mapped_grid_is_read_in_place(tmp_path):
     np.testing.assert_array_equal(F, F2)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("f", [sphere, torus], ids=["sphere", "torus"])
 def test_callable_is_sampled_near_the_surface_only(f):
     n = 128
@@ -248,6 +250,7 @@ def test_callable_marching_cubes_equals_the_full_grid():
     assert {tuple(map(tuple, V[t])) for t in F} == {tuple(map(tuple, Vg[t])) for t in Fg}
 
 
+@pytest.mark.slow
 def test_scattered_samples_contact_points_and_poisson():
     rng = np.random.default_rng(0)
     points = rng.uniform(-1, 1, (20000, 3))
@@ -361,6 +364,7 @@ def test_help_explains_each_option():
         assert name in doc
 
 
+@pytest.mark.slow
 def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
     # A callable torus, contoured locally: the same mesh as the CLI on the same grid, closed, and
     # its vertices within 0.02 spacings of the torus on average (marching cubes: ~0.05).
@@ -438,6 +442,7 @@ def test_sample_places_the_mesh_as_the_cli_does(tmp_path):
         sdfcontour.sample(V, F, 8, scale=0)
 
 
+@pytest.mark.slow
 def test_gcp_output_follows_the_grid():
     # The automatic Poisson depth grows with the samples per axis: at 32^3 the mesh has tens of
     # times marching cubes' triangles at most (depth 8 gave 70x), and is still closer.
@@ -531,6 +536,7 @@ def test_callable_marching_cubes_by_bricks_is_the_full_grids_mesh():
     assert stats["evaluated_fraction"] < 0.06 and stats["components"] == 3 and stats["closed"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scale,n,brick", [(1.0, 48, 24), (1.3, 64, "auto")])
 def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     # GCP's local reconstruction of a callable goes brick by brick too, from bricks sampled near
@@ -556,6 +562,7 @@ def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     assert stats["local_bricks"] == (8 if brick == 24 else 1)
 
 
+@pytest.mark.slow
 def test_callable_poisson_and_contact_points_come_from_the_bricks_near_the_surface():
     # The Poisson path and contact_points() of a callable read the bricks sampled near the
     # surface as the core's sparse grid: the full grid's mesh and points, bit for bit, without an
@@ -596,6 +603,7 @@ def test_callable_poisson_and_contact_points_come_from_the_bricks_near_the_surfa
     assert np.array_equal(Vc, Vc2) and np.array_equal(Fc, Fc2)
 
 
+@pytest.mark.slow
 def test_callable_local_mesh_with_adaptivity_is_the_full_grids():
     # Adaptivity merges the joined mesh of the callable's bricks over their own contact points,
     # in the core's order: the full grid's merged mesh, bit for bit, for any bricks.
@@ -661,6 +669,7 @@ def test_adaptivity_merges_flat_parts_and_says_so():
         sdfcontour.contour(grid, adaptivity=-1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("steepness", [3, 10])
 def test_a_field_steeper_than_a_distance_keeps_its_small_parts(steepness):
     def steep(p):

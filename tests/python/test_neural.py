@@ -5,6 +5,7 @@ import os
 import sys
 
 import numpy as np
+import pytest
 
 import sdfcontour
 
@@ -13,6 +14,7 @@ sys.path.insert(0, BENCH)
 from neural_sdf import load  # noqa: E402
 
 
+@pytest.mark.slow
 def test_local_gcp_follows_the_network_zero_set():
     f = load(os.path.join(BENCH, "data", "neural_bunny.npz"))
     reference = sdfcontour.contour(f, resolution=160, method="mc")  # the network's zero set
