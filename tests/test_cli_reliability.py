@@ -145,9 +145,10 @@ with tempfile.TemporaryDirectory() as d:
         stats = json.load(open(p("plane.json")))
         check("thin parts, values as given", "fallback" not in stats and "value_scale" not in stats,
               stats)
-        scaled = np.load(p("plane.npy")) * 3
-        np.save(p("plane3.npy"), scaled)
-        r = run("contour", p("plane3.npy"), "-o", p("plane3.ply"), "-q")
-        check("a scaled field, said", r.returncode == 0 and "rescaled" in r.stderr, r.stderr)
+    x = np.linspace(-1, 1, 24)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    np.save(p("sphere3.npy"), 3 * (np.sqrt(X**2 + Y**2 + Z**2) - 0.5))
+    r = run("contour", p("sphere3.npy"), "-o", p("sphere3.ply"), "-q")
+    check("a scaled field, said", r.returncode == 0 and "rescaled" in r.stderr, r.stderr)
 
 finish()
