@@ -33,6 +33,8 @@ bool vdb_read_by_boxes(const ContourOptions& opt) {
 LoadedInput load_input(const std::string& spec, const Bounds& bounds, std::uint64_t seed,
                        const std::string& grid_name, bool vdb_by_boxes) {
   LoadedInput loaded;
+  if (!grid_name.empty() && !is_vdb_path(spec))
+    throw Error("--grid names a float grid of a .vdb input, and '" + spec + "' is not one");
   if (is_builtin_spec(spec)) {
     const BuiltinSpec b = parse_builtin_spec(spec);
     loaded.shape = make_builtin_shape(b.name);
@@ -69,20 +71,20 @@ struct ProjectionOption {
 };
 const ProjectionOption kProjectionOptions[] = {
     {"--projection-radius", &ContactProjectionOptions::radius, 0.5, 8,
-     "GCP projection: the fitted neighbourhood's radius, in spacings"},
+     "GCP Poisson path's projection: the fitted neighbourhood's radius, in spacings"},
     {"--projection-max-move", &ContactProjectionOptions::max_move, 0, 4,
-     "GCP projection: a vertex whose fit is farther than this many spacings stays"},
+     "GCP Poisson path's projection: a vertex whose fit is farther than this many spacings stays"},
     {"--projection-agreement", &ContactProjectionOptions::normal_agreement, -1, 1,
-     "GCP projection: only contact points whose normal's cosine with the vertex's exceeds this "
+     "GCP Poisson path's projection: only contact points whose normal's cosine with the vertex's exceeds this "
      "are fitted"},
     {"--projection-depth-scale", &ContactProjectionOptions::depth_scale, 0, 1e6,
-     "GCP projection: a point from a sample |value| away weighs 1 / (1 + (|value| / (this many "
+     "GCP Poisson path's projection: a point from a sample |value| away weighs 1 / (1 + (|value| / (this many "
      "spacings))^2); 0: all the same"},
     {"--projection-variance", &ContactProjectionOptions::max_variance_factor, 1, 1e6,
-     "GCP projection: the largest variance factor of a fitted height (1: a plain mean); a vertex "
+     "GCP Poisson path's projection: the largest variance factor of a fitted height (1: a plain mean); a vertex "
      "whose fit is less certain stays"},
     {"--projection-residual", &ContactProjectionOptions::max_residual, 0, 1e6,
-     "GCP projection: a vertex stays where the points' RMS distance from the fitted quadric "
+     "GCP Poisson path's projection: a vertex stays where the points' RMS distance from the fitted quadric "
      "exceeds this many spacings (0: no limit)"}};
 
 // Options that the reconstruction which ran does not read are said, even with --quiet: a user
@@ -404,8 +406,10 @@ void add_projection_options(CLI::App* c, ContourArgs& a) {
                 "points within --projection-radius spacings whose normals agree with it (on, off; "
                 "auto: on)")
       ->capture_default_str();
+  // (The local reconstruction fits its own neighbourhoods: these tune the Poisson path's.)
   for (const ProjectionOption& p : kProjectionOptions)
-    c->add_option(p.name, a.projection_options.*p.field, p.help)->capture_default_str();
+    a.poisson_path_options.push_back(
+        c->add_option(p.name, a.projection_options.*p.field, p.help)->capture_default_str());
   const std::pair<const char*, double*> sign_options[] = {{"--sign-band", &a.sign_band},
                                                           {"--sign-radius", &a.sign_radius},
                                                           {"--sign-margin", &a.sign_margin},
@@ -449,9 +453,11 @@ void add_input_options(CLI::App* c, ContourArgs& a) {
                 "First halo around a brick, in spacings (grown where it does not suffice); "
                 "0: the largest |value| in the band and its margin, plus 2")
       ->capture_default_str();
-  c->add_flag("--fn", a.fn,
-              "+FN: if the averaged gradient's point is discarded, try each incident tet's "
-              "gradient");
+  // (The local reconstruction slides a discarded point over its sphere instead.)
+  a.poisson_path_options.push_back(
+      c->add_flag("--fn", a.fn,
+                  "+FN: if the averaged gradient's point is discarded, try each incident tet's "
+                  "gradient (the paper's contact points, on the Poisson path)"));
   c->add_option("--seed", a.seed, "Seed for builtin:NAME@random:COUNT")->capture_default_str();
 }
 

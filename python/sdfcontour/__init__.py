@@ -349,11 +349,11 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     return Mesh(out["V"], out["F"], normals, out["stats"], unpack)
 
 
-# contour()'s options that only the Poisson solve reads, and contour()'s defaults (whether the
+# contour()'s options that only the Poisson path reads, and contour()'s defaults (whether the
 # user set them).
 _POISSON_OPTIONS = ("depth", "full_depth", "alpha", "samples_per_node", "scale", "boundary",
                     "solver_tolerance", "finest_solver_tolerance", "refine_dilation", "degree",
-                    "sign_constraints")
+                    "sign_constraints", "fn")
 # ... and those that only the local reconstruction reads.
 _LOCAL_OPTIONS = ("subdivisions", "split_sag", "thin_parts", "zero_set")
 _CONTOUR_DEFAULTS = {name: p.default for name, p in _inspect.signature(contour).parameters.items()}

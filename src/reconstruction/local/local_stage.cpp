@@ -44,6 +44,7 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.lattice_points = options.gradient_source == GradientSource::Lattice;
   lb.contact = options.contact;
   lb.contact.max_slope_miss = kLocalSlopeMiss;
+  lb.contact.try_tet_gradients = false;  // (the slide, below, rescues those points)
   lb.contact.sphere_slide_rounds = lb.lattice_points ? kLatticeSlideRounds : kLocalSlideRounds;
   lb.contact.power_vertex_tolerance = kLocalPowerVertex;
   lb.contact.near_miss_tolerance = kLocalNearMiss;
