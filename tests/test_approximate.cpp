@@ -60,6 +60,24 @@ TEST(Approximate, ScaledDistancesAreRescaled) {
   }
 }
 
+TEST(Approximate, DistancesScaledToTheEdgesOfDoublesAreRescaled) {
+  // Squares of 1e-200 underflow: the slope is measured without them, and
+  // every stage after reads the values scaled once into distances.
+  const Grid exact = transformed("torus", 32, [](double v, double, double) { return v; });
+  const ContourResult reference = contour(grid_input(exact), nullptr, gcp_options());
+  for (double scale : {1e-200, 1e80}) {  // (over 1e100 is refused)
+    Grid g = exact;
+    g.values *= scale;
+    const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+    EXPECT_TRUE(r.fallback.empty()) << r.fallback;
+    EXPECT_NEAR(r.value_scale * scale, 1.0, 0.02);
+    ASSERT_TRUE(r.mesh);
+    test::expect_closed_and_outward(*r.mesh);
+    EXPECT_LT(worst_distance(*r.mesh, "torus"), 1.5 * worst_distance(*reference.mesh, "torus"))
+        << scale;
+  }
+}
+
 TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
   // Values clamped at one spacing: no sample is left in the band for a contact point.
   const Grid g =

@@ -28,7 +28,16 @@ def _evaluate(f, points, batch_size, counter):
     out = np.empty(len(points))
     for start in range(0, len(points), batch_size):
         chunk = points[start:start + batch_size]
-        raw = np.asarray(f(chunk))
+        try:
+            raw = np.asarray(f(chunk))
+        except Exception as error:
+            # Marked as the callable's own, so that a Dask client raises it as it is (its
+            # attributes travel with it from the worker).
+            try:
+                error.sdfcontour_from_callable = True
+            except AttributeError:
+                pass
+            raise
         if raw.dtype.kind not in "fiu":
             raise ArgumentTypeError(f"the SDF must return real numbers, got an array of dtype {raw.dtype}")
         values = raw.astype(float).reshape(-1)

@@ -155,6 +155,8 @@ def _open_path(path, dataset):
         except Exception as e:  # zarr says why in its own words
             raise OSError(f"cannot read '{text}' as zarr: {e}") from None
         if dataset is not None:
+            if not isinstance(array, zarr.hierarchy.Group) or dataset not in array:
+                raise ValueError(f"'{text}' has no array '{dataset}'")
             array = array[dataset]
         if not isinstance(array, zarr.Array):
             raise ValueError(f"'{text}' is a zarr group: name its array with dataset=")
@@ -317,6 +319,8 @@ def _one_line(error):
     """The exception a failed brick raised, as the caller should see it: the brick's one line,
     without Dask's traceback."""
     import distributed
+    if getattr(error, "sdfcontour_from_callable", False):
+        return error  # the callable's own exception, its type and message as in one process
     text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
     if isinstance(error, OSError):
         return OSError(text)
@@ -351,7 +355,8 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         single process's bit for bit). GCP's screened Poisson solve is global and is not offered
         here; neither are the whole-mesh stages after it (carving).
     brick : int
-        Cells per brick side (default 256: a float32 brick of 257^3 samples is 68 MB).
+        Cells per brick side, from 8 (default 256: a float32 brick of 257^3 samples is 68 MB).
+        The grid may have at most 2^17 bricks: one task graph holds them all.
     client : dask.distributed.Client, str or None
         The Dask client to run on; a scheduler address ("tcp://host:8786") to connect to; or
         None for a local cluster of one single-threaded worker process per core, closed after.
@@ -409,7 +414,8 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         options["thin_parts"] = _switch("thin_parts", thin_parts)
         if options["thin_parts"] == "auto" and callable(source):
             options["thin_parts"] = "off"  # (as contour(): a callable may be no distance)
-    brick = _checks.whole_in("brick", brick, 1, 2**20)
+    # (Smaller bricks cost more halo than cells: GCP's reads ~60 cells beyond its own.)
+    brick = _checks.whole_in("brick", brick, 8, 2**20)
     batch_size = _checks.whole_in("batch_size", batch_size, 1, 2**26)
     progress = _checks.flag("progress", progress)
     reader = _reader(source, bounds, resolution, batch_size, dataset)
@@ -418,6 +424,10 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         # Read as a distance: values are not rescaled here (sdfcontour.contour() does).
         reader.reach = max(_sdfcontour.local_values_reach(options, shape), 4.0) * reader.reach
     _check_shape_and_dtype(shape, reader.dtype)
+    count = np.prod([max(1, -(-(n - 1) // brick)) for n in shape], dtype=np.float64)
+    if count > _MAX_BRICKS:
+        raise ValueError(f"{shape} samples in bricks of {brick} cells make {count:.3g} bricks, "
+                         f"more than {_MAX_BRICKS} tasks for one graph: give a larger brick")
     if isinstance(reader, _VdbReader):
         if bounds is not None:
             raise ValueError("a .vdb level set places itself (its transform): give no bounds")
@@ -437,6 +447,9 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     with _main_script_hidden():
         return _contour_on(reader, shape, lo, hi, int(brick), client, out, progress,
                            return_stats, options)
+
+
+_MAX_BRICKS = 2**17
 
 
 def _gcp_truncation(dask_client, reader, source, shape, brick, options):

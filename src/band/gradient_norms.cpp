@@ -50,19 +50,21 @@ CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
           if (clamped) continue;
           // Central differences with steps h and 2h, extrapolated (Richardson): the curvature's
           // O(h^2) bias cancels, so an exact distance measures 1 to O(h^4).
-          double near = 0, far = 0, bend = 0;
+          // (hypot: squares of values as small as 1e-200 would underflow to 0.)
+          double d1s[3], d2s[3], bend = 0;
           for (int a = 0; a < 3; ++a) {
             const double minus1 = double(f[p - stride[a]]), plus1 = double(f[p + stride[a]]);
             const double minus2 = double(f[p - 2 * stride[a]]),
                          plus2 = double(f[p + 2 * stride[a]]);
             const double d1 = (plus1 - minus1) / (2 * h[a]);
             const double d2 = (plus2 - minus2) / (4 * h[a]);
-            near += d1 * d1, far += d2 * d2;
+            d1s[a] = d1, d2s[a] = d2;
             const double centre = 2 * double(f[p]);
             bend = std::max({bend, std::abs(plus1 - centre + minus1) / h[a],
                              std::abs(plus2 - centre + minus2) / (4 * h[a])});
           }
-          const double norm = (4 * std::sqrt(near) - std::sqrt(far)) / 3;
+          const double norm =
+              (4 * std::hypot(d1s[0], d1s[1], d1s[2]) - std::hypot(d2s[0], d2s[1], d2s[2])) / 3;
           Slab& slab = per_slab[std::size_t(i - from[0])];
           slab.all.push_back(norm);
           if (bend < kSmoothCurvature) slab.smooth.push_back(norm);

@@ -230,13 +230,37 @@ def test_gcp_onto_the_zero_set_in_bricks_is_the_single_process_mesh(client):
      "triangulation of all samples"),
     (lambda c: sdfcontour.dask.contour("/nonexistent/g.zarr", client=c), OSError, "no such"),
     (lambda c: sdfcontour.dask.contour(np.ones((9, 9, 9)), brick=0, client=c), ValueError,
-     "brick must be from 1"),
+     "brick must be from 8"),
+    (lambda c: sdfcontour.dask.contour(np.ones((11, 11, 11)), brick=1, method="gcp", client=c),
+     ValueError, "brick must be from 8"),
+    (lambda c: sdfcontour.dask.contour(shape_sdf, resolution=10**7, client=c), ValueError,
+     "bricks.*give a larger brick"),
     (lambda c: sdfcontour.dask.contour(shape_sdf, client=c), ValueError, "needs a resolution"),
     (lambda c: sdfcontour.dask.contour(np.ones((9, 9, 9)), client=5), TypeError, "client must"),
 ])
 def test_bad_input_is_one_clear_error(client, call, kind, words):
     with pytest.raises(kind, match=words):
         call(client)
+
+
+def _failing_sdf(p):
+    # (A built-in type: a class of this module is sent to the workers by value, as a copy.)
+    raise ZeroDivisionError("the network is not loaded")
+
+
+def test_errors_are_the_modules_or_the_callables_own(client, tmp_path):
+    # A missing zarr array is the module's ValueError, not zarr's KeyError.
+    z = zarr.open(str(tmp_path / "g.zarr"), mode="w")
+    z.create_dataset("a", data=np.ones((9, 9, 9)))
+    with pytest.raises(ValueError, match="no array 'b'"):
+        sdfcontour.dask.contour(str(tmp_path / "g.zarr"), dataset="b", client=client)
+    # A callable's own exception reaches the caller with its type and words, on Dask as in one
+    # process.
+    for run in (lambda: sdfcontour.contour(_failing_sdf, resolution=16),
+                lambda: sdfcontour.dask.contour(_failing_sdf, resolution=16, brick=8,
+                                                client=client)):
+        with pytest.raises(ZeroDivisionError, match="not loaded"):
+            run()
 
 
 @pytest.mark.slow
