@@ -18,6 +18,11 @@ ROOT = pathlib.Path(__file__).resolve().parent
 class CMakeBuild(build_ext):
     def build_extension(self, ext):
         build_dir = pathlib.Path(os.environ.get("SDFCONTOUR_BUILD_DIR", ROOT / "build"))
+        if not (build_dir / "libsdfcontour.a").exists():
+            cores = os.cpu_count() or 2
+            print(f"sdfcontour: no build in {build_dir}: compiling the C++ core, about "
+                  f"{max(2, round(30 / cores))} minutes on {cores} cores (bash scripts/build.sh "
+                  f"first makes pip take seconds)", file=sys.stderr, flush=True)
         subprocess.check_call(["cmake", "-S", str(ROOT), "-B", str(build_dir), "-DCMAKE_BUILD_TYPE=Release",
                                f"-DPYTHON_EXECUTABLE={sys.executable}"])
         subprocess.check_call(["cmake", "--build", str(build_dir), "--target", "_sdfcontour",
