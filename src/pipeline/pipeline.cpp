@@ -63,7 +63,6 @@ std::string gradient_source_name(GradientSource source) {
 
 namespace {
 
-using detail::NotDistances;
 using detail::Stages;
 
 // Noise above this many spacings is smoothed away before GCP (ContourOptions::smooth_noise).
@@ -142,9 +141,10 @@ void rescale_to_distances(const GridView& grid, const ContourOptions& options,
 }
 
 // The band's samples, seen by the later stages as scattered samples (a grid's positions are made
-// for the band only). A band that cannot be used means the values are not distances.
+// for the band only). A band that cannot be used means the values are not distances
+// (result.fallback says why).
 BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* scattered,
-                       const BandOptions& band_options, Stages& stages) {
+                       const BandOptions& band_options, ContourResult& result, Stages& stages) {
   return stages.run("band", "samples within the band", [&] {
     try {
       return grid ? grid.select_band(band_options)
@@ -156,9 +156,9 @@ BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* sca
     } catch (const Error& e) {
       // No usable band in a truncated grid: values clamped too close to the surface to be
       // distances (a band the user narrowed stays the user's error).
-      if (grid.dense && resolve_truncation(*grid.dense, band_options).detected())
-        throw NotDistances(e.what());
-      throw;
+      if (!grid.dense || !resolve_truncation(*grid.dense, band_options).detected()) throw;
+      result.fallback = e.what();
+      return BandSamples();
     }
   });
 }
@@ -283,7 +283,8 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
                                   [&] { release_resident_pages(input); });
     return result;
   }
-  BandSamples band = band_stage(grid, scattered, band_options, stages);
+  BandSamples band = band_stage(grid, scattered, band_options, result, stages);
+  if (!result.fallback.empty()) return result;
   result.band_samples = int(band.samples.values.size());
   result.isolated_samples = band.isolated;
   if (band.isolated > 0 && options.progress)
@@ -297,15 +298,17 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
       detail::contact_point_stage(band, shape, options, result, stages);
   const bool contact_mesh = (method == Method::Gcp || method == Method::Gtcp) && options.want_mesh;
   const bool local = contact_mesh && grid.dense && options.reconstruction == Reconstruction::Local;
+  if (contact_mesh) {
+    result.fallback = detail::contact_point_shortage(grid, options, *result.contact_points);
+    if (!result.fallback.empty()) return result;
+  }
   if (local) {
-    detail::check_contact_point_count(grid, options, *result.contact_points);
     const detail::ReconstructionInputs in =
         detail::prepare_reconstruction(band, band_options, grid, options, result);
     detail::reconstruct_locally(*grid.dense, in, options, result, stages);
   }
   std::optional<detail::ReconstructionInputs> inputs;
   if (contact_mesh && !local) {
-    detail::check_contact_point_count(grid, options, *result.contact_points);
     inputs = detail::prepare_reconstruction(band, band_options, grid, options, result);
   }
   // Contact points name their samples by input index.
@@ -344,27 +347,26 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
   auto since_start = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   };
-  try {
-    return contour_or_throw(input, shape, options, measured);
-  } catch (const NotDistances& e) {
-    const detail::GridSource grid = detail::grid_source_of(input);
-    if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
-        !options.fallback_to_mc)
-      throw Error(std::string(e.what()) + ": the values do not behave as distances");
-    const double discarded = since_start();
-    ContourResult result;
-    result.samples = int(grid.geometry().size());
-    result.fallback = std::string(e.what()) + ": the values do not behave as distances";
-    // The work thrown away is part of the run's cost: said, not hidden.
-    result.stages.push_back({"gcp (discarded)", discarded});
-    if (options.progress)
-      options.progress("GCP: " + result.fallback + "; this is marching cubes' mesh instead");
-    Stages stages(result, options);
-    result.mesh =
-        stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
-                   [&] { return grid.marching_cubes(); });
-    return result;
-  }
+  ContourResult gcp = contour_or_throw(input, shape, options, measured);
+  if (gcp.fallback.empty()) return gcp;
+  const std::string why = gcp.fallback + ": the values do not behave as distances";
+  const detail::GridSource grid = detail::grid_source_of(input);
+  if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
+      !options.fallback_to_mc)
+    throw Error(why);
+  const double discarded = since_start();
+  ContourResult result;
+  result.samples = int(grid.geometry().size());
+  result.fallback = why;
+  // The work thrown away is part of the run's cost: said, not hidden.
+  result.stages.push_back({"gcp (discarded)", discarded});
+  if (options.progress)
+    options.progress("GCP: " + result.fallback + "; this is marching cubes' mesh instead");
+  Stages stages(result, options);
+  result.mesh =
+      stages.run("marching", "marching cubes on " + std::to_string(result.samples) + " samples",
+                 [&] { return grid.marching_cubes(); });
+  return result;
 }
 
 }  // namespace

@@ -51,12 +51,9 @@ class Stages {
   const ContourOptions& options_;
 };
 
-// GCP's mesh cannot be trusted on these values (they do not behave as distances): contour()
-// falls back to marching cubes where it may.
-class NotDistances : public Error {
- public:
-  using Error::Error;
-};
+// Where GCP's mesh cannot be trusted on the values (they do not behave as distances), a stage
+// says why in ContourResult::fallback and returns; contour() then returns marching cubes' mesh
+// where it may, else throws Error.
 
 // The band's triangulations that the method's mesh still needs (marching tetrahedra), if any.
 struct SampleTriangulations {
@@ -86,13 +83,13 @@ struct ReconstructionInputs {
   double zero_set_truncation = std::numeric_limits<double>::infinity();
 };
 
-// What NotDistances says where no contact point was kept at all (both reconstructions).
+// The fallback's reason where no contact point was kept at all (both reconstructions).
 inline constexpr const char* kNoContactPoint =
     "no contact point was kept, so there is nothing to reconstruct a surface from";
 
-// Throws NotDistances where the contact points are too few for the values to be distances.
-void check_contact_point_count(const GridSource& grid, const ContourOptions& options,
-                               const ContactPoints& cp);
+// Why the contact points are too few for the values to be distances ("": they are not).
+std::string contact_point_shortage(const GridSource& grid, const ContourOptions& options,
+                                   const ContactPoints& cp);
 
 // The reconstruction's inputs from the band (result.poisson_depth and result.sign_constraints
 // set); `band_options` as the band was selected with. result.contact_points must still name their
@@ -103,8 +100,8 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
 
 // GCP's or GTCP's mesh into result.mesh: screened Poisson reconstruction of
 // result.contact_points, then (GCP) projection, carving and the undoing of moves that cross the
-// mesh, clipped to the grid's box where the surface leaves it. Throws NotDistances where the mesh
-// shows that the values were not distances.
+// mesh, clipped to the grid's box where the surface leaves it. Sets ContourResult::fallback
+// where the mesh shows that the values were not distances.
 // Projection onto the contact points and carving out of the samples' spheres, as `in` says, each
 // move undone where it makes the mesh cross itself.
 void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,

@@ -34,7 +34,8 @@ void check_on_zero_set(const GridSource& grid, ContourResult& result) {
     std::ostringstream message;
     message << std::setprecision(3) << 100 * result.off_zero_set
             << "% of the mesh's vertices lie more than a spacing off the field's zero set";
-    throw NotDistances(message.str());
+    result.fallback = message.str();
+    return;
   }
   // Nor more pieces than marching cubes finds in the same field: the extra ones are bubbles
   // around contact points that strayed (noise of 0.5 h, smoothed, left 6 on a torus).
@@ -44,8 +45,8 @@ void check_on_zero_set(const GridSource& grid, ContourResult& result) {
   if (pieces <= 1) return;
   const int mc_pieces = connected_components(grid.marching_cubes());
   if (pieces > mc_pieces)
-    throw NotDistances("the mesh has " + std::to_string(pieces) +
-                       " connected pieces where marching cubes finds " + std::to_string(mc_pieces));
+    result.fallback = "the mesh has " + std::to_string(pieces) +
+                      " connected pieces where marching cubes finds " + std::to_string(mc_pieces);
 }
 
 // The band's own samples within `reach` of the surface, whose sides the indicator keeps.
@@ -136,7 +137,7 @@ void clip_to_grid(const GridSource& grid, const ContourOptions& options, Contour
   const Bounds& box = grid.geometry().bounds;
   result.clipped_to_grid |= clip_mesh_to_box(*result.mesh, box.min, box.max);
   if (result.mesh->triangles.rows() == 0)
-    throw NotDistances("no part of the reconstructed surface lies in the grid");
+    result.fallback = "no part of the reconstructed surface lies in the grid";
 }
 
 // Projection and carving move vertices by a fraction of a spacing, which can push a thin part's
@@ -197,18 +198,19 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
     });
 }
 
-void check_contact_point_count(const GridSource& grid, const ContourOptions& options,
-                               const ContactPoints& cp) {
-  if (cp.size() == 0) throw NotDistances(kNoContactPoint);
+std::string contact_point_shortage(const GridSource& grid, const ContourOptions& options,
+                                   const ContactPoints& cp) {
+  if (cp.size() == 0) return kNoContactPoint;
   // An exact distance keeps at least about one contact point per grid cell the surface
   // crosses (flat faces aligned with the grid hide the rest); far fewer means the values are
   // not distances.
   if (options.method == Method::Gcp && grid) {
     const long crossings = grid.sign_change_edges();
     if (10 * long(cp.size()) < crossings)
-      throw NotDistances("only " + std::to_string(cp.size()) + " contact points for " +
-                         std::to_string(crossings) + " grid edges crossing the surface");
+      return "only " + std::to_string(cp.size()) + " contact points for " +
+             std::to_string(crossings) + " grid edges crossing the surface";
   }
+  return "";
 }
 
 ReconstructionInputs prepare_reconstruction(const BandSamples& band,
@@ -275,6 +277,7 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
   // Cut before projection and carving, which would work on the outer part for nothing, and
   // again after them, as they move the cut's vertices a little.
   clip_to_grid(grid, options, result);
+  if (!result.fallback.empty()) return;
   refine_stage(inputs, options, result, stages);
   if (options.zero_set == Switch::On && grid.dense) {
     // Values that are no exact distances: the whole mesh onto the grid's zero set, as the local
@@ -293,7 +296,8 @@ void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
     untangle(before, result, stages);
   }
   if (result.clipped_to_grid) clip_to_grid(grid, options, result);
-  if (options.method == Method::Gcp && grid) check_on_zero_set(grid, result);
+  if (result.fallback.empty() && options.method == Method::Gcp && grid)
+    check_on_zero_set(grid, result);
 }
 
 }  // namespace sdfcontour::detail

@@ -29,8 +29,8 @@ constexpr int kLocalSlideRounds = 50;
 constexpr double kLocalPowerVertex = 3e-4;
 // A candidate that a neighbour's sphere holds less than 3e-3 of its |value| deep is kept: on smooth
 // shapes those are a few thousandths of a spacing off, the power vertices that would replace them
-// 0.016 h. At 1e-3 the analytic torus at 64^3 kept power vertices on its mirror planes and its worst
-// vertex went beyond marching cubes' (bench/smooth_shapes.py).
+// 0.016 h. At 1e-3 the analytic torus at 64^3 kept power vertices on its mirror planes and its
+// worst vertex went beyond marching cubes' (bench/smooth_shapes.py).
 constexpr double kLocalNearMiss = 3e-3;
 // The lattice's contact points slide for fewer rounds: each round searches every sphere in reach
 // (the triangulation's, its neighbours only). Bunny 32^3: 10 rounds rescue 1,480 points in 0.49 s,
@@ -140,9 +140,11 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
   // Rescaled values that hide nearly every contact point were no scaled distances: every cell
   // would take its edge crossings (hammer 32^3 rescaled by 1.11: 0.62x MC's L1, against 0.27x
   // from the values as given, which GradientNormSummary::slope now keeps).
-  if (band.value_scale != 1 && 10 * stats.contact_points < stats.local.cells)
-    throw NotDistances("only " + std::to_string(stats.contact_points) + " contact points for " +
-                       std::to_string(stats.local.cells) + " cells crossing the surface");
+  if (band.value_scale != 1 && 10 * stats.contact_points < stats.local.cells) {
+    result.fallback = "only " + std::to_string(stats.contact_points) + " contact points for " +
+                      std::to_string(stats.local.cells) + " cells crossing the surface";
+    return;
+  }
   // Every cell from its edge crossings is marching cubes' mesh with more steps, not GCP's (unless
   // the vertices then go onto the interpolant's zero set, as for values that are no distances).
   // As on the Poisson path: a band the user narrowed is the user's error; values clamped too
@@ -152,7 +154,8 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
       throw Error("no contact point: no sample within the band of " +
                   (std::ostringstream() << band.band).str() +
                   " spacings keeps one; widen it with --band (or --band all)");
-    throw NotDistances(kNoContactPoint);
+    result.fallback = kNoContactPoint;
+    return;
   }
   if (lb.keep_contact_points) {
     ContactPoints cp;
