@@ -20,6 +20,8 @@ clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INST
   tests/fuzz/fuzz_vdb.cpp src/io/vdb.cpp src/io/openvdb_loader.cpp src/io/openvdb_module.cpp \
   src/io/isolated_call.cpp src/input/samples.cpp src/io/atomic_file.cpp src/io/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb \
   -o "$out/fuzz_vdb"
+# Option values as text: the one number parser and every option's range.
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_options.cpp src/pipeline/option_ranges.cpp -o "$out/fuzz_options"
 # Meshes through sample's checks, union and signed distance (CGAL, TBB).
 clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_mesh_sample.cpp \
   src/input/mesh_sdf.cpp src/input/mesh_union.cpp src/metrics/mesh_properties.cpp src/metrics/self_intersections.cpp \
@@ -29,8 +31,9 @@ clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_m
 # printed but end only the child, which the parent reports as an error), which inherits libFuzzer's malloc limit:
 # a huge allocation there is the child's failure, which the parent turns into an error, so only
 # ASan's own size limit applies to it.
-declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000" [mesh_sample]="")
-for target in npy mesh_files vdb mesh_sample; do
+declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000" [mesh_sample]=""
+                  [options]="")
+for target in npy mesh_files vdb mesh_sample options; do
   corpus="$out/corpus_$target"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/$target/* "$corpus/"
