@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "io/isolated_call.h"
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/io/vdb.h"
 #include "sdfcontour/pipeline/pipeline.h"
@@ -380,4 +381,31 @@ TEST(Vdb, BackgroundsNoLevelSetHasAndShearedVoxelsAreRefused) {
   write_box_level_set(path, openvdb::math::Transform::createLinearTransform(shear), centre, half,
                       voxel);
   EXPECT_THROW(vdb_blocked_grid(path), Error);
+}
+
+// A reader child that never runs (it waits on a lock that another thread held when it was forked)
+// is started once more; one that spends its processor time is not.
+TEST(IsolatedCall, AStalledChildIsStartedOnceMore) {
+  const auto dir = test::temp_dir("isolated_stall");
+  const std::string marker = (dir / "first").string();
+  detail::IsolationLimits limits;
+  limits.seconds = 0.1;  // the parent waits 4 x 0.1 + 10 s
+  const std::string reply = detail::run_isolated(
+      [&]() -> std::string {
+        if (!std::filesystem::exists(marker)) {
+          std::ofstream(marker) << "stalled";
+          for (;;) ::pause();  // no processor time: a stall
+        }
+        return "ran";
+      },
+      "the test's child", limits);
+  EXPECT_EQ(reply, "ran");
+  // A child that spins is killed by its processor-time limit, once.
+  EXPECT_THROW(detail::run_isolated(
+                   []() -> std::string {
+                     for (volatile std::uint64_t i = 0;; i = i + 1) {
+                     }
+                   },
+                   "the test's spinning child", limits),
+               IoError);
 }
