@@ -72,7 +72,8 @@ constexpr double kNoisy = 0.08;
 // What contour() measures of a grid before choosing to smooth it, handed on so that the
 // pipeline does not measure it again.
 struct GridMeasures {
-  GradientNormSummary gradient_norms;  // with the truncation of the options' band
+  Truncation truncation;               // the options' band's, found in the grid once
+  GradientNormSummary gradient_norms;  // with that truncation
   double noise = 0;                    // in spacings, see noise_in_spacings
 };
 
@@ -82,8 +83,8 @@ struct GridMeasures {
 // norm, 1.25 at 0.5 h).
 GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
   validate_grid(grid);
-  const Truncation truncation = resolve_truncation(grid, options.band);
   GridMeasures m;
+  const Truncation truncation = m.truncation = resolve_truncation(grid, options.band);
   m.gradient_norms = gradient_norm_summary(grid, truncation);
   const double slope = m.gradient_norms.median;
   const double scale = std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.5 ? slope : 1;
@@ -255,6 +256,13 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
   if (!options.want_points && method == Method::Mc) return result;
 
   BandOptions band_options = options.band;
+  // One truncation detection per grid: every later stage (band, bricks, carving, gradient norms)
+  // reads it from here.
+  if (grid.dense && band_options.truncation_mode == TruncationMode::Auto) {
+    band_options.resolved =
+        measured ? measured->truncation : resolve_truncation(*grid.dense, band_options);
+    band_options.truncation_mode = TruncationMode::Resolved;
+  }
   if (grid.dense && options.normalize_values && method != Method::Mc && method != Method::Gtcp) {
     rescale_to_distances(*grid.dense, options, measured, band_options, result);
     if (band_options.value_scale != 1) {
