@@ -22,10 +22,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     sdfcontour::VdbLayout layout;
     const sdfcontour::BlockedGrid grid = sdfcontour::vdb_blocked_grid(file.path(), "", &layout);
     sdfcontour::vdb_world_from_grid(layout);
-    if (!grid.surface_boxes.empty()) {
+    if (grid.surface_boxes && !grid.surface_boxes->empty()) {
       std::array<int, 3> lo, hi;
       for (std::size_t a = 0; a < 3; ++a) {
-        lo[a] = std::max(0, grid.surface_boxes.front().lo[a]);
+        lo[a] = std::max(0, grid.surface_boxes->front().lo[a]);
         hi[a] = std::min(grid.dims[a], lo[a] + 4);
       }
       if (lo[0] < hi[0] && lo[1] < hi[1] && lo[2] < hi[2]) grid.read(lo, hi);
