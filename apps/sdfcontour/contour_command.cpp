@@ -75,17 +75,17 @@ const ProjectionOption kProjectionOptions[] = {
     {"--projection-max-move", &ContactProjectionOptions::max_move, 0, 4,
      "GCP Poisson path's projection: a vertex whose fit is farther than this many spacings stays"},
     {"--projection-agreement", &ContactProjectionOptions::normal_agreement, -1, 1,
-     "GCP Poisson path's projection: only contact points whose normal's cosine with the vertex's exceeds this "
-     "are fitted"},
+     "GCP Poisson path's projection: only contact points whose normal's cosine with the vertex's "
+     "exceeds this are fitted"},
     {"--projection-depth-scale", &ContactProjectionOptions::depth_scale, 0, 1e6,
-     "GCP Poisson path's projection: a point from a sample |value| away weighs 1 / (1 + (|value| / (this many "
-     "spacings))^2); 0: all the same"},
+     "GCP Poisson path's projection: a point from a sample |value| away weighs 1 / (1 + (|value| / "
+     "(this many spacings))^2); 0: all the same"},
     {"--projection-variance", &ContactProjectionOptions::max_variance_factor, 1, 1e6,
-     "GCP Poisson path's projection: the largest variance factor of a fitted height (1: a plain mean); a vertex "
-     "whose fit is less certain stays"},
+     "GCP Poisson path's projection: the largest variance factor of a fitted height (1: a plain "
+     "mean); a vertex whose fit is less certain stays"},
     {"--projection-residual", &ContactProjectionOptions::max_residual, 0, 1e6,
-     "GCP Poisson path's projection: a vertex stays where the points' RMS distance from the fitted quadric "
-     "exceeds this many spacings (0: no limit)"}};
+     "GCP Poisson path's projection: a vertex stays where the points' RMS distance from the fitted "
+     "quadric exceeds this many spacings (0: no limit)"}};
 
 // Options that the reconstruction which ran does not read are said, even with --quiet: a user
 // would otherwise take them for having had an effect.

@@ -86,11 +86,11 @@ double auto_split_sag(double samples_per_axis);
 /// at twice the resolution with one subdivision fewer replaces the grid's own cells (the 17 shared
 /// meshes' L1 over MC's, `bench/local.py --methods mc,gcp-local-thin --variant
 /// thick:"--thin-parts off"`: 32^3 0.292x -> 0.216x, 64^3
-/// 0.253x -> 0.199x, 128^3 0.356x -> 0.267x without the exact cube, 0.193x -> 0.272x with it; the sword's blade and
-/// the plane's wings appear). An exact axis-aligned box loses its exactness on that grid (at
-/// 128^3 from 1e-5 to 0.36x MC's: its narrow cells next to the edges hold one or two contact
-/// points, one of them often with a bent normal). Not from 192: at 256^3 the exact cube is 1.02x
-/// MC's with it, and it costs twice the time and 2-3x the memory (docs/notes/local.md).
+/// 0.253x -> 0.199x, 128^3 0.356x -> 0.267x without the exact cube, 0.193x -> 0.272x with it; the
+/// sword's blade and the plane's wings appear). An exact axis-aligned box loses its exactness on
+/// that grid (at 128^3 from 1e-5 to 0.36x MC's: its narrow cells next to the edges hold one or two
+/// contact points, one of them often with a bent normal). Not from 192: at 256^3 the exact cube
+/// is 1.02x MC's with it, and it costs twice the time and 2-3x the memory (docs/notes/local.md).
 bool auto_thin_parts(double samples_per_axis);
 /// The same, knowing the grid's `gaps` (count_subspacing_gaps): on below 192 samples per axis,
 /// and from 192 up to kThinPartGridLimit where at least kThinPartGapShare of the edges that the
