@@ -129,8 +129,7 @@ GradientNormSummary gradient_norm_summary(const GridView& grid, const Truncation
 }
 
 double distance_value_scale(double slope) {
-  const double m = slope;
-  return std::isfinite(m) && m > 0 && std::abs(m - 1) > 0.1 ? 1 / m : 1.0;
+  return std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.1 ? 1 / slope : 1.0;
 }
 
 }  // namespace sdfcontour

@@ -164,8 +164,7 @@ void read_layout(const std::string& path, const std::string& grid_name, OpenVdbL
   out.grid_name = grid->getName();
   for (int a = 0; a < 3; ++a) out.min[a] = box.min()[a], out.max[a] = box.max()[a];
   out.voxel = voxel[0];
-  const openvdb::Vec3d origin = xform.indexToWorld(openvdb::Vec3d(0, 0, 0));
-  for (int a = 0; a < 3; ++a) out.origin[a] = origin[a];
+  for (int a = 0; a < 3; ++a) out.origin[a] = zero[a];
   out.background = double(grid->background());
   if (!(out.background > 0) || !std::isfinite(out.background))
     throw Failure{OpenVdbStatus::BadInput, background_error(*grid)};

@@ -1,10 +1,8 @@
 // contour_grid (sdfcontour.h): the common case as one call, on top of contour().
-#include <tbb/parallel_for.h>
-
 #include <cmath>
-#include <memory>
-#include <vector>
+#include <cstdio>
 
+#include "pipeline/pipeline_stages.h"
 #include "sdfcontour/pipeline/pipeline.h"
 #include "sdfcontour/sdfcontour.h"
 
@@ -45,13 +43,8 @@ Mesh contour_values(const T* values, const std::array<int, 3>& dims, const Bound
   validate_grid_geometry(input.view);
   input.view.type = std::is_same_v<T, float> ? ScalarType::Float32 : ScalarType::Float64;
   input.view.data = values;
-  if (isovalue != 0) {  // the level's distances, in the caller's precision
-    auto shifted = std::make_shared<std::vector<T>>(input.view.size());
-    tbb::parallel_for(std::size_t(0), shifted->size(),
-                      [&](std::size_t i) { (*shifted)[i] = T(values[i] - isovalue); });
-    input.view.data = shifted->data();
-    input.storage = shifted;
-  }
+  if (isovalue != 0)  // the level's distances, in the caller's precision
+    input = detail::mapped_grid(input.view, [isovalue](double v) { return v - isovalue; });
   ContourResult result = contour(input, nullptr, options_of(settings));
   if (!result.mesh || result.mesh->triangles.rows() == 0)
     throw Error("no surface: the " + settings.method + " mesh is empty");

@@ -1,16 +1,11 @@
 #include "sdfcontour/pipeline/pipeline.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <limits>
-#include <memory>
 #include <sstream>
-#include <type_traits>
-#include <vector>
 
 #include "pipeline/enum_names.h"
 #include "pipeline/pipeline_stages.h"
@@ -216,22 +211,6 @@ void place_in_world(const Eigen::Affine3d& world_from_grid, ContourResult& resul
   }
 }
 
-// The grid's values times `scale`, in their own precision.
-SdfInput scaled_grid_input(const GridView& grid, double scale) {
-  return grid.visit([&](const auto* values) -> SdfInput {
-    using T = std::remove_const_t<std::remove_pointer_t<decltype(values)>>;
-    auto scaled = std::make_shared<std::vector<T>>(grid.size());
-    tbb::parallel_for(std::size_t(0), scaled->size(),
-                      [&](std::size_t i) { (*scaled)[i] = T(double(values[i]) * scale); });
-    GridInput input;
-    static_cast<GridGeometry&>(input.view) = grid;
-    input.view.type = grid.type;
-    input.view.data = scaled->data();
-    input.storage = scaled;
-    return input;
-  });
-}
-
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
@@ -268,10 +247,12 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     if (band_options.value_scale != 1) {
       // Every later stage reads distances: the values scaled once, in their own precision
       // (a field of 1e-200 would underflow in the squares and quotients of later stages).
+      const double scale = band_options.value_scale;
       ContourOptions distances = options;
       distances.normalize_values = false;
       ContourResult scaled = contour_or_throw(
-          scaled_grid_input(*grid.dense, band_options.value_scale), shape, distances, nullptr);
+          SdfInput(detail::mapped_grid(*grid.dense, [scale](double v) { return v * scale; })),
+          shape, distances, nullptr);
       scaled.value_scale = result.value_scale;
       scaled.gradient_norm = result.gradient_norm;
       scaled.gradient_norms = result.gradient_norms;

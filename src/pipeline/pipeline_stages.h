@@ -3,18 +3,40 @@
 // (reconstruction_stage.cpp). Internal to the library.
 #pragma once
 
+#include <tbb/parallel_for.h>
+
 #include <chrono>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "pipeline/grid_source.h"
 #include "sdfcontour/contact_points/triangulation.h"
 #include "sdfcontour/pipeline/pipeline.h"
 
 namespace sdfcontour::detail {
+
+// A grid of f(value) for each of `grid`'s values, stored in the grid's own precision (float32
+// stays float32), owning its values.
+template <class F>
+GridInput mapped_grid(const GridView& grid, F f) {
+  return grid.visit([&](const auto* values) {
+    using T = std::remove_const_t<std::remove_pointer_t<decltype(values)>>;
+    auto mapped = std::make_shared<std::vector<T>>(grid.size());
+    tbb::parallel_for(std::size_t(0), mapped->size(),
+                      [&](std::size_t i) { (*mapped)[i] = T(f(double(values[i]))); });
+    GridInput input;
+    static_cast<GridGeometry&>(input.view) = grid;
+    input.view.type = grid.type;
+    input.view.data = mapped->data();
+    input.storage = mapped;
+    return input;
+  });
+}
 
 // Times each stage into the result and reports its start through the progress callback.
 class Stages {
