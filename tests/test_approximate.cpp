@@ -78,6 +78,25 @@ TEST(Approximate, DistancesScaledToTheEdgesOfDoublesAreRescaled) {
   }
 }
 
+TEST(Approximate, AGivenTruncationFollowsTheValuesIntoDistances) {
+  // A TSDF in voxel units (distance / h, clamped at 3) with its truncation given as 3: rescaled
+  // into distances, its clamp is 3 h, and its mesh is the TSDF's in distance units.
+  const Grid distances = transformed(
+      "torus", 40, [](double v, double h, double) { return std::clamp(v, -3 * h, 3 * h); });
+  const double h = distances.spacing()[0];
+  Grid voxels = distances;
+  voxels.values /= h;
+  ContourOptions in_distances = gcp_options(), in_voxels = gcp_options();
+  in_distances.band.truncation_mode = in_voxels.band.truncation_mode = TruncationMode::Given;
+  in_distances.band.truncation = 3 * h;
+  in_voxels.band.truncation = 3;
+  const ContourResult a = contour(grid_input(distances), nullptr, in_distances);
+  const ContourResult b = contour(grid_input(voxels), nullptr, in_voxels);
+  EXPECT_NEAR(b.value_scale, h, 1e-3 * h);
+  ASSERT_TRUE(a.mesh && b.mesh);
+  EXPECT_LT(worst_distance(*b.mesh, "torus"), 1.05 * worst_distance(*a.mesh, "torus"));
+}
+
 TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
   // Values clamped at one spacing: no sample is left in the band for a contact point.
   const Grid g =

@@ -246,10 +246,17 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     rescale_to_distances(*grid.dense, options, measured, band_options, result);
     if (band_options.value_scale != 1) {
       // Every later stage reads distances: the values scaled once, in their own precision
-      // (a field of 1e-200 would underflow in the squares and quotients of later stages).
+      // (a field of 1e-200 would underflow in the squares and quotients of later stages), and
+      // their truncation, found or given in the values' units, with them.
       const double scale = band_options.value_scale;
       ContourOptions distances = options;
       distances.normalize_values = false;
+      if (band_options.truncation_mode != TruncationMode::None) {
+        const Truncation t = resolve_truncation(*grid.dense, band_options);  // (resolved above)
+        distances.band.truncation_mode = TruncationMode::Resolved;
+        distances.band.resolved.inside = t.inside * scale;
+        distances.band.resolved.outside = t.outside * scale;
+      }
       ContourResult scaled = contour_or_throw(
           SdfInput(detail::mapped_grid(*grid.dense, [scale](double v) { return v * scale; })),
           shape, distances, nullptr);
