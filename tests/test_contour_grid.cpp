@@ -104,7 +104,9 @@ bool one_line_error(Call&& call) {
   return false;
 }
 
-double sphere_distance(const Eigen::Vector3d& p) { return p.norm() - kRadius; }
+double sphere_distance(const Eigen::Vector3d& p) {
+  return p.norm() - kRadius;
+}
 
 TEST(ContourFunction, IsContourGridOfTheSampledFunction) {
   // The same samples, so the same mesh bit for bit; the function is called from every thread.
@@ -176,8 +178,8 @@ TEST(ContourSamples, BadInputIsAnErrorWithOneLine) {
 // The exact distance to the box in tests/data/rotated_box.vdb (data/make_rotated_box.cpp), in
 // the world: centre (0.15, 0.05, 0.25), half sides (0.3, 0.2, 0.12).
 double rotated_box_distance(const Eigen::Vector3d& p) {
-  const Eigen::Vector3d q = (p - Eigen::Vector3d(0.15, 0.05, 0.25)).cwiseAbs() -
-                            Eigen::Vector3d(0.3, 0.2, 0.12);
+  const Eigen::Vector3d q =
+      (p - Eigen::Vector3d(0.15, 0.05, 0.25)).cwiseAbs() - Eigen::Vector3d(0.3, 0.2, 0.12);
   return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
 }
 

@@ -95,8 +95,8 @@ Mesh contour_function(const std::function<double(const Eigen::Vector3d&)>& f,
         const double v = f(p);
         if (!std::isfinite(v)) {
           std::ostringstream m;
-          m << "contour_function: the function is not finite at (" << p[0] << ", " << p[1]
-            << ", " << p[2] << ")";
+          m << "contour_function: the function is not finite at (" << p[0] << ", " << p[1] << ", "
+            << p[2] << ")";
           throw Error(m.str());
         }
         values[(std::size_t(i) * std::size_t(dims[1]) + std::size_t(j)) * std::size_t(dims[2]) +
