@@ -500,7 +500,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
   ContourResult r = run_interruptible(
       [input, opt](std::atomic<bool>& cancel) mutable {
         opt.cancel = &cancel;
-        return contour(input, nullptr, opt);
+        return contour(input, opt);
       },
       owners, deliver);
   py::dict out;

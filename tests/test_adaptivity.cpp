@@ -21,7 +21,7 @@ ContourResult local_mesh(const Grid& g, double tolerance, int fit_rounds = -1,
   o.thin_parts = thin_parts;
   o.adaptivity.tolerance = tolerance;
   if (fit_rounds >= 0) o.adaptivity.fit_rounds = fit_rounds;
-  return contour(grid_input(g), nullptr, o);
+  return contour(grid_input(g), o);
 }
 
 // The mean |distance| to the shape over the triangles (area-weighted), from their centroids and
@@ -99,7 +99,7 @@ TEST(Adaptivity, BoxWithExactContactPointsCollapsesOntoItsCorners) {
   o.method = Method::Gtcp;
   o.reconstruction = Reconstruction::Local;
   o.adaptivity.tolerance = 0.25;
-  const ContourResult r = contour(grid_input(g), box.get(), o);
+  const ContourResult r = contour_with_exact_sdf(grid_input(g), *box, o);
   ASSERT_TRUE(r.mesh);
   EXPECT_LE(r.mesh->triangles.rows(), 48);
   EXPECT_LT(farthest_corner(*r.mesh), 1e-9);
@@ -214,7 +214,7 @@ TEST(Adaptivity, SmallBricksMergeAcrossTheirSeamsAlike) {
   ContourOptions o;
   o.reconstruction = Reconstruction::Local;
   o.want_points = true;
-  const ContourResult fine = contour(grid_input(g), nullptr, o);
+  const ContourResult fine = contour(grid_input(g), o);
   ASSERT_TRUE(fine.contact_points);
   const PointMatrix& P = fine.contact_points->points;
   const PointMatrix& N = fine.contact_points->normals;

@@ -44,11 +44,11 @@ ContourOptions gcp_options() {
 TEST(Approximate, ScaledDistancesAreRescaled) {
   for (const char* shape : {"sphere", "torus"}) {
     const Grid exact = transformed(shape, 40, [](double v, double, double) { return v; });
-    const ContourResult reference = contour(grid_input(exact), nullptr, gcp_options());
+    const ContourResult reference = contour(grid_input(exact), gcp_options());
     for (double scale : {10.0, 0.1}) {
       Grid g = exact;
       g.values *= scale;
-      const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+      const ContourResult r = contour(grid_input(g), gcp_options());
       EXPECT_TRUE(r.fallback.empty()) << r.fallback;
       EXPECT_NEAR(r.value_scale * scale, 1.0, 0.02);
       const MeshTopology t = mesh_topology(*r.mesh);
@@ -64,11 +64,11 @@ TEST(Approximate, DistancesScaledToTheEdgesOfDoublesAreRescaled) {
   // Squares of 1e-200 underflow: the slope is measured without them, and
   // every stage after reads the values scaled once into distances.
   const Grid exact = transformed("torus", 32, [](double v, double, double) { return v; });
-  const ContourResult reference = contour(grid_input(exact), nullptr, gcp_options());
+  const ContourResult reference = contour(grid_input(exact), gcp_options());
   for (double scale : {1e-200, 1e80}) {  // (over 1e100 is refused)
     Grid g = exact;
     g.values *= scale;
-    const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+    const ContourResult r = contour(grid_input(g), gcp_options());
     EXPECT_TRUE(r.fallback.empty()) << r.fallback;
     EXPECT_NEAR(r.value_scale * scale, 1.0, 0.02);
     ASSERT_TRUE(r.mesh);
@@ -90,8 +90,8 @@ TEST(Approximate, AGivenTruncationFollowsTheValuesIntoDistances) {
   in_distances.band.truncation_mode = in_voxels.band.truncation_mode = TruncationMode::Given;
   in_distances.band.truncation = 3 * h;
   in_voxels.band.truncation = 3;
-  const ContourResult a = contour(grid_input(distances), nullptr, in_distances);
-  const ContourResult b = contour(grid_input(voxels), nullptr, in_voxels);
+  const ContourResult a = contour(grid_input(distances), in_distances);
+  const ContourResult b = contour(grid_input(voxels), in_voxels);
   EXPECT_NEAR(b.value_scale, h, 1e-3 * h);
   ASSERT_TRUE(a.mesh && b.mesh);
   EXPECT_LT(worst_distance(*b.mesh, "torus"), 1.05 * worst_distance(*a.mesh, "torus"));
@@ -103,7 +103,7 @@ TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
       transformed("sphere", 40, [](double v, double h, double) { return std::clamp(v, -h, h); });
   ContourOptions poisson = gcp_options();
   poisson.reconstruction = Reconstruction::Poisson;
-  const ContourResult r = contour(grid_input(g), nullptr, poisson);
+  const ContourResult r = contour(grid_input(g), poisson);
   EXPECT_FALSE(r.fallback.empty());
   EXPECT_FALSE(r.smoothed);
   const Mesh mc = marching_cubes(g);
@@ -111,9 +111,9 @@ TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
   EXPECT_TRUE(r.mesh->triangles == mc.triangles);
   ContourOptions strict = poisson;
   strict.fallback_to_mc = false;
-  EXPECT_THROW(contour(grid_input(g), nullptr, strict), Error);
+  EXPECT_THROW(contour(grid_input(g), strict), Error);
   // The local reconstruction (the default on grids) has no contact point either: the same.
-  const ContourResult local = contour(grid_input(g), nullptr, gcp_options());
+  const ContourResult local = contour(grid_input(g), gcp_options());
   EXPECT_NE(local.fallback.find("no contact point"), std::string::npos) << local.fallback;
   EXPECT_TRUE(local.mesh->vertices == mc.vertices);
   EXPECT_TRUE(local.mesh->triangles == mc.triangles);
@@ -129,7 +129,7 @@ TEST(Approximate, ThinPartsAreNotTakenForScaledValues) {
   const GradientNormSummary norms = gradient_norm_summary(view_of(g));
   EXPECT_LT(norms.median, 0.8);
   EXPECT_EQ(norms.slope, 1.0);
-  const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+  const ContourResult r = contour(grid_input(g), gcp_options());
   EXPECT_TRUE(r.fallback.empty()) << r.fallback;
   EXPECT_EQ(r.value_scale, 1.0);
   ASSERT_TRUE(r.mesh);
@@ -158,7 +158,7 @@ TEST(Approximate, NoisyFieldsAreSmoothed) {
         for (Eigen::Index i = 0; i < noisy.values.size(); ++i)
           noisy.values[i] += sigma * h * normal(rng);
       }
-      const ContourResult r = contour(grid_input(noisy), nullptr, gcp_options());
+      const ContourResult r = contour(grid_input(noisy), gcp_options());
       EXPECT_TRUE(r.smoothed) << shape << " " << sigma;
       EXPECT_NEAR(r.noise_level, sigma, 0.2 * sigma) << shape;
       EXPECT_EQ(connected_components(*r.mesh), 1) << shape << " " << sigma;
@@ -168,7 +168,7 @@ TEST(Approximate, NoisyFieldsAreSmoothed) {
     }
   // Exact distances are not smoothed.
   const Grid exact = transformed("torus", 40, [](double v, double, double) { return v; });
-  const ContourResult r = contour(grid_input(exact), nullptr, gcp_options());
+  const ContourResult r = contour(grid_input(exact), gcp_options());
   EXPECT_FALSE(r.smoothed);
   EXPECT_LT(r.noise_level, 0.08);
 }
@@ -194,13 +194,13 @@ TEST(Approximate, MeshesOffTheZeroSetFallBack) {
   ContourOptions as_distances = gcp_options();
   as_distances.detect_approximate = false;
   as_distances.reconstruction = Reconstruction::Poisson;  // (its whole-mesh check)
-  const ContourResult r1 = contour(grid_input(g), nullptr, as_distances);
+  const ContourResult r1 = contour(grid_input(g), as_distances);
   EXPECT_NE(r1.fallback.find("off the field's zero set"), std::string::npos) << r1.fallback;
   EXPECT_EQ(connected_components(*r1.mesh), 1);
   EXPECT_TRUE(r1.mesh->vertices == marching_cubes(g).vertices);
   // Found no exact distance (the default), its vertices go onto the grid's zero set: closer to
   // the torus than marching cubes'.
-  const ContourResult found = contour(grid_input(g), nullptr, gcp_options());
+  const ContourResult found = contour(grid_input(g), gcp_options());
   EXPECT_TRUE(found.fallback.empty()) << found.fallback;
   EXPECT_TRUE(found.approximate_distances);
   EXPECT_EQ(found.reconstruction, Reconstruction::Local);
@@ -209,7 +209,7 @@ TEST(Approximate, MeshesOffTheZeroSetFallBack) {
   EXPECT_LT(2 * worst_distance(*found.mesh, "torus"), worst_distance(marching_cubes(g), "torus"));
   // Exact distances stay on it.
   const Grid exact = transformed("torus", 40, [](double v, double, double) { return v; });
-  const ContourResult r2 = contour(grid_input(exact), nullptr, gcp_options());
+  const ContourResult r2 = contour(grid_input(exact), gcp_options());
   EXPECT_TRUE(r2.fallback.empty());
   EXPECT_EQ(r2.off_zero_set, 0.0);
   EXPECT_FALSE(r2.approximate_distances);
@@ -217,7 +217,7 @@ TEST(Approximate, MeshesOffTheZeroSetFallBack) {
 
 TEST(Approximate, ExactDistancesAreLeftAlone) {
   const Grid g = transformed("torus", 40, [](double v, double, double) { return v; });
-  const ContourResult r = contour(grid_input(g), nullptr, gcp_options());
+  const ContourResult r = contour(grid_input(g), gcp_options());
   EXPECT_EQ(r.value_scale, 1.0);
   EXPECT_NEAR(r.gradient_norm, 1.0, 0.05);
   EXPECT_TRUE(r.fallback.empty());
@@ -230,7 +230,7 @@ TEST(Approximate, GcpIsAtLeastAsCloseAsMarchingCubesOnSmoothShapes) {
            {"sphere", 1.0}, {"sphere", 10.0}, {"torus", 1.0}}) {
     Grid g = transformed(shape, 64, [](double v, double, double) { return v; });
     g.values *= scale;
-    const ContourResult r = contour(grid_input(g), nullptr, ContourOptions{});
+    const ContourResult r = contour(grid_input(g), ContourOptions{});
     ASSERT_TRUE(r.fallback.empty()) << r.fallback;
     EXPECT_TRUE(mesh_topology(*r.mesh).closed);
     EXPECT_EQ(connected_components(*r.mesh), 1);
@@ -251,7 +251,7 @@ TEST(Approximate, LocalReconstructionOfThinPartsKeepsTheValuesAsGiven) {
   o.reconstruction = Reconstruction::Local;
   o.thin_parts = Switch::Off;  // (the grid's own cells: narrower ones take more crossings)
   o.want_points = true;
-  const ContourResult r = contour(grid_input(g), nullptr, o);
+  const ContourResult r = contour(grid_input(g), o);
   EXPECT_TRUE(r.fallback.empty()) << r.fallback;
   EXPECT_EQ(r.value_scale, 1.0);
   ASSERT_TRUE(r.contact_points);

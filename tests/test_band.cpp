@@ -101,10 +101,10 @@ TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
   o.reconstruction = Reconstruction::Poisson;
   o.poisson.depth = 7;
   o.band.band = std::numeric_limits<double>::infinity();  // the truncation alone cuts
-  const ContourResult a = contour(truncated, nullptr, o);
+  const ContourResult a = contour(truncated, o);
   EXPECT_TRUE(a.truncation.detected());
   o.band.band = 0.999;  // + the margin of 1: 1.999
-  const ContourResult b = contour(exact_input, nullptr, o);
+  const ContourResult b = contour(exact_input, o);
   EXPECT_FALSE(b.truncation.detected());
   ASSERT_EQ(a.band_samples, b.band_samples);
   ASSERT_EQ(a.contact_points->size(), b.contact_points->size());
@@ -116,7 +116,7 @@ TEST(Band, TruncatedGridEqualsTheExactGridInTheBand) {
   // Without the detection, the clamped samples would be taken for distances.
   o.band.band = std::numeric_limits<double>::infinity();
   o.band.truncation_mode = TruncationMode::None;
-  EXPECT_GT(contour(truncated, nullptr, o).band_samples, a.band_samples);
+  EXPECT_GT(contour(truncated, o).band_samples, a.band_samples);
 }
 
 // The band keeps the accuracy: contact points of the band's samples lie as close to the
@@ -136,9 +136,9 @@ TEST(Band, BandContactPointsAreAsGoodAsAllSamples) {
     return sum / double(r.contact_points->points.rows());
   };
   const SdfInput input = grid_input(grid);
-  const ContourResult band = contour(input, shape.get(), o);
+  const ContourResult band = contour_with_exact_sdf(input, *shape, o);
   o.band.band = std::numeric_limits<double>::infinity();
-  const ContourResult all = contour(input, shape.get(), o);
+  const ContourResult all = contour_with_exact_sdf(input, *shape, o);
   EXPECT_LT(band.band_samples, all.band_samples / 3);
   EXPECT_LT(mean_error(band), 1e-3 * h);
   EXPECT_LT(mean_error(band), 2 * mean_error(all) + 1e-6 * h);
@@ -168,7 +168,7 @@ TEST(Band, AutoBandFollowsTheResolution) {
   ContourOptions o;
   o.want_mesh = false;
   o.want_points = true;
-  EXPECT_EQ(contour(grid_input(grid), nullptr, o).band_spacings, 8);
+  EXPECT_EQ(contour(grid_input(grid), o).band_spacings, 8);
 }
 
 // The automatic Poisson depth follows the samples per axis across the band's extent: the octree's

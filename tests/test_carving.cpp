@@ -197,7 +197,7 @@ TEST(Carving, TriangleRoundsFollowTheSamplesPerAxisForScatteredSamples) {
   auto side_passes = [&](double spacing) {
     ContourOptions o;
     o.band.band = 3.5 * h / spacing;  // the same samples either way
-    const ContourResult r = contour(ScatteredInput{band, spacing}, nullptr, o);
+    const ContourResult r = contour(ScatteredInput{band, spacing}, o);
     EXPECT_TRUE(r.carving.has_value());
     return r.carving ? r.carving->side_passes : -1;
   };
@@ -235,8 +235,8 @@ TEST(Carving, LowersGcpErrorOnSharedMeshes) {
     ContourOptions carved, plain;  // (the Poisson path's carving, its triangle rounds and all)
     carved.reconstruction = plain.reconstruction = Reconstruction::Poisson;
     plain.carve = Switch::Off;
-    const ContourResult a = contour(grid_input(grid), nullptr, carved);
-    const ContourResult b = contour(grid_input(grid), nullptr, plain);
+    const ContourResult a = contour(grid_input(grid), carved);
+    const ContourResult b = contour(grid_input(grid), plain);
     ASSERT_TRUE(a.fallback.empty()) << a.fallback;
     ASSERT_TRUE(a.carving.has_value());
     EXPECT_FALSE(b.carving.has_value());

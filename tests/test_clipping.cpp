@@ -73,7 +73,7 @@ TEST(Clipping, GcpOnAGridThatCutsTheSurface) {
   ContourOptions options;
   options.method = Method::Gcp;
   options.reconstruction = Reconstruction::Poisson;  // (the local mesh stops at the grid's sides)
-  const ContourResult r = contour(grid_input(grid), nullptr, options);
+  const ContourResult r = contour(grid_input(grid), options);
   ASSERT_TRUE(r.fallback.empty()) << r.fallback;
   EXPECT_TRUE(r.clipped_to_grid);
   ASSERT_TRUE(r.mesh);
@@ -89,7 +89,7 @@ TEST(Clipping, GcpOnAGridThatCutsTheSurface) {
             << " h\n";
   EXPECT_LT(gcp_worst, mc_worst);
   // The local mesh (the default on grids) stops at the grid's side, inside the grid's box.
-  const ContourResult local = contour(grid_input(grid), nullptr, ContourOptions{});
+  const ContourResult local = contour(grid_input(grid), ContourOptions{});
   ASSERT_TRUE(local.fallback.empty()) << local.fallback;
   EXPECT_EQ(local.reconstruction, Reconstruction::Local);
   EXPECT_LE(local.mesh->vertices.col(0).maxCoeff(), 0.3);
@@ -118,7 +118,7 @@ TEST(Clipping, GcpOnAPlaneThroughTheGrid) {
   const double h = grid.spacing().maxCoeff();
   ContourOptions poisson;  // (the local mesh stops at the grid's sides)
   poisson.reconstruction = Reconstruction::Poisson;
-  const ContourResult r = contour(grid_input(grid), nullptr, poisson);
+  const ContourResult r = contour(grid_input(grid), poisson);
   ASSERT_TRUE(r.fallback.empty()) << r.fallback;
   EXPECT_TRUE(r.clipped_to_grid);
   ASSERT_TRUE(r.mesh);
@@ -131,7 +131,7 @@ TEST(Clipping, GcpOnAPlaneThroughTheGrid) {
   // edges follow the box's sides exactly).
   EXPECT_GT(surface_area(*r.mesh), 4.0 * 0.9 / n.z());
   // The local mesh (the default on grids) lies on the plane too, up to the grid's sides.
-  const ContourResult local = contour(grid_input(grid), nullptr, ContourOptions{});
+  const ContourResult local = contour(grid_input(grid), ContourOptions{});
   ASSERT_TRUE(local.fallback.empty()) << local.fallback;
   EXPECT_EQ(local.reconstruction, Reconstruction::Local);
   EXPECT_EQ(connected_components(*local.mesh), 1);

@@ -78,7 +78,7 @@ Mesh quadric_vertices_mesh(const Grid& g, double band = 0, Switch thin_parts = S
   options.subdivisions = 0;
   options.project = Switch::Off;
   options.carve = Switch::Off;
-  const ContourResult r = contour(grid_input(g), nullptr, options);
+  const ContourResult r = contour(grid_input(g), options);
   EXPECT_EQ(r.reconstruction, Reconstruction::Local);
   return *r.mesh;
 }
@@ -176,7 +176,7 @@ TEST(LocalReconstruction, PointsAskedForAreTheOnesTheMeshWasMadeFrom) {
   ContourOptions o;
   o.reconstruction = Reconstruction::Local;
   o.want_points = true;
-  const ContourResult r = contour(grid_input(g), nullptr, o);
+  const ContourResult r = contour(grid_input(g), o);
   ASSERT_TRUE(r.mesh && r.contact_points && r.local_bricks);
   EXPECT_EQ(r.local_bricks->bricks, 1);
   EXPECT_EQ(long(r.contact_points->points.rows()), r.local_bricks->contact_points);
@@ -224,7 +224,7 @@ TEST(LocalReconstruction, GcpBoxCellsNextToCornersStayOnTheEdges) {
     options.project = Switch::Off;
     options.carve = Switch::Off;
     options.thin_parts = Switch::Off;  // (the grid's own cells)
-    const ContourResult r = contour(grid_input(g), nullptr, options);
+    const ContourResult r = contour(grid_input(g), options);
     ASSERT_TRUE(r.mesh && r.local) << n;
     expect_closed_manifold(*r.mesh);
     EXPECT_LE(r.local->crossing_cells, crossing_cells) << n;
@@ -351,7 +351,7 @@ TEST(LocalReconstruction, SameMeshForAnyThreadCountAndBricks) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     ContourOptions o = options;
     o.bricks.size = brick;
-    return *contour(grid_input(g), nullptr, o).mesh;
+    return *contour(grid_input(g), o).mesh;
   };
   const Mesh one = run(1, 0), two = run(2, 0), bricked = run(2, 12);
   EXPECT_EQ(one.vertices, two.vertices);
@@ -369,7 +369,7 @@ TEST(LocalReconstruction, SmoothShapeIsCloseToTheSurface) {
   const double h = g.spacing().maxCoeff();
   ContourOptions options;
   options.reconstruction = Reconstruction::Local;
-  const Mesh local = *contour(grid_input(g), nullptr, options).mesh;
+  const Mesh local = *contour(grid_input(g), options).mesh;
   const Mesh mc = marching_cubes(g);
   auto mean_error = [&](const Mesh& m) {
     const std::vector<double> d = vertex_distances(m, *torus);
@@ -397,7 +397,7 @@ TEST(LocalReconstruction, EverySampleTakesTheWholeBandPath) {
   ContourOptions options;
   options.reconstruction = Reconstruction::Local;
   options.band.band = std::numeric_limits<double>::infinity();
-  const ContourResult r = contour(grid_input(g), nullptr, options);
+  const ContourResult r = contour(grid_input(g), options);
   ASSERT_TRUE(r.mesh);
   EXPECT_EQ(r.reconstruction, Reconstruction::Local);
   EXPECT_FALSE(r.local_bricks.has_value());

@@ -294,7 +294,7 @@ TEST(Poisson, GcpBeatsMarchingCubesOnSmoothShapes) {
     const Method methods[3] = {Method::Mc, Method::Gcp, Method::Gtcp};
     for (int m = 0; m < 3; ++m) {
       o.method = methods[m];
-      const Mesh mesh = *contour(input, shape.get(), o).mesh;
+      const Mesh mesh = *contour_with_exact_sdf(input, *shape, o).mesh;
       expect_watertight(mesh, name == "torus" ? 0 : 2);
       error[m] = surface_error(mesh, *shape).mean;
     }

@@ -179,7 +179,7 @@ TEST(SelfIntersections, GcpMeshesOfThinShapesDoNotCrossThemselves) {
     const Grid grid = test::shared_mesh_grid(name, 32);
     ContourOptions poisson;
     poisson.reconstruction = Reconstruction::Poisson;
-    const ContourResult r = contour(grid_input(grid), nullptr, poisson);
+    const ContourResult r = contour(grid_input(grid), poisson);
     ASSERT_TRUE(r.fallback.empty()) << r.fallback;
     ASSERT_TRUE(r.untangling.has_value());
     std::cout << name << ": " << r.untangling->intersections_found << " crossing pairs, "
@@ -187,7 +187,7 @@ TEST(SelfIntersections, GcpMeshesOfThinShapesDoNotCrossThemselves) {
     EXPECT_GT(r.untangling->intersections_found, 10);
     EXPECT_EQ(r.untangling->intersections_left, 0);
     EXPECT_TRUE(cgal_pairs(*r.mesh).empty());
-    const ContourResult local = contour(grid_input(grid), nullptr, ContourOptions{});
+    const ContourResult local = contour(grid_input(grid), ContourOptions{});
     ASSERT_TRUE(local.fallback.empty()) << local.fallback;
     EXPECT_EQ(local.reconstruction, Reconstruction::Local);
     EXPECT_TRUE(cgal_pairs(*local.mesh).empty());

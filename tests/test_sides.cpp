@@ -65,8 +65,8 @@ TEST(Sides, SamplesStayOnTheirSide) {
     with.reconstruction = without.reconstruction = Reconstruction::Poisson;
     with.carve = without.carve = Switch::Off;
     without.enforce_signs = Switch::Off;
-    const ContourResult held = contour(grid_input(grid), nullptr, with);
-    const ContourResult free = contour(grid_input(grid), nullptr, without);
+    const ContourResult held = contour(grid_input(grid), with);
+    const ContourResult free = contour(grid_input(grid), without);
     ASSERT_TRUE(held.fallback.empty()) << held.fallback;
     EXPECT_TRUE(held.sign_constraints);  // automatic below 128 samples per axis
     EXPECT_FALSE(free.sign_constraints);
@@ -90,7 +90,7 @@ TEST(Sides, NoSampleOnTheWrongSideOfTheCarvedMesh) {
   for_each_shared_grid([](const char* name, int n, const Grid& grid) {
     ContourOptions poisson;
     poisson.reconstruction = Reconstruction::Poisson;
-    const ContourResult r = contour(grid_input(grid), nullptr, poisson);
+    const ContourResult r = contour(grid_input(grid), poisson);
     ASSERT_TRUE(r.fallback.empty()) << r.fallback;
     ASSERT_TRUE(r.carving.has_value());
     EXPECT_GT(r.carving->side_passes, 0);
@@ -112,7 +112,7 @@ TEST(Sides, NoSampleOnTheWrongSideOfTheLocalMesh) {
   for_each_shared_grid([](const char* name, int n, const Grid& grid) {
     ContourOptions options;
     options.reconstruction = Reconstruction::Local;
-    const ContourResult r = contour(grid_input(grid), nullptr, options);
+    const ContourResult r = contour(grid_input(grid), options);
     ASSERT_EQ(r.reconstruction, Reconstruction::Local);
     const Sides wrong = wrong_sides(grid, *r.mesh);
     std::cout << name << " " << n << "^3 local: wrong side " << wrong.wrong << " (deepest "
@@ -134,8 +134,8 @@ TEST(Sides, RepairDentsTheMeshOffSamplesInThinGaps) {
     ContourOptions with, without;  // (the Poisson path's repair)
     with.reconstruction = without.reconstruction = Reconstruction::Poisson;
     without.side_repair = Switch::Off;
-    const ContourResult a = contour(grid_input(grid), nullptr, with);
-    const ContourResult b = contour(grid_input(grid), nullptr, without);
+    const ContourResult a = contour(grid_input(grid), with);
+    const ContourResult b = contour(grid_input(grid), without);
     ASSERT_TRUE(a.fallback.empty()) << a.fallback;
     ASSERT_TRUE(a.side_repair.has_value());
     EXPECT_FALSE(b.side_repair.has_value());
@@ -161,10 +161,9 @@ TEST(Sides, ConstraintsAutomaticOnlyBelow128SamplesPerAxis) {
   automatic.reconstruction = on.reconstruction = Reconstruction::Poisson;
   on.enforce_signs = Switch::On;
   const Grid fine = sample_grid(*sphere, 128, wide);
-  const ContourResult a = contour(grid_input(fine), nullptr, automatic);
+  const ContourResult a = contour(grid_input(fine), automatic);
   EXPECT_FALSE(a.sign_constraints);
   EXPECT_EQ(a.sign_violations, 0);
-  EXPECT_TRUE(contour(grid_input(fine), nullptr, on).sign_constraints);
-  EXPECT_TRUE(
-      contour(grid_input(sample_grid(*sphere, 127, wide)), nullptr, automatic).sign_constraints);
+  EXPECT_TRUE(contour(grid_input(fine), on).sign_constraints);
+  EXPECT_TRUE(contour(grid_input(sample_grid(*sphere, 127, wide)), automatic).sign_constraints);
 }

@@ -107,8 +107,8 @@ TEST(SparseGrid, GcpPoissonMeshAndContactPointsAreTheDenseGrids) {
   options.band.band = 3;  // a given band: no wider carving band
   const Sparse s = sparse_of(dense, 4, (contour_values_reach(options, dense.dims) + 1) * h);
   ASSERT_LT(s.input.grid.blocks.size(), s.input.grid.fill.size());
-  const ContourResult a = contour(grid_input(dense), nullptr, options);
-  const ContourResult b = contour(s.input, nullptr, options);
+  const ContourResult a = contour(grid_input(dense), options);
+  const ContourResult b = contour(s.input, options);
   ASSERT_TRUE(a.mesh && b.mesh);
   EXPECT_EQ(canonical(*a.mesh), canonical(*b.mesh));
   EXPECT_TRUE(a.contact_points->points == b.contact_points->points);
@@ -141,5 +141,5 @@ TEST(SparseGrid, BadGridsAreRefusedWithTheirPlace) {
   EXPECT_THROW(require_sign_change(g), Error);
   ContourOptions options;
   options.reconstruction = Reconstruction::Poisson;
-  EXPECT_THROW(contour(s.input, nullptr, options), Error);
+  EXPECT_THROW(contour(s.input, options), Error);
 }

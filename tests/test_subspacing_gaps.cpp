@@ -148,7 +148,7 @@ TEST(SubspacingGaps, FineGridsLookForThinPartsWhereTheyHaveThem) {
   auto run = [](const Grid& g, Switch thin_parts) {
     ContourOptions o;
     o.thin_parts = thin_parts;
-    return contour(grid_input(g), nullptr, o);
+    return contour(grid_input(g), o);
   };
   auto fin_vertices = [&](const Mesh& m) {
     int count = 0;
@@ -189,7 +189,7 @@ TEST(SubspacingGaps, ChooseThinPartsFrom192To256SamplesPerAxis) {
     return std::min(box_distance(p, {60, 5.5, 5.5}, {30.3, 3.2, 3.3}),
                     box_distance(p, {200.5, 5.5, 5.5}, {0.2, 3, 3}));
   });
-  const ContourResult r = contour(grid_input(g), nullptr, ContourOptions{});
+  const ContourResult r = contour(grid_input(g), ContourOptions{});
   EXPECT_FALSE(r.subspacing_gaps);
   ASSERT_TRUE(r.local_bricks);
   EXPECT_FALSE(r.local_bricks->thin_parts);

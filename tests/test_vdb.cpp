@@ -94,7 +94,7 @@ TEST(Vdb, RoundTripKeepsTheBandSparse) {
   o.band.truncation_mode = TruncationMode::Given;
   o.band.truncation = ls.background;
   o.poisson.depth = 7;
-  const ContourResult r = contour(input, nullptr, o);
+  const ContourResult r = contour(input, o);
   const auto torus = make_builtin_shape("torus");
   double worst = 0;
   for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i)
@@ -213,7 +213,7 @@ TEST(Vdb, FarApartLevelSetsCostTheirVoxelsOnly) {
     ContourOptions o;
     o.band.truncation_mode = TruncationMode::Given;
     o.band.truncation = ls.background;
-    const ContourResult r = contour(ScatteredInput{ls.samples, ls.voxel_size}, nullptr, o);
+    const ContourResult r = contour(ScatteredInput{ls.samples, ls.voxel_size}, o);
     int near = 0, far = 0;
     for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i) {
       Eigen::Vector3d p = r.mesh->vertices.row(i).transpose();
@@ -240,7 +240,7 @@ TEST(Vdb, FarApartLevelSetsCostTheirVoxelsOnly) {
   EXPECT_EQ(ls.samples.values.size(), 6);
   ContourOptions o;
   o.poisson.depth = 5;
-  const ContourResult r = contour(ScatteredInput{ls.samples, ls.voxel_size}, nullptr, o);
+  const ContourResult r = contour(ScatteredInput{ls.samples, ls.voxel_size}, o);
   EXPECT_EQ(r.isolated_samples, 1);
   EXPECT_LT(r.mesh->vertices.cwiseAbs().maxCoeff(), 4 * voxel);
 }
@@ -264,10 +264,10 @@ TEST(Vdb, FarApartLevelSetsReadBoxByBoxCostTheirLeavesOnly) {
       ContourOptions o;
       o.method = method;
       if (method == Method::Gcp && apart > 1e5) {
-        EXPECT_THROW(contour(input, nullptr, o), Error);
+        EXPECT_THROW(contour(input, o), Error);
         continue;
       }
-      const ContourResult r = contour(input, nullptr, o);
+      const ContourResult r = contour(input, o);
       int near = 0, away = 0;
       for (Eigen::Index i = 0; i < r.mesh->vertices.rows(); ++i) {
         Eigen::Vector3d p = r.mesh->vertices.row(i).transpose();
@@ -336,8 +336,8 @@ TEST(Vdb, RotatedTransformsPlaceTheMeshInTheWorld) {
   for (int m = 0; m < 2; ++m) {
     ContourOptions options;
     options.method = m == 0 ? Method::Mc : Method::Gcp;
-    const ContourResult r = contour(
-        BlockedGridInput{grid, layout.background, vdb_world_from_grid(layout)}, nullptr, options);
+    const ContourResult r =
+        contour(BlockedGridInput{grid, layout.background, vdb_world_from_grid(layout)}, options);
     ASSERT_TRUE(r.mesh && r.mesh->vertices.rows() > 0) << m;
     double worst = 0;
     for (Eigen::Index v = 0; v < r.mesh->vertices.rows(); ++v) {

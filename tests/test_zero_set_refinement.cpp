@@ -140,7 +140,7 @@ TEST(ZeroSetRefinement, ApproximateDistancesAreDetectedAndContouredCloserThanMar
     const int n = 48;
     const Grid g = approximate_grid(shape, n);
     const double h = g.spacing()[0];
-    const ContourResult r = contour(grid_input(g), nullptr, ContourOptions{});
+    const ContourResult r = contour(grid_input(g), ContourOptions{});
     ASSERT_TRUE(r.fallback.empty()) << r.fallback << " " << r.gradient_norms.smooth_spread;
     EXPECT_TRUE(r.approximate_distances) << shape;
     EXPECT_EQ(r.reconstruction, Reconstruction::Local);
@@ -156,15 +156,14 @@ TEST(ZeroSetRefinement, ApproximateDistancesAreDetectedAndContouredCloserThanMar
     // farther than marching cubes' without a word.
     ContourOptions poisson;
     poisson.reconstruction = Reconstruction::Poisson;
-    const ContourResult p = contour(grid_input(g), nullptr, poisson);
+    const ContourResult p = contour(grid_input(g), poisson);
     if (p.fallback.empty())
       EXPECT_LT(2 * vertex_distances(*p.mesh, shape, h).first, mc) << shape;
     else
       EXPECT_TRUE(p.mesh->vertices == marching_cubes(g).vertices) << shape;
     // The same values as exact distances are left as they are.
     const ContourResult exact =
-        contour(grid_input(sample_grid(*make_builtin_shape(shape), n, Bounds{})), nullptr,
-                ContourOptions{});
+        contour(grid_input(sample_grid(*make_builtin_shape(shape), n, Bounds{})), ContourOptions{});
     EXPECT_FALSE(exact.approximate_distances) << shape;
   }
 }

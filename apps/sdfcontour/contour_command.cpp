@@ -209,7 +209,8 @@ int run_contour(const ContourArgs& a) {
     opt.band.truncation = in.vdb_background;
   }
   const double load_seconds = seconds_since(t0);
-  ContourResult r = contour(in.input, in.shape.get(), opt);
+  ContourResult r =
+      in.shape ? contour_with_exact_sdf(in.input, *in.shape, opt) : contour(in.input, opt);
   // Every decision that changes what the user gets is said, even with --quiet.
   if (!r.fallback.empty())
     std::cerr << "sdfcontour: warning: GCP returned marching cubes' mesh: " << r.fallback << "\n";

@@ -36,7 +36,8 @@ ContourOptions options_of(const GridSettings& settings) {
   ContourOptions options;
   options.method = parse_method(settings.method);
   if (options.method == Method::Gtcp)
-    throw Error("method gtcp needs the exact surface: give contour() an AnalyticShape");
+    throw Error(
+        "method gtcp needs the exact surface: give contour_with_exact_sdf() an AnalyticShape");
   check_adaptivity(settings.adaptivity);
   options.adaptivity.tolerance = settings.adaptivity;
   if (std::isnan(settings.truncation)) throw Error("truncation must be a number");
@@ -63,7 +64,7 @@ Mesh contour_values(const T* values, const std::array<int, 3>& dims, const Bound
   input.view.data = values;
   if (isovalue != 0)  // the level's distances, in the caller's precision
     input = detail::mapped_grid(input.view, [isovalue](double v) { return v - isovalue; });
-  return mesh_of(contour(input, nullptr, options_of(settings)), settings.method);
+  return mesh_of(contour(input, options_of(settings)), settings.method);
 }
 
 }  // namespace
@@ -116,14 +117,15 @@ Mesh contour_samples(const PointMatrix& points, const Eigen::VectorXd& values,
   if (options.method == Method::Mc)
     throw Error("method mc needs a grid: give scattered samples gcp, mt-rt or mt-dt");
   if (options.method == Method::Gtcp)
-    throw Error("method gtcp needs the exact surface: give contour() an AnalyticShape");
+    throw Error(
+        "method gtcp needs the exact surface: give contour_with_exact_sdf() an AnalyticShape");
   if (settings.depth != 0) require_in_range("--depth", settings.depth, "depth");
   options.poisson.depth = settings.depth;
   check_adaptivity(settings.adaptivity);
   options.adaptivity.tolerance = settings.adaptivity;
   options.progress = progress_on_stderr(settings.progress);
   ScatteredInput input{Samples{points, values}, 0.0};
-  return mesh_of(contour(input, nullptr, options), settings.method);
+  return mesh_of(contour(input, options), settings.method);
 }
 
 Mesh contour_vdb(const std::string& path, const GridSettings& settings,
@@ -135,7 +137,7 @@ Mesh contour_vdb(const std::string& path, const GridSettings& settings,
     VdbLayout layout;
     BlockedGrid grid = vdb_blocked_grid(path, grid_name, &layout);
     BlockedGridInput input{std::move(grid), layout.background, vdb_world_from_grid(layout)};
-    return mesh_of(contour(input, nullptr, options), settings.method);
+    return mesh_of(contour(input, options), settings.method);
   }
   VdbLevelSet level_set = read_vdb_level_set(path, grid_name);
   if (options.band.truncation_mode == TruncationMode::Auto && level_set.background > 0) {
@@ -143,7 +145,7 @@ Mesh contour_vdb(const std::string& path, const GridSettings& settings,
     options.band.truncation = level_set.background;
   }
   ScatteredInput input{std::move(level_set.samples), level_set.voxel_size};
-  return mesh_of(contour(input, nullptr, options), settings.method);
+  return mesh_of(contour(input, options), settings.method);
 }
 
 }  // namespace sdfcontour

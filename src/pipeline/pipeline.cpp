@@ -115,7 +115,9 @@ void check_input_for_method(const detail::GridSource& grid, const ScatteredInput
         "the local reconstruction needs a grid input (scattered samples and .vdb level "
         "sets: --reconstruction poisson)");
   if (options.method == Method::Gtcp && !shape)
-    throw Error("method gtcp needs the exact SDF, which only built-in shapes provide");
+    throw Error(
+        "method gtcp needs the exact SDF, which only built-in shapes provide "
+        "(contour_with_exact_sdf)");
 }
 
 // Values that change by m per unit length near the surface (m far from 1) are rescaled by 1/m
@@ -417,9 +419,15 @@ bool choose_for_approximate_distances(const GridMeasures& measured, ContourOptio
 
 }  // namespace
 
-ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
-                      const ContourOptions& options) {
-  ContourResult result = contour_before_adaptivity(input, shape, options);
+ContourResult contour(const SdfInput& input, const ContourOptions& options) {
+  ContourResult result = contour_before_adaptivity(input, nullptr, options);
+  adapt_stage(input, options, result);
+  return result;
+}
+
+ContourResult contour_with_exact_sdf(const SdfInput& input, const AnalyticShape& shape,
+                                     const ContourOptions& options) {
+  ContourResult result = contour_before_adaptivity(input, &shape, options);
   adapt_stage(input, options, result);
   return result;
 }

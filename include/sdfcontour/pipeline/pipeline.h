@@ -327,10 +327,14 @@ LocalBrickOptions local_brick_options(const ContourOptions& options);
 /// GCP's carving band. A sparse grid exact to here gives what the dense grid gives.
 double contour_values_reach(const ContourOptions& options, const std::array<int, 3>& dims);
 
-/// Runs `options.method` on `input`. `shape` gives the exact SDF for GTCP (built-in shapes);
-/// it may be null for other methods. Throws Error for an input the method cannot use (no sign
-/// change, MC without a grid, GTCP without an exact SDF, no contact point kept).
-ContourResult contour(const SdfInput& input, const AnalyticShape* shape,
-                      const ContourOptions& options);
+/// Runs `options.method` on `input`. Throws Error for an input the method cannot use (no sign
+/// change, MC without a grid, GTCP, which needs contour_with_exact_sdf, no contact point kept).
+ContourResult contour(const SdfInput& input, const ContourOptions& options);
+
+/// The same for samples of a shape whose exact SDF is known (the built-in shapes): method GTCP
+/// takes its contact points from `shape` (the paper's ground-truth contact points); the other
+/// methods read the samples alone, as contour() does.
+ContourResult contour_with_exact_sdf(const SdfInput& input, const AnalyticShape& shape,
+                                     const ContourOptions& options);
 
 }  // namespace sdfcontour
