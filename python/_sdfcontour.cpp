@@ -879,6 +879,12 @@ PYBIND11_MODULE(_sdfcontour, m) {
       if (*r.python) ranges[r.python] = py::make_tuple(r.lo, r.hi);
     return ranges;
   });
+  m.def("contour_option_names", [] {
+    py::list names;  // (CLI name, Python keyword, decided by a user), contour_option_names
+    for (const OptionName& o : contour_option_names())
+      names.append(py::make_tuple(o.cli, o.python, o.user));
+    return names;
+  });
   m.def("distances", &run_distances, py::arg("V"), py::arg("F"), py::arg("V_gt"), py::arg("F_gt"),
         py::arg("samples"), py::arg("seed"));
 }

@@ -2,6 +2,8 @@
 // shape) -> a mesh and/or contact points, with a JSON summary.
 #include <cmath>
 #include <iostream>
+#include <map>
+#include <set>
 
 #include "cli_options.h"
 #include "commands.h"
@@ -475,13 +477,25 @@ class LevelsFormatter : public CLI::Formatter {
   }
 };
 
-// The options a user decides; the rest are tuning knobs, listed by --help-all.
-bool user_option(const CLI::Option* o) {
-  static const std::set<std::string> user = {
-      "output", "points", "method",  "bounds", "band", "truncation", "reconstruction", "adaptivity",
-      "grid",   "stats",  "threads", "ascii",  "seed", "quiet",      "help",           "help-all"};
-  const std::vector<std::string>& names = o->get_lnames();
-  return names.empty() || user.count(names.front()) > 0;  // (the input is positional)
+// The options a user decides (contour_option_names); the rest are tuning knobs, listed by
+// --help-all. An option the table lacks, or a table entry the command lacks, is a bug here.
+void group_by_level(CLI::App* c) {
+  std::map<std::string, bool> user;
+  for (const OptionName& o : contour_option_names())
+    if (*o.cli) user[o.cli] = o.user;
+  std::set<std::string> declared;
+  for (CLI::Option* o : c->get_options()) {
+    const std::vector<std::string>& names = o->get_lnames();
+    if (names.empty()) continue;  // the input, positional
+    const auto found = user.find(names.front());
+    if (found == user.end())
+      throw InternalError("contour option --" + names.front() + " is not in contour_option_names");
+    declared.insert(names.front());
+    if (!found->second) o->group(kTuning);
+  }
+  for (const auto& entry : user)
+    if (!declared.count(entry.first))
+      throw InternalError("contour_option_names lists --" + entry.first + ", which contour lacks");
 }
 
 // One sentence each for the options a user decides (the long accounts stay in --help-all's
@@ -538,8 +552,7 @@ Command add_contour_command(CLI::App& app) {
               "List the tuning options too (gradients, bricks, signs, carving, "
               "projection, the local cells, the Poisson solver)");
   if (!show_all_options) shorten_user_help(c);
-  for (CLI::Option* o : c->get_options())
-    if (!user_option(o)) o->group(kTuning);
+  group_by_level(c);
   c->formatter(std::make_shared<LevelsFormatter>());
   c->footer("Tuning options: sdfcontour contour --help-all");
   return {c, [a] { return run_contour(*a); }};

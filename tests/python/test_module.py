@@ -716,3 +716,30 @@ def test_progress_callback_gets_fractions():
     assert bricks and bricks[-1][0] == bricks[-1][1]
     with pytest.raises(TypeError, match="progress"):
         sdfcontour.contour(full_grid(torus, 20), progress="yes")
+
+
+def test_the_options_table_is_the_source_of_contours_keywords_and_cli_names():
+    # contour_option_names (C++) lists every keyword of sdfcontour.contour() and every option of
+    # `sdfcontour contour`; a name added on one side only fails here (Python) or at the CLI's
+    # start (C++).
+    import inspect
+    import re
+
+    from sdfcontour import _sdfcontour
+    table = _sdfcontour.contour_option_names()
+    keywords = {python for _, python, _ in table if python}
+    assert keywords == set(inspect.signature(sdfcontour.contour).parameters)
+    cli = CLI
+    if not os.path.exists(cli):
+        pytest.skip(f"no CLI at {cli}: the CLI checks its own half when it starts")
+    listed = subprocess.run([cli, "contour", "--help-all"], capture_output=True, text=True,
+                            check=True).stdout
+    declared = set(re.findall(r"^\s+(?:-\w,)?--([a-z0-9-]+)", listed, re.M))
+    assert declared == {name for name, _, _ in table if name}
+    # --help shows the user's options and no more.
+    short = subprocess.run([cli, "contour", "--help"], capture_output=True, text=True,
+                           check=True).stdout
+    assert set(re.findall(r"^\s+(?:-\w,)?--([a-z0-9-]+)", short, re.M)) == {
+        name for name, _, user in table if name and user}
+    # Every numeric range names a keyword in the table (or none).
+    assert set(_sdfcontour.option_ranges()) <= keywords | {"resolution"}

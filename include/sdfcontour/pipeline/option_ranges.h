@@ -1,6 +1,6 @@
-// The accepted range of every numeric option, one table for the command-line tool and the Python
-// module alike: each names the option as both spell it, so each can say what is wrong in its
-// own words.
+// The contour options' one table for the command-line tool and the Python module alike: every
+// option's names as both spell it and whether a user decides it (else it is a tuning knob), and
+// every numeric option's accepted range, so each entry point says what is wrong in its own words.
 #pragma once
 
 #include <optional>
@@ -20,6 +20,20 @@ struct OptionRange {
 /// Every numeric option's range. The limits keep a run finite in time and memory (a complete
 /// octree of depth 9 already has 134 million cells) and its arithmetic in range.
 const std::vector<OptionRange>& option_ranges();
+
+/// A contour option as the CLI and Python spell it. `cli` is the long name without "--" (empty for
+/// a Python keyword with no CLI option); `python` the keyword of sdfcontour.contour() (empty for a
+/// CLI option with no keyword). `user`: listed by `contour --help` (the rest by --help-all).
+struct OptionName {
+  const char* cli;
+  const char* python;
+  bool user;
+};
+
+/// Every option of `sdfcontour contour` and every keyword of sdfcontour.contour(). The CLI refuses
+/// to start with an option this table lacks (InternalError), and the Python tests check the
+/// keywords against it, so a name is added here first.
+const std::vector<OptionName>& contour_option_names();
 
 /// The range of the option with this CLI name; throws InternalError if there is none.
 const OptionRange& option_range(const std::string& cli_name);
