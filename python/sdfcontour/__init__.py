@@ -98,7 +98,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         (docs/notes/local.md); "all" keeps every sample (the paper's GCP, far slower).
     margin : float
         Samples up to this many spacings beyond the band close the band's stars.
-    truncation : "auto", "none" or a number as text
+    truncation : "auto", "none" or a number (or a number as text)
         Values clamped at +-T (a TSDF) carry no distance: detect ("auto"), none, or given.
     gradient : {"regular", "delaunay", "knn", "lattice"}
         Where GCP's gradients come from ("lattice": a grid's finite differences, for the local

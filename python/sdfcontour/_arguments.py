@@ -85,9 +85,15 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
     elif not (_checks.number("band", band) > 0 and band == band):
         raise ValueError(f"band must be a positive number of spacings (or 'all' or 'auto'), "
                          f"got {band!r}")
+    if isinstance(truncation, (int, float, _np.integer, _np.floating)) and \
+            not isinstance(truncation, (bool, _np.bool_)):
+        if not 0 < float(truncation) < float("inf"):
+            raise ValueError(f"truncation must be a positive finite number (or 'auto' or 'none'), "
+                             f"got {truncation!r}")
+        truncation = repr(float(truncation))  # the core reads it as the CLI's text
     if not isinstance(truncation, str):
-        raise _checks.ArgumentTypeError(f"truncation must be 'auto', 'none' or a number as text, got "
-                        f"{truncation!r}")
+        raise _checks.ArgumentTypeError(f"truncation must be 'auto', 'none' or a number, got "
+                                        f"{truncation!r}")
     if truncation not in ("auto", "none"):
         from . import _sdfcontour  # the CLI's reading of a number ("0_1" is none)
         given = _sdfcontour.parse_number(truncation)

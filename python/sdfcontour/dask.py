@@ -376,7 +376,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         that are no exact distances (a neural SDF's grid), which :func:`sdfcontour.contour` finds
         by itself. "auto" and False: the values are taken as distances (no pass measures them
         here).
-    truncation : "auto", "none" or a number as text
+    truncation : "auto", "none" or a number (or a number as text)
         GCP: values clamped at +-T carry no distance. "auto" finds T as the single process does,
         in a first pass over the bricks (one more read of the grid; a ``.vdb``'s background is
         its truncation, a callable has none); "none" skips that pass.

@@ -245,6 +245,23 @@ def test_a_truncation_is_read_as_the_cli_reads_it(text):
         sdfcontour.contour(grid, truncation=text)
 
 
+def test_a_truncation_given_as_a_number_is_the_same_as_its_text():
+    # A TSDF clamped at 3 spacings: truncation=0.3 (a float), 0.3 as text and numpy's float
+    # give one mesh; a non-positive, non-finite or boolean one is refused.
+    x = np.linspace(-1, 1, 21)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    grid = np.clip(np.sqrt(X**2 + Y**2 + Z**2) - 0.5, -0.3, 0.3)
+    V, F = sdfcontour.contour(grid, truncation="0.3")
+    for given in (0.3, np.float64(0.3)):
+        Vn, Fn = sdfcontour.contour(grid, truncation=given)
+        assert np.array_equal(V, Vn) and np.array_equal(F, Fn)
+    for bad in (0, -0.3, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="truncation"):
+            sdfcontour.contour(grid, truncation=bad)
+    with pytest.raises(TypeError, match="truncation"):
+        sdfcontour.contour(grid, truncation=True)
+
+
 def test_lattice_gradients_run_the_local_reconstruction_and_are_refused_elsewhere():
     x = np.linspace(-1, 1, 24)
     X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
