@@ -22,10 +22,14 @@ def _input_array(sdf):
     return array
 
 
+# A .npy path larger than this is memory-mapped instead of read (a 1024^3 float32 grid is 4 GiB).
+MAPPED_NPY_BYTES = 2 << 30
+
+
 def _from_path(sdf, grid_name):
-    """A path as the samples: a .npy memory-mapped (a grid or (n, 4) samples), a .vdb level set
-    read sparse as the CLI reads it (its voxel size the spacing, its background the truncation
-    unless one is given). Returns (samples, spacing of scattered samples or 0, truncation or
+    """A path as the samples: a .npy read (a grid or (n, 4) samples; memory-mapped above
+    MAPPED_NPY_BYTES), a .vdb level set read sparse as the CLI reads it (its voxel size the
+    spacing, its background the truncation unless one is given). Returns (samples, spacing of scattered samples or 0, truncation or
     None)."""
     import os
     if not isinstance(sdf, (str, os.PathLike)):
@@ -39,7 +43,11 @@ def _from_path(sdf, grid_name):
         if not os.path.isfile(path):
             raise OSError(f"cannot read '{path}': no such file")
         try:
-            return _np.load(path, mmap_mode="r", allow_pickle=False), 0.0, None
+            # Read into memory: a mapped file that another process truncates while it is read
+            # kills the interpreter (SIGBUS). Only a file larger than that is mapped, as
+            # np.load(path, mmap_mode="r") would be, and must then stay as it is.
+            mapped = os.path.getsize(path) > MAPPED_NPY_BYTES
+            return _np.load(path, mmap_mode="r" if mapped else None, allow_pickle=False), 0.0, None
         except ValueError as error:
             raise ValueError(f"cannot read '{path}' as .npy: {error}") from None
     if path.lower().endswith(".vdb"):

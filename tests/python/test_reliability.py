@@ -3,6 +3,8 @@ checked once, in Python, so that no input reaches the C++ core as a string, a Na
 or an option out of range (the interpreter never dies); stray scattered samples are dropped and
 said; objects far apart are reconstructed each in its own octree."""
 import os
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -278,3 +280,23 @@ def test_poisson_from_too_few_or_coincident_points_is_a_value_error():
     for P in (np.zeros((1, 3)) + 0.5, np.zeros((6, 3)) + 0.5):
         with pytest.raises(ValueError, match="no surface|one place"):
             sdfcontour.poisson(P, n[:len(P)])
+
+
+def test_a_npy_path_truncated_after_it_was_opened_does_not_kill_python(tmp_path):
+    # Another process truncates the file while it is contoured: a memory-mapped grid would die of
+    # SIGBUS on its next read; the path's grid is read into memory (maps only above 2 GiB). In a
+    # child process, so that a signal fails the test instead of pytest.
+    x = np.linspace(-1, 1, 24)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    path = tmp_path / "sphere.npy"
+    np.save(path, np.sqrt(X**2 + Y**2 + Z**2) - 0.5)
+    child = f"""
+import os, numpy as np, sdfcontour
+from sdfcontour._running import _from_path
+grid, _, _ = _from_path({str(path)!r}, None)
+os.truncate({str(path)!r}, 128)
+V, F = sdfcontour.contour(grid, method="mc")
+assert len(F) > 0 and np.isfinite(V).all()
+"""
+    run = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, (run.returncode, run.stderr[-1000:])
