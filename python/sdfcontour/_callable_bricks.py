@@ -120,24 +120,7 @@ class NearSurfaceGrid:
 
     def read(self, first, dims):
         """The samples [first, first + dims) as a float64 array."""
-        count = self.fill.shape
-        index = [np.minimum((first[a] + np.arange(dims[a])) // BRICK, count[a] - 1)
-                 for a in range(3)]
-        block = self.fill[np.ix_(*index)]
-        ranges = [range(max(0, (first[a] - 1) // BRICK), (first[a] + dims[a] - 1) // BRICK + 1)
-                  for a in range(3)]
-        for b in ((i, j, k) for i in ranges[0] for j in ranges[1] for k in ranges[2]):
-            array = self.arrays.get(b)
-            if array is None:
-                continue
-            at = [x * BRICK for x in b]
-            lo = [max(at[a], first[a]) for a in range(3)]
-            hi = [min(at[a] + array.shape[a], first[a] + dims[a]) for a in range(3)]
-            if any(l >= u for l, u in zip(lo, hi)):
-                continue
-            block[tuple(slice(l - f0, u - f0) for l, u, f0 in zip(lo, hi, first))] = \
-                array[tuple(slice(l - a0, u - a0) for l, u, a0 in zip(lo, hi, at))]
-        return block
+        return assemble(self.arrays, self.fill, first, dims)
 
     def value_scale(self):
         """(value_scale, median gradient norm) as the core measures them on the whole grid
@@ -158,6 +141,30 @@ class NearSurfaceGrid:
             return _sdfcontour.distance_value_scale(np.zeros(0), np.zeros(0))
         every, kinkless = zip(*norms)
         return _sdfcontour.distance_value_scale(np.concatenate(every), np.concatenate(kinkless))
+
+
+def assemble(arrays, fill, first, dims):
+    """The samples [first, first + dims) of a grid held as sampled bricks (`arrays`: index ->
+    block of BRICK + 1 samples a side, or fewer at the grid's end) and a `fill` value for each
+    other brick, as a float64 array. Where two bricks share a face, the higher index's values
+    are taken: a pure function of the bricks, so every block read of one grid agrees."""
+    count = fill.shape
+    index = [np.minimum((first[a] + np.arange(dims[a])) // BRICK, count[a] - 1) for a in range(3)]
+    block = fill[np.ix_(*index)]
+    ranges = [range(max(0, (first[a] - 1) // BRICK), (first[a] + dims[a] - 1) // BRICK + 1)
+              for a in range(3)]
+    for b in ((i, j, k) for i in ranges[0] for j in ranges[1] for k in ranges[2]):
+        array = arrays.get(b)
+        if array is None:
+            continue
+        at = [x * BRICK for x in b]
+        lo = [max(at[a], first[a]) for a in range(3)]
+        hi = [min(at[a] + array.shape[a], first[a] + dims[a]) for a in range(3)]
+        if any(l >= u for l, u in zip(lo, hi)):
+            continue
+        block[tuple(slice(l - f0, u - f0) for l, u, f0 in zip(lo, hi, first))] = \
+            array[tuple(slice(l - a0, u - a0) for l, u, a0 in zip(lo, hi, at))]
+    return block
 
 
 def _report_bricks(progress, stage, done, total, report):

@@ -125,6 +125,101 @@ class _CallableReader:
                             SamplingReport())
 
 
+# A callable on Dask: each small brick of its grid (_callable_bricks.BRICK cells) that may hold the
+# surface is sampled once, by one task; every brick of the reconstruction assembles its block
+# from those samples and the other bricks' fill. So a callable that does not repeat itself to
+# the last bit (a network on a GPU) still gives every brick the same value for a shared sample.
+
+def _active_task(reader):
+    """(the small bricks that may hold the surface, the fill of the others) of a callable."""
+    from ._callable import SamplingReport
+    from ._callable_bricks import active_bricks
+    return active_bricks(reader.f, reader.lo, reader.h, reader.shape[0], reader.reach,
+                         reader.batch_size, SamplingReport(), 1.0, fill=True)
+
+
+def _sample_task(reader, group):
+    """{index: samples} of a group of small bricks (index, first, dims)."""
+    from ._callable import SamplingReport, sample_blocks
+    blocks = sample_blocks(reader.f, reader.lo, reader.h,
+                           [(first, dims) for _, first, dims in group], reader.reach,
+                           reader.batch_size, SamplingReport())
+    return {index: block for (index, _, _), block in zip(group, blocks)}
+
+
+class _SampledBlocks:
+    """Blocks of a callable's grid, assembled from the sampled small bricks of the cells
+    [lo, hi) (every one that was sampled there) and the fill of the others."""
+
+    def __init__(self, parts, fill, lo, hi):
+        self.arrays = {}
+        for part in parts:
+            self.arrays.update(part)
+        self.fill, self.lo, self.hi = fill, lo, hi
+
+    def read(self, first, dims):
+        from ._callable_bricks import BRICK, assemble
+        for a in range(3):
+            if max(0, first[a] - 1) // BRICK < max(0, self.lo[a] - 1) // BRICK or \
+                    (first[a] + dims[a] - 1) // BRICK > max(self.hi[a] - 1, 0) // BRICK:
+                raise RuntimeError("internal error: a brick read beyond the samples it was given")
+        return assemble(self.arrays, self.fill, first, dims)
+
+
+def _sampled_gcp_task(parts, fill, lo_cells, hi_cells, index, first, dims, shape, lo, hi, options,
+                      truncation):
+    blocks = _SampledBlocks(parts, fill, lo_cells, hi_cells)
+    return gcp_brick_piece(blocks.read, index, first, dims, shape, lo, hi, options, truncation)
+
+
+def _sampled_mc_task(parts, fill, lo_cells, hi_cells, index, first, dims, shape, lo, hi):
+    block = _SampledBlocks(parts, fill, lo_cells, hi_cells).read(first, dims)
+    return brick_piece(block, index, first, shape, lo, hi)
+
+
+def _callable_tasks(dask_client, reader, shape, lo, hi, brick, options, truncation):
+    """The reconstruction's tasks for a callable: its small bricks sampled once each (grouped by
+    the brick of `brick` cells that holds their first sample), each brick's block assembled from
+    those within its reach."""
+    import dask
+    from ._callable_bricks import BRICK
+    try:
+        small, fill = dask_client.compute(dask.delayed(_active_task)(reader)).result()
+    except Exception as error:
+        raise _one_line(error) from None
+    groups = {}
+    for entry in small:
+        groups.setdefault(tuple(f // brick for f in entry[1]), []).append(entry)
+    sampled = {key: dask.delayed(_sample_task, pure=True)(reader, group)
+               for key, group in groups.items()}
+    # GCP reads a halo around its brick, which doubles where the contact points' stars need it:
+    # the samples of two doublings are at hand.
+    reach = 4 * int(_sdfcontour.local_brick_halo(options, shape)) if options is not None else 0
+    active = {entry[0] for entry in small}
+    tasks = []
+    for index, first, dims in bricks(shape, brick):
+        cells_lo = [max(0, f - reach) for f in first]
+        cells_hi = [min(n, f + d + reach) for f, d, n in zip(first, dims, shape)]
+        # (A brick with no sampled small brick among its own cells has no sign change.)
+        own = [range(max(0, f - 1) // BRICK, max(f, f + d - 2) // BRICK + 1)
+               for f, d in zip(first, dims)]
+        if not any((i, j, k) in active for i in own[0] for j in own[1] for k in own[2]):
+            continue
+        near = [range(max(0, c0 - 1) // BRICK, max(c1 - 1, 0) // BRICK + 1)
+                for c0, c1 in zip(cells_lo, cells_hi)]
+        keys = sorted({tuple(x * BRICK // brick for x in (i, j, k))
+                       for i in near[0] for j in near[1] for k in near[2] if (i, j, k) in active})
+        parts = [sampled[k] for k in keys]
+        if options is not None:
+            tasks.append(dask.delayed(_sampled_gcp_task, pure=True)(
+                parts, fill, cells_lo, cells_hi, index, first, dims, shape, lo, hi, options,
+                truncation))
+        else:
+            tasks.append(dask.delayed(_sampled_mc_task, pure=True)(
+                parts, fill, cells_lo, cells_hi, index, first, dims, shape, lo, hi))
+    return tasks
+
+
 def _open_path(path, dataset):
     text = os.fspath(path)
     if not os.path.exists(text):
@@ -512,8 +607,12 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
             truncation = _gcp_truncation(dask_client, reader, source, shape, brick, options)
             options = dict(options, thin_parts=_gcp_thin_parts(dask_client, source, shape, brick,
                                                                lo, hi, options, active))
+        if isinstance(reader, _CallableReader):
+            tasks = _callable_tasks(dask_client, reader, shape, lo, hi, brick, options,
+                                    truncation)
         # (A brick without an active voxel holds no surface: not even listed.)
-        for index, first, dims in bricks_among(shape, brick, active):
+        for index, first, dims in ([] if isinstance(reader, _CallableReader) else
+                                   bricks_among(shape, brick, active)):
             if options is not None:
                 task = dask.delayed(_gcp_task, pure=True)(source, index, first, dims, shape, lo,
                                                           hi, options, truncation)
