@@ -519,7 +519,10 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         # Read as a distance: values are not rescaled here (sdfcontour.contour() does).
         reader.reach = max(_sdfcontour.local_values_reach(options, shape), 4.0) * reader.reach
     _check_shape_and_dtype(shape, reader.dtype)
-    count = np.prod([max(1, -(-(n - 1) // brick)) for n in shape], dtype=np.float64)
+    # (A level set's bricks are those that meet its leaves: two spheres 1e5 voxels apart make
+    # a few hundred, not the 1e11 of their box.)
+    count = (len(reader.active(brick)) if isinstance(reader, _VdbReader) else
+             np.prod([max(1, -(-(n - 1) // brick)) for n in shape], dtype=np.float64))
     if count > _MAX_BRICKS:
         raise ValueError(f"{shape} samples in bricks of {brick} cells make {count:.3g} bricks, "
                          f"more than {_MAX_BRICKS} tasks for one graph: give a larger brick")

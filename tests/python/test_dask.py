@@ -364,3 +364,42 @@ def test_gcp_finds_thin_parts_on_a_fine_grid_as_the_single_process_does(client):
     assert_closed_manifold(F)
     assert on_fin(V) > 200
     assert on_fin(sdfcontour.contour(grid, bounds=(0, hi), thin_parts=False)[0]) == 0
+
+
+FAR_SPHERES = os.path.join(os.path.dirname(__file__), "..", "data", "far_spheres.vdb")
+
+
+def assert_on_far_spheres(V):
+    """Vertices on both spheres of tests/data/far_spheres.vdb (radius 0.6, at the origin and at
+    5000 along the diagonal), within half a voxel."""
+    far = 1e5 * 0.05
+    away = V[:, 0] > far / 2
+    assert away.sum() > 100 and (~away).sum() > 100
+    W = V - np.where(away[:, None], far, 0.0)
+    assert np.abs(np.linalg.norm(W, axis=1) - 0.6).max() < 0.5 * 0.05
+
+
+@pytest.mark.slow
+def test_a_level_set_far_apart_costs_its_voxels_on_every_path(client, tmp_path):
+    # Two spheres 1e5 voxels apart: a box of 1e15 voxels, a few hundred leaves. Read box by box
+    # (GCP's default, marching cubes), sparse (Poisson) and on Dask, each costs the leaves: in a
+    # child process, its peak memory under 1 GB; on Dask, the bricks that meet a leaf only.
+    import subprocess
+    import sys
+    for call in ("sdfcontour.contour(path)", "sdfcontour.contour(path, method='mc')",
+                 "sdfcontour.contour(path, reconstruction='poisson')"):
+        child = (f"import resource, numpy as np, sdfcontour\npath = {FAR_SPHERES!r}\n"
+                 f"V, F = {call}\nnp.save({str(tmp_path / 'V.npy')!r}, V)\n"
+                 f"import sys; print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, "
+                 f"file=sys.stderr)")
+        run = subprocess.run([sys.executable, "-c", child], capture_output=True, timeout=600)
+        assert run.returncode == 0, (call, run.stderr[-1000:])
+        assert_on_far_spheres(np.load(tmp_path / "V.npy"))
+        assert int(run.stderr.split()[-1]) < 1 << 20, (call, run.stderr[-200:])  # KB: < 1 GB
+    for method, brick in (("mc", 16), ("gcp", 32)):
+        V, F, stats = sdfcontour.dask.contour(FAR_SPHERES, method=method, brick=brick,
+                                              client=client, return_stats=True)
+        assert_on_far_spheres(V)
+        assert_closed_manifold(F)
+        assert stats["bricks"] < 2000, stats["bricks"]
+
