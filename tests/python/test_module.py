@@ -324,6 +324,9 @@ def test_bad_options_raise_value_error():
 
 _CTRL_C_CHILD = """
 import os, signal, sys, threading, time
+# (A process that ignores SIGINT passes that on to its children: Python's own handler, as an
+# interactive session has it.)
+signal.signal(signal.SIGINT, signal.default_int_handler)
 sys.path.insert(0, {here!r})
 import sdfcontour
 from test_module import full_grid, sphere, torus
