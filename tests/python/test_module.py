@@ -327,6 +327,7 @@ import os, signal, sys, threading, time
 # (A process that ignores SIGINT passes that on to its children: Python's own handler, as an
 # interactive session has it.)
 signal.signal(signal.SIGINT, signal.default_int_handler)
+signal.pthread_sigmask(signal.SIG_UNBLOCK, {{signal.SIGINT}})  # (a blocked mask is inherited too)
 sys.path.insert(0, {here!r})
 import sdfcontour
 from test_module import full_grid, sphere, torus
