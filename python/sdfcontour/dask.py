@@ -109,7 +109,7 @@ class _VdbReader:
 
 
 class _CallableReader:
-    """A callable SDF sampled block by block, near the surface only: exact where |f| <= `reach`
+    """A callable SDF, to be sampled near the surface only (_callable_tasks): exact where |f| <= `reach`
     (marching cubes needs the signs everywhere and the values at crossings, one spacing; GCP's
     local reconstruction its local_values_reach)."""
 
@@ -118,11 +118,6 @@ class _CallableReader:
         self.h = (hi - lo) / (n - 1)
         self.shape, self.dtype = (n, n, n), np.dtype(np.float64)
         self.reach = float(self.h.max())
-
-    def read(self, first, dims):
-        from ._callable import SamplingReport, sample_block
-        return sample_block(self.f, self.lo, self.h, first, dims, self.reach, self.batch_size,
-                            SamplingReport())
 
 
 # A callable on Dask: each small brick of its grid (_callable_bricks.BRICK cells) that may hold the
@@ -595,12 +590,30 @@ def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
     return "on" if _sdfcontour.auto_thin_parts(samples, gaps, crossings) else "off"
 
 
-def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stats, options):
+def _grid_tasks(reader, source, shape, lo, hi, brick, options, truncation, active):
+    """The reconstruction's tasks for a grid: one per brick, reading its own block (with its
+    halo for GCP); a brick without an active voxel holds no surface: not even listed."""
     import dask
+    tasks = []
+    for index, first, dims in bricks_among(shape, brick, active):
+        if options is not None:
+            task = dask.delayed(_gcp_task, pure=True)(source, index, first, dims, shape, lo,
+                                                      hi, options, truncation)
+        elif isinstance(reader, np.ndarray) or type(reader).__module__.startswith("dask"):
+            sl = tuple(slice(f, f + d) for f, d in zip(first, dims))
+            block = reader[sl]
+            task = dask.delayed(brick_piece, pure=True)(block, index, first, shape, lo, hi)
+        else:
+            task = dask.delayed(_read_and_contour, pure=True)(reader, index, first, dims,
+                                                              shape, lo, hi)
+        tasks.append(task)
+    return tasks
+
+
+def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stats, options):
     started = time.perf_counter()
     dask_client, owned = _start_client(client)
     try:
-        tasks = []
         active = reader.active(brick) if isinstance(reader, _VdbReader) else None
         source = reader
         if options is not None and isinstance(reader, np.ndarray):
@@ -613,20 +626,8 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
         if isinstance(reader, _CallableReader):
             tasks = _callable_tasks(dask_client, reader, shape, lo, hi, brick, options,
                                     truncation)
-        # (A brick without an active voxel holds no surface: not even listed.)
-        for index, first, dims in ([] if isinstance(reader, _CallableReader) else
-                                   bricks_among(shape, brick, active)):
-            if options is not None:
-                task = dask.delayed(_gcp_task, pure=True)(source, index, first, dims, shape, lo,
-                                                          hi, options, truncation)
-            elif isinstance(reader, np.ndarray) or type(reader).__module__.startswith("dask"):
-                sl = tuple(slice(f, f + d) for f, d in zip(first, dims))
-                block = reader[sl]
-                task = dask.delayed(brick_piece, pure=True)(block, index, first, shape, lo, hi)
-            else:
-                task = dask.delayed(_read_and_contour, pure=True)(reader, index, first, dims,
-                                                                  shape, lo, hi)
-            tasks.append(task)
+        else:
+            tasks = _grid_tasks(reader, source, shape, lo, hi, brick, options, truncation, active)
         if not tasks:
             raise ValueError("the level set has no active voxels: no surface to contour")
         futures = dask_client.compute(tasks)
