@@ -57,6 +57,31 @@ TEST(MeshUnion, OverlappingPartsBecomeOneSurface) {
   EXPECT_EQ(same.triangles, apart.triangles);
 }
 
+// An inside-out part crossing an outward one (the fuzzer's case: CGAL's corefinement, which
+// needs solids bounded outward, looped forever on it) is kept as it is, its crossings counted;
+// turned outward, the same two parts are united.
+TEST(MeshUnion, InsideOutPartsAreNotUnited) {
+  Mesh m;
+  m.vertices.resize(8, 3);
+  m.vertices << 0, 0, 0, 0.8, -0.8, -0.4, 0, -0.2, 0, 0, 0, 0.8, -0.4, -0.4, -0.4, 0.4, -0.4, 0.4,
+      -0.4, 0.4, -0.4, -0.4, -0.4, 0.4;
+  m.triangles.resize(8, 3);
+  m.triangles << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, 4, 6, 5, 4, 5, 7, 4, 7, 6, 5, 6, 7;
+  ASSERT_TRUE(mesh_topology(m).closed);
+  MeshUnionStats stats;
+  const Mesh kept = union_of_overlapping_parts(m, &stats);
+  EXPECT_EQ(stats.parts, 2);
+  EXPECT_EQ(stats.parts_united, 0);
+  EXPECT_GT(stats.crossings_left, 0);
+  EXPECT_EQ(kept.triangles, m.triangles);
+  Mesh outward = m;
+  outward.triangles.topRows(4).col(1).swap(outward.triangles.topRows(4).col(2));
+  const Mesh united = union_of_overlapping_parts(outward, &stats);
+  EXPECT_EQ(stats.parts_united, 1);
+  EXPECT_EQ(stats.crossings_left, 0);
+  EXPECT_TRUE(mesh_topology(united).closed);
+}
+
 // The sign is the winding number's: inside two overlapping parts (winding 2) is inside, a cavity
 // (an inward shell inside an outward one, winding 0) is outside, and parity would get the
 // overlap wrong.

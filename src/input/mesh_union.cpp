@@ -65,6 +65,20 @@ void append(Mesh& out, const SurfaceMesh& m) {
 // the parts as they are, so the report is noise on the tool's one-line output.
 void silent(const char*, const char*, const char*, int, const char*) {}
 
+// Six times the signed volume that each part bounds (positive: outward faces). CGAL's corefinement
+// requires solids bounded outward; an inside-out part made it loop forever.
+std::vector<double> part_volumes(const Mesh& mesh, const std::vector<int>& part_of_face,
+                                 int parts) {
+  std::vector<double> volume(std::size_t(parts), 0.0);
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(f, 0)).transpose();
+    const Eigen::Vector3d b = mesh.vertices.row(mesh.triangles(f, 1)).transpose();
+    const Eigen::Vector3d c = mesh.vertices.row(mesh.triangles(f, 2)).transpose();
+    volume[std::size_t(part_of_face[std::size_t(f)])] += a.dot(b.cross(c));
+  }
+  return volume;
+}
+
 int find(std::vector<int>& parent, int x) {
   while (parent[std::size_t(x)] != x)
     x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
@@ -94,6 +108,7 @@ Mesh union_of_overlapping_parts(const Mesh& mesh, MeshUnionStats* stats) {
       group[std::size_t(std::max(ra, rb))] = std::min(ra, rb);
     }
   }
+  const std::vector<double> volume = part_volumes(mesh, part_of_face, s.parts);
   std::map<int, std::vector<int>> members;  // ordered: deterministic output
   for (int p = 0; p < s.parts; ++p) members[find(group, p)].push_back(p);
   Mesh out;
@@ -101,7 +116,8 @@ Mesh union_of_overlapping_parts(const Mesh& mesh, MeshUnionStats* stats) {
   out.triangles.resize(0, 3);
   for (const auto& [root, parts] : members) {
     bool can_unite = parts.size() > 1;
-    for (int p : parts) can_unite = can_unite && !crosses_itself[std::size_t(p)];
+    for (int p : parts)
+      can_unite = can_unite && !crosses_itself[std::size_t(p)] && volume[std::size_t(p)] > 0;
     SurfaceMesh united = part_mesh(mesh, part_of_face, parts[0]);
     std::size_t merged = 1;
     if (can_unite) {

@@ -33,10 +33,19 @@ clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_m
 # ASan's own size limit applies to it.
 declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000" [mesh_sample]=""
                   [options]="")
+# Every target runs, even after one finds something; the script then fails naming them.
+failed=()
 for target in npy mesh_files vdb mesh_sample options; do
   corpus="$out/corpus_$target"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/$target/* "$corpus/"
-  "$out/fuzz_$target" "$corpus" -max_total_time="$seconds" -max_len=20000 -rss_limit_mb=2048 \
-    -artifact_prefix="$out/findings/${target}_" ${extra[$target]} 2>&1 | tail -n 12
+  if ! "$out/fuzz_$target" "$corpus" -max_total_time="$seconds" -max_len=20000 -rss_limit_mb=2048 \
+    -artifact_prefix="$out/findings/${target}_" ${extra[$target]} > "$out/$target.log" 2>&1; then
+    failed+=("$target")
+  fi
+  echo "== $target"; tail -n 12 "$out/$target.log"
 done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz findings in: ${failed[*]} (inputs in $out/findings/)" >&2
+  exit 1
+fi

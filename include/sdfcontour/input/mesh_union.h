@@ -16,8 +16,9 @@ struct MeshUnionStats {
 /// The boundary of the union of the solids bounded by the closed parts (connected components)
 /// of `mesh`: parts whose triangles cross are united by CGAL's exact corefinement, and the rest
 /// are kept as they are, so that the inner faces of overlapping parts are gone and a signed
-/// distance sampled from the result is a distance. A part that crosses itself cannot be united;
-/// it is kept, and its crossings are counted in `stats`. `mesh` must be closed and consistently
+/// distance sampled from the result is a distance. A part that crosses itself, or that bounds no
+/// positive volume (its faces turned inward), cannot be united; it is kept, and its crossings are
+/// counted in `stats`. `mesh` must be closed and consistently
 /// oriented (require_closed_mesh). Deterministic.
 Mesh union_of_overlapping_parts(const Mesh& mesh, MeshUnionStats* stats = nullptr);
 
