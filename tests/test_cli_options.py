@@ -52,6 +52,7 @@ OPTIONS = {
     "--subdivisions": ([GRID], "0", "changes"),
     "--split-sag": ([GRID], "0.001", "changes"),
     "--thin-parts": ([GRID], "off", "changes"),
+    "--edge-fans": ([GRID], "on", "changes"),
     "--local-reach": ([GRID], "0.4", "changes"),
     "--local-feature-ratio": ([GRID], "0.3", "changes"),
     "--local-robust-rounds": ([GRID], "0", "changes"),

@@ -94,6 +94,17 @@ const ProjectionOption kProjectionOptions[] = {
 void warn_of_options_not_read(const ContourArgs& a, const ContourOptions& opt,
                               const ContourResult& r) {
   if (!r.mesh || (opt.method != Method::Gcp && opt.method != Method::Gtcp)) return;
+  if (r.reconstruction == Reconstruction::Local && opt.local.edge_fans) {
+    std::vector<std::string> unused;
+    if (a.subdivisions != "auto") unused.push_back("--subdivisions");
+    if (a.side_passes != "auto") unused.push_back("--side-passes");
+    if (a.no_side_repair) unused.push_back("--no-side-repair");
+    if (a.thin_parts != "auto") unused.push_back("--thin-parts");
+    for (const std::string& name : unused)
+      std::cerr << "sdfcontour: warning: " << name
+                << " is not used with --edge-fans on: its vertices stay in their cells, edges and "
+                   "faces without subdivision, side rounds or a finer grid for thin parts\n";
+  }
   if (r.reconstruction == Reconstruction::Local) {
     const std::string solver = a.poisson.given(), path = given_names(a.poisson_path_options);
     const std::string poisson = solver + (solver.empty() || path.empty() ? "" : ", ") + path;
@@ -178,6 +189,9 @@ ContourOptions contour_options(const ContourArgs& a) {
   require_range("--local-depth-scale", a.local.depth_scale, 0, 1e6);
   require_range("--local-max-field-miss", a.local.max_field_miss, 0, 1e6);
   opt.local = a.local;
+  if (a.edge_fans != "on" && a.edge_fans != "off")
+    throw Error("--edge-fans must be on or off, got '" + a.edge_fans + "'");
+  opt.local.edge_fans = a.edge_fans == "on";
   opt.project = parse_switch("--projection", a.projection);
   opt.zero_set = parse_switch("--zero-set", a.zero_set);
   opt.thin_parts = parse_switch("--thin-parts", a.thin_parts);
@@ -356,6 +370,14 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
            "subdivision fewer (on, off; auto: on below 192 samples per axis, and from 192 to 256 "
            "where at least 1% of the edges that the surface crosses have such a gap next to them: "
            "two samples on one side, closer together than their values allow)")
+          ->capture_default_str());
+  a.local_options.push_back(
+      c->add_option("--edge-fans", a.edge_fans,
+                    "GCP local reconstruction: fan each grid edge's polygon from a vertex where "
+                    "the surface crosses the edge, every vertex kept in its cell, edge or face, so "
+                    "that the mesh cannot cross itself or leave a sample on the wrong side without "
+                    "any repair (about 2-3.5x marching cubes' triangles; no subdivision, side "
+                    "rounds or untangling; on, off)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option("--local-reach", a.local.reach,

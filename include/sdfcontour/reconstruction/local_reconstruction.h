@@ -58,6 +58,11 @@ struct LocalReconstructionOptions {
   /// the crossing triangles after the projection). Else (a cell a spacing wide) the vertex
   /// stays at the minimum, clamped into the cell.
   bool narrow_cells = false;
+  /// Each edge's polygon is fanned from a vertex of its own on the grid edge, where the surface
+  /// crosses it, instead of split along a diagonal: every triangle then lies in one cell or two
+  /// that share a face, so vertices inside their cells cannot make the mesh cross itself (Ju and
+  /// Udeshi's argument, 2006), at about twice the triangles.
+  bool edge_fans = false;
 };
 
 struct LocalReconstructionStats {

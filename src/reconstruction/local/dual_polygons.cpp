@@ -25,6 +25,7 @@ struct PolygonSlot {
   std::array<Eigen::Vector3d, 8> segment_position;
   int size = 0;
   std::uint64_t edge = 0;  // the grid edge's global key
+  Eigen::Vector3d edge_point;
 };
 
 Eigen::Vector3d crossing(const SurfaceCells& cells, const std::array<int, 3>& p, int axis) {
@@ -37,11 +38,12 @@ Eigen::Vector3d crossing(const SurfaceCells& cells, const std::array<int, 3>& p,
 
 // Cells x and y share the face perpendicular to `b` through grid point `edge_start`, spanning
 // axis a (the edge) and axis w from edge_start[w] + w_offset. If both cells' polygons cross all
-// four of the face's edges, the face's two segments would join the same two vertices twice:
-// returns the segment vertex of the segment that the edge (edge_start, a) ends on.
+// four of the face's edges (with `every`: if the surface crosses all four), the face's two
+// segments would join the same two vertices twice: returns the segment vertex of the segment
+// that the edge (edge_start, a) ends on.
 bool shared_twice(const SurfaceCells& cells, const ActiveCell& x, const ActiveCell& y,
                   const std::array<int, 3>& edge_start, int a, int b, int w, int w_offset,
-                  SegmentVertex& out) {
+                  bool every, SegmentVertex& out) {
   const CubeTables& T = cube_tables();
   std::array<int, 3> low = edge_start;
   low[std::size_t(w)] += w_offset;
@@ -58,7 +60,7 @@ bool shared_twice(const SurfaceCells& cells, const ActiveCell& x, const ActiveCe
         corner |= (p - at[std::size_t(d)]) << d;
       }
       const int q = cell.polygon_of_edge[std::size_t(T.edge_id[corner][e[2]])];
-      if (q < 0 || (polygon != -2 && q != polygon)) return false;
+      if (q < 0 || (!every && polygon != -2 && q != polygon)) return false;
       polygon = q;
     }
     return true;
@@ -86,7 +88,7 @@ bool shared_twice(const SurfaceCells& cells, const ActiveCell& x, const ActiveCe
 
 // The polygon of the edge from cell `at`'s lowest corner along axis a.
 PolygonSlot edge_polygon(const SurfaceCells& cells, const ActiveCell& cell,
-                         const std::array<int, 3>& at, int a) {
+                         const std::array<int, 3>& at, int a, bool every) {
   const CubeTables& T = cube_tables();
   const int u = (a + 1) % 3, v = (a + 2) % 3;
   // The cells around the edge, counter-clockwise about +a, by their offsets in (u, v).
@@ -100,6 +102,7 @@ PolygonSlot edge_polygon(const SurfaceCells& cells, const ActiveCell& cell,
   }
   PolygonSlot slot;
   slot.edge = 3 * cells.global_point(at) + std::uint64_t(a);
+  slot.edge_point = crossing(cells, at, a);
   for (int q = 0; q < 4; ++q) {
     const int low = offsets[q][0] << u | offsets[q][1] << v;
     slot.vertices[std::size_t(slot.size++)] =
@@ -110,7 +113,7 @@ PolygonSlot edge_polygon(const SurfaceCells& cells, const ActiveCell& cell,
     const int b = differ_u ? u : v, w = differ_u ? v : u;
     const int w_offset = -(differ_u ? offsets[q][1] : offsets[q][0]);
     SegmentVertex sv;
-    if (shared_twice(cells, *around[q], *around[r], at, a, b, w, w_offset, sv)) {
+    if (shared_twice(cells, *around[q], *around[r], at, a, b, w, w_offset, every, sv)) {
       slot.segment_key[std::size_t(slot.size)] = sv.key;
       slot.segment_position[std::size_t(slot.size)] = sv.position;
       slot.vertices[std::size_t(slot.size++)] = -1;
@@ -126,7 +129,7 @@ PolygonSlot edge_polygon(const SurfaceCells& cells, const ActiveCell& cell,
 
 }  // namespace
 
-DualPolygons SurfaceCells::dual_polygons() const {
+DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
   const CubeTables& T = cube_tables();
   std::vector<std::array<PolygonSlot, 3>> slots(active.size());
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t c) {
@@ -137,7 +140,7 @@ DualPolygons SurfaceCells::dual_polygons() const {
       if (cell.polygon_of_edge[std::size_t(T.edge_id[0][a])] < 0 || at[std::size_t(u)] < 1 ||
           at[std::size_t(v)] < 1)
         continue;
-      slots[c][std::size_t(a)] = edge_polygon(*this, cell, at, a);
+      slots[c][std::size_t(a)] = edge_polygon(*this, cell, at, a, every_ambiguous_face);
     }
   });
   // Segment vertices, numbered by key after the cells' vertices.
@@ -172,6 +175,7 @@ DualPolygons SurfaceCells::dual_polygons() const {
       out.vertices.push_back(ids);
       out.size.push_back(std::int8_t(s.size));
       out.edge.push_back(s.edge);
+      out.edge_point.push_back(s.edge_point);
     }
   return out;
 }

@@ -10,11 +10,13 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 #include "reconstruction/carving_internal.h"
 #include "reconstruction/free_memory.h"
 #include "reconstruction/local/brick_moves.h"
 #include "reconstruction/local/brick_ownership.h"
+#include "reconstruction/local/edge_fans.h"
 #include "reconstruction/local/keyed_local_mesh.h"
 #include "reconstruction/local/lattice_subdivision.h"
 #include "reconstruction/local/thin_parts.h"
@@ -335,10 +337,16 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     near.vertices = std::move(dual.vertices);
   }
   clock.next(2);
-  const int levels = std::max(
-      0, (options.subdivisions >= 0 ? options.subdivisions
-                                    : auto_subdivisions(*std::max_element(n.begin(), n.end()))) -
-             (scale - 1));
+  const bool fans = local.edge_fans;
+  // An edge-fanned mesh keeps its dual vertices' crossing means for its split cells.
+  const std::vector<std::uint64_t> fan_keys = fans ? near.vertex_key : std::vector<std::uint64_t>();
+  const PointMatrix fan_means = fans ? crossing_means : PointMatrix();
+  const int levels =
+      fans ? 0
+           : std::max(0, (options.subdivisions >= 0
+                              ? options.subdivisions
+                              : auto_subdivisions(*std::max_element(n.begin(), n.end()))) -
+                             (scale - 1));
   detail::SubdividedMesh sub = detail::lattice_subdivision(near, levels);
   PointMatrix reconstructed = sub.mesh.vertices;
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
@@ -353,7 +361,10 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
   // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
   // vertices 0.002 h off it.)
-  if (sag > 0 && levels <= 3 && options.project && !options.refine_zero_set && cp.size() > 0)
+  if (fans && sag > 0 && options.project && !options.refine_zero_set && cp.size() > 0)
+    detail::split_fan_faces(near, sag * h, cp, depths, h, options, cells_grid, sub, reconstructed);
+  if (!fans && sag > 0 && levels <= 3 && options.project && !options.refine_zero_set &&
+      cp.size() > 0)
     split_sagging_edges(near, levels, sag * h, cp, depths, h, options, sub, reconstructed, corners);
   near = detail::KeyedTriangles();
   cp = ContactPoints();
@@ -378,6 +389,16 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (options.side_rounds > 0) {
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
     detail::return_free_memory();
+  }
+  if (fans) {
+    // Per vertex of sub: its crossings' mean where it has one (the dual mesh's vertices).
+    PointMatrix means = sub.mesh.vertices;
+    std::unordered_map<std::uint64_t, Eigen::Index> dual;
+    for (std::size_t v = 0; v < fan_keys.size(); ++v) dual.emplace(fan_keys[v], Eigen::Index(v));
+    for (std::size_t v = 0; v < sub.keys.size(); ++v)
+      if (const auto it = dual.find(sub.keys[v][0]); sub.keys[v][1] == 0 && it != dual.end())
+        means.row(Eigen::Index(v)) = fan_means.row(it->second);
+    detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, cells_grid);
   }
   // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
   // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is

@@ -15,6 +15,7 @@
 
 #include "extraction/cube_polygons.h"
 #include "reconstruction/local/cell_quadric.h"
+#include "reconstruction/local/edge_fans.h"
 #include "reconstruction/local/keyed_local_mesh.h"
 #include "reconstruction/local/surface_cells.h"
 #include "reconstruction/local/vertex_placement.h"
@@ -264,12 +265,15 @@ void fan_from_segment_vertex(const std::array<int, 8>& p, int size, int first_ex
   }
 }
 
-void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra,
+// first_edge >= 0: polygon i is fanned from vertex first_edge + i, on its grid edge, into as many
+// triangles as it has sides.
+void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra, int first_edge,
                           detail::KeyedLocalMesh& keyed) {
   Mesh& mesh = keyed.mesh;
+  const bool fans = first_edge >= 0;
   std::vector<Eigen::Index> first(polygons.size.size() + 1, 0);
   for (std::size_t i = 0; i < polygons.size.size(); ++i)
-    first[i + 1] = first[i] + polygons.size[i] - 2;
+    first[i + 1] = first[i] + polygons.size[i] - (fans ? 0 : 2);
   mesh.triangles.resize(first.back(), 3);
   keyed.triangle_edge.resize(std::size_t(first.back()));
   keyed.triangle_rank.resize(std::size_t(first.back()));
@@ -280,7 +284,14 @@ void triangulate_polygons(const detail::DualPolygons& polygons, int first_extra,
     }
     int* out = mesh.triangles.data() + 3 * first[i];
     const auto& p = polygons.vertices[i];
-    if (polygons.size[i] == 4)
+    const int k = polygons.size[i];
+    if (fans) {
+      for (int q = 0; q < k; ++q) {
+        *out++ = first_edge + int(i);
+        *out++ = p[std::size_t(q)];
+        *out++ = p[std::size_t((q + 1) % k)];
+      }
+    } else if (k == 4)
       split_quad(mesh.vertices, {p[0], p[1], p[2], p[3]}, out);
     else
       fan_from_segment_vertex(p, polygons.size[i], first_extra, out);
@@ -326,14 +337,19 @@ KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatri
   }
   mesh.vertices = cell_vertices(cells, points, normals, weights, options, stats, keyed.flags,
                                 keyed.crossing_means);
-  const detail::DualPolygons polygons = cells.dual_polygons();
+  const bool fans = options.edge_fans;
+  const detail::DualPolygons polygons = cells.dual_polygons(fans);
   const Eigen::Index cell_vertex_count = mesh.vertices.rows();
+  const Eigen::Index first_edge = cell_vertex_count + Eigen::Index(polygons.extra_positions.size());
   mesh.vertices.conservativeResize(
-      cell_vertex_count + Eigen::Index(polygons.extra_positions.size()), 3);
+      first_edge + (fans ? Eigen::Index(polygons.edge_point.size()) : 0), 3);
   for (std::size_t e = 0; e < polygons.extra_positions.size(); ++e)
     mesh.vertices.row(cell_vertex_count + Eigen::Index(e)) =
         polygons.extra_positions[e].transpose();
-  triangulate_polygons(polygons, int(cell_vertex_count), keyed);
+  if (fans)
+    for (std::size_t e = 0; e < polygons.edge_point.size(); ++e)
+      mesh.vertices.row(first_edge + Eigen::Index(e)) = polygons.edge_point[e].transpose();
+  triangulate_polygons(polygons, int(cell_vertex_count), fans ? int(first_edge) : -1, keyed);
   // Global names: 4 * cell + polygon (a cell has at most 4), then the segment vertices.
   keyed.vertex_key.resize(std::size_t(mesh.vertices.rows()));
   for (const ActiveCell& cell : cells.active) {
@@ -341,11 +357,12 @@ KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatri
     for (int q = 0; q < cell.polygon_count; ++q)
       keyed.vertex_key[std::size_t(cell.first_vertex + q)] = base + std::uint64_t(q);
   }
-  const std::array<int, 3> n = grid.whole_dims();
-  const std::uint64_t segments_base =
-      4 * std::uint64_t(n[0] - 1) * std::uint64_t(n[1] - 1) * std::uint64_t(n[2] - 1);
+  const detail::VertexKeyBases bases = detail::vertex_key_bases(grid.whole_dims());
   for (std::size_t e = 0; e < polygons.extra_keys.size(); ++e)
-    keyed.vertex_key[std::size_t(cell_vertex_count) + e] = segments_base + polygons.extra_keys[e];
+    keyed.vertex_key[std::size_t(cell_vertex_count) + e] = bases.segments + polygons.extra_keys[e];
+  if (fans)
+    for (std::size_t e = 0; e < polygons.edge.size(); ++e)
+      keyed.vertex_key[std::size_t(first_edge) + e] = bases.edges + polygons.edge[e];
   stats.cells = long(cells.active.size());
   stats.vertices = long(mesh.vertices.rows());
   for (const ActiveCell& cell : cells.active) stats.split_cells += cell.polygon_count > 1;

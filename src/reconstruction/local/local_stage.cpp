@@ -59,6 +59,12 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.refine_zero_set = options.zero_set == Switch::On;
   lb.zero_set = options.zero_set_options;
   lb.cancel = options.cancel;
+  if (options.local.edge_fans) {  // right by construction: nothing to repair
+    lb.untangle = false;
+    lb.side_rounds = 0;
+    // (Its finer grid's fans made the mesh cross itself: blub 32^3.)
+    lb.thin_parts = 0;
+  }
   return lb;
 }
 
@@ -188,6 +194,10 @@ void reconstruct_in_bricks(const BlockedGrid& grid, const BandOptions& band,
 
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
                          const ContourOptions& options, ContourResult& result, Stages& stages) {
+  if (options.local.edge_fans)
+    throw Error(
+        "edge fans need the local reconstruction brick by brick: a grid or .vdb level set with a "
+        "band (not 'all'), gradients 'regular' or 'lattice', method gcp");
   const ContactPoints& cp = *result.contact_points;
   LocalReconstructionStats stats;
   Mesh mesh = stages.run(

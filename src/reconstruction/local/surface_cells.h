@@ -38,6 +38,7 @@ struct DualPolygons {
   std::vector<std::array<int, 8>> vertices;
   std::vector<std::int8_t> size;
   std::vector<std::uint64_t> edge;  ///< each polygon's grid edge: 3 * global low point + axis
+  std::vector<Eigen::Vector3d> edge_point;  ///< where the values' linear interpolant crosses it
   /// The segment vertices' positions, numbered after the cells' vertices, and their global keys
   /// ((3 * global face point + axis) * 4 + corner), ascending.
   std::vector<Eigen::Vector3d> extra_positions;
@@ -77,8 +78,10 @@ struct SurfaceCells {
     return active.empty() ? 0 : active.back().first_vertex + active.back().polygon_count;
   }
   CellPolygons polygons(const ActiveCell& cell) const;
-  /// The dual mesh's polygons (dual_polygons.cpp).
-  DualPolygons dual_polygons() const;
+  /// The dual mesh's polygons (dual_polygons.cpp). With `every_ambiguous_face`, each segment of a
+  /// face that the surface crosses four times gets a vertex (for edge fans: each triangle then
+  /// stays in one cell); else only where both cells would join the same two vertices twice.
+  DualPolygons dual_polygons(bool every_ambiguous_face = false) const;
 };
 
 /// Grid point of cell `cell`'s corner c (bits x=1, y=2, z=4), and a grid point's value.

@@ -1,0 +1,176 @@
+// An edge-fanned mesh's vertices in their regions (edge_fans.h).
+#include "reconstruction/local/edge_fans.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "reconstruction/mesh_geometry.h"
+#include "sdfcontour/reconstruction/contact_projection.h"
+
+namespace sdfcontour::detail {
+
+namespace {
+
+// A vertex stays this fraction of its cell or edge away from the cell's sides or the samples:
+// the vertex placement's own margin, which keeps the argument strict (no two triangles of
+// different cells share more than the faces between them).
+constexpr double kMargin = 1e-3;
+
+std::array<int, 3> point_of(std::uint64_t p, const std::array<int, 3>& n) {
+  const int k = int(p % std::uint64_t(n[2]));
+  p /= std::uint64_t(n[2]);
+  return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
+}
+
+// The position on the segment from `start` + [0, h] along `axis` (clamped a margin inside)
+// where the plane through `now`, normal to the move from `was`, meets it; a segment nearly in
+// that plane keeps `was`'s place along it.
+double place_along(const Eigen::Vector3d& start, int axis, double h, const Eigen::Vector3d& was,
+                   const Eigen::Vector3d& now) {
+  const Eigen::Vector3d move = now - was;
+  double t = was[axis] - start[axis];
+  if (move.norm() > 0 && std::abs(move[axis]) > 0.2 * move.norm())
+    t = (now - start).dot(move) / move[axis];
+  return std::clamp(t, kMargin * h, (1 - kMargin) * h);
+}
+
+// The face between two cells that share one (their vertex keys' cells): its axis and the
+// position of its plane; false if the cells share no face.
+bool shared_face(std::uint64_t kx, std::uint64_t ky, const std::array<int, 3>& cells,
+                 const GridGeometry& grid, int& axis, Eigen::Vector3d& low) {
+  const std::array<int, 3> a = point_of(kx / 4, cells), b = point_of(ky / 4, cells);
+  axis = -1;
+  for (int d = 0; d < 3; ++d) {
+    const int diff = std::abs(a[std::size_t(d)] - b[std::size_t(d)]);
+    if (diff > 1 || (diff == 1 && axis >= 0)) return false;
+    if (diff == 1) axis = d;
+  }
+  if (axis < 0) return false;
+  const Eigen::Vector3d h = grid.spacing();
+  for (int d = 0; d < 3; ++d)
+    low[d] = grid.bounds.min[d] + std::max(a[std::size_t(d)], b[std::size_t(d)]) * h[d];
+  return true;
+}
+
+}  // namespace
+
+VertexKeyBases vertex_key_bases(const std::array<int, 3>& n) {
+  VertexKeyBases b;
+  const std::uint64_t points = std::uint64_t(n[0]) * std::uint64_t(n[1]) * std::uint64_t(n[2]);
+  b.segments = 4 * std::uint64_t(n[0] - 1) * std::uint64_t(n[1] - 1) * std::uint64_t(n[2] - 1);
+  b.edges = b.segments + 12 * points;
+  return b;
+}
+
+long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& keys,
+                         const PointMatrix& before, const PointMatrix& crossing_means,
+                         const GridGeometry& grid) {
+  const std::array<int, 3> n = grid.whole_dims();
+  const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
+  const VertexKeyBases bases = vertex_key_bases(n);
+  // Cells with a second polygon (4 * cell + 1 and up).
+  std::vector<std::uint64_t> split_cells;
+  for (const VertexKey& k : keys)
+    if (k[1] == 0 && k[0] < bases.segments && k[0] % 4 != 0) split_cells.push_back(k[0] / 4);
+  std::sort(split_cells.begin(), split_cells.end());
+  const Eigen::Vector3d h = grid.spacing(), min = grid.bounds.min;
+  std::atomic<long> put_back{0};
+  tbb::parallel_for(Eigen::Index(0), vertices.rows(), [&](Eigen::Index v) {
+    const std::uint64_t key = keys[std::size_t(v)][0];
+    const Eigen::Vector3d was = before.row(v).transpose(), now = vertices.row(v).transpose();
+    Eigen::Vector3d kept = now;
+    int axis = 0;
+    Eigen::Vector3d low;
+    if (keys[std::size_t(v)][1] != 0) {
+      // A face's vertex: on the face's plane, moved within it, a margin inside its sides.
+      if (!shared_face(key, keys[std::size_t(v)][1] / 64 - 1, cells, grid, axis, low)) {
+        kept = was;
+      } else {
+        kept = was;
+        kept[axis] = low[axis];
+        for (int d = 0; d < 3; ++d)
+          if (d != axis) {
+            Eigen::Vector3d start = kept;
+            start[d] = low[d];
+            kept[d] = start[d] + place_along(start, d, h[d], was, now);
+          }
+      }
+    } else if (key < bases.segments &&
+               std::binary_search(split_cells.begin(), split_cells.end(), key / 4)) {
+      kept = crossing_means.row(v).transpose();
+    } else if (key < bases.segments) {
+      const std::array<int, 3> c = point_of(key / 4, cells);
+      for (int a = 0; a < 3; ++a) {
+        const double lo = min[a] + c[std::size_t(a)] * h[a];
+        kept[a] = std::clamp(now[a], lo + kMargin * h[a], lo + (1 - kMargin) * h[a]);
+      }
+    } else if (key < bases.edges) {
+      kept = was;
+    } else {
+      const std::uint64_t edge = key - bases.edges;
+      axis = int(edge % 3);
+      const std::array<int, 3> p = point_of(edge / 3, n);
+      Eigen::Vector3d start;
+      for (int a = 0; a < 3; ++a) start[a] = min[a] + p[std::size_t(a)] * h[a];
+      kept = start;
+      kept[axis] += place_along(start, axis, h[axis], was, now);
+    }
+    if (kept != now) {
+      vertices.row(v) = kept.transpose();
+      put_back.fetch_add(1, std::memory_order_relaxed);
+    }
+  });
+  return put_back.load();
+}
+
+void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoints& cp,
+                     const Eigen::VectorXd& depths, double h, const LocalBrickOptions& options,
+                     const GridGeometry& grid, SubdividedMesh& sub, PointMatrix& reconstructed) {
+  const std::array<int, 3> n = grid.whole_dims();
+  const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
+  const VertexKeyBases bases = vertex_key_bases(n);
+  const PointMatrix normals = vertex_normals(sub.mesh);
+  const double crease = std::cos(30.0 * M_PI / 180.0);
+  auto split = [&](int x, int y) {
+    const VertexKey &kx = sub.keys[std::size_t(x)], &ky = sub.keys[std::size_t(y)];
+    if (kx[1] != 0 || ky[1] != 0 || kx[0] >= bases.segments || ky[0] >= bases.segments)
+      return false;  // only between two cells' vertices: the edge crosses their face
+    if (sub.on_feature[std::size_t(x)] && sub.on_feature[std::size_t(y)]) return false;
+    const double c = std::clamp(normals.row(x).dot(normals.row(y)), -1.0, 1.0);
+    if (c < crease) return false;
+    const double length = (sub.mesh.vertices.row(x) - sub.mesh.vertices.row(y)).norm();
+    return length * std::acos(c) / 8 > limit;
+  };
+  SplitMesh split_mesh = split_curved_edges(near, sub, 0, split);
+  const Eigen::Index count = split_mesh.sub.mesh.vertices.rows();
+  PointMatrix start(count, 3), placed(count, 3);
+  std::vector<char> stay(std::size_t(count), 0);
+  for (Eigen::Index v = 0; v < count; ++v) {
+    const auto [x, y] = split_mesh.source[std::size_t(v)];
+    stay[std::size_t(v)] = x == y;
+    if (x == y) {
+      start.row(v) = reconstructed.row(x);
+      placed.row(v) = sub.mesh.vertices.row(x);
+      continue;
+    }
+    // Where the chord crosses the face between the two cells.
+    const VertexKey& key = split_mesh.sub.keys[std::size_t(v)];
+    int axis = 0;
+    Eigen::Vector3d low;
+    const Eigen::Vector3d a = sub.mesh.vertices.row(x).transpose(),
+                          b = sub.mesh.vertices.row(y).transpose();
+    Eigen::Vector3d at = 0.5 * (a + b);
+    if (shared_face(key[0], key[1] / 64 - 1, cells, grid, axis, low) && a[axis] != b[axis])
+      at = a + (low[axis] - a[axis]) / (b[axis] - a[axis]) * (b - a);
+    start.row(v) = placed.row(v) = at.transpose();
+  }
+  split_mesh.sub.mesh.vertices = placed;
+  sub = std::move(split_mesh.sub);
+  reconstructed = start;
+  project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection, &stay);
+}
+
+}  // namespace sdfcontour::detail

@@ -1,0 +1,48 @@
+// Internal: the vertices of an edge-fanned local mesh (LocalReconstructionOptions::edge_fans)
+// kept where they cannot make it cross itself.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "reconstruction/local/lattice_subdivision.h"
+#include "sdfcontour/contact_points/contact_points.h"
+#include "sdfcontour/input/samples.h"
+#include "sdfcontour/reconstruction/local_brick.h"
+
+namespace sdfcontour::detail {
+
+/// Where keyed_local_reconstruction's vertex keys start, on a grid of `n` points (whole grid):
+/// cell vertices are 4 * cell + polygon, below `segments`; segment vertices `segments` + (3 *
+/// face point + axis) * 4 + corner, below `edges`; edge vertices `edges` + 3 * point + axis.
+struct VertexKeyBases {
+  std::uint64_t segments = 0, edges = 0;
+};
+VertexKeyBases vertex_key_bases(const std::array<int, 3>& n);
+
+/// After the vertices of an edge-fanned mesh moved from `before` (the projection onto the contact
+/// points), each goes back into its region: a cell's vertex into its cell (a thousandth of the
+/// cell inside), an edge's vertex onto its grid edge and a face's vertex (split_fan_faces) onto
+/// its face, where the plane through its new place, normal to its move, meets them (a thousandth
+/// of a spacing inside), a segment's vertex back where it was (on its face). `keys`: the
+/// vertices' names (lattice_subdivision's at level 0, split_curved_edges' for face vertices);
+/// `grid`: the grid (or block) the keys were made on. A cell with more than one polygon holds as
+/// many cones, which its vertices alone cannot keep apart: they go to `crossing_means` (per
+/// vertex: the mean of its polygon's edge crossings, as marching cubes' polygons lie). Returns
+/// the vertices that had to be put back.
+long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& keys,
+                         const PointMatrix& before, const PointMatrix& crossing_means,
+                         const GridGeometry& grid);
+
+/// Refinement where it pays, inside the regions: each edge of `sub` (an edge-fanned mesh at
+/// level 0, projected) between two cells' vertices, whose chord sags by more than `limit` (its
+/// length times its ends' normals' turn / 8) gets a vertex where it crosses the face between the
+/// two cells, projected onto the contact points `cp` and kept on that face; each of its two
+/// triangles is cut in two, each half in one cell. `reconstructed` follows the new numbering
+/// (the new vertices at their faces' crossings).
+void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoints& cp,
+                     const Eigen::VectorXd& depths, double h, const LocalBrickOptions& options,
+                     const GridGeometry& grid, SubdividedMesh& sub, PointMatrix& reconstructed);
+
+}  // namespace sdfcontour::detail
