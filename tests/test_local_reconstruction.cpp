@@ -25,35 +25,9 @@ using namespace sdfcontour;
 
 namespace {
 
-// Every vertex's triangles form one fan (a closed disc), as mesh_topology's edge test does not
-// check.
-bool vertices_manifold(const Mesh& m) {
-  std::vector<std::vector<std::pair<int, int>>> link(std::size_t(m.vertices.rows()));
-  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t)
-    for (int k = 0; k < 3; ++k)
-      link[std::size_t(m.triangles(t, k))].push_back(
-          {m.triangles(t, (k + 1) % 3), m.triangles(t, (k + 2) % 3)});
-  for (const auto& edges : link) {
-    if (edges.empty()) continue;
-    std::map<int, int> next;
-    for (const auto& [a, b] : edges)
-      if (!next.emplace(a, b).second) return false;
-    int at = edges[0].first;
-    std::size_t steps = 0;
-    do {
-      const auto it = next.find(at);
-      if (it == next.end()) return false;
-      at = it->second;
-      ++steps;
-    } while (at != edges[0].first && steps <= edges.size());
-    if (steps != edges.size()) return false;
-  }
-  return true;
-}
-
 void expect_closed_manifold(const Mesh& m) {
   test::expect_closed_and_outward(m);
-  EXPECT_TRUE(vertices_manifold(m));
+  EXPECT_TRUE(test::vertices_manifold(m));
 }
 
 // With no contact points (edge crossings only): closed, manifold, and marching cubes' topology.

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <random>
 #include <string>
 #include <utility>
@@ -136,6 +137,32 @@ inline void expect_closed_and_outward(const Mesh& m) {
                         << " non-manifold edges";
   EXPECT_TRUE(t.consistently_oriented);
   EXPECT_GT(signed_volume(m), 0) << "not outward oriented";
+}
+
+// Every vertex's triangles form one fan (a closed disc), as mesh_topology's edge test does not
+// check.
+inline bool vertices_manifold(const Mesh& m) {
+  std::vector<std::vector<std::pair<int, int>>> link(std::size_t(m.vertices.rows()));
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t)
+    for (int k = 0; k < 3; ++k)
+      link[std::size_t(m.triangles(t, k))].push_back(
+          {m.triangles(t, (k + 1) % 3), m.triangles(t, (k + 2) % 3)});
+  for (const auto& edges : link) {
+    if (edges.empty()) continue;
+    std::map<int, int> next;
+    for (const auto& [a, b] : edges)
+      if (!next.emplace(a, b).second) return false;
+    int at = edges[0].first;
+    std::size_t steps = 0;
+    do {
+      const auto it = next.find(at);
+      if (it == next.end()) return false;
+      at = it->second;
+      ++steps;
+    } while (at != edges[0].first && steps <= edges.size());
+    if (steps != edges.size()) return false;
+  }
+  return true;
 }
 
 /// Corner c of the origin-centred box with half extents `half`: bit k of c set for +half[k].

@@ -57,6 +57,17 @@ bool shared_face(std::uint64_t kx, std::uint64_t ky, const std::array<int, 3>& c
 
 }  // namespace
 
+std::vector<std::uint64_t> split_cells(const std::vector<std::uint64_t>& keys,
+                                       const std::array<int, 3>& n) {
+  const VertexKeyBases bases = vertex_key_bases(n);
+  std::vector<std::uint64_t> out;
+  for (const std::uint64_t k : keys)  // a second polygon: 4 * cell + 1 and up
+    if (k < bases.segments && k % 4 != 0) out.push_back(k / 4);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 VertexKeyBases vertex_key_bases(const std::array<int, 3>& n) {
   VertexKeyBases b;
   const std::uint64_t points = std::uint64_t(n[0]) * std::uint64_t(n[1]) * std::uint64_t(n[2]);
@@ -67,15 +78,10 @@ VertexKeyBases vertex_key_bases(const std::array<int, 3>& n) {
 
 long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& keys,
                          const PointMatrix& before, const PointMatrix& crossing_means,
-                         const GridGeometry& grid) {
+                         const std::vector<std::uint64_t>& split_cells, const GridGeometry& grid) {
   const std::array<int, 3> n = grid.whole_dims();
   const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
   const VertexKeyBases bases = vertex_key_bases(n);
-  // Cells with a second polygon (4 * cell + 1 and up).
-  std::vector<std::uint64_t> split_cells;
-  for (const VertexKey& k : keys)
-    if (k[1] == 0 && k[0] < bases.segments && k[0] % 4 != 0) split_cells.push_back(k[0] / 4);
-  std::sort(split_cells.begin(), split_cells.end());
   const Eigen::Vector3d h = grid.spacing(), min = grid.bounds.min;
   std::atomic<long> put_back{0};
   tbb::parallel_for(Eigen::Index(0), vertices.rows(), [&](Eigen::Index v) {

@@ -27,13 +27,19 @@ VertexKeyBases vertex_key_bases(const std::array<int, 3>& n);
 /// its face, where the plane through its new place, normal to its move, meets them (a thousandth
 /// of a spacing inside), a segment's vertex back where it was (on its face). `keys`: the
 /// vertices' names (lattice_subdivision's at level 0, split_curved_edges' for face vertices);
-/// `grid`: the grid (or block) the keys were made on. A cell with more than one polygon holds as
-/// many cones, which its vertices alone cannot keep apart: they go to `crossing_means` (per
-/// vertex: the mean of its polygon's edge crossings, as marching cubes' polygons lie). Returns
-/// the vertices that had to be put back.
+/// `grid`: the grid (or block) the keys were made on. A cell with more than one polygon
+/// (`split_cells`: ascending cell numbers, split_cells() of the whole dual mesh) holds as many
+/// cones, which its vertices alone cannot keep apart: they go to `crossing_means` (per vertex:
+/// the mean of its polygon's edge crossings, as marching cubes' polygons lie). Returns the
+/// vertices that had to be put back.
 long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& keys,
                          const PointMatrix& before, const PointMatrix& crossing_means,
-                         const GridGeometry& grid);
+                         const std::vector<std::uint64_t>& split_cells, const GridGeometry& grid);
+
+/// The cells (4 * cell + polygon keys / 4) that hold more than one polygon, ascending, among the
+/// dual mesh's vertex keys `keys` on a grid of `n` points.
+std::vector<std::uint64_t> split_cells(const std::vector<std::uint64_t>& keys,
+                                       const std::array<int, 3>& n);
 
 /// Refinement where it pays, inside the regions: each edge of `sub` (an edge-fanned mesh at
 /// level 0, projected) between two cells' vertices, whose chord sags by more than `limit` (its

@@ -311,10 +311,12 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // block's whole dual mesh goes once they are taken.
   PointMatrix crossing_means;
   detail::KeyedTriangles near;
+  std::vector<std::uint64_t> split_cells;  // with edge fans: cells with more than one polygon
   {
     const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
         cells_grid, cp.points, cp.normals, local, nullptr, depths);
     piece.stats = detail::owned_cell_stats(keyed, cells_n, cells_first, cells_end);
+    if (local.edge_fans) split_cells = detail::split_cells(keyed.vertex_key, cells_n);
     for (const Index3& t : refined.thin_points)
       piece.stats.thin_points += in_range(t, cells_first, cells_end);
     near = detail::triangles_of_edges(keyed, cells_n, shifted(cells_first, -scale * ring(options)),
@@ -361,8 +363,10 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
   // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
   // vertices 0.002 h off it.)
-  if (fans && sag > 0 && options.project && !options.refine_zero_set && cp.size() > 0)
+  if (fans && sag > 0 && options.project && !options.refine_zero_set && cp.size() > 0) {
     detail::split_fan_faces(near, sag * h, cp, depths, h, options, cells_grid, sub, reconstructed);
+    corners = detail::shared_corners(sub);  // in the new numbering
+  }
   if (!fans && sag > 0 && levels <= 3 && options.project && !options.refine_zero_set &&
       cp.size() > 0)
     split_sagging_edges(near, levels, sag * h, cp, depths, h, options, sub, reconstructed, corners);
@@ -398,7 +402,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     for (std::size_t v = 0; v < sub.keys.size(); ++v)
       if (const auto it = dual.find(sub.keys[v][0]); sub.keys[v][1] == 0 && it != dual.end())
         means.row(Eigen::Index(v)) = fan_means.row(it->second);
-    detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, cells_grid);
+    detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, split_cells,
+                                cells_grid);
   }
   // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
   // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is
