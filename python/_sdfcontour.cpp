@@ -244,6 +244,7 @@ ContourOptions contour_options(const py::dict& o) {
   c.fallback_to_mc = get<bool>(o, "fallback_to_mc", c.fallback_to_mc);
   c.subdivisions = get<int>(o, "subdivisions", -1);
   c.split_sag = get<double>(o, "split_sag", -1.0);
+  c.local.edge_fans = get<bool>(o, "edge_fans", false);
   c.adaptivity.tolerance = get<double>(o, "adaptivity", 0.0);
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);

@@ -74,7 +74,7 @@ const std::vector<OptionName>& contour_option_names() {
       {"subdivisions", "subdivisions", false},
       {"split-sag", "split_sag", false},
       {"thin-parts", "thin_parts", false},
-      {"edge-fans", "", false},
+      {"edge-fans", "edge_fans", false},
       {"local-reach", "", false},
       {"local-feature-ratio", "", false},
       {"local-robust-rounds", "", false},
