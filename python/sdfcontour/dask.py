@@ -425,7 +425,7 @@ def _one_line(error):
 def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
             resolution=None, dataset=None, batch_size=65536, band="auto", truncation="auto",
             subdivisions="auto", projection="auto", zero_set="auto", progress=False,
-            return_stats=False, split_sag="auto", thin_parts="auto"):
+            return_stats=False, split_sag="auto", thin_parts="auto", edge_fans=False):
     """Contour a grid too large for one process, brick by brick on Dask.
 
     Parameters
@@ -457,7 +457,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         Samples per axis for a callable source.
     dataset : str, optional
         The dataset inside an HDF5 file or zarr group, or the grid inside a ``.vdb``.
-    band, subdivisions, projection, split_sag, thin_parts
+    band, subdivisions, projection, split_sag, thin_parts, edge_fans
         GCP: as in :func:`sdfcontour.contour` (thin_parts "auto": off for a callable; from 192 to
         256 samples per axis, the bricks' gaps are counted in a first pass, as the single process
         counts them on the whole grid).
@@ -502,6 +502,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         options["projection"] = _switch("projection", projection)
         options["zero_set"] = _switch("zero_set", zero_set)
         options["thin_parts"] = _switch("thin_parts", thin_parts)
+        options["edge_fans"] = _checks.flag("edge_fans", edge_fans)
         if options["thin_parts"] == "auto" and callable(source):
             options["thin_parts"] = "off"  # (as contour(): a callable may be no distance)
     # (Smaller bricks cost more halo than cells: GCP's reads ~60 cells beyond its own.)

@@ -185,6 +185,18 @@ def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_
         sdfcontour.dask.contour(bad, method="gcp", brick=64, client=client, truncation="none")
 
 
+def test_gcp_with_edge_fans_in_bricks_is_the_single_process_mesh(client, grid):
+    # Edge fans read one ring of cells beyond a brick's own (no repair stages): bricks of 32 give
+    # the single process's mesh bit for bit, closed.
+    single = sdfcontour.contour(grid, edge_fans=True, band=3)
+    V, F = sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client, edge_fans=True,
+                                   band=3)
+    assert_same_mesh((V, F), single)
+    assert_closed_manifold(F)
+    with pytest.raises(ValueError, match="edge_fans"):
+        sdfcontour.dask.contour(grid, method="gcp", client=client, edge_fans="yes")
+
+
 @pytest.mark.slow
 def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
     # Each brick samples the callable near the surface, exactly wherever the local
