@@ -386,6 +386,17 @@ def test_help_explains_each_option():
 
 
 @pytest.mark.slow
+def assert_the_clis_mesh(tmp_path, grid, mesh, *options):
+    """`sdfcontour contour` of `grid` (saved as .npy) with `options` gives `mesh` (V, F) bit for
+    bit."""
+    np.save(tmp_path / "cli_grid.npy", grid)
+    out = tmp_path / "cli_mesh.ply"
+    subprocess.run([CLI, "contour", str(tmp_path / "cli_grid.npy"), "-o", str(out), *options,
+                    "--quiet"], check=True)
+    V, F = sdfcontour.read_mesh(str(out))
+    assert np.array_equal(mesh[0], V) and np.array_equal(mesh[1], F)
+
+
 def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
     # A callable torus, contoured locally: the same mesh as the CLI on the same grid, closed, and
     # its vertices within 0.02 spacings of the torus on average (marching cubes: ~0.05).
@@ -395,11 +406,7 @@ def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
     assert stats["reconstruction"] == "local"
     h = 2 / (n - 1)
     assert np.abs(torus(V)).mean() < 0.02 * h
-    np.save(tmp_path / "g.npy", g)
-    subprocess.run([CLI, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m.ply"),
-                    "--reconstruction", "local", "--quiet"], check=True)
-    V2, F2 = sdfcontour.read_mesh(str(tmp_path / "m.ply"))
-    assert np.array_equal(V, V2) and np.array_equal(F, F2)
+    assert_the_clis_mesh(tmp_path, g, (V, F), "--reconstruction", "local")
     with pytest.raises(ValueError, match="reconstruction"):
         sdfcontour.contour(g, reconstruction="global")
     with pytest.raises(ValueError, match="subdivisions"):
@@ -407,10 +414,7 @@ def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
     # Without the split of the sagging edges: fewer triangles, the CLI's mesh alike.
     V3, F3 = sdfcontour.contour(g, reconstruction="local", split_sag="off")
     assert 0 < len(F3) < len(F)
-    subprocess.run([CLI, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m3.ply"),
-                    "--reconstruction", "local", "--split-sag", "0", "--quiet"], check=True)
-    V4, F4 = sdfcontour.read_mesh(str(tmp_path / "m3.ply"))
-    assert np.array_equal(V3, V4) and np.array_equal(F3, F4)
+    assert_the_clis_mesh(tmp_path, g, (V3, F3), "--reconstruction", "local", "--split-sag", "0")
     for bad in (2, -0.1, "some", True):
         with pytest.raises(ValueError, match="split_sag"):
             sdfcontour.contour(g, reconstruction="local", split_sag=bad)
@@ -419,10 +423,8 @@ def test_local_reconstruction_matches_the_cli_and_the_surface(tmp_path):
     V5, F5, s5 = sdfcontour.contour(g, reconstruction="local", thin_parts=False, return_stats=True)
     assert stats["local_thin_points"] == 0 and s5["local_thin_points"] == 0
     assert V5.shape != V.shape or not np.array_equal(V5, V)  # the finer grid's cells
-    subprocess.run([CLI, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m5.ply"),
-                    "--reconstruction", "local", "--thin-parts", "off", "--quiet"], check=True)
-    V6, F6 = sdfcontour.read_mesh(str(tmp_path / "m5.ply"))
-    assert np.array_equal(V5, V6) and np.array_equal(F5, F6)
+    assert_the_clis_mesh(tmp_path, g, (V5, F5), "--reconstruction", "local", "--thin-parts",
+                         "off")
     for bad in ("on", 1, None):
         with pytest.raises(ValueError, match="thin_parts"):
             sdfcontour.contour(g, reconstruction="local", thin_parts=bad)
@@ -443,11 +445,7 @@ def test_edge_fans_give_the_clis_mesh_near_the_surface_with_a_few_times_mcs_tria
     assert len(V) - len(counts) + len(F) == 0
     h = 2 / (n - 1)
     assert np.abs(torus(V)).mean() < 0.05 * h
-    np.save(tmp_path / "g.npy", g)
-    subprocess.run([CLI, "contour", str(tmp_path / "g.npy"), "-o", str(tmp_path / "m.ply"),
-                    "--edge-fans", "on", "--quiet"], check=True)
-    V2, F2 = sdfcontour.read_mesh(str(tmp_path / "m.ply"))
-    assert np.array_equal(V, V2) and np.array_equal(F, F2)
+    assert_the_clis_mesh(tmp_path, g, (V, F), "--edge-fans", "on")
     for bad in ("on", 1, None):
         with pytest.raises(ValueError, match="edge_fans"):
             sdfcontour.contour(g, edge_fans=bad)
