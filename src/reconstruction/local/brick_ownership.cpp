@@ -7,11 +7,14 @@
 
 namespace sdfcontour::detail {
 
-Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
-  std::uint64_t p = edge / 3;
+Index3 grid_point_of(std::uint64_t p, const Index3& n) {
   const int k = int(p % std::uint64_t(n[2]));
   p /= std::uint64_t(n[2]);
   return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
+}
+
+Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
+  return grid_point_of(edge / 3, n);
 }
 
 bool in_range(const Index3& p, const Index3& lo, const Index3& hi) {

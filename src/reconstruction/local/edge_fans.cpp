@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 
@@ -18,12 +19,6 @@ namespace {
 // the vertex placement's own margin, which keeps the argument strict (no two triangles of
 // different cells share more than the faces between them).
 constexpr double kMargin = 1e-3;
-
-std::array<int, 3> point_of(std::uint64_t p, const std::array<int, 3>& n) {
-  const int k = int(p % std::uint64_t(n[2]));
-  p /= std::uint64_t(n[2]);
-  return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
-}
 
 // The position on the segment from `start` + [0, h] along `axis` (clamped a margin inside)
 // where the plane through `now`, normal to the move from `was`, meets it; a segment nearly in
@@ -41,7 +36,7 @@ double place_along(const Eigen::Vector3d& start, int axis, double h, const Eigen
 // position of its plane; false if the cells share no face.
 bool shared_face(std::uint64_t kx, std::uint64_t ky, const std::array<int, 3>& cells,
                  const GridGeometry& grid, int& axis, Eigen::Vector3d& low) {
-  const std::array<int, 3> a = point_of(kx / 4, cells), b = point_of(ky / 4, cells);
+  const std::array<int, 3> a = grid_point_of(kx / 4, cells), b = grid_point_of(ky / 4, cells);
   axis = -1;
   for (int d = 0; d < 3; ++d) {
     const int diff = std::abs(a[std::size_t(d)] - b[std::size_t(d)]);
@@ -92,7 +87,7 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
     Eigen::Vector3d low;
     if (keys[std::size_t(v)][1] != 0) {
       // A face's vertex: on the face's plane, moved within it, a margin inside its sides.
-      if (!shared_face(key, keys[std::size_t(v)][1] / 64 - 1, cells, grid, axis, low)) {
+      if (!shared_face(key, far_end_key(keys[std::size_t(v)]), cells, grid, axis, low)) {
         kept = was;
       } else {
         kept = was;
@@ -108,7 +103,7 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
                std::binary_search(split_cells.begin(), split_cells.end(), key / 4)) {
       kept = crossing_means.row(v).transpose();
     } else if (key < bases.segments) {
-      const std::array<int, 3> c = point_of(key / 4, cells);
+      const std::array<int, 3> c = grid_point_of(key / 4, cells);
       for (int a = 0; a < 3; ++a) {
         const double lo = min[a] + c[std::size_t(a)] * h[a];
         kept[a] = std::clamp(now[a], lo + kMargin * h[a], lo + (1 - kMargin) * h[a]);
@@ -118,7 +113,7 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
     } else {
       const std::uint64_t edge = key - bases.edges;
       axis = int(edge % 3);
-      const std::array<int, 3> p = point_of(edge / 3, n);
+      const std::array<int, 3> p = edge_low_point(edge, n);
       Eigen::Vector3d start;
       for (int a = 0; a < 3; ++a) start[a] = min[a] + p[std::size_t(a)] * h[a];
       kept = start;
@@ -139,16 +134,11 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
   const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
   const VertexKeyBases bases = vertex_key_bases(n);
   const PointMatrix normals = vertex_normals(sub.mesh);
-  const double crease = std::cos(30.0 * M_PI / 180.0);
   auto split = [&](int x, int y) {
     const VertexKey &kx = sub.keys[std::size_t(x)], &ky = sub.keys[std::size_t(y)];
     if (kx[1] != 0 || ky[1] != 0 || kx[0] >= bases.segments || ky[0] >= bases.segments)
       return false;  // only between two cells' vertices: the edge crosses their face
-    if (sub.on_feature[std::size_t(x)] && sub.on_feature[std::size_t(y)]) return false;
-    const double c = std::clamp(normals.row(x).dot(normals.row(y)), -1.0, 1.0);
-    if (c < crease) return false;
-    const double length = (sub.mesh.vertices.row(x) - sub.mesh.vertices.row(y)).norm();
-    return length * std::acos(c) / 8 > limit;
+    return chord_sags(sub, normals, x, y, limit);
   };
   SplitMesh split_mesh = split_curved_edges(near, sub, 0, split);
   const Eigen::Index count = split_mesh.sub.mesh.vertices.rows();
@@ -169,7 +159,7 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
     const Eigen::Vector3d a = sub.mesh.vertices.row(x).transpose(),
                           b = sub.mesh.vertices.row(y).transpose();
     Eigen::Vector3d at = 0.5 * (a + b);
-    if (shared_face(key[0], key[1] / 64 - 1, cells, grid, axis, low) && a[axis] != b[axis])
+    if (shared_face(key[0], far_end_key(key), cells, grid, axis, low) && a[axis] != b[axis])
       at = a + (low[axis] - a[axis]) / (b[axis] - a[axis]) * (b - a);
     start.row(v) = placed.row(v) = at.transpose();
   }

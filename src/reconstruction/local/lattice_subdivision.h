@@ -37,6 +37,17 @@ struct SubdividedMesh {
 
 SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels);
 
+/// A vertex on a level-0 edge (key[1] != 0, not inside a triangle): the key of the edge's end
+/// with the larger key (key[0] is the other end's).
+inline std::uint64_t far_end_key(const VertexKey& key) {
+  return key[1] / 64 - 1;
+}
+
+/// Whether the edge (x, y) of `sub`, with `normals` its vertex normals, sags by more than
+/// `limit` (its length times its ends' normals' turn / 8, a circular arc's sag), off sharp edges
+/// and creases.
+bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, int y, double limit);
+
 /// Per vertex of `sub`: a corner that samples share (on_feature 2), which stays where it is.
 std::vector<char> shared_corners(const SubdividedMesh& sub);
 
