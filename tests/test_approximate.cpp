@@ -1,5 +1,6 @@
-// Fields that are only approximately distances: GCP rescales a scaled distance and falls back to
-// marching cubes, saying why, where its contact points cannot be trusted; never a garbage mesh.
+// Fields that are only approximately distances: GCP rescales a scaled distance, takes a field
+// clamped too close for any contact point to marching cubes up front, and lets each cell without a
+// contact point keep its edge crossings, saying why; never a garbage mesh.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -97,26 +98,63 @@ TEST(Approximate, AGivenTruncationFollowsTheValuesIntoDistances) {
   EXPECT_LT(worst_distance(*b.mesh, "torus"), 1.05 * worst_distance(*a.mesh, "torus"));
 }
 
-TEST(Approximate, ClampedFieldsFallBackToMarchingCubes) {
-  // Values clamped at one spacing: no sample is left in the band for a contact point.
+bool has_stage(const ContourResult& r, const std::string& name) {
+  return std::any_of(r.stages.begin(), r.stages.end(),
+                     [&](const StageTime& s) { return s.name == name; });
+}
+
+TEST(Approximate, FieldsClampedAtASpacingAreMarchingCubesDecidedUpFront) {
+  // Values clamped at one spacing: no sample keeps a contact point. Measured before anything
+  // runs, so marching cubes' mesh comes without a discarded GCP run, on either reconstruction.
   const Grid g =
       transformed("sphere", 40, [](double v, double h, double) { return std::clamp(v, -h, h); });
-  ContourOptions poisson = gcp_options();
-  poisson.reconstruction = Reconstruction::Poisson;
-  const ContourResult r = contour(grid_input(g), poisson);
-  EXPECT_FALSE(r.fallback.empty());
-  EXPECT_FALSE(r.smoothed);
   const Mesh mc = marching_cubes(g);
-  EXPECT_TRUE(r.mesh->vertices == mc.vertices);
-  EXPECT_TRUE(r.mesh->triangles == mc.triangles);
-  ContourOptions strict = poisson;
+  for (Reconstruction rec : {Reconstruction::Auto, Reconstruction::Poisson}) {
+    ContourOptions o = gcp_options();
+    o.reconstruction = rec;
+    const ContourResult r = contour(grid_input(g), o);
+    EXPECT_NE(r.fallback.find("clamped within"), std::string::npos) << r.fallback;
+    EXPECT_FALSE(has_stage(r, "gcp (discarded)"));
+    EXPECT_FALSE(r.smoothed);
+    EXPECT_TRUE(r.mesh->vertices == mc.vertices);
+    EXPECT_TRUE(r.mesh->triangles == mc.triangles);
+    ContourOptions strict = o;
+    strict.fallback_to_mc = false;
+    EXPECT_THROW(contour(grid_input(g), strict), Error);
+  }
+}
+
+TEST(Approximate, CellsWithoutContactPointsKeepTheirCrossingsWithoutARerun) {
+  // The same clamped field, its measures not consulted (detect_approximate off): the local
+  // reconstruction's cells decide alone, each without a contact point taking its vertex from its
+  // edge crossings. The mesh is GCP's own, closed and as close to the sphere as marching cubes'
+  // within a spacing's tenth; nothing is discarded or run again.
+  const Grid g =
+      transformed("sphere", 40, [](double v, double h, double) { return std::clamp(v, -h, h); });
+  const double h = g.spacing()[0];
+  ContourOptions o = gcp_options();
+  o.detect_approximate = false;
+  const ContourResult r = contour(grid_input(g), o);
+  EXPECT_TRUE(r.fallback.empty()) << r.fallback;
+  EXPECT_FALSE(has_stage(r, "gcp (discarded)"));
+  EXPECT_FALSE(has_stage(r, "marching"));
+  ASSERT_TRUE(r.mesh && r.local_bricks);
+  EXPECT_EQ(r.local_bricks->contact_points, 0);
+  test::expect_closed_and_outward(*r.mesh);
+  EXPECT_LT(worst_distance(*r.mesh, "sphere"), worst_distance(marching_cubes(g), "sphere") + 0.1 * h);
+  ContourOptions strict = o;
   strict.fallback_to_mc = false;
   EXPECT_THROW(contour(grid_input(g), strict), Error);
-  // The local reconstruction (the default on grids) has no contact point either: the same.
-  const ContourResult local = contour(grid_input(g), gcp_options());
-  EXPECT_NE(local.fallback.find("no contact point"), std::string::npos) << local.fallback;
-  EXPECT_TRUE(local.mesh->vertices == mc.vertices);
-  EXPECT_TRUE(local.mesh->triangles == mc.triangles);
+  // Clamped at 1.5 spacings, some samples keep a point: GCP's mesh, decided by nobody but the
+  // cells.
+  const Grid wider = transformed("sphere", 40, [](double v, double h, double) {
+    return std::clamp(v, -1.5 * h, 1.5 * h);
+  });
+  const ContourResult w = contour(grid_input(wider), gcp_options());
+  EXPECT_TRUE(w.fallback.empty()) << w.fallback;
+  ASSERT_TRUE(w.mesh && w.local_bricks);
+  EXPECT_GT(w.local_bricks->contact_points, 0);
+  test::expect_closed_and_outward(*w.mesh);
 }
 
 TEST(Approximate, ThinPartsAreNotTakenForScaledValues) {

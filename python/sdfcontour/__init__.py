@@ -197,10 +197,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
     batch_size : int
         Points per call of a callable ``sdf``.
     strict : bool
-        Where GCP cannot trust the values as distances (no contact point, or far fewer than
-        the cells crossing the surface), it returns marching cubes' mesh
-        (``stats["fallback"]``) with a ``FallbackWarning``; ``strict=True`` raises ValueError
-        instead.
+        Where GCP cannot trust the values as distances (clamped within a spacing of the
+        surface; on the Poisson path, a mesh off the zero set or from too few contact points),
+        it returns marching cubes' mesh (``stats["fallback"]``) with a ``FallbackWarning``, and
+        where the local reconstruction keeps no contact point (or, for rescaled values, very
+        few) it goes on from the cells' edge crossings; ``strict=True`` raises ValueError
+        instead of either.
     refine : bool or "auto"
         GCP with a callable ``sdf``: move each vertex along its normal onto the callable's zero
         set (two secant steps, each move at most half a spacing; a vertex whose field does not

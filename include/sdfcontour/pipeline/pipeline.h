@@ -221,10 +221,14 @@ struct ContourOptions {
   /// distance to a detailed mesh measures up to ~1% off at 64^3, and rescaling an exact distance
   /// by 1% hides most samples.
   bool normalize_values = true;
-  /// When GCP's mesh on a grid cannot be trusted (no usable band in a truncated grid, no contact
-  /// point, or fewer than a tenth as many as grid edges crossing the surface: the values do not
-  /// behave as distances), GCP returns marching cubes' mesh instead, and says why in
-  /// ContourResult::fallback. Without it, those cases throw Error.
+  /// Where GCP on a grid cannot trust the values as distances, it says so and goes on, decided
+  /// once: values clamped within about a spacing of the surface (no sample can keep a contact
+  /// point) take marching cubes' mesh from the start; on the local reconstruction, each cell
+  /// without a contact point takes its vertex from its edge crossings (the run says when none or
+  /// few have one); on the Poisson path, a mesh off the values' zero set, with more pieces than
+  /// marching cubes', or from too few contact points is replaced by marching cubes' mesh.
+  /// ContourResult::fallback says why marching cubes' mesh was returned. Without it, each of
+  /// those cases throws Error instead.
   bool fallback_to_mc = true;
   /// GCP on a noisy grid (noise_level() above 5% of a spacing, times the gradient norm): the
   /// values are smoothed with a Gaussian of one sample first, and everything after runs on the

@@ -143,25 +143,29 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
   result.mesh = stages.run("local", "local reconstruction in bricks", [&] {
     return local_mesh_in_bricks(grid, lb, size, &stats, lb.keep_contact_points ? &kept : nullptr);
   });
-  // Rescaled values that hide nearly every contact point were no scaled distances: every cell
-  // would take its edge crossings (hammer 32^3 rescaled by 1.11: 0.62x MC's L1, against 0.27x
-  // from the values as given, which GradientNormSummary::slope now keeps).
-  if (band.value_scale != 1 && 10 * stats.contact_points < stats.local.cells) {
-    result.fallback = "only " + std::to_string(stats.contact_points) + " contact points for " +
-                      std::to_string(stats.local.cells) + " cells crossing the surface";
-    return;
-  }
-  // Every cell from its edge crossings is marching cubes' mesh with more steps, not GCP's (unless
-  // the vertices then go onto the interpolant's zero set, as for values that are no distances).
-  // As on the Poisson path: a band the user narrowed is the user's error; values clamped too
-  // close to the surface, or none that keeps a point, are no distances (contour() falls back).
+  // Each cell decides for itself: one with contact points nearby takes GCP's vertex, one without
+  // keeps its edge crossings' (or, where the values are no distances, the zero set's). A grid
+  // where few or none keep a point is said, and is no error unless asked (fallback_to_mc off);
+  // nothing runs again. (Rescaled values that hide nearly every point were no scaled distances:
+  // hammer 32^3 rescaled by 1.11 gave 0.62x MC's L1, 0.27x as given, which
+  // GradientNormSummary::slope now keeps.)
+  std::string few;
   if (stats.contact_points == 0 && !lb.refine_zero_set) {
+    // A band the user narrowed is the user's error.
     if (band.band > 0 && !truncation_found(grid, band))
       throw Error("no contact point: no sample within the band of " +
                   (std::ostringstream() << band.band).str() +
                   " spacings keeps one; widen it with --band (or --band all)");
-    result.fallback = kNoContactPoint;
-    return;
+    few = kNoContactPoint;
+  } else if (band.value_scale != 1 && 10 * stats.contact_points < stats.local.cells) {
+    few = "only " + std::to_string(stats.contact_points) + " contact points for " +
+          std::to_string(stats.local.cells) + " cells crossing the surface";
+  }
+  if (!few.empty()) {
+    if (!options.fallback_to_mc) throw Error(few + ": the values do not behave as distances");
+    if (options.progress)
+      options.progress(few + ": the cells without one take their vertex from their edge "
+                       "crossings, as dual contouring does");
   }
   if (lb.keep_contact_points) {
     ContactPoints cp;
