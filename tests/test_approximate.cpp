@@ -141,15 +141,15 @@ TEST(Approximate, CellsWithoutContactPointsKeepTheirCrossingsWithoutARerun) {
   ASSERT_TRUE(r.mesh && r.local_bricks);
   EXPECT_EQ(r.local_bricks->contact_points, 0);
   test::expect_closed_and_outward(*r.mesh);
-  EXPECT_LT(worst_distance(*r.mesh, "sphere"), worst_distance(marching_cubes(g), "sphere") + 0.1 * h);
+  EXPECT_LT(worst_distance(*r.mesh, "sphere"),
+            worst_distance(marching_cubes(g), "sphere") + 0.1 * h);
   ContourOptions strict = o;
   strict.fallback_to_mc = false;
   EXPECT_THROW(contour(grid_input(g), strict), Error);
   // Clamped at 1.5 spacings, some samples keep a point: GCP's mesh, decided by nobody but the
   // cells.
-  const Grid wider = transformed("sphere", 40, [](double v, double h, double) {
-    return std::clamp(v, -1.5 * h, 1.5 * h);
-  });
+  const Grid wider = transformed(
+      "sphere", 40, [](double v, double h, double) { return std::clamp(v, -1.5 * h, 1.5 * h); });
   const ContourResult w = contour(grid_input(wider), gcp_options());
   EXPECT_TRUE(w.fallback.empty()) << w.fallback;
   ASSERT_TRUE(w.mesh && w.local_bricks);
