@@ -321,10 +321,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     }
     if (!few.empty() && !options.fallback_to_mc)
       throw Error(few + ": the values do not behave as distances");
-    if (!few.empty() && options.progress)
-      options.progress(few +
-                       ": the cells without one take their vertex from their edge "
-                       "crossings, as dual contouring does");
+    if (!few.empty() && options.progress) options.progress(few + detail::kCellsFromCrossings);
   }
   if (local) {
     const detail::ReconstructionInputs in =

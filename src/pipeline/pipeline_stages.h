@@ -109,6 +109,11 @@ struct ReconstructionInputs {
 inline constexpr const char* kNoContactPoint =
     "no contact point was kept, so there is nothing to reconstruct a surface from";
 
+// What the local reconstruction does where a grid keeps no or few contact points (said after the
+// reason).
+inline constexpr const char* kCellsFromCrossings =
+    ": the cells without one take their vertex from their edge crossings, as dual contouring does";
+
 // Why the contact points are too few for the values to be distances ("": they are not).
 std::string contact_point_shortage(const GridSource& grid, const ContourOptions& options,
                                    const ContactPoints& cp);

@@ -163,10 +163,7 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
   }
   if (!few.empty()) {
     if (!options.fallback_to_mc) throw Error(few + ": the values do not behave as distances");
-    if (options.progress)
-      options.progress(few +
-                       ": the cells without one take their vertex from their edge "
-                       "crossings, as dual contouring does");
+    if (options.progress) options.progress(few + kCellsFromCrossings);
   }
   if (lb.keep_contact_points) {
     ContactPoints cp;
