@@ -22,9 +22,11 @@ namespace sdfcontour {
 ///   tie_tolerance: as ContactPointOptions says, against every band sample's sphere;
 ///   max_slope_miss: the 26 lattice neighbours in the band stand for the triangulation's;
 ///   sphere_slide_rounds: as for the triangulation, out of every sphere that holds the point;
-///   power_vertex_tolerance: without tetrahedra, the slid point is kept where its power to every
-///   sphere that holds it is within this fraction of value^2 (where spheres nearly meet, as at a
-///   power vertex); 0: only a point that no sphere holds;
+///   power_vertex_tolerance: a slid point is kept where its power to every sphere that holds it
+///   is within this fraction of value^2 (where spheres nearly meet), and a sample without a point
+///   then takes a vertex of its power cell among the spheres near where its gradient points
+///   whose power to its own sphere is within it (where it meets three others, as the
+///   triangulation's power vertices); 0: only a point that no sphere holds;
 ///   near_miss_tolerance, try_tet_gradients: not used.
 /// With `only` (one flag per band sample), just the flagged samples give points.
 /// A flagged sample reads the band samples within lattice_contact_reach samples of it; a
