@@ -7,8 +7,8 @@
 
 #include "contact_points/convex_cell.h"
 
-using sdfcontour::detail::ConvexCell;
 using Eigen::Vector3d;
+using sdfcontour::detail::ConvexCell;
 
 namespace {
 
