@@ -157,6 +157,21 @@ TEST(Approximate, CellsWithoutContactPointsKeepTheirCrossingsWithoutARerun) {
   test::expect_closed_and_outward(*w.mesh);
 }
 
+TEST(Approximate, SparseContactPointsMakeNoFalseFeatures) {
+  // Clamped at 1.1-1.5 spacings, a sphere keeps few contact points: a cell without its own takes
+  // its vertex from its crossings, and two distant points' planes (34 degrees apart) must not
+  // make it an edge outside the sphere (it did: 0.29-0.37 h off, marching cubes 0.01 h).
+  for (double t : {1.1, 1.2, 1.5}) {
+    Grid g = transformed("sphere", 40, [](double v, double, double) { return v; });
+    const double h = g.spacing()[0];
+    g.values = g.values.cwiseMax(-t * h).cwiseMin(t * h);
+    const ContourResult r = contour(grid_input(g), gcp_options());
+    ASSERT_TRUE(r.mesh && r.fallback.empty()) << t;
+    test::expect_closed_and_outward(*r.mesh);
+    EXPECT_LT(worst_distance(*r.mesh, "sphere"), 0.05 * h) << t;
+  }
+}
+
 TEST(Approximate, ThinPartsAreNotTakenForScaledValues) {
   SDFCONTOUR_REQUIRE_SHARED_MESHES();
   // The plane's exact distance at 16^3: central differences across its thin wings measure a
