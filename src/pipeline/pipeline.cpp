@@ -465,12 +465,32 @@ ContourResult contour_with_exact_sdf(const SdfInput& input, const AnalyticShape&
 
 namespace {
 
+ContourResult contour_as_measured(const SdfInput& input, const AnalyticShape* shape,
+                                  const ContourOptions& options, const GridView* grid,
+                                  const GridMeasures& measured);
+
 ContourResult contour_before_adaptivity(const SdfInput& input, const AnalyticShape* shape,
                                         const ContourOptions& options) {
   const GridView* grid = grid_view_of(input);
   if (!grid || options.method != Method::Gcp || !options.smooth_noise)
     return contour_with_fallback(input, shape, options);
+  if (options.progress) options.progress("measuring the values near the surface");
+  const auto started = std::chrono::steady_clock::now();
   const GridMeasures measured = measure_grid(*grid, options);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  ContourResult result = contour_as_measured(input, shape, options, grid, measured);
+  // The measuring is the run's time too (passes over the whole grid for the validation, the
+  // truncation, the gradient norms and the noise: bunny 256^3, 0.64 s of 6.5 s with edge fans
+  // and lattice gradients on a band of 2).
+  result.stages.insert(result.stages.begin(), {"measure", seconds});
+  return result;
+}
+
+// contour_before_adaptivity's choices from the grid's measures.
+ContourResult contour_as_measured(const SdfInput& input, const AnalyticShape* shape,
+                                  const ContourOptions& options, const GridView* grid,
+                                  const GridMeasures& measured) {
   // Decided once, from the grid's measures: no later stage runs the pipeline again.
   if (options.detect_approximate && clamped_too_close(measured, grid->spacing().maxCoeff())) {
     std::ostringstream why;
