@@ -10,9 +10,12 @@
 #include <utility>
 
 #include "contact_points/convex_cell.h"
+#include "contact_points/lattice_spheres.h"
 
 namespace sdfcontour {
 namespace {
+
+using detail::Lattice;
 
 // A second difference over this many spacings (|v+ - 2 v + v-| > kKink * h) marks a crease or a
 // medial axis between the samples: the gradient then takes the one-sided difference on the side
@@ -23,9 +26,6 @@ constexpr double kKink = 0.5;
 // Gradients shorter than this have no usable direction.
 constexpr double kTinyGradient = 1e-300;
 
-// Lattice samples per chunk of a column that the sphere search bounds by its largest radius.
-constexpr int kChunk = 4;
-
 // A power vertex is looked for within this many spacings (in each direction) of where the
 // gradient puts the point (the triangulation's are the orthocentres of the sample's own
 // tetrahedra). Armadillo 32^3: 0.25 keeps 13,211 points at a median distance of 0.0004 h (the
@@ -34,108 +34,6 @@ constexpr int kChunk = 4;
 constexpr double kPowerBox = 0.25;
 
 enum class Outcome : char { Skipped, ZeroGradient, Discarded, Kept, Rescued };
-
-// The band samples on their lattice: each lattice sample's band index (or -1), and the largest
-// radius |value| of the band samples in each column and in each chunk of kChunk along a column.
-class Lattice {
- public:
-  Lattice(const GridGeometry& grid, const BandSamples& band)
-      : band_(band),
-        n_(grid.dims),
-        chunks_((n_[2] + kChunk - 1) / kChunk),
-        origin_(grid.point(0, 0, 0)),
-        h_(grid.spacing()),
-        slot_(grid.size(), -1),
-        radius_(band.source.size()),
-        column_max_(std::size_t(n_[0]) * n_[1], 0.0),
-        chunk_max_(std::size_t(n_[0]) * n_[1] * std::size_t(chunks_), 0.0) {
-    if (band.source.size() > std::size_t(std::numeric_limits<int>::max()))
-      throw Error("too many band samples in one brick: use smaller bricks (--brick-size)");
-    for (std::size_t s = 0; s < band.source.size(); ++s) {
-      const std::size_t p = std::size_t(band.source[s]), column = p / std::size_t(n_[2]);
-      const int k = int(p % std::size_t(n_[2]));
-      slot_[p] = int(s);
-      const double r = radius_[s] = std::abs(band.samples.values[Eigen::Index(s)]);
-      double& in_column = column_max_[column];
-      double& in_chunk = chunk_max_[column * std::size_t(chunks_) + std::size_t(k / kChunk)];
-      in_column = std::max(in_column, r);
-      in_chunk = std::max(in_chunk, r);
-      largest_ = std::max(largest_, r);
-    }
-  }
-
-  const Eigen::Vector3d& spacing() const { return h_; }
-  double value(long s) const { return band_.samples.values[Eigen::Index(s)]; }
-  Eigen::Vector3d point(long s) const { return band_.samples.points.row(Eigen::Index(s)); }
-  std::array<int, 3> index(long s) const {
-    const long p = band_.source[std::size_t(s)];
-    return {int(p / (long(n_[1]) * n_[2])), int(p / n_[2] % n_[1]), int(p % n_[2])};
-  }
-
-  // The band sample at lattice (i, j, k), or -1.
-  long find(int i, int j, int k) const {
-    if (i < 0 || j < 0 || k < 0 || i >= n_[0] || j >= n_[1] || k >= n_[2]) return -1;
-    return slot_[(std::size_t(i) * n_[1] + j) * n_[2] + k];
-  }
-
-  // Calls f(j, squared distance from c to p_j) for each band sample j != self whose sphere holds
-  // c (|c - p_j| < |value_j|), until f returns true; returns whether one did.
-  template <class F>
-  bool any_sphere_holding(const Eigen::Vector3d& c, long self, F&& f) const {
-    return any_sphere_near(c, 0.0, self, std::forward<F>(f));
-  }
-
-  // The same for the spheres that come within `extra` of c (|c - p_j| < |value_j| + extra).
-  template <class F>
-  bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
-    const double far = largest_ + extra;
-    const Eigen::Vector3d lo = (c.array() - far - origin_.array()) / h_.array();
-    const Eigen::Vector3d hi = (c.array() + far - origin_.array()) / h_.array();
-    if (!(lo.allFinite() && hi.allFinite())) return false;
-    const int i0 = std::max(0, int(std::ceil(lo[0]))), i1 = std::min(n_[0] - 1, int(hi[0]));
-    const int j0 = std::max(0, int(std::ceil(lo[1]))), j1 = std::min(n_[1] - 1, int(hi[1]));
-    for (int i = i0; i <= i1; ++i) {
-      const double dx = origin_[0] + i * h_[0] - c[0];
-      for (int j = j0; j <= j1; ++j) {
-        const std::size_t column = std::size_t(i) * n_[1] + j;
-        const double dy = origin_[1] + j * h_[1] - c[1];
-        const double across = dx * dx + dy * dy, top = column_max_[column] + extra;
-        if (across >= top * top) continue;
-        const double reach = std::sqrt(top * top - across);
-        const int k0 = std::max(0, int(std::ceil((c[2] - reach - origin_[2]) / h_[2])));
-        const int k1 = std::min(n_[2] - 1, int((c[2] + reach - origin_[2]) / h_[2]));
-        const double* chunk_max = &chunk_max_[column * std::size_t(chunks_)];
-        const int* slot = &slot_[column * std::size_t(n_[2])];
-        // Chunk by chunk, each skipped where its largest sphere cannot reach c.
-        for (int q = k0 / kChunk; q * kChunk <= k1; ++q) {
-          const int a = std::max(k0, q * kChunk), b = std::min(k1, q * kChunk + kChunk - 1);
-          const double below = origin_[2] + a * h_[2] - c[2], above = origin_[2] + b * h_[2] - c[2];
-          const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
-                       m = chunk_max[q] + extra;
-          if (across + dz * dz >= m * m) continue;
-          for (int k = a; k <= b; ++k) {
-            const int t = slot[k];
-            if (t < 0 || t == self) continue;
-            const double z = origin_[2] + k * h_[2] - c[2];
-            const double d2 = across + z * z, r = radius_[std::size_t(t)] + extra;
-            if (d2 < r * r && f(long(t), d2)) return true;
-          }
-        }
-      }
-    }
-    return false;
-  }
-
- private:
-  const BandSamples& band_;
-  std::array<int, 3> n_;
-  int chunks_;  // per column
-  Eigen::Vector3d origin_, h_;
-  std::vector<int> slot_;
-  std::vector<double> radius_;
-  std::vector<double> column_max_, chunk_max_;
-  double largest_ = 0;
-};
 
 // One sample's point: its gradient from the lattice, the candidate, the filter and the rescues.
 class SamplePoint {
