@@ -7,7 +7,7 @@
 #include <limits>
 #include <sstream>
 
-#include "pipeline/enum_names.h"
+#include "pipeline/grid_measures.h"
 #include "pipeline/pipeline_stages.h"
 #include "sdfcontour/extraction/brick_marching.h"
 #include "sdfcontour/extraction/marching.h"
@@ -16,91 +16,15 @@
 namespace sdfcontour {
 
 namespace {
-const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
-                                            {"gtcp", Method::Gtcp},
-                                            {"mc", Method::Mc},
-                                            {"mt-rt", Method::MtRt},
-                                            {"mt-dt", Method::MtDt}};
-const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
-                                                            {"delaunay", GradientSource::Delaunay},
-                                                            {"knn", GradientSource::Knn},
-                                                            {"lattice", GradientSource::Lattice}};
-const detail::NameTable<Reconstruction> kReconstructions = {{"auto", Reconstruction::Auto},
-                                                            {"poisson", Reconstruction::Poisson},
-                                                            {"local", Reconstruction::Local}};
-const detail::NameTable<Switch> kSwitches = {
-    {"auto", Switch::Auto}, {"on", Switch::On}, {"off", Switch::Off}};
-}  // namespace
 
-Switch parse_switch(const std::string& what, const std::string& name) {
-  return detail::parse_name(kSwitches, what, name);
-}
-
-Reconstruction parse_reconstruction(const std::string& name) {
-  return detail::parse_name(kReconstructions, "reconstruction", name);
-}
-std::string reconstruction_name(Reconstruction reconstruction) {
-  return detail::name_of(kReconstructions, reconstruction);
-}
-
-Method parse_method(const std::string& name) {
-  return detail::parse_name(kMethods, "method", name);
-}
-std::string method_name(Method method) {
-  return detail::name_of(kMethods, method);
-}
-GradientSource parse_gradient_source(const std::string& name) {
-  return detail::parse_name(kGradientSources, "gradient source", name);
-}
-std::string gradient_source_name(GradientSource source) {
-  return detail::name_of(kGradientSources, source);
-}
-
-namespace {
+using detail::choose_for_approximate_distances;
+using detail::clamped_too_close;
+using detail::GridMeasures;
+using detail::kClampedTooClose;
+using detail::kNoisy;
+using detail::measure_grid;
 
 using detail::Stages;
-
-// Noise above this many spacings is smoothed away before GCP (ContourOptions::smooth_noise).
-// Exact distances to the shared meshes measure at most 0.067 (armadillo 16^3), 0.045 at 32^3.
-constexpr double kNoisy = 0.08;
-
-// What contour() measures of a grid before choosing to smooth it, handed on so that the
-// pipeline does not measure it again.
-struct GridMeasures {
-  Truncation truncation;               // the options' band's, found in the grid once
-  GradientNormSummary gradient_norms;  // with that truncation
-  double noise = 0;                    // in spacings, see noise_in_spacings
-};
-
-// The grid validated, its gradient norms, and the noise on its values near the surface, in
-// spacings. A distance scaled by m has its noise scaled by m too, so the noise is divided by the
-// gradient norm when that is far from 1 (by more than half: noise itself inflates the measured
-// norm, 1.25 at 0.5 h).
-GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
-  validate_grid(grid);
-  GridMeasures m;
-  const Truncation truncation = m.truncation = resolve_truncation(grid, options.band);
-  m.gradient_norms = gradient_norm_summary(grid, truncation);
-  const double slope = m.gradient_norms.median;
-  const double scale = std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.5 ? slope : 1;
-  m.noise = noise_level(grid, truncation) / scale / grid.spacing().maxCoeff();
-  return m;
-}
-
-// Values clamped this close to the surface (in spacings, on both sides) leave no sample whose
-// neighbours are unclamped, so none keeps a contact point: a sphere at 40^3 clamped at 1 spacing
-// keeps none, at 1.1 spacings 384, at 1.5 1,760, at 3 6,928. (A hair over one: the clamp's own
-// rounding.) Marching cubes' mesh is then the best the values give: at 0.5 and 1 spacing its
-// vertices lie 0.020 h and 0.0039 h from the sphere on average, the local reconstruction's on the
-// grid's zero set 0.037 h and 0.0032 h.
-constexpr double kClampedTooClose = 1.05;
-
-// Whether the measured truncation leaves the grid no contact point (kClampedTooClose).
-bool clamped_too_close(const GridMeasures& measured, double spacing) {
-  const Truncation& t = measured.truncation;
-  const double slope = measured.gradient_norms.slope > 0 ? measured.gradient_norms.slope : 1.0;
-  return t.detected() && std::max(t.inside, t.outside) / slope <= kClampedTooClose * spacing;
-}
 
 // Throws Error where the input cannot be contoured with the options' method. `measured`: the
 // grid was validated already.
@@ -176,64 +100,12 @@ BandSamples band_stage(const detail::GridSource& grid, const ScatteredInput* sca
   });
 }
 
-// A grid read a block at a time (a .vdb level set): marching cubes or GCP's local reconstruction
-// brick by brick, the values taken as distances (a level set's are), nothing measured of the
-// whole grid; its own truncation (the background) unless the options give one.
-ContourResult contour_blocked_grid(const BlockedGridInput& input, const ContourOptions& given) {
-  const BlockedGrid& grid = input.grid;
-  validate_grid_geometry(grid);
-  ContourOptions options = given;
-  if (options.band.truncation_mode == TruncationMode::Auto && input.truncation > 0) {
-    options.band.truncation_mode = TruncationMode::Given;
-    options.band.truncation = input.truncation;
-  }
-  const bool mc = options.method == Method::Mc && !options.want_points;
-  if (!options.want_mesh ||
-      (!mc && (options.method != Method::Gcp || options.reconstruction == Reconstruction::Poisson ||
-               !local_gradients(options.gradient_source) || !std::isfinite(options.band.band))))
-    throw Error(
-        "a grid read block by block (a .vdb level set) takes marching cubes or GCP's local "
-        "reconstruction to a mesh, with regular or lattice gradients and a finite band: read "
-        "it as scattered samples for the rest");
-  ContourResult result;
-  const double samples = double(grid.dims[0]) * grid.dims[1] * grid.dims[2];
-  result.samples = int(std::min(samples, double(std::numeric_limits<int>::max())));
-  Stages stages(result, options);
-  if (mc) {
-    result.mesh = stages.run("marching", "marching cubes brick by brick",
-                             [&] { return marching_cubes(grid, kLocalBrick); });
-    if (result.mesh->triangles.rows() == 0)
-      throw Error("no surface: the values have no sign change inside the grid");
-    return result;
-  }
-  detail::reconstruct_in_bricks(grid, options.band, options, result, stages);
-  return result;
-}
-
-// The outputs of a grid contoured in its own frame, placed in the world (a rigid motion: the
-// distances, and so the mesh, are the same).
-void place_in_world(const Eigen::Affine3d& world_from_grid, ContourResult& result) {
-  auto place = [&](PointMatrix& points, bool directions) {
-    for (Eigen::Index r = 0; r < points.rows(); ++r) {
-      const Eigen::Vector3d p = points.row(r).transpose();
-      points.row(r) = (directions ? Eigen::Vector3d(world_from_grid.linear() * p)
-                                  : Eigen::Vector3d(world_from_grid * p))
-                          .transpose();
-    }
-  };
-  if (result.mesh) place(result.mesh->vertices, false);
-  if (result.contact_points) {
-    place(result.contact_points->points, false);
-    place(result.contact_points->normals, true);
-  }
-}
-
 // `measured`: the grid's measures when contour() took them (the grid is then validated).
 ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape,
                                const ContourOptions& options, const GridMeasures* measured) {
   if (const auto* blocked = std::get_if<BlockedGridInput>(&input)) {
-    ContourResult result = contour_blocked_grid(*blocked, options);
-    if (blocked->world_from_grid) place_in_world(*blocked->world_from_grid, result);
+    ContourResult result = detail::contour_blocked_grid(*blocked, options);
+    if (blocked->world_from_grid) detail::place_in_world(*blocked->world_from_grid, result);
     return result;
   }
   const detail::GridSource grid = detail::grid_source_of(input);
@@ -425,28 +297,6 @@ void adapt_stage(const SdfInput& input, const ContourOptions& options, ContourRe
 
 ContourResult contour_before_adaptivity(const SdfInput& input, const AnalyticShape* shape,
                                         const ContourOptions& options);
-
-// Where the values are no exact distances, the automatic choices that assume them change
-// (ContourOptions::detect_approximate); true if they did.
-bool choose_for_approximate_distances(const GridMeasures& measured, ContourOptions& options) {
-  if (!options.detect_approximate || !auto_approximate_distances(measured.gradient_norms))
-    return false;
-  if (options.reconstruction == Reconstruction::Auto)
-    options.reconstruction = Reconstruction::Local;
-  if (options.carve == Switch::Auto) options.carve = Switch::Off;
-  if (options.zero_set == Switch::Auto) options.zero_set = Switch::On;
-  // (Its contact points make false thin parts where the values are no distances.)
-  if (options.thin_parts == Switch::Auto) options.thin_parts = Switch::Off;
-  if (options.progress) {
-    std::ostringstream message;
-    message << std::setprecision(2) << "the values are no exact distances (their slope is off 1 by "
-            << measured.gradient_norms.smooth_spread
-            << " where the field is smooth): the local reconstruction, its vertices on the "
-               "grid's tricubic zero set, no carving";
-    options.progress(message.str());
-  }
-  return true;
-}
 
 }  // namespace
 

@@ -157,4 +157,11 @@ void reconstruct_in_bricks(const BlockedGrid& grid, const BandOptions& band,
 void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
                          const ContourOptions& options, ContourResult& result, Stages& stages);
 
+/// contour() of a grid read a block at a time (a .vdb level set): marching cubes or GCP's local
+/// reconstruction brick by brick, the values taken as distances (blocked_contour.cpp).
+ContourResult contour_blocked_grid(const BlockedGridInput& input, const ContourOptions& given);
+
+/// The outputs of a grid contoured in its own frame, placed in the world.
+void place_in_world(const Eigen::Affine3d& world_from_grid, ContourResult& result);
+
 }  // namespace sdfcontour::detail
