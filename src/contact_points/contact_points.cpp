@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 
+#include "contact_points/orthocentre.h"
 #include "sdfcontour/contact_points/gradients.h"
 
 namespace sdfcontour {
@@ -85,27 +86,16 @@ Eigen::Vector3d slide_out_of_spheres(const PointMatrix& points, const Eigen::Vec
 }
 
 // The orthocentre of tetrahedron t (the point of equal power to its four weighted samples) and
-// that power. Vertices in position order, so that a tet gives the same bits in any brick.
+// that power.
 std::pair<Eigen::Vector3d, double> orthocentre(const PointMatrix& points,
                                                const Eigen::VectorXd& values, const TetMatrix& tets,
                                                int t) {
-  std::array<int, 4> v{tets(t, 0), tets(t, 1), tets(t, 2), tets(t, 3)};
-  std::sort(v.begin(), v.end(), [&](int a, int b) {
-    const auto pa = points.row(a), pb = points.row(b);
-    return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
-  });
-  const Eigen::Vector3d p0 = row(points, v[0]);
-  const double w0 = values[v[0]] * values[v[0]];
-  Eigen::Matrix3d a;
-  Eigen::Vector3d b;
-  for (int j = 0; j < 3; ++j) {
-    const Eigen::Vector3d d = row(points, v[std::size_t(j) + 1]) - p0;
-    const double wj = values[v[std::size_t(j) + 1]] * values[v[std::size_t(j) + 1]];
-    a.row(j) = 2 * d.transpose();
-    b[j] = d.squaredNorm() - (wj - w0);
-  }
-  const Eigen::Vector3d y = a.fullPivLu().solve(b);
-  return {p0 + y, y.squaredNorm() - w0};
+  std::array<std::pair<Eigen::Vector3d, double>, 4> four;
+  for (int k = 0; k < 4; ++k) four[std::size_t(k)] = {row(points, tets(t, k)), values[tets(t, k)]};
+  std::pair<Eigen::Vector3d, double> out;
+  // (Whether the tet is flat is not asked: the caller judges the centre by its power.)
+  detail::orthocentre(four, out.first, out.second);
+  return out;
 }
 
 // The vertex of sample i's power cell on its sphere: the orthocentre of an incident tet of

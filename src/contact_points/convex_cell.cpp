@@ -41,9 +41,10 @@ void ConvexCell::clip(const Eigen::Vector3d& normal, double offset, int id, doub
   // Most planes miss the cell: its bounding box tells, and nothing is written for them.
   const Eigen::Vector3d centre = (lo_ + hi_) / 2, extent = (hi_ - lo_) / 2;
   if (normal.dot(centre) + normal.cwiseAbs().dot(extent) - offset <= tolerance) return;
+  d_.resize(vertices_.size());
   bool any_out = false, any_in = false;
-  for (const Vertex& v : vertices_) {
-    const double d = normal.dot(v.point) - offset;
+  for (std::size_t v = 0; v < vertices_.size(); ++v) {
+    const double d = d_[v] = normal.dot(vertices_[v].point) - offset;
     any_out |= d > tolerance;
     any_in |= d <= tolerance;
   }
@@ -55,9 +56,6 @@ void ConvexCell::clip(const Eigen::Vector3d& normal, double offset, int id, doub
     face_plane_.clear();
     return;
   }
-  d_.resize(vertices_.size());
-  for (std::size_t v = 0; v < vertices_.size(); ++v)
-    d_[v] = normal.dot(vertices_[v].point) - offset;
   kept_.clear();
   cap_.clear();
   cut_.clear();

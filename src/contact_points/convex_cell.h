@@ -29,9 +29,6 @@ class ConvexCell {
     std::array<int, 3> planes;  ///< three of the planes through it (ascending)
   };
   const std::vector<Vertex>& vertices() const { return vertices_; }
-  /// The vertices' bounding box (the box itself until a plane cuts it).
-  const Eigen::Vector3d& lo() const { return lo_; }
-  const Eigen::Vector3d& hi() const { return hi_; }
 
  private:
   std::vector<Vertex> vertices_;

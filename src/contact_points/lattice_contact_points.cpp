@@ -2,7 +2,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,6 +10,7 @@
 
 #include "contact_points/convex_cell.h"
 #include "contact_points/lattice_spheres.h"
+#include "contact_points/orthocentre.h"
 
 namespace sdfcontour {
 namespace {
@@ -216,7 +216,7 @@ class SamplePoint {
   bool power_vertex() {
     const double tolerance = o_.power_vertex_tolerance;
     if (!(tolerance > 0) || v_ == 0 || !start_.allFinite()) return false;
-    find_power_vertex(start_, tolerance);
+    find_power_vertex();
     if (!(power_miss_ <= tolerance * v_ * v_)) return false;
     const double r = std::abs(v_);
     const bool deep = l_.any_sphere_holding(power_at_, s_, [&](long t, double d2) {
@@ -227,8 +227,10 @@ class SamplePoint {
     return true;
   }
 
-  // The power vertex nearest the sphere within `tolerance` (power_miss_ stays infinite if none).
-  void find_power_vertex(const Eigen::Vector3d& start, double tolerance) {
+  // The power vertex nearest the sphere within the tolerance (power_miss_ stays infinite if none).
+  void find_power_vertex() {
+    const Eigen::Vector3d& start = start_;
+    const double tolerance = o_.power_vertex_tolerance;
     const double r = std::abs(v_), h = l_.spacing().maxCoeff();
     const Eigen::Vector3d half = Eigen::Vector3d::Constant(kPowerBox * h);
     // Relative to the sample: the cell's planes are |x|^2 - v^2 <= |x - a|^2 - w for a = q - p.
@@ -273,39 +275,20 @@ class SamplePoint {
       }
     }
     if (!nearest) return;
-    const std::array<long, 4> four{s_, spheres[std::size_t(nearest->planes[0])],
-                                   spheres[std::size_t(nearest->planes[1])],
-                                   spheres[std::size_t(nearest->planes[2])]};
+    std::array<std::pair<Eigen::Vector3d, double>, 4> four;
+    four[0] = {p_, v_};
+    for (int k = 0; k < 3; ++k) {
+      const long t = spheres[std::size_t(nearest->planes[std::size_t(k)])];
+      four[std::size_t(k) + 1] = {l_.point(t), l_.value(t)};
+    }
     Eigen::Vector3d centre;
-    if (!orthocentre(four, centre)) return;
+    double power;
+    if (!detail::orthocentre(four, centre, power) || !centre.allFinite()) return;
     const double miss = std::abs((centre - p_).squaredNorm() - v_ * v_);
     if (miss <= tolerance * v_ * v_) {
       power_miss_ = miss;
       power_at_ = centre;
     }
-  }
-
-  // The point of equal power to four samples' spheres, from their positions in position order
-  // (the same bits in any brick); false where they lie on a plane.
-  bool orthocentre(std::array<long, 4> four, Eigen::Vector3d& out) const {
-    std::sort(four.begin(), four.end(), [&](long a, long b) {
-      const Eigen::Vector3d pa = l_.point(a), pb = l_.point(b);
-      return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
-    });
-    const Eigen::Vector3d p0 = l_.point(four[0]);
-    const double w0 = l_.value(four[0]) * l_.value(four[0]);
-    Eigen::Matrix3d m;
-    Eigen::Vector3d rhs;
-    for (int k = 1; k < 4; ++k) {
-      const Eigen::Vector3d d = l_.point(four[std::size_t(k)]) - p0;
-      const double w = l_.value(four[std::size_t(k)]) * l_.value(four[std::size_t(k)]);
-      m.row(k - 1) = 2 * d.transpose();
-      rhs[k - 1] = d.squaredNorm() - w + w0;
-    }
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(m);
-    if (!lu.isInvertible()) return false;
-    out = p0 + lu.solve(rhs);
-    return out.allFinite();
   }
 
   const Lattice& l_;

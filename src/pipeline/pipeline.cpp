@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "pipeline/grid_measures.h"
@@ -191,9 +192,7 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
       result.fallback = few;
       return result;
     }
-    if (!few.empty() && !options.fallback_to_mc)
-      throw Error(few + ": the values do not behave as distances");
-    if (!few.empty() && options.progress) options.progress(few + detail::kCellsFromCrossings);
+    if (local) detail::say_cells_from_crossings(few, options);
   }
   if (local) {
     const detail::ReconstructionInputs in =
@@ -234,9 +233,9 @@ namespace {
 
 // Marching cubes' mesh where GCP's cannot be had (`why`), or Error(why) where the options want
 // GCP's alone (fallback_to_mc off, contact points asked for, no grid). `discarded`: the seconds
-// of GCP's work that found it out (0: decided before any).
+// of GCP's work that found it out (none: decided before any).
 ContourResult marching_cubes_instead(const SdfInput& input, const ContourOptions& options,
-                                     const std::string& why, double discarded) {
+                                     const std::string& why, std::optional<double> discarded) {
   const detail::GridSource grid = detail::grid_source_of(input);
   if (!grid || options.method != Method::Gcp || !options.want_mesh || options.want_points ||
       !options.fallback_to_mc)
@@ -245,7 +244,7 @@ ContourResult marching_cubes_instead(const SdfInput& input, const ContourOptions
   result.samples = int(grid.geometry().size());
   result.fallback = why;
   // The work thrown away is part of the run's cost: said, not hidden.
-  if (discarded > 0) result.stages.push_back({"gcp (discarded)", discarded});
+  if (discarded) result.stages.push_back({"gcp (discarded)", *discarded});
   if (options.progress)
     options.progress("GCP: " + result.fallback + "; this is marching cubes' mesh instead");
   Stages stages(result, options);
@@ -265,9 +264,8 @@ ContourResult contour_with_fallback(const SdfInput& input, const AnalyticShape* 
   if (gcp.fallback.empty()) return gcp;
   const double discarded =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  return marching_cubes_instead(input, options,
-                                gcp.fallback + ": the values do not behave as distances",
-                                std::max(discarded, 1e-9));
+  return marching_cubes_instead(
+      input, options, gcp.fallback + ": the values do not behave as distances", discarded);
 }
 
 }  // namespace
@@ -346,7 +344,7 @@ ContourResult contour_as_measured(const SdfInput& input, const AnalyticShape* sh
     std::ostringstream why;
     why << "the values are clamped within " << kClampedTooClose
         << " spacings of the surface, where no sample keeps a contact point";
-    ContourResult result = marching_cubes_instead(input, options, why.str(), 0);
+    ContourResult result = marching_cubes_instead(input, options, why.str(), std::nullopt);
     result.noise_level = measured.noise;
     result.truncation = measured.truncation;
     return result;

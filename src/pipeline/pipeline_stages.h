@@ -109,10 +109,10 @@ struct ReconstructionInputs {
 inline constexpr const char* kNoContactPoint =
     "no contact point was kept, so there is nothing to reconstruct a surface from";
 
-// What the local reconstruction does where a grid keeps no or few contact points (said after the
-// reason).
-inline constexpr const char* kCellsFromCrossings =
-    ": the cells without one take their vertex from their edge crossings, as dual contouring does";
+// The local reconstruction on a grid that keeps no or few contact points (`few` says why): each
+// cell without one takes its vertex from its edge crossings. Said through options.progress; an
+// Error where options.fallback_to_mc is off. Nothing where `few` is empty.
+void say_cells_from_crossings(const std::string& few, const ContourOptions& options);
 
 // Why the contact points are too few for the values to be distances ("": they are not).
 std::string contact_point_shortage(const GridSource& grid, const ContourOptions& options,

@@ -16,10 +16,10 @@ namespace sdfcontour::detail {
 
 using Index3 = std::array<int, 3>;
 
-/// The low sample (i, j, k) of the grid edge named `edge` (3 * sample index + axis) on a grid of
-/// `n` samples.
 /// Grid point `index` (C order) of a grid of `n` points (or cells).
 Index3 grid_point_of(std::uint64_t index, const Index3& n);
+/// The low sample (i, j, k) of the grid edge named `edge` (3 * sample index + axis) on a grid of
+/// `n` samples.
 Index3 edge_low_point(std::uint64_t edge, const Index3& n);
 
 /// Whether `p` lies in [lo, hi) on every axis.

@@ -161,10 +161,7 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
     few = "only " + std::to_string(stats.contact_points) + " contact points for " +
           std::to_string(stats.local.cells) + " cells crossing the surface";
   }
-  if (!few.empty()) {
-    if (!options.fallback_to_mc) throw Error(few + ": the values do not behave as distances");
-    if (options.progress) options.progress(few + kCellsFromCrossings);
-  }
+  say_cells_from_crossings(few, options);
   if (lb.keep_contact_points) {
     ContactPoints cp;
     cp.points = std::move(kept.points);
@@ -182,6 +179,15 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
 }
 
 }  // namespace
+
+void say_cells_from_crossings(const std::string& few, const ContourOptions& options) {
+  if (few.empty()) return;
+  if (!options.fallback_to_mc) throw Error(few + ": the values do not behave as distances");
+  if (options.progress)
+    options.progress(few +
+                     ": the cells without one take their vertex from their edge crossings, as dual "
+                     "contouring does");
+}
 
 void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
                            const ContourOptions& options, ContourResult& result, Stages& stages,
