@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <vector>
 
 #include "extraction/cube_polygons.h"
 #include "reconstruction/local/surface_cells.h"
@@ -19,10 +20,11 @@ struct SegmentVertex {
   Eigen::Vector3d position;
 };
 
+// Segment vertices are rare (ambiguous faces): a slot keeps them aside, so that a slot per cell
+// and axis stays small.
 struct PolygonSlot {
-  std::array<int, 8> vertices{};
-  std::array<std::int64_t, 8> segment_key{};  // for a segment vertex; vertices[] holds -1 there
-  std::array<Eigen::Vector3d, 8> segment_position;
+  std::array<int, 8> vertices{};  // -1: the next of `segments`, in order
+  std::vector<SegmentVertex> segments;
   int size = 0;
   std::uint64_t edge = 0;  // the grid edge's global key
   Eigen::Vector3d edge_point;
@@ -114,15 +116,13 @@ PolygonSlot edge_polygon(const SurfaceCells& cells, const ActiveCell& cell,
     const int w_offset = -(differ_u ? offsets[q][1] : offsets[q][0]);
     SegmentVertex sv;
     if (shared_twice(cells, *around[q], *around[r], at, a, b, w, w_offset, every, sv)) {
-      slot.segment_key[std::size_t(slot.size)] = sv.key;
-      slot.segment_position[std::size_t(slot.size)] = sv.position;
+      slot.segments.push_back(sv);
       slot.vertices[std::size_t(slot.size++)] = -1;
     }
   }
   if (!(cell.inside & 1)) {  // outside at the low end: the surface faces -a
     std::reverse(slot.vertices.begin(), slot.vertices.begin() + slot.size);
-    std::reverse(slot.segment_key.begin(), slot.segment_key.begin() + slot.size);
-    std::reverse(slot.segment_position.begin(), slot.segment_position.begin() + slot.size);
+    std::reverse(slot.segments.begin(), slot.segments.end());
   }
   return slot;
 }
@@ -147,9 +147,7 @@ DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
   std::vector<std::pair<std::int64_t, Eigen::Vector3d>> segments;
   for (const auto& s3 : slots)
     for (const PolygonSlot& s : s3)
-      for (int i = 0; i < s.size; ++i)
-        if (s.vertices[std::size_t(i)] < 0)
-          segments.push_back({s.segment_key[std::size_t(i)], s.segment_position[std::size_t(i)]});
+      for (const SegmentVertex& sv : s.segments) segments.push_back({sv.key, sv.position});
   std::sort(segments.begin(), segments.end(),
             [](const auto& x, const auto& y) { return x.first < y.first; });
   segments.erase(std::unique(segments.begin(), segments.end(),
@@ -165,10 +163,11 @@ DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
     for (const PolygonSlot& s : s3) {
       if (s.size == 0) continue;
       std::array<int, 8> ids = s.vertices;
+      std::size_t next = 0;
       for (int i = 0; i < s.size; ++i) {
         if (ids[std::size_t(i)] >= 0) continue;
         const auto it =
-            std::lower_bound(segments.begin(), segments.end(), s.segment_key[std::size_t(i)],
+            std::lower_bound(segments.begin(), segments.end(), s.segments[next++].key,
                              [](const auto& x, std::int64_t k) { return x.first < k; });
         ids[std::size_t(i)] = first_extra + int(it - segments.begin());
       }
