@@ -320,6 +320,9 @@ void drop_mapped_pages(const char* values, std::size_t size, const void* address
   ::madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
 }
 
+// Grids up to this many bytes keep their pages mapped (no GridView::drop_pages).
+constexpr std::size_t kKeepPagesUpTo = std::size_t(256) << 20;
+
 // A mapped .npy's grid and the page dropper its view points to (GridView::drop_pages).
 struct MappedGrid {
   std::shared_ptr<const MappedNpy> array;
@@ -414,7 +417,10 @@ SdfInput sdf_input_from_npy(std::shared_ptr<const MappedNpy> array, const Bounds
                                                                       std::size_t bytes) {
       drop_mapped_pages(values, size, address, bytes);
     };
-    input.view.drop_pages = &mapped->drop;
+    // A grid that memory holds many times over keeps its pages: dropping them behind each
+    // measuring pass only makes the next pass fault them in again (bunny 256^3, float64: the
+    // measuring 0.55 -> 0.3 s of a 4.7 s run).
+    if (array->count * item > kKeepPagesUpTo) input.view.drop_pages = &mapped->drop;
     input.storage = mapped;
     validate_grid(input.view);
     return input;

@@ -12,7 +12,8 @@
 namespace sdfcontour {
 
 /// A grid viewed in place (float32 or float64, never copied or widened), with whatever owns or
-/// maps the memory the view reads. A view of a file mapping (map_npy) has view.drop_pages set.
+/// maps the memory the view reads. A view of a file mapping (map_npy) of over 256 MiB of values
+/// has view.drop_pages set.
 struct GridInput {
   GridView view;
   std::shared_ptr<const void> storage;  ///< keeps view.data (and view.drop_pages) alive
