@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <utility>
 
 #include "reconstruction/mesh_geometry.h"
@@ -94,9 +95,46 @@ KeyOrder order_by_key(std::vector<std::pair<VertexKey, std::size_t>> order) {
   return out;
 }
 
+// Level 0: the input's used vertices in ascending key order, as the general path would make them,
+// without naming every triangle's corners (edge fans' meshes at bunny 256^3: 2.8 M corners sorted,
+// 0.4 s on one thread). Nothing where two vertices share a key.
+std::optional<SubdividedMesh> unsubdivided(const KeyedTriangles& in) {
+  const std::size_t count = in.vertex_key.size();
+  std::vector<char> used(count, 0);
+  for (Eigen::Index t = 0; t < in.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) used[std::size_t(in.triangles(t, c))] = 1;
+  std::vector<std::pair<std::uint64_t, int>> order;
+  order.reserve(count);
+  for (std::size_t v = 0; v < count; ++v)
+    if (used[v]) order.push_back({in.vertex_key[v], int(v)});
+  tbb::parallel_sort(order.begin(), order.end());
+  for (std::size_t i = 1; i < order.size(); ++i)
+    if (order[i].first == order[i - 1].first) return std::nullopt;
+  SubdividedMesh out;
+  std::vector<int> id(count, -1);
+  out.mesh.vertices.resize(Eigen::Index(order.size()), 3);
+  out.keys.resize(order.size());
+  out.on_feature.resize(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const int v = order[i].second;
+    id[std::size_t(v)] = int(i);
+    out.mesh.vertices.row(Eigen::Index(i)) = in.vertices.row(v);
+    out.keys[i] = {order[i].first, 0};
+    out.on_feature[i] = in.on_feature[std::size_t(v)];
+  }
+  out.mesh.triangles.resize(in.triangles.rows(), 3);
+  for (Eigen::Index t = 0; t < in.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) out.mesh.triangles(t, c) = id[std::size_t(in.triangles(t, c))];
+  out.parent = in.triangle_name;
+  out.child.assign(in.triangle_name.size(), 0);
+  return out;
+}
+
 }  // namespace
 
 SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
+  if (levels == 0)
+    if (auto same = unsubdivided(in)) return std::move(*same);
   const int n = 1 << levels;
   const Eigen::Index f = in.triangles.rows();
   // Lattice point (u, v): u steps towards the triangle's 2nd vertex, v towards its 3rd.
