@@ -10,7 +10,9 @@ unaffected, GCP detects the truncation), all float32. L1 against the normalised 
 `sdfcontour eval`.
 
 Methods: gcp (the default reconstruction: the local one on grids since session 20), gcp-local
-(--reconstruction local, the same on grids), mt-rt, mc, and the peers skimage, openvdb, vtk.
+(--reconstruction local, the same on grids), mt-rt, mc, and the peers skimage, openvdb, vtk; and
+each --variant LABEL:OPTIONS, GCP with those contour options (e.g. fans:"--edge-fans on
+--gradient lattice --band 2").
 
 Usage: /usr/bin/python3 bench/scale.py [--res 64,128,256,512] [--meshes bunny,spot,armadillo]
        [--repeats 1] [--out docs/results/scale.md] [--work /tmp/sdfcontour_scale]
@@ -116,8 +118,12 @@ def main():
     ap.add_argument("--work", default="/tmp/sdfcontour_scale")
     ap.add_argument("--out", default=None)
     ap.add_argument("--repeats", type=int, default=1, help="runs per method and grid; the median time is kept")
+    ap.add_argument("--variant", action="append", default=[], metavar="LABEL:OPTIONS",
+                    help="one more method: GCP with these contour options (repeatable)")
     ap.add_argument("--peer", nargs=3, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    variants = dict(v.split(":", 1) for v in args.variant)
+    args.methods = ",".join([args.methods, *variants]) if variants else args.methods
     if args.repeats < 1:
         ap.error("--repeats must be at least 1")
     if args.peer:
@@ -139,10 +145,13 @@ def main():
                 out = os.path.join(args.work, f"out_{method}.ply")
                 times, rss, err = [], None, None
                 for _ in range(args.repeats):
-                    if method in ("gcp", "mt-rt", "mc", "gcp-local"):
+                    if method in ("gcp", "mt-rt", "mc", "gcp-local") or method in variants:
                         extra = ["--reconstruction", "local"] if method == "gcp-local" else []
+                        if method in variants:
+                            extra = variants[method].split()
                         seconds, r, _, err = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--method",
-                                                    method.split("-local")[0], "-q", *extra])
+                                                    "gcp" if method in variants else method.split("-local")[0],
+                                                    "-q", *extra])
                     else:
                         wall, r, stdout, err = timed([*self_cmd, method, prefix + ".npy", out])
                         seconds = json.loads(stdout)["seconds"] if wall is not None else None
