@@ -472,7 +472,8 @@ void add_input_options(CLI::App* c, ContourArgs& a) {
        "triangulation's; 0 triangulates the whole band at once (so does --band all); "
        "'auto': the largest of 256 down to 96 that makes >= 4 bricks per thread of <= 1.5M "
        "samples each, else 64. The local reconstruction runs in bricks of this many cells "
-       "(auto: one brick up to 512 samples per axis, bricks of 512 beyond)")
+       "(auto: one brick up to 512 samples per axis, bricks of 512 beyond; with --edge-fans on, "
+       "bricks of 256)")
       ->capture_default_str();
   c->add_option("--brick-halo", a.brick_halo,
                 "First halo around a brick, in spacings (grown where it does not suffice); "

@@ -38,7 +38,10 @@ constexpr int kLocalBrick = 256;
 /// The same for a grid already in memory (contour() on an array): one brick up to 512 samples
 /// per axis. Each brick recomputes a halo of ~55 samples on its inner sides (kUntangleRing and the
 /// band): bunny at 512^3 on 2 cores took 106 s in bricks of 256 and 61 s in one brick (the same
-/// mesh), for a peak RSS of 3.58 GB instead of 2.98 GB.
+/// mesh), for a peak RSS of 3.58 GB instead of 2.98 GB. With edge fans, whose halo is a cell or
+/// two, a grid in memory takes kLocalBrick too: bunny 512^3 (float32, truncated at 8 spacings,
+/// lattice gradients on a band of 2) 26.6 s and 1.72 GB in one brick, 22.7 s and 0.48 GB in
+/// bricks of 256, the same mesh (at 256^3, bricks of 128 were 1.25x slower than one).
 constexpr int kLocalGridBrick = 512;
 
 /// Rounds of undoing crossing moves. A piece's triangles depend on the triangles within

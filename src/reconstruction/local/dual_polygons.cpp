@@ -166,9 +166,8 @@ DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
       std::size_t next = 0;
       for (int i = 0; i < s.size; ++i) {
         if (ids[std::size_t(i)] >= 0) continue;
-        const auto it =
-            std::lower_bound(segments.begin(), segments.end(), s.segments[next++].key,
-                             [](const auto& x, std::int64_t k) { return x.first < k; });
+        const auto it = std::lower_bound(segments.begin(), segments.end(), s.segments[next++].key,
+                                         [](const auto& x, std::int64_t k) { return x.first < k; });
         ids[std::size_t(i)] = first_extra + int(it - segments.begin());
       }
       out.vertices.push_back(ids);

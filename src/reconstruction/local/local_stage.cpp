@@ -102,12 +102,13 @@ bool truncation_found(const BlockedGrid&, const BandOptions& band) {
 }
 
 // One brick up to 512 samples per axis for a grid in memory (its stages run in parallel inside
-// it), bricks of 512 beyond; a grid read block by block, which exists to bound memory, bricks of
-// 256 (as a callable's or Dask's).
-int default_brick(const GridView&) {
-  return kLocalGridBrick;
+// it), bricks of 512 beyond; with edge fans, whose halo is a cell or two, not the repairs' ~55
+// samples, bricks of 256 (kLocalBrick). A grid read block by block, which exists to bound
+// memory, bricks of 256 (as a callable's or Dask's).
+int default_brick(const GridView&, const ContourOptions& options) {
+  return options.local.edge_fans ? kLocalBrick : kLocalGridBrick;
 }
-int default_brick(const BlockedGrid&) {
+int default_brick(const BlockedGrid&, const ContourOptions&) {
   return kLocalBrick;
 }
 
@@ -133,8 +134,8 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
   }
   if (options.progress_fraction)
     lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
-  const int size =
-      options.bricks.size == BrickOptions::kAutoSize ? default_brick(grid) : options.bricks.size;
+  const int size = options.bricks.size == BrickOptions::kAutoSize ? default_brick(grid, options)
+                                                                  : options.bricks.size;
   LocalBricksStats stats;
   // Adaptivity merges over the contact points, and --points writes the ones the mesh was made
   // from (the local reconstruction's options differ from the paper's): the bricks hand theirs on.
