@@ -30,6 +30,18 @@ class PointCubes {
       keyed_[std::size_t(i)] = {key(c[0], c[1], c[2]), int(i)};
     });
     tbb::parallel_sort(keyed_.begin(), keyed_.end());
+    // Where each row of cubes (j, k) starts, so that a search reads its row alone: nine binary
+    // searches over every point were most of a gather (not where the rows outnumber the points
+    // many times over: the searches then stay whole).
+    const long rows = size_[1] * size_[2];
+    if (rows <= std::max(long(1) << 20, 4 * long(P.rows()))) {
+      row_start_.assign(std::size_t(rows) + 1, int(keyed_.size()));
+      for (std::size_t e = keyed_.size(); e-- > 0;)
+        row_start_[std::size_t(keyed_[e].first / size_[0])] = int(e);
+      for (long r = rows - 1; r >= 0; --r)
+        row_start_[std::size_t(r)] =
+            std::min(row_start_[std::size_t(r)], row_start_[std::size_t(r) + 1]);
+    }
   }
 
   // Calls f(point index) for every point in the 27 cubes around p.
@@ -39,10 +51,15 @@ class PointCubes {
     const long x0 = std::max(0L, c[0] - 1), x1 = std::min(size_[0] - 1, c[0] + 1);
     for (long k = std::max(0L, c[2] - 1); k <= std::min(size_[2] - 1, c[2] + 1); ++k)
       for (long j = std::max(0L, c[1] - 1); j <= std::min(size_[1] - 1, c[1] + 1); ++j) {
-        auto it =
-            std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<long, int>{key(x0, j, k), -1});
+        auto first = keyed_.begin(), last = keyed_.end();
+        if (!row_start_.empty()) {
+          const std::size_t row = std::size_t(k * size_[1] + j);
+          first += row_start_[row];
+          last = keyed_.begin() + row_start_[row + 1];
+        }
+        auto it = std::lower_bound(first, last, std::pair<long, int>{key(x0, j, k), -1});
         const long end = key(x1, j, k);
-        for (; it != keyed_.end() && it->first <= end; ++it) f(it->second);
+        for (; it != last && it->first <= end; ++it) f(it->second);
       }
   }
 
@@ -59,6 +76,7 @@ class PointCubes {
   Eigen::Vector3d origin_;
   long size_[3];
   std::vector<std::pair<long, int>> keyed_;  // (cube key, point), sorted
+  std::vector<int> row_start_;               // per row j + k * size_[1], then the end; or empty
 };
 
 }  // namespace sdfcontour::detail
