@@ -4,13 +4,15 @@
 #include "sdfcontour/reconstruction/local_brick.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
-#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "reconstruction/carving_internal.h"
 #include "reconstruction/free_memory.h"
@@ -397,21 +399,27 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (fans) {
     // Per vertex of sub: its crossings' mean where it has one (the dual mesh's vertices).
     PointMatrix means = sub.mesh.vertices;
-    std::unordered_map<std::uint64_t, Eigen::Index> dual;
-    for (std::size_t v = 0; v < fan_keys.size(); ++v) dual.emplace(fan_keys[v], Eigen::Index(v));
-    for (std::size_t v = 0; v < sub.keys.size(); ++v)
-      if (const auto it = dual.find(sub.keys[v][0]); sub.keys[v][1] == 0 && it != dual.end())
+    std::vector<std::pair<std::uint64_t, Eigen::Index>> dual(fan_keys.size());
+    for (std::size_t v = 0; v < fan_keys.size(); ++v) dual[v] = {fan_keys[v], Eigen::Index(v)};
+    tbb::parallel_sort(dual.begin(), dual.end());
+    tbb::parallel_for(std::size_t(0), sub.keys.size(), [&](std::size_t v) {
+      if (sub.keys[v][1] != 0) return;
+      const auto it = std::lower_bound(dual.begin(), dual.end(),
+                                       std::pair<std::uint64_t, Eigen::Index>{sub.keys[v][0], 0});
+      if (it != dual.end() && it->first == sub.keys[v][0])
         means.row(Eigen::Index(v)) = fan_means.row(it->second);
+    });
     detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, split_cells,
                                 cells_grid);
   }
   // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
   // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is
   // undone below.
-  for (Eigen::Index v = 0; v < sub.mesh.vertices.rows(); ++v)
+  tbb::parallel_for(Eigen::Index(0), sub.mesh.vertices.rows(), [&](Eigen::Index v) {
     sub.mesh.vertices.row(v) = sub.mesh.vertices.row(v)
                                    .cwiseMax(block.bounds.min.transpose())
                                    .cwiseMin(block.bounds.max.transpose());
+  });
   clock.next(4);
   if (options.untangle) {
     std::vector<char> reverted;
