@@ -146,12 +146,10 @@ def main():
                 times, rss, err = [], None, None
                 for _ in range(args.repeats):
                     if method in ("gcp", "mt-rt", "mc", "gcp-local") or method in variants:
-                        extra = ["--reconstruction", "local"] if method == "gcp-local" else []
-                        if method in variants:
-                            extra = variants[method].split()
+                        extra = variants.get(method, "--reconstruction local" if method == "gcp-local" else "")
+                        cli_method = "gcp" if method in variants else method.split("-local")[0]
                         seconds, r, _, err = timed([args.cli, "contour", prefix + ".npy", "-o", out, "--method",
-                                                    "gcp" if method in variants else method.split("-local")[0],
-                                                    "-q", *extra])
+                                                    cli_method, "-q", *extra.split()])
                     else:
                         wall, r, stdout, err = timed([*self_cmd, method, prefix + ".npy", out])
                         seconds = json.loads(stdout)["seconds"] if wall is not None else None

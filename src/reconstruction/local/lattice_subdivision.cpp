@@ -100,28 +100,29 @@ KeyOrder order_by_key(std::vector<std::pair<VertexKey, std::size_t>> order) {
 // 0.4 s on one thread). Nothing where two vertices share a key.
 std::optional<SubdividedMesh> unsubdivided(const KeyedTriangles& in) {
   const std::size_t count = in.vertex_key.size();
-  std::vector<char> used(count, 0);
+  std::vector<char> is_used(count, 0);
   for (Eigen::Index t = 0; t < in.triangles.rows(); ++t)
-    for (int c = 0; c < 3; ++c) used[std::size_t(in.triangles(t, c))] = 1;
-  std::vector<std::pair<std::uint64_t, int>> order;
-  order.reserve(count);
+    for (int c = 0; c < 3; ++c) is_used[std::size_t(in.triangles(t, c))] = 1;
+  std::vector<int> used;
+  std::vector<std::pair<VertexKey, std::size_t>> order;
   for (std::size_t v = 0; v < count; ++v)
-    if (used[v]) order.push_back({in.vertex_key[v], int(v)});
-  tbb::parallel_sort(order.begin(), order.end());
-  for (std::size_t i = 1; i < order.size(); ++i)
-    if (order[i].first == order[i - 1].first) return std::nullopt;
+    if (is_used[v]) {
+      order.push_back({{in.vertex_key[v], 0}, used.size()});
+      used.push_back(int(v));
+    }
+  KeyOrder named = order_by_key(std::move(order));
+  if (named.keys.size() != used.size()) return std::nullopt;
   SubdividedMesh out;
-  std::vector<int> id(count, -1);
-  out.mesh.vertices.resize(Eigen::Index(order.size()), 3);
-  out.keys.resize(order.size());
-  out.on_feature.resize(order.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    const int v = order[i].second;
-    id[std::size_t(v)] = int(i);
+  out.keys = std::move(named.keys);
+  out.mesh.vertices.resize(Eigen::Index(used.size()), 3);
+  out.on_feature.resize(used.size());
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    const int v = used[named.first_of[i]];
     out.mesh.vertices.row(Eigen::Index(i)) = in.vertices.row(v);
-    out.keys[i] = {order[i].first, 0};
     out.on_feature[i] = in.on_feature[std::size_t(v)];
   }
+  std::vector<int> id(count, -1);
+  for (std::size_t i = 0; i < used.size(); ++i) id[std::size_t(used[i])] = named.id[i];
   out.mesh.triangles.resize(in.triangles.rows(), 3);
   for (Eigen::Index t = 0; t < in.triangles.rows(); ++t)
     for (int c = 0; c < 3; ++c) out.mesh.triangles(t, c) = id[std::size_t(in.triangles(t, c))];
