@@ -21,15 +21,16 @@ using namespace sdfcontour;
 namespace {
 
 // The default path's brick options with edge fans (or the plain dual mesh without its
-// untangling, fans = false), on `band` spacings.
-LocalBrickOptions fan_options(bool fans, double band, bool lattice) {
+// untangling, fans = false), on `band` spacings; with `finer`, on the grid of twice the
+// resolution that shows the thin parts (thin_parts.h).
+LocalBrickOptions fan_options(bool fans, double band, bool lattice, bool finer = false) {
   ContourOptions c;
   c.local.edge_fans = fans;
   c.band.band = band;
   c.gradient_source = lattice ? GradientSource::Lattice : GradientSource::Regular;
   LocalBrickOptions o = local_brick_options(c);
   o.subdivisions = 0;
-  o.thin_parts = 0;
+  o.thin_parts = finer ? 1 : 0;
   o.untangle = false;
   o.side_rounds = 0;
   return o;
@@ -122,6 +123,16 @@ TEST(EdgeFans, AdversarialFieldsNeitherCrossNorLeaveASampleOnTheWrongSide) {
         EXPECT_TRUE(self_intersecting_triangles(m).empty());
         EXPECT_EQ(samples_on_the_wrong_side(g, m), 0);
       }
+    // On the finer grid (its own samples' signs, the thin parts' markers) as well.
+    for (const bool lattice : {false, true}) {
+      SCOPED_TRACE(name + (lattice ? " lattice" : " regular") + " on the finer grid");
+      const Mesh m = bricked(g, fan_options(true, 8, lattice, true));
+      ASSERT_GT(m.triangles.rows(), 0);
+      test::expect_closed_and_outward(m);
+      EXPECT_TRUE(test::vertices_manifold(m));
+      EXPECT_TRUE(self_intersecting_triangles(m).empty());
+      EXPECT_EQ(samples_on_the_wrong_side(g, m), 0);
+    }
     diagonal_crossings +=
         long(self_intersecting_triangles(bricked(g, fan_options(false, 8, false))).size());
   }
@@ -150,13 +161,14 @@ TEST(EdgeFans, APlaneIsExact) {
 }
 
 // Bricks of 8, 16 and 64 samples give the one-brick mesh bit for bit, for 1 and 2 threads, on a
-// CSG shape (creases, corners) and a torus at 32^3, with the curved faces split (a band of 3
-// spacings: bricks of 8 read blocks of about 30 samples).
+// CSG shape (creases, corners), also on the finer grid, and a torus at 32^3, with the curved
+// faces split (a band of 3 spacings: bricks of 8 read blocks of about 30 samples).
 TEST(EdgeFans, BricksEqualOneBrickBitForBit) {
-  for (const std::string shape : {"csg", "torus"}) {
-    SCOPED_TRACE(shape);
+  for (const auto& [shape, finer] : {std::pair{"csg", false}, std::pair{"torus", false},
+                                     std::pair{"csg", true}}) {
+    SCOPED_TRACE(std::string(shape) + (finer ? " on the finer grid" : ""));
     const Grid g = sample_grid(*make_builtin_shape(shape), 32, Bounds{});
-    LocalBrickOptions o = fan_options(true, 3, false);
+    LocalBrickOptions o = fan_options(true, 3, false, finer);
     o.split_sag = 0.002;
     const Mesh whole = bricked(g, o, 0, 1);
     ASSERT_GT(whole.triangles.rows(), 1000);

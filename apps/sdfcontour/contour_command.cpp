@@ -99,11 +99,10 @@ void warn_of_options_not_read(const ContourArgs& a, const ContourOptions& opt,
     if (a.subdivisions != "auto") unused.push_back("--subdivisions");
     if (a.side_passes != "auto") unused.push_back("--side-passes");
     if (a.no_side_repair) unused.push_back("--no-side-repair");
-    if (a.thin_parts != "auto") unused.push_back("--thin-parts");
     for (const std::string& name : unused)
       std::cerr << "sdfcontour: warning: " << name
                 << " is not used with --edge-fans on: its vertices stay in their cells, edges and "
-                   "faces without subdivision, side rounds or a finer grid for thin parts\n";
+                   "faces without subdivision or side rounds\n";
   }
   if (r.reconstruction == Reconstruction::Local) {
     const std::string solver = a.poisson.given(), path = given_names(a.poisson_path_options);
@@ -369,7 +368,8 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
            "points on their two sides, on a grid of twice the resolution with one "
            "subdivision fewer (on, off; auto: on below 192 samples per axis, and from 192 to 256 "
            "where at least 1% of the edges that the surface crosses have such a gap next to them: "
-           "two samples on one side, closer together than their values allow)")
+           "two samples on one side, closer together than their values allow; with --edge-fans "
+           "on: only when on, the fans then on the finer grid with about 4x their triangles)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option("--edge-fans", a.edge_fans,

@@ -305,6 +305,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
         detail::refine_for_thin_parts(block, cp.points, cp.normals, options.band.value_scale,
                                       grid_truncation(band.truncation, options.band.value_scale));
   const GridView& cells_grid = refine ? refined.view : block;
+  // (Its values go once the dual mesh is made; the fans keep to its cells after that.)
+  const GridGeometry cells_geometry = cells_grid;
   const int scale = refine ? 2 : 1;
   const Index3 cells_n = cells_grid.whole_dims();
   const Index3 cells_first = times(own_first, scale), cells_end = times(own_end, scale);
@@ -366,7 +368,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
   // vertices 0.002 h off it.)
   if (fans && sag > 0 && options.project && !options.refine_zero_set && cp.size() > 0) {
-    detail::split_fan_faces(near, sag * h, cp, depths, h, options, cells_grid, sub, reconstructed);
+    detail::split_fan_faces(near, sag * h, cp, depths, h, options, cells_geometry, sub,
+                            reconstructed);
     corners = detail::shared_corners(sub);  // in the new numbering
   }
   if (!fans && sag > 0 && levels <= 3 && options.project && !options.refine_zero_set &&
@@ -410,7 +413,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
         means.row(Eigen::Index(v)) = fan_means.row(it->second);
     });
     detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, split_cells,
-                                cells_grid);
+                                cells_geometry);
   }
   // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
   // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is

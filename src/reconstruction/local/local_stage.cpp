@@ -62,8 +62,8 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   if (options.local.edge_fans) {  // right by construction: nothing to repair
     lb.untangle = false;
     lb.side_rounds = 0;
-    // (Its finer grid's fans made the mesh cross itself: blub 32^3.)
-    lb.thin_parts = 0;
+    // The finer grid only when asked: about 4x the fans' triangles (docs/edge_fans.md).
+    if (options.thin_parts != Switch::On) lb.thin_parts = 0;
   }
   return lb;
 }
