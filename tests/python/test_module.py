@@ -446,6 +446,11 @@ def test_edge_fans_give_the_clis_mesh_near_the_surface_with_a_few_times_mcs_tria
     h = 2 / (n - 1)
     assert np.abs(torus(V)).mean() < 0.05 * h
     assert_the_clis_mesh(tmp_path, g, (V, F), "--edge-fans", "on")
+    # On the finer grid of thin parts: two to five times the triangles, closer to the torus.
+    V2, F2 = sdfcontour.contour(g, edge_fans=True, thin_parts=True)
+    assert 2 * len(F) <= len(F2) <= 5 * len(F)
+    assert np.abs(torus(V2)).mean() < np.abs(torus(V)).mean()
+    assert_the_clis_mesh(tmp_path, g, (V2, F2), "--edge-fans", "on", "--thin-parts", "on")
     for bad in ("on", 1, None):
         with pytest.raises(ValueError, match="edge_fans"):
             sdfcontour.contour(g, edge_fans=bad)
