@@ -1,5 +1,6 @@
 """Edge fans (`--edge-fans on`: a mesh that cannot cross itself, no repair stages) against the
-default local reconstruction and marching cubes on the shared meshes: L1 and L-infinity over MC's,
+default local reconstruction and marching cubes on the shared meshes (also on the grid of twice
+the resolution that shows the thin parts, `--thin-parts on`): L1 and L-infinity over MC's,
 triangles over MC's, crossings, closedness and time, one table per grid size, and each mesh's L1
 against the default's.
 
@@ -20,10 +21,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import geomean  # noqa: E402
 
 VARIANTS = ["--variant", "fans:--edge-fans on",
-            "--variant", "fans-lattice-b4:--edge-fans on --gradient lattice --band 4"]
-METHODS = ["gcp-local", "fans", "fans-lattice-b4"]
+            "--variant", "fans-lattice-b4:--edge-fans on --gradient lattice --band 4",
+            "--variant", "fans-finer:--edge-fans on --thin-parts on",
+            "--variant", "fans-finer-lattice:--edge-fans on --thin-parts on --gradient lattice"]
+METHODS = ["gcp-local", "fans", "fans-lattice-b4", "fans-finer", "fans-finer-lattice"]
 LABELS = {"gcp-local": "default", "fans": "edge fans", "fans-lattice-b4":
-          "edge fans, lattice gradients, band 4"}
+          "edge fans, lattice gradients, band 4", "fans-finer": "edge fans on the finer grid",
+          "fans-finer-lattice": "edge fans on the finer grid, lattice gradients"}
 
 
 def tables(rows):
