@@ -127,16 +127,24 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
 // Per vertex, the sum over its triangles of e e^T over their three edges e (in spacings), and
 // the number of triangles: a flat triangle with its corners on z(x, y) lies
 // sum_e Q(e) / 12 above it on average, Q the quadric's quadratic part, so the vertex's chord
-// offset is minus the mean of that over its triangles.
+// offset is minus the mean of that over its triangles. Only for the vertices that move (not
+// `fixed`): a split's second projection moves a fifth of them.
 struct EdgeMoments {
+  std::vector<int> slot;  // per vertex: its place in sum and triangles, -1 where fixed
   std::vector<Eigen::Matrix3d> sum;
   std::vector<int> triangles;
 };
-EdgeMoments edge_moments(const Mesh& mesh, double spacing) {
-  EdgeMoments m{
-      std::vector<Eigen::Matrix3d>(std::size_t(mesh.vertices.rows()), Eigen::Matrix3d::Zero()),
-      std::vector<int>(std::size_t(mesh.vertices.rows()), 0)};
+EdgeMoments edge_moments(const Mesh& mesh, double spacing, const std::vector<char>* fixed) {
+  EdgeMoments m;
+  m.slot.resize(std::size_t(mesh.vertices.rows()));
+  int moving = 0;
+  for (std::size_t v = 0; v < m.slot.size(); ++v) m.slot[v] = fixed && (*fixed)[v] ? -1 : moving++;
+  m.sum.assign(std::size_t(moving), Eigen::Matrix3d::Zero());
+  m.triangles.assign(std::size_t(moving), 0);
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
+    int slots[3];
+    for (int k = 0; k < 3; ++k) slots[k] = m.slot[std::size_t(mesh.triangles(t, k))];
+    if (slots[0] < 0 && slots[1] < 0 && slots[2] < 0) continue;
     Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
@@ -145,10 +153,11 @@ EdgeMoments edge_moments(const Mesh& mesh, double spacing) {
                                 spacing;
       e2 += e * e.transpose();
     }
-    for (int k = 0; k < 3; ++k) {
-      m.sum[std::size_t(mesh.triangles(t, k))] += e2;
-      ++m.triangles[std::size_t(mesh.triangles(t, k))];
-    }
+    for (const int s : slots)
+      if (s >= 0) {
+        m.sum[std::size_t(s)] += e2;
+        ++m.triangles[std::size_t(s)];
+      }
   }
   return m;
 }
@@ -172,7 +181,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
   ContactProjectionStats stats;
   if (points.rows() == 0 || mesh.vertices.rows() == 0) return stats;
   const PointMatrix N = detail::vertex_normals(mesh);
-  const EdgeMoments chords = o.chord_offset ? edge_moments(mesh, spacing) : EdgeMoments{};
+  const EdgeMoments chords = o.chord_offset ? edge_moments(mesh, spacing, fixed) : EdgeMoments{};
   // Points within each radius, in cubes of that side.
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   const detail::PointCubes cubes(points, radii[0]);
@@ -230,10 +239,11 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       if (!fit_quadric(fit, o, c)) return;
     }
     double z0 = c[0];
-    if (o.chord_offset && chords.triangles[std::size_t(v)] > 0) {
-      const Eigen::Matrix3d& m = chords.sum[std::size_t(v)];
+    const int slot = o.chord_offset ? chords.slot[std::size_t(v)] : -1;
+    if (slot >= 0 && chords.triangles[std::size_t(slot)] > 0) {
+      const Eigen::Matrix3d& m = chords.sum[std::size_t(slot)];
       const double q = c[3] * a.dot(m * a) + c[4] * a.dot(m * b) + c[5] * b.dot(m * b);
-      z0 -= q / 12 / chords.triangles[std::size_t(v)];
+      z0 -= q / 12 / chords.triangles[std::size_t(slot)];
     }
     if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
   });

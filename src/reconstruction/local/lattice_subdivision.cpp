@@ -198,62 +198,83 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
     std::array<int, 2> source;
     char on_feature;
   };
-  // Per level-0 triangle: its children's pieces (fine's vertex ids, or -1 - k for its k-th new
-  // point) and the new points.
-  std::vector<std::vector<std::array<int, 3>>> pieces(static_cast<std::size_t>(f));
-  std::vector<std::vector<NewPoint>> points(static_cast<std::size_t>(f));
+  // Which of each child's edges split (bit e: from corner e to e + 1), then per level-0
+  // triangle its children's pieces (fine's vertex ids, or -1 - k for its k-th new point) and new
+  // points, in flat arrays at the triangle's offsets.
+  auto ids = [&](Eigen::Index t, int k, int id[3]) {
+    for (int c = 0; c < 3; ++c) id[c] = fine.mesh.triangles(t * children + k, c);
+  };
+  std::vector<unsigned char> masks(std::size_t(f) * std::size_t(children), 0);
+  std::vector<std::size_t> first_new(std::size_t(f) + 1, 0), first_piece(std::size_t(f) + 1, 0);
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
-    auto& out = pieces[std::size_t(t)];
-    auto& made = points[std::size_t(t)];
+    std::size_t made = 0;
     for (int k = 0; k < children; ++k) {
-      const Eigen::Index row = t * children + k;
+      int id[3];
+      ids(t, k, id);
+      unsigned char mask = 0;
+      // Vertex ids ascend with keys: (min, max) asks the same of both triangles on the edge.
+      for (int e = 0; e < 3; ++e)
+        if (split(std::min(id[e], id[(e + 1) % 3]), std::max(id[e], id[(e + 1) % 3])))
+          mask |= (unsigned char)(1 << e), ++made;
+      masks[std::size_t(t) * std::size_t(children) + std::size_t(k)] = mask;
+    }
+    first_new[std::size_t(t) + 1] = made;
+    first_piece[std::size_t(t) + 1] = made + std::size_t(children);  // each split adds a piece
+  });
+  for (Eigen::Index t = 0; t < f; ++t) {
+    first_new[std::size_t(t) + 1] += first_new[std::size_t(t)];
+    first_piece[std::size_t(t) + 1] += first_piece[std::size_t(t)];
+  }
+  std::vector<NewPoint> points(first_new.back());
+  std::vector<std::array<int, 3>> pieces(first_piece.back());
+  tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
+    NewPoint* made = points.data() + first_new[std::size_t(t)];
+    std::array<int, 3>* out = pieces.data() + first_piece[std::size_t(t)];
+    int count = 0;
+    for (int k = 0; k < children; ++k) {
       int id[3], mid[3];
-      for (int c = 0; c < 3; ++c) id[c] = fine.mesh.triangles(row, c);
+      ids(t, k, id);
+      const unsigned char mask = masks[std::size_t(t) * std::size_t(children) + std::size_t(k)];
       int splits = 0;
       for (int e = 0; e < 3; ++e) {
         const int x = id[e], y = id[(e + 1) % 3];
         mid[e] = 0;
-        // Vertex ids ascend with keys: (min, max) asks the same of both triangles on the edge.
-        if (!split(std::min(x, y), std::max(x, y))) continue;
+        if (!(mask & (1 << e))) continue;
         const auto& cx = corners[std::size_t(k)][std::size_t(e)];
         const auto& cy = corners[std::size_t(k)][std::size_t((e + 1) % 3)];
         const KeyedPosition p = lattice_point(in, t, cx[0] + cy[0], cx[1] + cy[1], 2 * n);
-        made.push_back({p.key, {std::min(x, y), std::max(x, y)}, p.on_feature});
-        mid[e] = -int(made.size());
+        made[count++] = {p.key, {std::min(x, y), std::max(x, y)}, p.on_feature};
+        mid[e] = -count;
         ++splits;
       }
       const int a = id[0], b = id[1], c = id[2], ab = mid[0], bc = mid[1], ca = mid[2];
       if (splits == 0) {
-        out.push_back({a, b, c});
+        *out++ = {a, b, c};
       } else if (splits == 3) {
-        out.push_back({a, ab, ca});
-        out.push_back({ab, b, bc});
-        out.push_back({ca, bc, c});
-        out.push_back({ab, bc, ca});
+        *out++ = {a, ab, ca};
+        *out++ = {ab, b, bc};
+        *out++ = {ca, bc, c};
+        *out++ = {ab, bc, ca};
       } else if (splits == 1) {
-        if (ab) out.push_back({a, ab, c}), out.push_back({ab, b, c});
-        if (bc) out.push_back({a, b, bc}), out.push_back({a, bc, c});
-        if (ca) out.push_back({a, b, ca}), out.push_back({ca, b, c});
+        if (ab) *out++ = {a, ab, c}, *out++ = {ab, b, c};
+        if (bc) *out++ = {a, b, bc}, *out++ = {a, bc, c};
+        if (ca) *out++ = {a, b, ca}, *out++ = {ca, b, c};
       } else {
         // Two split edges: the corner between them is cut off, the rest is cut at its shorter
         // diagonal's fixed choice (from the unsplit edge's first end).
-        if (!ca) out.push_back({ab, b, bc}), out.push_back({a, ab, bc}), out.push_back({a, bc, c});
-        if (!ab) out.push_back({bc, c, ca}), out.push_back({b, bc, ca}), out.push_back({b, ca, a});
-        if (!bc) out.push_back({ca, a, ab}), out.push_back({c, ca, ab}), out.push_back({c, ab, b});
+        if (!ca) *out++ = {ab, b, bc}, *out++ = {a, ab, bc}, *out++ = {a, bc, c};
+        if (!ab) *out++ = {bc, c, ca}, *out++ = {b, bc, ca}, *out++ = {b, ca, a};
+        if (!bc) *out++ = {ca, a, ab}, *out++ = {c, ca, ab}, *out++ = {c, ab, b};
       }
     }
   });
   // Every vertex, old and new, named; new points shared by two triangles are made twice alike.
-  std::vector<std::pair<VertexKey, std::size_t>> order;
   const std::size_t old = std::size_t(fine.mesh.vertices.rows());
-  order.reserve(old);
-  for (std::size_t v = 0; v < old; ++v) order.push_back({fine.keys[v], v});
-  std::vector<std::size_t> first_new(std::size_t(f) + 1, 0);
-  for (Eigen::Index t = 0; t < f; ++t)
-    first_new[std::size_t(t) + 1] = first_new[std::size_t(t)] + points[std::size_t(t)].size();
-  for (Eigen::Index t = 0; t < f; ++t)
-    for (std::size_t k = 0; k < points[std::size_t(t)].size(); ++k)
-      order.push_back({points[std::size_t(t)][k].key, old + first_new[std::size_t(t)] + k});
+  std::vector<std::pair<VertexKey, std::size_t>> order(old + points.size());
+  tbb::parallel_for(std::size_t(0), old, [&](std::size_t v) { order[v] = {fine.keys[v], v}; });
+  tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t q) {
+    order[old + q] = {points[q].key, old + q};
+  });
   KeyOrder named = order_by_key(std::move(order));
   const std::vector<std::size_t>& first_of = named.first_of;
   const std::vector<int>& id = named.id;
@@ -263,42 +284,36 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
   out.source.resize(count);
   out.sub.on_feature.resize(count);
   out.sub.mesh.vertices.resize(Eigen::Index(count), 3);
-  std::vector<const NewPoint*> made(first_new.back());
-  for (Eigen::Index t = 0; t < f; ++t)
-    for (std::size_t k = 0; k < points[std::size_t(t)].size(); ++k)
-      made[first_new[std::size_t(t)] + k] = &points[std::size_t(t)][k];
-  for (std::size_t v = 0; v < count; ++v) {
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t v) {
     const std::size_t s = first_of[v];
     if (s < old) {
       out.source[v] = {int(s), int(s)};
       out.sub.on_feature[v] = fine.on_feature[s];
     } else {
-      const NewPoint& p = *made[s - old];
+      const NewPoint& p = points[s - old];
       out.source[v] = p.source;
       out.sub.on_feature[v] = p.on_feature;
     }
     const auto [x, y] = out.source[v];
     out.sub.mesh.vertices.row(Eigen::Index(v)) =
         0.5 * (fine.mesh.vertices.row(x) + fine.mesh.vertices.row(y));
-  }
-  Eigen::Index total = 0;
-  for (const auto& p : pieces) total += Eigen::Index(p.size());
+  });
+  const Eigen::Index total = Eigen::Index(pieces.size());
   out.sub.mesh.triangles.resize(total, 3);
   out.sub.parent.resize(std::size_t(total));
   out.sub.child.resize(std::size_t(total));
-  Eigen::Index r = 0;
-  for (Eigen::Index t = 0; t < f; ++t) {
-    const auto& ps = pieces[std::size_t(t)];
-    for (std::size_t k = 0; k < ps.size(); ++k, ++r) {
+  tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
+    const std::size_t new_at = old + first_new[std::size_t(t)];
+    for (std::size_t r = first_piece[std::size_t(t)]; r < first_piece[std::size_t(t) + 1]; ++r) {
       for (int c = 0; c < 3; ++c) {
-        const int v = ps[k][std::size_t(c)];
-        out.sub.mesh.triangles(r, c) =
-            v >= 0 ? id[std::size_t(v)] : id[old + first_new[std::size_t(t)] + std::size_t(-v - 1)];
+        const int v = pieces[r][std::size_t(c)];
+        out.sub.mesh.triangles(Eigen::Index(r), c) =
+            v >= 0 ? id[std::size_t(v)] : id[new_at + std::size_t(-v - 1)];
       }
-      out.sub.parent[std::size_t(r)] = in.triangle_name[std::size_t(t)];
-      out.sub.child[std::size_t(r)] = int(k);
+      out.sub.parent[r] = in.triangle_name[std::size_t(t)];
+      out.sub.child[r] = int(r - first_piece[std::size_t(t)]);
     }
-  }
+  });
   return out;
 }
 
