@@ -187,12 +187,17 @@ def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_
 
 def test_gcp_with_edge_fans_in_bricks_is_the_single_process_mesh(client, grid):
     # Edge fans read one ring of cells beyond a brick's own (no repair stages): bricks of 32 give
-    # the single process's mesh bit for bit, closed.
+    # the single process's mesh bit for bit, closed, on the grid and on its finer grid.
     single = sdfcontour.contour(grid, edge_fans=True, band=3)
     V, F = sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client, edge_fans=True,
                                    band=3)
     assert_same_mesh((V, F), single)
     assert_closed_manifold(F)
+    # The finer grid only when asked, there too.
+    finer = sdfcontour.contour(grid, edge_fans=True, band=3, thin_parts=True)
+    assert len(finer[1]) > 2 * len(F)
+    assert_same_mesh(sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client,
+                                             edge_fans=True, band=3, thin_parts=True), finer)
     with pytest.raises(ValueError, match="edge_fans"):
         sdfcontour.dask.contour(grid, method="gcp", client=client, edge_fans="yes")
 
