@@ -68,17 +68,20 @@ Eigen::VectorXd point_mesh_distances(const PointMatrix& points, const Mesh& mesh
   // One of each triangle and one hint per point: a repeated triangle changes no distance but
   // every query near it visits each copy, and CGAL's kd-tree of hints recursed past the stack on
   // a mesh whose 83,384 triangles had 50 distinct corners.
-  auto corners = [](const Triangle& t) {
-    std::array<K::Point_3, 3> c{t[0], t[1], t[2]};
-    std::sort(c.begin(), c.end());
-    return c;
-  };
-  std::sort(triangles.begin(), triangles.end(),
-            [&](const Triangle& a, const Triangle& b) { return corners(a) < corners(b); });
-  triangles.erase(
-      std::unique(triangles.begin(), triangles.end(),
-                  [&](const Triangle& a, const Triangle& b) { return corners(a) == corners(b); }),
-      triangles.end());
+  // The first of each set of corners kept, in the mesh's order (the corners sorted once each).
+  std::vector<std::pair<std::array<K::Point_3, 3>, std::size_t>> keyed(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    keyed[t] = {{triangles[t][0], triangles[t][1], triangles[t][2]}, t};
+    std::sort(keyed[t].first.begin(), keyed[t].first.end());
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<char> repeated(triangles.size(), 0);
+  for (std::size_t i = 1; i < keyed.size(); ++i)
+    repeated[keyed[i].second] = keyed[i].first == keyed[i - 1].first;
+  std::size_t kept = 0;
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    if (!repeated[t]) triangles[kept++] = triangles[t];
+  triangles.resize(kept);
   Tree tree(triangles.begin(), triangles.end());
   std::vector<Tree::Point_and_primitive_id> hints;
   hints.reserve(triangles.size());
