@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,26 +51,53 @@ struct FitRow {
   Eigen::Vector3d normal;  // the point's unit normal in the tangent frame (a, b, n)
 };
 
-// The angle between a point's normal and the normal of the quadric c where the point lies (the
-// vertex's normal, (0, 0, 1), before the first fit).
-double normal_turn(const FitRow& f, const Coefficients* c) {
-  Eigen::Vector3d fitted = Eigen::Vector3d::UnitZ();
-  if (c) {
-    const double x = f.row[1], y = f.row[2];
-    const auto& q = *c;
-    fitted =
-        Eigen::Vector3d(-(q[1] + 2 * q[3] * x + q[4] * y), -(q[2] + q[4] * x + 2 * q[5] * y), 1)
-            .normalized();
+// The squared chord between a point's unit normal and the unit normal of the quadric c where
+// the point lies (the vertex's normal, (0, 0, 1), before the first fit): 2 (1 - cos t) for a turn
+// t, which is t^2 to within 2% below 30 degrees and needs no arc cosine (the projection's
+// largest cost when it took one per row and round).
+double squared_turn_chord(const FitRow& f, const Coefficients* c) {
+  if (!c) return 2 * (1 - f.normal[2]);
+  const double x = f.row[1], y = f.row[2];
+  const auto& q = *c;
+  const double ga = -(q[1] + 2 * q[3] * x + q[4] * y), gb = -(q[2] + q[4] * x + 2 * q[5] * y);
+  const double cosine =
+      (ga * f.normal[0] + gb * f.normal[1] + f.normal[2]) / std::sqrt(ga * ga + gb * gb + 1);
+  return 2 * (1 - std::clamp(cosine, -1.0, 1.0));
+}
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
+// M's lower triangle += w r r^T (Eigen's rankUpdate calls out of line for a 6 x 6).
+void add_outer(Matrix6& M, const Coefficients& r, double w) {
+  for (int j = 0; j < 6; ++j) {
+    const double wr = w * r[j];
+    for (int i = j; i < 6; ++i) M(i, j) += wr * r[i];
   }
-  return std::acos(std::clamp(fitted.dot(f.normal), -1.0, 1.0));
+}
+
+// M (its lower triangle, symmetric positive semi-definite) factored; false where it is singular
+// to within rounding (a pivot below 12 epsilon of its largest diagonal entry).
+bool factor(const Matrix6& M, Eigen::LLT<Matrix6>& llt) {
+  llt.compute(M);
+  if (llt.info() != Eigen::Success) return false;
+  const double largest = M.diagonal().maxCoeff();
+  const auto L = llt.matrixLLT().diagonal();
+  for (int i = 0; i < 6; ++i)
+    if (!(L[i] * L[i] > 12 * std::numeric_limits<double>::epsilon() * largest)) return false;
+  return true;
+}
+
+// (M^-1)_00 from its factor.
+double inverse_00(const Eigen::LLT<Matrix6>& llt) {
+  return llt.solve(Coefficients::Unit(0))[0];
 }
 
 // Weighted least squares, then robust_rounds refits with each row's weight divided by
 // 1 + (its miss / robust_scale)^2; with normal_turn_scale, every fit also divides it by
-// 1 + (its normal's turn from the fit's / normal_turn_scale)^2, from the vertex's normal in the
-// first fit (the built-in box at 32^3: vertices next to its edges 0.146 h inside a face at worst
-// without the turns, 0.085 h with them). False where the rows
-// give no reliable height at the vertex: a rank-deficient or one-sided neighbourhood
+// 1 + (its normal's turn from the fit's / normal_turn_scale)^2, the turn measured by its chord,
+// from the vertex's normal in the first fit (the built-in box at 32^3: vertices next to its
+// edges 0.146 h inside a face at worst without the turns, 0.085 h with them). False where the
+// rows give no reliable height at the vertex: a rank-deficient or one-sided neighbourhood
 // (max_variance_factor), or points too far from any quadric (max_residual). The first fit's
 // spread is judged without the turns: where the surface curves within the radius, its points
 // turn from the vertex's normal for good reason (a cylinder of radius 4 h: 19 degrees 1.4 h
@@ -77,13 +105,14 @@ double normal_turn(const FitRow& f, const Coefficients* c) {
 bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions& o,
                  Coefficients& c) {
   if (int(fit.size()) < o.min_points) return false;
-  const double turn_scale = o.normal_turn_scale * std::acos(-1.0) / 180;
+  const double chord_scale = 2 * std::sin(o.normal_turn_scale * std::acos(-1.0) / 360);
+  const double inv_chord_scale2 = o.normal_turn_scale > 0 ? 1 / (chord_scale * chord_scale) : 0;
+  Eigen::LLT<Matrix6> llt;
   for (int round = 0; round <= o.robust_rounds; ++round) {
-    using Matrix6 = Eigen::Matrix<double, 6, 6>;
     Matrix6 M = Matrix6::Zero(), spread = Matrix6::Zero();
     Coefficients rhs = Coefficients::Zero();
     double weight_sum = 0, weighted_z2 = 0, spread_sum = 0;
-    const bool spread_apart = round == 0 && turn_scale > 0;
+    const bool spread_apart = round == 0 && inv_chord_scale2 > 0;
     for (const FitRow& f : fit) {
       double w = f.w;
       if (round > 0) {
@@ -92,30 +121,24 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
       }
       if (spread_apart) {
         spread_sum += w;
-        spread.selfadjointView<Eigen::Lower>().rankUpdate(f.row, w);
+        add_outer(spread, f.row, w);
       }
-      if (turn_scale > 0) {
-        const double turn = normal_turn(f, round > 0 ? &c : nullptr) / turn_scale;
-        w /= 1 + turn * turn;
-      }
+      if (inv_chord_scale2 > 0)
+        w /= 1 + squared_turn_chord(f, round > 0 ? &c : nullptr) * inv_chord_scale2;
       weight_sum += w;
-      M.selfadjointView<Eigen::Lower>().rankUpdate(f.row, w);
+      add_outer(M, f.row, w);
       rhs += w * f.z * f.row;
       weighted_z2 += w * f.z * f.z;
     }
-    M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
-    const Eigen::FullPivLU<Matrix6> lu(M);
-    if (!lu.isInvertible()) return false;
-    const Matrix6 inverse = lu.inverse();
     if (spread_apart) {
-      spread.triangularView<Eigen::StrictlyUpper>() = spread.transpose();
-      const Eigen::FullPivLU<Matrix6> plain(spread);
-      if (!plain.isInvertible() || plain.inverse()(0, 0) * spread_sum > o.max_variance_factor)
+      Eigen::LLT<Matrix6> plain;
+      if (!factor(spread, plain) || inverse_00(plain) * spread_sum > o.max_variance_factor)
         return false;
-    } else if (inverse(0, 0) * weight_sum > o.max_variance_factor) {
+      if (!factor(M, llt)) return false;
+    } else if (!factor(M, llt) || inverse_00(llt) * weight_sum > o.max_variance_factor) {
       return false;
     }
-    c = inverse * rhs;
+    c = llt.solve(rhs);
     // Sum w (z - row.c)^2 = sum w z^2 - c.rhs at the least-squares solution.
     if (round == 0 && o.max_residual > 0 &&
         weighted_z2 - c.dot(rhs) > o.max_residual * o.max_residual * weight_sum)
