@@ -73,11 +73,9 @@ CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
     });
   });
   CrossingNorms norms;
-  for (const Slab& s : per_slab) {
-    norms.all.insert(norms.all.end(), s.all.begin(), s.all.end());
-    norms.kinkless.insert(norms.kinkless.end(), s.kinkless.begin(), s.kinkless.end());
-    if (smooth) smooth->insert(smooth->end(), s.smooth.begin(), s.smooth.end());
-  }
+  norms.all = detail::concatenate(per_slab, &Slab::all);
+  norms.kinkless = detail::concatenate(per_slab, &Slab::kinkless);
+  if (smooth) *smooth = detail::concatenate(per_slab, &Slab::smooth);
   return norms;
 }
 

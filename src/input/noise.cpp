@@ -19,7 +19,10 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
   // whose second differences (~h^2 curvature) would read as noise on a coarse grid; sqrt(70)
   // sigma on white noise.
   constexpr double kWeights[5] = {1, -4, 6, -4, 1};
-  std::vector<std::vector<double>> per_slab(static_cast<std::size_t>(nx));
+  struct Slab {
+    std::vector<double> d4;
+  };
+  std::vector<Slab> per_slab(static_cast<std::size_t>(nx));
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, 2, nx - 2, 2, [&](int i) {
       for (int j = 2; j + 2 < ny; ++j)
@@ -34,13 +37,12 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
               clamped |= truncation.truncated(v);
               sum += kWeights[o + 2] * v;
             }
-            if (!clamped) per_slab[std::size_t(i)].push_back(std::abs(sum));
+            if (!clamped) per_slab[std::size_t(i)].d4.push_back(std::abs(sum));
           }
         }
     });
   });
-  std::vector<double> d4;
-  for (const auto& s : per_slab) d4.insert(d4.end(), s.begin(), s.end());
+  std::vector<double> d4 = detail::concatenate(per_slab, &Slab::d4);
   if (d4.size() < 16) return NAN;
   const auto mid = d4.begin() + long(d4.size() / 2);
   std::nth_element(d4.begin(), mid, d4.end());

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <vector>
 
 #include "sdfcontour/input/samples.h"
 
@@ -60,6 +61,19 @@ void windowed_slabs(const GridView& grid, const T* values, int from, int to, int
       dropped = upto;
     }
   }
+}
+
+/// The slabs' values in slab order, copied in parallel (a grid's crossings are millions of values:
+/// copied one slab after another, they were a sixth of measuring bunny at 256^3 on two threads).
+template <class T, class Part>
+std::vector<T> concatenate(const std::vector<Part>& parts, std::vector<T> Part::*member) {
+  std::vector<std::size_t> start(parts.size() + 1, 0);
+  for (std::size_t s = 0; s < parts.size(); ++s) start[s + 1] = start[s] + (parts[s].*member).size();
+  std::vector<T> out(start.back());
+  tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t s) {
+    std::copy((parts[s].*member).begin(), (parts[s].*member).end(), out.begin() + long(start[s]));
+  });
+  return out;
 }
 
 }  // namespace sdfcontour::detail

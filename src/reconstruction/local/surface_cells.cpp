@@ -33,17 +33,23 @@ Eigen::Vector3d gradient_at(const GridView& grid, const std::array<int, 3>& p,
 }
 
 // The cells of slab i (cells (i, *, *)) that the surface crosses, with their polygons' edges.
+// Most cells are on one side: their corners' signs alone rule them out.
 template <class T>
 void slab_cells(const GridView& grid, const T* values, int i, std::vector<ActiveCell>& out) {
   const auto& n = grid.dims;
   const std::int64_t slab = std::int64_t(i) * (n[1] - 1) * (n[2] - 1);
+  const std::size_t sj = std::size_t(n[2]), si = std::size_t(n[1]) * sj;
+  const std::size_t offset[8] = {0, si, sj, si + sj, 1, si + 1, sj + 1, si + sj + 1};
   double v[8];
-  for (int j = 0; j + 1 < n[1]; ++j)
+  for (int j = 0; j + 1 < n[1]; ++j) {
+    const T* row = values + grid.index(i, j, 0);
     for (int k = 0; k + 1 < n[2]; ++k) {
-      for (int c = 0; c < 8; ++c)
-        v[c] = double(values[grid.index(i + (c & 1), j + (c >> 1 & 1), k + (c >> 2 & 1))]);
+      const T* at = row + k;
+      unsigned inside = 0;
+      for (int c = 0; c < 8; ++c) inside |= unsigned(at[offset[c]] < 0) << c;
+      if (inside == 0 || inside == 0xff) continue;
+      for (int c = 0; c < 8; ++c) v[c] = double(at[offset[c]]);
       const CubeCase cube = cube_case(v);
-      if (!cube.mixed()) continue;
       ActiveCell cell;
       cell.key = slab + std::int64_t(j) * (n[2] - 1) + k;
       cell.inside = cube.inside;
@@ -56,6 +62,7 @@ void slab_cells(const GridView& grid, const T* values, int i, std::vector<Active
       });
       out.push_back(cell);
     }
+  }
 }
 
 }  // namespace
@@ -138,18 +145,26 @@ SurfaceCells find_surface_cells(const GridView& grid) {
   tbb::parallel_for(0, cells.cell_dims[0], [&](int i) {
     grid.visit([&](const auto* values) { slab_cells(grid, values, i, slabs[std::size_t(i)]); });
   });
-  std::size_t total = 0;
-  for (const auto& s : slabs) total += s.size();
-  cells.active.reserve(total);
-  int next_vertex = 0;
-  for (auto& s : slabs) {
-    for (ActiveCell& c : s) {
+  // Each slab's first cell and first vertex, then the slabs copied in parallel.
+  std::vector<std::size_t> first_cell(slabs.size() + 1, 0);
+  std::vector<int> first_vertex(slabs.size() + 1, 0);
+  for (std::size_t i = 0; i < slabs.size(); ++i) {
+    int polygons = 0;
+    for (const ActiveCell& c : slabs[i]) polygons += c.polygon_count;
+    first_cell[i + 1] = first_cell[i] + slabs[i].size();
+    first_vertex[i + 1] = first_vertex[i] + polygons;
+  }
+  cells.active.resize(first_cell.back());
+  tbb::parallel_for(std::size_t(0), slabs.size(), [&](std::size_t i) {
+    int next_vertex = first_vertex[i];
+    std::size_t at = first_cell[i];
+    for (ActiveCell& c : slabs[i]) {
       c.first_vertex = next_vertex;
       next_vertex += c.polygon_count;
-      cells.active.push_back(c);
+      cells.active[at++] = c;
     }
-    std::vector<ActiveCell>().swap(s);
-  }
+    std::vector<ActiveCell>().swap(slabs[i]);
+  });
   return cells;
 }
 
