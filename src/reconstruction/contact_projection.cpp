@@ -8,7 +8,6 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -205,11 +204,10 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
   if (points.rows() == 0 || mesh.vertices.rows() == 0) return stats;
   const PointMatrix N = detail::vertex_normals(mesh);
   const EdgeMoments chords = o.chord_offset ? edge_moments(mesh, spacing, fixed) : EdgeMoments{};
-  // Points within each radius, in cubes of that side.
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
+  // Points within each radius, in cubes of the narrower (the wider reads more of them).
   const detail::PointCubes cubes(points, radii[0]);
-  std::optional<detail::PointCubes> wide_cubes;
-  if (o.wide_radius > 0) wide_cubes.emplace(points, radii[1]);
+  const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
   detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
@@ -227,11 +225,14 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
     // (a brick's points start elsewhere).
     thread_local std::vector<int> near;
     thread_local std::vector<FitRow> fit;
-    auto gather = [&](double r, const detail::PointCubes& in) {
+    auto gather = [&](double r, long reach) {
       near.clear();
-      in.for_each_near(p, [&](int i) {
-        if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
-      });
+      cubes.for_each_near(
+          p,
+          [&](int i) {
+            if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
+          },
+          reach);
       std::sort(near.begin(), near.end());
       const double inv_two_sigma2 = 4.0 / (r * r);
       fit.clear();
@@ -250,15 +251,15 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       }
     };
     Coefficients c;
-    gather(radii[0], cubes);
+    gather(radii[0], reaches[0]);
     if (!fit_quadric(fit, o, c)) {
       // Points on lines further apart than the radius (contact points of grid-aligned flats)
       // leave a quadric undetermined: a wider neighbourhood holds the next line. Too few points
       // that agree (an edge's vertex, whose normal neither face shares) would take the few
       // points between the faces wider (the box at 32^3: its vertices 0.012 h off on average,
       // 0.001 h without).
-      if (!wide_cubes || int(fit.size()) < o.min_points) return;
-      gather(radii[1], *wide_cubes);
+      if (!(o.wide_radius > 0) || int(fit.size()) < o.min_points) return;
+      gather(radii[1], reaches[1]);
       if (!fit_quadric(fit, o, c)) return;
     }
     double z0 = c[0];

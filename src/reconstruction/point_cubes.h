@@ -44,13 +44,17 @@ class PointCubes {
     }
   }
 
-  // Calls f(point index) for every point in the 27 cubes around p.
+  // The cubes' side (at least the one asked for).
+  double cell() const { return cell_; }
+
+  // Calls f(point index) for every point in the 27 cubes around p (with `reach`, the
+  // (2 reach + 1)^3 cubes: the points within reach sides of p).
   template <class F>
-  void for_each_near(const Eigen::Vector3d& p, F&& f) const {
+  void for_each_near(const Eigen::Vector3d& p, F&& f, long reach = 1) const {
     const auto c = cube_of(p);
-    const long x0 = std::max(0L, c[0] - 1), x1 = std::min(size_[0] - 1, c[0] + 1);
-    for (long k = std::max(0L, c[2] - 1); k <= std::min(size_[2] - 1, c[2] + 1); ++k)
-      for (long j = std::max(0L, c[1] - 1); j <= std::min(size_[1] - 1, c[1] + 1); ++j) {
+    const long x0 = std::max(0L, c[0] - reach), x1 = std::min(size_[0] - 1, c[0] + reach);
+    for (long k = std::max(0L, c[2] - reach); k <= std::min(size_[2] - 1, c[2] + reach); ++k)
+      for (long j = std::max(0L, c[1] - reach); j <= std::min(size_[1] - 1, c[1] + reach); ++j) {
         auto first = keyed_.begin(), last = keyed_.end();
         if (!row_start_.empty()) {
           const std::size_t row = std::size_t(k * size_[1] + j);
