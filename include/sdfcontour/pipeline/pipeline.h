@@ -163,6 +163,8 @@ struct ContourOptions {
   /// second fit within 2 spacings where the first has no height (with the local contact points'
   /// near misses): 0.305x -> 0.300x at 32^3, 0.278x -> 0.267x at 64^3; the analytic torus at
   /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (bench/smooth_shapes.py).
+  /// Edge fans on the grid itself take one robust round where this asks for the default's two
+  /// (local_stage.cpp).
   ContactProjectionOptions local_projection = local_projection_options();
   /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
   /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.
