@@ -328,6 +328,10 @@ bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, in
   const double c = std::clamp(normals.row(x).dot(normals.row(y)), -1.0, 1.0);
   if (c < kCreaseTurnCosine) return false;
   const double length = (sub.mesh.vertices.row(x) - sub.mesh.vertices.row(y)).norm();
+  // The turn t lies between its chord 2 sin(t/2) and 1.05 times it below the crease's 30
+  // degrees: the arc cosine only where those bounds disagree (most edges sag far less).
+  const double chord = std::sqrt(2 * (1 - c));
+  if (length * chord * 1.05 / 8 <= limit) return false;
   return length * std::acos(c) / 8 > limit;
 }
 
