@@ -107,6 +107,20 @@ void merge_ascending(const std::vector<const std::vector<Key>*>& lists, Visit vi
 // join_local_pieces; with `owned` (the same pieces), each piece's arrays are freed once read, so
 // the join holds little beyond the output mesh (23 M triangles at 1024³).
 Mesh join_pieces(const std::vector<LocalPiece>& pieces, std::vector<LocalPiece>* owned) {
+  // One piece is already in key and name order (LocalPiece): the merges below would copy it
+  // entry by entry through a heap, serially.
+  if (pieces.size() == 1) {
+    Mesh mesh;
+    if (owned) {
+      mesh.vertices = std::move((*owned)[0].vertices);
+      mesh.triangles = std::move((*owned)[0].triangles);
+      std::vector<VertexKey>().swap((*owned)[0].keys);
+    } else {
+      mesh.vertices = pieces[0].vertices;
+      mesh.triangles = pieces[0].triangles;
+    }
+    return mesh;
+  }
   std::vector<const std::vector<VertexKey>*> keys;
   std::vector<const std::vector<std::uint64_t>*> names;
   for (const LocalPiece& p : pieces) {
