@@ -68,7 +68,8 @@ void windowed_slabs(const GridView& grid, const T* values, int from, int to, int
 template <class T, class Part>
 std::vector<T> concatenate(const std::vector<Part>& parts, std::vector<T> Part::*member) {
   std::vector<std::size_t> start(parts.size() + 1, 0);
-  for (std::size_t s = 0; s < parts.size(); ++s) start[s + 1] = start[s] + (parts[s].*member).size();
+  for (std::size_t s = 0; s < parts.size(); ++s)
+    start[s + 1] = start[s] + (parts[s].*member).size();
   std::vector<T> out(start.back());
   tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t s) {
     std::copy((parts[s].*member).begin(), (parts[s].*member).end(), out.begin() + long(start[s]));

@@ -47,10 +47,11 @@ struct ContactProjectionOptions {
   double robust_scale = 0.02;
   /// Degrees: each fit divides a point's weight by 1 + (t / normal_turn_scale)^2, t the turn
   /// between its normal and the fit's normal where it lies (the vertex's normal in the first
-  /// fit), measured by its chord: 2 sin(t / 2) against 2 sin(normal_turn_scale / 2). Points whose normal disagrees with their place (gradients blended across an edge or
-  /// a medial axis, which land a few hundredths of a spacing inside a face) then lose their
-  /// pull on curved and flat regions alike (after Poisson: shared meshes' L1 0.340x -> 0.337x
-  /// MC's at 64^3, `bench/local.py --res 64 --methods mc,gcp-poisson`). 0: off.
+  /// fit), measured by its chord: 2 sin(t / 2) against 2 sin(normal_turn_scale / 2). Points whose
+  /// normal disagrees with their place (gradients blended across an edge or a medial axis, which
+  /// land a few hundredths of a spacing inside a face) then lose their pull on curved and flat
+  /// regions alike (after Poisson: shared meshes' L1 0.340x -> 0.337x MC's at 64^3, `bench/local.py
+  /// --res 64 --methods mc,gcp-poisson`). 0: off.
   double normal_turn_scale = 5;
   /// Where the fit within radius gives no reliable height although at least min_points points
   /// there agree with the vertex's normal (points on lines further apart than the radius, as
