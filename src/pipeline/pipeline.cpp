@@ -195,9 +195,18 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     if (local) detail::say_cells_from_crossings(few, options);
   }
   if (local) {
-    const detail::ReconstructionInputs in =
-        detail::prepare_reconstruction(band, band_options, grid, options, result);
-    detail::reconstruct_locally(*grid.dense, in, options, result, stages);
+    // The bricks take their points from the whole grid's: the same chain as GCP's own.
+    const ContactPoints& cp = *result.contact_points;
+    GivenContactPoints given;
+    given.points = cp.points;
+    given.normals = cp.normals;
+    given.depths.resize(cp.size());
+    given.samples.resize(cp.samples.size());
+    for (std::size_t q = 0; q < cp.samples.size(); ++q) {
+      given.depths[Eigen::Index(q)] = std::abs(band.samples.values[cp.samples[q]]);
+      given.samples[q] = std::uint64_t(band.source[std::size_t(cp.samples[q])]);
+    }
+    detail::reconstruct_from_points(*grid.dense, band_options, given, options, result, stages);
   }
   std::optional<detail::ReconstructionInputs> inputs;
   if (contact_mesh && !local) {

@@ -17,6 +17,7 @@
 #include "pipeline/grid_source.h"
 #include "sdfcontour/contact_points/triangulation.h"
 #include "sdfcontour/pipeline/pipeline.h"
+#include "sdfcontour/reconstruction/local_brick.h"
 
 namespace sdfcontour::detail {
 
@@ -137,9 +138,6 @@ void refine_stage(const ReconstructionInputs& in, const ContourOptions& options,
 void reconstruct_mesh(ReconstructionInputs inputs, const GridSource& grid,
                       const ContourOptions& options, ContourResult& result, Stages& stages);
 
-// GCP's or GTCP's mesh into result.mesh by the local reconstruction of result.contact_points on
-// `grid`'s cells (result.local, result.reconstruction set), subdivided, then projected and carved
-// as `inputs` (prepare_reconstruction's) say.
 /// True where GCP's local reconstruction runs brick by brick (reconstruct_in_bricks): a grid,
 /// regular-triangulation gradients.
 bool bricked_local(const GridView* grid, const ContourOptions& options);
@@ -154,8 +152,11 @@ void reconstruct_in_bricks(const GridView& grid, const BandOptions& band,
 void reconstruct_in_bricks(const BlockedGrid& grid, const BandOptions& band,
                            const ContourOptions& options, ContourResult& result, Stages& stages);
 
-void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
-                         const ContourOptions& options, ContourResult& result, Stages& stages);
+/// The same from contact points made for the whole grid (GTCP's, the Delaunay or k-nearest
+/// gradients', every sample's: result.contact_points, their samples named as in `points`).
+void reconstruct_from_points(const GridView& grid, const BandOptions& band,
+                             const GivenContactPoints& points, const ContourOptions& options,
+                             ContourResult& result, Stages& stages);
 
 /// contour() of a grid read a block at a time (a .vdb level set): marching cubes or GCP's local
 /// reconstruction brick by brick, the values taken as distances (blocked_contour.cpp).

@@ -166,8 +166,9 @@ struct ContourOptions {
   /// Edge fans on the grid itself take one robust round where this asks for the default's two
   /// (local_stage.cpp).
   ContactProjectionOptions local_projection = local_projection_options();
-  /// The local reconstruction's midpoint subdivisions (subdivision.h) before its vertices are
-  /// projected onto the contact points (`project`, `projection`); -1: auto_subdivisions.
+  /// The local reconstruction's lattice subdivisions (LocalBrickOptions::subdivisions) before its
+  /// vertices are projected onto the contact points (`project`, `projection`); -1:
+  /// auto_subdivisions.
   int subdivisions = -1;
   /// The local reconstruction's edges split once more where their chords sag by more than this
   /// many spacings (LocalBrickOptions::split_sag; grids, brick by brick); -1: auto_split_sag.

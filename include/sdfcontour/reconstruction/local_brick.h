@@ -71,6 +71,16 @@ constexpr int kSplitReach = 2;
 /// Samples beyond a brick's reach whose contact points decide the thin parts' points.
 constexpr int kThinPartReach = 2;
 
+/// Contact points made before the bricks for the whole grid (GTCP's exact ones, or those of the
+/// Delaunay or k-nearest gradients on the whole band): each brick takes those of the samples it
+/// reads instead of making its own; the rest of the chain is the same.
+struct GivenContactPoints {
+  PointMatrix points, normals;  ///< k x 3: the points and their unit outward normals
+  Eigen::VectorXd depths;       ///< k: |value| of each point's sample (the projection's weight)
+  /// k: each point's sample, its global C-order index in the whole grid, ascending.
+  std::vector<std::uint64_t> samples;
+};
+
 struct LocalBrickOptions {
   /// The band (band > 0 or 0 for auto_band of the whole grid) with its truncation resolved on the
   /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
@@ -133,6 +143,9 @@ struct LocalBrickOptions {
   std::function<void()> grid_read;
   /// Keep the owned samples' contact points in LocalPiece (for adaptivity after the join).
   bool keep_contact_points = false;
+  /// When set, the bricks take their contact points from here (the caller keeps them alive);
+  /// `gradient`, `lattice_points` and `contact` are then not read.
+  const GivenContactPoints* given_points = nullptr;
 };
 
 /// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,

@@ -55,9 +55,12 @@ BandOptions resolved_band(BandOptions band, const std::array<int, 3>& dims) {
   return band;
 }
 
-// The largest |value| a band sample can have, in spacings.
+// The largest |value| a band sample can have, in spacings. With every sample (band 'all') no
+// sphere reaches farther than the grid's diagonal matters.
 double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& dims) {
-  return resolved_band(band, dims).band + band.margin;
+  const double largest = resolved_band(band, dims).band + band.margin;
+  if (std::isfinite(largest)) return largest;
+  return std::sqrt(3.0) * *std::max_element(dims.begin(), dims.end());
 }
 
 // Grid edges beyond the owned ones whose triangles a brick computes: their vertices' normals
@@ -194,15 +197,48 @@ void require_lattice_reach(const GridView& block, const BandSamples& band,
   }
 }
 
+// The given contact points of the samples in [lo, hi] (global, inclusive), in their order.
+ContactPoints given_in_reach(const GivenContactPoints& given, const Index3& n, const Index3& lo,
+                             const Index3& hi, Eigen::VectorXd& depths) {
+  std::vector<Eigen::Index> rows;
+  for (std::size_t q = 0; q < given.samples.size(); ++q) {
+    const std::uint64_t s = given.samples[q];
+    const Index3 at{int(s / (std::uint64_t(n[1]) * std::uint64_t(n[2]))),
+                    int(s / std::uint64_t(n[2]) % std::uint64_t(n[1])),
+                    int(s % std::uint64_t(n[2]))};
+    bool in = true;
+    for (std::size_t a = 0; a < 3; ++a) in = in && at[a] >= lo[a] && at[a] <= hi[a];
+    if (in) rows.push_back(Eigen::Index(q));
+  }
+  ContactPoints cp;
+  cp.points = given.points(rows, Eigen::all);
+  cp.normals = given.normals(rows, Eigen::all);
+  depths = given.depths(rows);
+  cp.samples.resize(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) cp.samples[r] = int(r);
+  return cp;
+}
+
 // The contact points of the band samples that the owned part [own_first, own_end) can use (within
-// flag_reach of it), from the block's triangulation with certified stars.
+// flag_reach of it), from the block's triangulation with certified stars, its lattice, or the
+// given points; `depths`: their samples' |value|.
 ContactPoints owned_reach_contact_points(const GridView& block, const BandSamples& band,
                                          const Index3& own_first, const Index3& own_end,
-                                         const LocalBrickOptions& options) {
+                                         const LocalBrickOptions& options,
+                                         Eigen::VectorXd& depths) {
   const double h = block.spacing().maxCoeff();
   const Index3 n = block.whole_dims();
   const double largest = largest_in_spacings(options.band, n) * h;
   const int reach = flag_reach(options, largest / h, n);
+  if (options.given_points)
+    return given_in_reach(*options.given_points, n, shifted(own_first, -reach),
+                          shifted(own_end, reach), depths);
+  auto with_depths = [&](ContactPoints cp) {
+    depths.resize(cp.size());
+    for (int q = 0; q < cp.size(); ++q)
+      depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
+    return cp;
+  };
   const Eigen::Vector3d flag_lo =
       block.point(own_first[0] - reach - block.first[0], own_first[1] - reach - block.first[1],
                   own_first[2] - reach - block.first[2]);
@@ -218,7 +254,7 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
   }
   if (options.lattice_points) {
     require_lattice_reach(block, band, flagged, options.contact, largest);
-    return lattice_contact_points(block, band, options.contact, &flagged);
+    return with_depths(lattice_contact_points(block, band, options.contact, &flagged));
   }
   const Bounds within = certain_box(block);
   BrickOptions bricks;
@@ -234,7 +270,7 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
   if (count > 0)
     cp = brick_contact_points(band.samples, h, options.gradient, options.contact, bricks, nullptr,
                               {}, &flagged);
-  return cp;
+  return with_depths(std::move(cp));
 }
 
 }  // namespace
@@ -287,14 +323,13 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   StepClock clock(piece.seconds);
   const BandSamples band = brick_band(block, options);
   clock.next(0);
-  ContactPoints cp = owned_reach_contact_points(block, band, own_first, own_end, options);
+  Eigen::VectorXd depths;
+  ContactPoints cp = owned_reach_contact_points(block, band, own_first, own_end, options, depths);
   piece.contact_points = cp.size();
   detail::return_free_memory();  // the triangulation's bricks, freed in every thread's arena
-  if (options.keep_contact_points)
+  // (Given points stay with their caller.)
+  if (options.keep_contact_points && !options.given_points)
     detail::keep_owned_contact_points(block, band, cp, own_first, own_end, piece);
-  Eigen::VectorXd depths(cp.size());
-  for (int q = 0; q < cp.size(); ++q)
-    depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
   clock.next(1);
   // With thin parts, the dual mesh lives on the grid at twice the resolution (thin_parts.h): its
   // cells, edges and names, with the options' reaches in its spacings and one subdivision level

@@ -1,15 +1,12 @@
 // contour()'s local reconstruction stage: GCP's mesh brick by brick from the grid (local_brick.h),
-// or, for GTCP's exact contact points, a mesh on the grid's cells, subdivided and projected onto
-// the contact points where they fit a smooth surface, then carved.
+// each brick making its own contact points or taking the whole grid's (GTCP's exact ones, other
+// gradients', every sample's).
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "pipeline/pipeline_stages.h"
 #include "sdfcontour/reconstruction/local_brick.h"
-#include "sdfcontour/reconstruction/subdivision.h"
-
-namespace sdfcontour::detail {}  // namespace sdfcontour::detail
 
 namespace sdfcontour {
 
@@ -120,38 +117,12 @@ int default_brick(const BlockedGrid&, const ContourOptions&) {
   return kLocalBrick;
 }
 
+// After the bricks made their own contact points: says (or throws, as asked) where few or none
+// kept a point; hands on the kept ones (`kept`).
 template <class AnyGrid>
-void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
-                                const ContourOptions& options, ContourResult& result,
-                                Stages& stages, const std::function<void()>& grid_read) {
-  if (options.carve_sides == Switch::On || options.side_repair == Switch::On)
-    throw Error(
-        "carving's triangle rounds and side repair are whole-mesh stages: the local "
-        "reconstruction runs brick by brick and carves vertex by vertex (--side-passes 0, or "
-        "--reconstruction poisson)");
-  LocalBrickOptions lb = local_brick_options(options);
-  lb.band = band;
-  lb.grid_read = grid_read;
-  // Thin parts on fine grids only where the grid has them: one pass over the values, before the
-  // bricks, which must agree (none beyond kThinPartGridLimit: thin parts stay off there).
-  const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
-  if (lb.thin_parts < 0 && !lb.refine_zero_set && thin_parts_need_gaps(samples_per_axis)) {
-    result.subspacing_gaps = stages.run("gaps", "edges with a thin part across",
-                                        [&] { return subspacing_gaps_of(grid, band.value_scale); });
-    lb.thin_parts = auto_thin_parts(samples_per_axis, *result.subspacing_gaps) ? 1 : 0;
-  }
-  if (options.progress_fraction)
-    lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
-  const int size = options.bricks.size == BrickOptions::kAutoSize ? default_brick(grid, options)
-                                                                  : options.bricks.size;
-  LocalBricksStats stats;
-  // Adaptivity merges over the contact points, and --points writes the ones the mesh was made
-  // from (the local reconstruction's options differ from the paper's): the bricks hand theirs on.
-  lb.keep_contact_points = options.adaptivity.tolerance > 0 || options.want_points;
-  OrientedPoints kept;
-  result.mesh = stages.run("local", "local reconstruction in bricks", [&] {
-    return local_mesh_in_bricks(grid, lb, size, &stats, lb.keep_contact_points ? &kept : nullptr);
-  });
+void check_contact_points(const AnyGrid& grid, const BandOptions& band, const LocalBrickOptions& lb,
+                          const LocalBricksStats& stats, const ContourOptions& options,
+                          OrientedPoints& kept, ContourResult& result) {
   // Each cell decides for itself: one with contact points nearby takes GCP's vertex, one without
   // keeps its edge crossings' (or, where the values are no distances, the zero set's). A grid
   // where few or none keep a point is said, and is no error unless asked (fallback_to_mc off);
@@ -177,6 +148,47 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
     cp.normals = std::move(kept.normals);
     result.contact_points = std::move(cp);
   }
+}
+
+// `given` (optional): the whole grid's contact points, made and checked by the caller
+// (result.contact_points holds them); the bricks take theirs from it.
+template <class AnyGrid>
+void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
+                                const ContourOptions& options, ContourResult& result,
+                                Stages& stages, const std::function<void()>& grid_read,
+                                const GivenContactPoints* given = nullptr) {
+  if (options.carve_sides == Switch::On || options.side_repair == Switch::On)
+    throw Error(
+        "carving's triangle rounds and side repair are whole-mesh stages: the local "
+        "reconstruction runs brick by brick and carves vertex by vertex (--side-passes 0, or "
+        "--reconstruction poisson)");
+  LocalBrickOptions lb = local_brick_options(options);
+  lb.band = band;
+  lb.grid_read = grid_read;
+  // Thin parts on fine grids only where the grid has them: one pass over the values, before the
+  // bricks, which must agree (none beyond kThinPartGridLimit: thin parts stay off there).
+  const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
+  if (lb.thin_parts < 0 && !lb.refine_zero_set && thin_parts_need_gaps(samples_per_axis)) {
+    result.subspacing_gaps = stages.run("gaps", "edges with a thin part across",
+                                        [&] { return subspacing_gaps_of(grid, band.value_scale); });
+    lb.thin_parts = auto_thin_parts(samples_per_axis, *result.subspacing_gaps) ? 1 : 0;
+  }
+  if (options.progress_fraction)
+    lb.progress = [&](int done, int total) { options.progress_fraction("bricks", done, total); };
+  // With every sample (band 'all') any sphere may reach across the grid: one brick.
+  const int size = !std::isfinite(band.band)                        ? 0
+                   : options.bricks.size == BrickOptions::kAutoSize ? default_brick(grid, options)
+                                                                    : options.bricks.size;
+  LocalBricksStats stats;
+  // Adaptivity merges over the contact points, and --points writes the ones the mesh was made
+  // from (the local reconstruction's options differ from the paper's): the bricks hand theirs on.
+  lb.given_points = given;
+  lb.keep_contact_points = !given && (options.adaptivity.tolerance > 0 || options.want_points);
+  OrientedPoints kept;
+  result.mesh = stages.run("local", "local reconstruction in bricks", [&] {
+    return local_mesh_in_bricks(grid, lb, size, &stats, lb.keep_contact_points ? &kept : nullptr);
+  });
+  if (!given) check_contact_points(grid, band, lb, stats, options, kept, result);
   result.local = stats.local;
   for (std::size_t k = 0; k < stats.seconds.size(); ++k)
     result.local_stages.push_back({kLocalSteps[k], stats.seconds[k]});
@@ -209,32 +221,10 @@ void reconstruct_in_bricks(const BlockedGrid& grid, const BandOptions& band,
   reconstruct_grid_in_bricks(grid, band, options, result, stages, {});
 }
 
-void reconstruct_locally(const GridView& grid, const ReconstructionInputs& inputs,
-                         const ContourOptions& options, ContourResult& result, Stages& stages) {
-  if (options.local.edge_fans)
-    throw Error(
-        "edge fans need the local reconstruction brick by brick: a grid or .vdb level set with a "
-        "band (not 'all'), gradients 'regular' or 'lattice', method gcp");
-  const ContactPoints& cp = *result.contact_points;
-  LocalReconstructionStats stats;
-  Mesh mesh = stages.run(
-      "local", "local reconstruction from " + std::to_string(cp.size()) + " contact points", [&] {
-        return local_reconstruction(grid, cp.points, cp.normals, options.local, &stats,
-                                    inputs.contact_depths);
-      });
-  const int levels =
-      options.subdivisions >= 0
-          ? options.subdivisions
-          : auto_subdivisions(double(*std::max_element(grid.dims.begin(), grid.dims.end())));
-  if (levels > 0)
-    mesh = stages.run("subdivision", "midpoint subdivision", [&] {
-      for (int l = 0; l < levels; ++l) mesh = midpoint_subdivision(mesh);
-      return std::move(mesh);
-    });
-  result.mesh = std::move(mesh);
-  refine_stage(inputs, options, result, stages);
-  result.local = stats;
-  result.reconstruction = Reconstruction::Local;
+void reconstruct_from_points(const GridView& grid, const BandOptions& band,
+                             const GivenContactPoints& points, const ContourOptions& options,
+                             ContourResult& result, Stages& stages) {
+  reconstruct_grid_in_bricks(grid, band, options, result, stages, {}, &points);
 }
 
 }  // namespace sdfcontour::detail
