@@ -449,6 +449,35 @@ py::tuple run_subspacing_gaps(const py::array& block, const std::array<int, 3>& 
   return py::make_tuple(counts.gaps, counts.crossings);
 }
 
+// detect_truncation's counts (band.h) over a part of a grid, `block` (each sample in one part):
+// (most negative, most positive, at the most negative, at the most positive, negatives, count).
+py::tuple run_truncation_counts(const py::array& block) {
+  py::object keep;
+  const GridView view =
+      block_view(block, {0, 0, 0}, {int(block.shape(0)), int(block.shape(1)), int(block.shape(2))},
+                 {-1, -1, -1}, {1, 1, 1}, keep);
+  TruncationCounts c;
+  {
+    py::gil_scoped_release release;
+    c = truncation_counts(view);
+  }
+  return py::make_tuple(c.most_negative, c.most_positive, c.at_inside, c.at_outside, c.negatives,
+                        c.count);
+}
+
+// The whole grid's truncation (inside, outside; inf: none) from its parts' counts, as
+// detect_truncation decides on the whole.
+std::pair<double, double> run_truncation_of_parts(const std::vector<py::tuple>& parts) {
+  std::vector<TruncationCounts> counts;
+  for (const py::tuple& p : parts) {
+    if (p.size() != 6) throw Error("truncation counts are 6-tuples");
+    counts.push_back({p[0].cast<double>(), p[1].cast<double>(), p[2].cast<long>(),
+                      p[3].cast<long>(), p[4].cast<long>(), p[5].cast<long>()});
+  }
+  const Truncation t = truncation_of_parts(counts);
+  return {t.inside, t.outside};
+}
+
 // A .vdb float level set, read sparse as the CLI reads it: (points (n, 3), values (n,), voxel
 // size, background).
 py::tuple run_read_vdb(const std::string& path, const std::string& grid_name) {
@@ -780,6 +809,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("thin_parts_need_gaps", &thin_parts_need_gaps, py::arg("samples_per_axis"),
         "Whether the choice of thin parts needs the grid's subspacing gaps (the single "
         "process's rule; elsewhere auto_thin_parts(samples_per_axis, 0, 0) decides).");
+  m.def("truncation_counts", &run_truncation_counts, py::arg("block"));
+  m.def("truncation_of_parts", &run_truncation_of_parts, py::arg("parts"));
   m.def("subspacing_gaps", &run_subspacing_gaps, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
   m.def(

@@ -81,6 +81,47 @@ TEST(Band, DetectsTruncationOnlyWhereValuesAreClamped) {
   EXPECT_EQ(o.inside, std::numeric_limits<double>::infinity());
 }
 
+// The truncation found from parts' counts (Dask's bricks) equals the whole grid's, also where the
+// samples at the extreme lie in several parts, each with too few alone.
+TEST(Band, TruncationFromPartsEqualsTheWholeGrids) {
+  const Grid exact = torus_grid(32);
+  const double h = exact.spacing()[0];
+  auto parts_of = [](const Grid& g, int count) {
+    std::vector<TruncationCounts> parts;
+    const int plane = g.dims[1] * g.dims[2];
+    for (int p = 0; p < count; ++p) {
+      const int first = g.dims[0] * p / count, end = g.dims[0] * (p + 1) / count;
+      Grid slab;
+      slab.dims = {end - first, g.dims[1], g.dims[2]};
+      slab.values =
+          g.values.segment(Eigen::Index(first) * plane, Eigen::Index(end - first) * plane);
+      parts.push_back(truncation_counts(view_of(slab)));
+    }
+    return parts;
+  };
+  Grid outside_only = exact, few = exact;
+  for (Eigen::Index i = 0; i < outside_only.values.size(); ++i)
+    outside_only.values[i] = std::min(outside_only.values[i], 2 * h);
+  // 200 samples at the largest value in each of the first and last slabs: together over 1% of
+  // the outside samples, as the rule asks, in two parts.
+  const double top = few.values.maxCoeff() + h;
+  const int plane = few.dims[1] * few.dims[2];
+  for (int i = 0; i < 200; ++i) {
+    few.values[i] = top;
+    few.values[(few.dims[0] - 1) * plane + i] = top;
+  }
+  for (const Grid& g : {exact, clamped(exact, 3 * h), outside_only, few}) {
+    const Truncation whole = detect_truncation(view_of(g));
+    for (int count : {1, 2, 5}) {
+      const Truncation t = truncation_of_parts(parts_of(g, count));
+      EXPECT_EQ(t.inside, whole.inside) << count;
+      EXPECT_EQ(t.outside, whole.outside) << count;
+    }
+  }
+  EXPECT_EQ(detect_truncation(view_of(few)).outside, top);
+  EXPECT_EQ(truncation_of_parts(parts_of(few, 5)).inside, std::numeric_limits<double>::infinity());
+}
+
 // A truncated grid gives the same contact points and mesh as the exact grid restricted to the
 // band the truncation leaves: the clamped samples never reach the triangulation, and the last
 // spacing inside the truncation is the band's margin.

@@ -305,24 +305,18 @@ def _gcp_task(source, index, first, dims, shape, lo, hi, options, truncation):
                            options, truncation)
 
 
-# The truncation rule of the single process (band.h, detect_truncation), on per-brick counts.
-_TOLERANCE, _MIN_TRUNCATED, _MIN_FRACTION = 1e-6, 64, 0.01
-
-
 def _extremes_task(source, index, first, dims):
-    """(min, max, values at the min, values at the max, negatives, count) of one brick's own
+    """The single process's truncation counts (band.h, truncation_counts) of one brick's own
     samples."""
     try:
-        v = np.asarray(_read(source, first, dims), np.float64)
+        v = np.asarray(_read(source, first, dims))
     except ValueError as e:
         raise BrickError(f"brick {tuple(index)}: {e}") from None
     if not np.isfinite(v).all():
         at = np.unravel_index(int(np.argmin(np.isfinite(v))), v.shape)
         raise BrickError(f"brick {tuple(index)}: the grid has a non-finite value at "
                          f"{[int(f) + int(a) for f, a in zip(first, at)]}")
-    lo, hi = float(v.min()), float(v.max())
-    return (lo, hi, int(((v < 0) & (-v >= -lo * (1 - _TOLERANCE))).sum()),
-            int(((v > 0) & (v >= hi * (1 - _TOLERANCE))).sum()), int((v < 0).sum()), v.size)
+    return _sdfcontour.truncation_counts(v)
 
 
 def _gaps_task(source, index, first, own, shape, lo, hi):
@@ -337,20 +331,6 @@ def _gaps_task(source, index, first, own, shape, lo, hi):
     own_end = [f + d for f, d in zip(first, own)]
     return _sdfcontour.subspacing_gaps(block, tuple(start), tuple(shape), tuple(lo), tuple(hi),
                                        tuple(first), tuple(own_end))
-
-
-def _truncation_of(parts):
-    lo = min(p[0] for p in parts)
-    hi = max(p[1] for p in parts)
-    at_inside = sum(p[2] for p in parts if -p[0] >= -lo * (1 - _TOLERANCE))
-    at_outside = sum(p[3] for p in parts if p[1] >= hi * (1 - _TOLERANCE))
-    negatives = sum(p[4] for p in parts)
-    count = sum(p[5] for p in parts)
-
-    def clamped(at, of_sign):
-        return at >= _MIN_TRUNCATED and at >= _MIN_FRACTION * of_sign
-    return (-lo if lo < 0 and clamped(at_inside, negatives) else float("inf"),
-            hi if hi > 0 and clamped(at_outside, count - negatives) else float("inf"))
 
 
 def _read_and_contour(reader, index, first, dims, shape, lo, hi):
@@ -566,7 +546,7 @@ def _gcp_truncation(dask_client, reader, source, shape, brick, options):
         parts = dask_client.gather(dask_client.compute(tasks))
     except Exception as error:
         raise _one_line(error) from None
-    return _truncation_of(parts)
+    return _sdfcontour.truncation_of_parts(parts)  # the single process's rule
 
 
 def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):

@@ -77,34 +77,29 @@ namespace {
 
 // `drop_pages`: the grid's page dropper (GridView::drop_pages), or null.
 template <class T>
-Truncation detect_in(const T* values, std::size_t n, double min_fraction,
-                     const std::function<void(const void*, std::size_t)>* drop_pages) {
+TruncationCounts counts_in(const T* values, std::size_t n,
+                           const std::function<void(const void*, std::size_t)>* drop_pages) {
   auto never = [](const auto&) { return false; };
-  struct Extremes {
-    double most_negative = 0, most_positive = 0;
-  };
-  const Extremes e = detail::windowed_reduce(
-      drop_pages, values, n, Extremes{},
-      [&](const tbb::blocked_range<std::size_t>& r, Extremes x) {
+  TruncationCounts c = detail::windowed_reduce(
+      drop_pages, values, n, TruncationCounts{},
+      [&](const tbb::blocked_range<std::size_t>& r, TruncationCounts x) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           x.most_negative = std::min(x.most_negative, double(values[i]));
           x.most_positive = std::max(x.most_positive, double(values[i]));
         }
         return x;
       },
-      [](Extremes a, Extremes b) {
-        return Extremes{std::min(a.most_negative, b.most_negative),
-                        std::max(a.most_positive, b.most_positive)};
+      [](TruncationCounts a, TruncationCounts b) {
+        a.most_negative = std::min(a.most_negative, b.most_negative);
+        a.most_positive = std::max(a.most_positive, b.most_positive);
+        return a;
       },
       never);
-  const double lo = -e.most_negative * (1 - kTruncationTolerance),
-               hi = e.most_positive * (1 - kTruncationTolerance);
-  struct Counts {
-    long at_inside = 0, at_outside = 0, negatives = 0;
-  };
-  const Counts c = detail::windowed_reduce(
-      drop_pages, values, n, Counts{},
-      [&](const tbb::blocked_range<std::size_t>& r, Counts x) {
+  const double lo = -c.most_negative * (1 - kTruncationTolerance),
+               hi = c.most_positive * (1 - kTruncationTolerance);
+  const TruncationCounts at = detail::windowed_reduce(
+      drop_pages, values, n, TruncationCounts{},
+      [&](const tbb::blocked_range<std::size_t>& r, TruncationCounts x) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           const double v = values[i];
           x.negatives += v < 0;
@@ -113,31 +108,54 @@ Truncation detect_in(const T* values, std::size_t n, double min_fraction,
         }
         return x;
       },
-      [](Counts a, Counts b) {
-        return Counts{a.at_inside + b.at_inside, a.at_outside + b.at_outside,
-                      a.negatives + b.negatives};
+      [](TruncationCounts a, TruncationCounts b) {
+        a.at_inside += b.at_inside, a.at_outside += b.at_outside, a.negatives += b.negatives;
+        return a;
       },
       never);
+  c.at_inside = at.at_inside, c.at_outside = at.at_outside, c.negatives = at.negatives;
+  c.count = long(n);
+  return c;
+}
+
+}  // namespace
+
+TruncationCounts truncation_counts(const GridView& part) {
+  return part.visit([&](const auto* f) { return counts_in(f, part.size(), part.drop_pages); });
+}
+
+Truncation truncation_of_parts(const std::vector<TruncationCounts>& parts, double min_fraction) {
+  TruncationCounts whole;
+  for (const TruncationCounts& p : parts) {
+    whole.most_negative = std::min(whole.most_negative, p.most_negative);
+    whole.most_positive = std::max(whole.most_positive, p.most_positive);
+    whole.negatives += p.negatives, whole.count += p.count;
+  }
+  for (const TruncationCounts& p : parts) {
+    if (-p.most_negative >= -whole.most_negative * (1 - kTruncationTolerance))
+      whole.at_inside += p.at_inside;
+    if (p.most_positive >= whole.most_positive * (1 - kTruncationTolerance))
+      whole.at_outside += p.at_outside;
+  }
   auto clamped = [&](long at_extreme, long of_sign) {
     return at_extreme >= kMinTruncatedSamples &&
            double(at_extreme) >= min_fraction * double(of_sign);
   };
   Truncation t;
-  if (e.most_negative < 0 && clamped(c.at_inside, c.negatives)) t.inside = -e.most_negative;
-  if (e.most_positive > 0 && clamped(c.at_outside, long(n) - c.negatives))
-    t.outside = e.most_positive;
+  if (whole.most_negative < 0 && clamped(whole.at_inside, whole.negatives))
+    t.inside = -whole.most_negative;
+  if (whole.most_positive > 0 && clamped(whole.at_outside, whole.count - whole.negatives))
+    t.outside = whole.most_positive;
   return t;
 }
 
-}  // namespace
-
 Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction) {
-  return detect_in(values.data(), std::size_t(values.size()), min_fraction, nullptr);
+  return truncation_of_parts({counts_in(values.data(), std::size_t(values.size()), nullptr)},
+                             min_fraction);
 }
 
 Truncation detect_truncation(const GridView& grid, double min_fraction) {
-  return grid.visit(
-      [&](const auto* f) { return detect_in(f, grid.size(), min_fraction, grid.drop_pages); });
+  return truncation_of_parts({truncation_counts(grid)}, min_fraction);
 }
 
 namespace {

@@ -63,6 +63,20 @@ struct BandOptions {
 Truncation detect_truncation(const Eigen::VectorXd& values, double min_fraction = 0.01);
 Truncation detect_truncation(const GridView& grid, double min_fraction = 0.01);
 
+/// detect_truncation's counts over one part of a grid (each sample in one part: Dask's bricks'
+/// own samples): the part's extremes, its samples within the tolerance of them per sign, and its
+/// negative and all samples.
+struct TruncationCounts {
+  double most_negative = 0, most_positive = 0;
+  long at_inside = 0, at_outside = 0, negatives = 0, count = 0;
+};
+TruncationCounts truncation_counts(const GridView& part);
+
+/// detect_truncation's rule on the parts' counts: a part's samples at its extreme count where
+/// that extreme is the whole's (to the tolerance). One part gives detect_truncation's result.
+Truncation truncation_of_parts(const std::vector<TruncationCounts>& parts,
+                               double min_fraction = 0.01);
+
 /// The truncation that `options` asks for on `values`.
 Truncation resolve_truncation(const Eigen::VectorXd& values, const BandOptions& options);
 Truncation resolve_truncation(const GridView& grid, const BandOptions& options);
