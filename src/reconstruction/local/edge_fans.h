@@ -23,9 +23,10 @@ VertexKeyBases vertex_key_bases(const std::array<int, 3>& n);
 
 /// After the vertices of an edge-fanned mesh moved from `before` (the projection onto the contact
 /// points), each goes back into its region: a cell's vertex into its cell (a thousandth of the
-/// cell inside), an edge's vertex onto its grid edge and a face's vertex (split_fan_faces) onto
-/// its face, where the plane through its new place, normal to its move, meets them (a thousandth
-/// of a spacing inside), a segment's vertex back where it was (on its face). `keys`: the
+/// cell inside; slid along the sides that hold it back to the plane through its new place,
+/// normal to its move), an edge's vertex onto its grid edge and a face's vertex (split_fan_faces)
+/// onto its face, where the plane through its new place, normal to its move, meets them (a
+/// thousandth of a spacing inside), a segment's vertex back where it was (on its face). `keys`: the
 /// vertices' names (lattice_subdivision's at level 0, split_curved_edges' for face vertices);
 /// `grid`: the grid (or block) the keys were made on. A cell with more than one polygon
 /// (`split_cells`: ascending cell numbers, split_cells() of the whole dual mesh) holds as many
