@@ -449,6 +449,53 @@ py::tuple run_subspacing_gaps(const py::array& block, const std::array<int, 3>& 
   return py::make_tuple(counts.gaps, counts.crossings);
 }
 
+// GCP's bricks' pieces (keys (v, 2) uint64 ascending, V (v, 3), F (f, 3) into V, the triangles'
+// names (f,) uint64 ascending: local_brick's) joined as the core joins its bricks
+// (join_local_pieces): vertices in key order, triangles in name order, the one-brick arrays
+// whatever the bricks. Returns (V, F).
+py::tuple run_join_local_pieces(const std::vector<py::tuple>& given) {
+  using U64 = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
+  using I64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  std::vector<LocalPiece> pieces(given.size());
+  for (std::size_t b = 0; b < given.size(); ++b) {
+    const py::tuple& g = given[b];
+    if (g.size() != 4) throw Error("a piece is (keys, V, F, triangle names)");
+    LocalPiece& p = pieces[b];
+    const U64 keys = U64::ensure(g[0]), names = U64::ensure(g[3]);
+    const I64 F = I64::ensure(g[2]);
+    if (!keys || !names || !F) throw Error("a piece's keys, triangles and names must be integers");
+    const py::ssize_t v = keys.size() / 2, f = F.size() / 3;
+    if (keys.size() != 2 * v || F.size() != 3 * f || names.size() != f)
+      throw Error("a piece's keys must be (v, 2), its triangles (f, 3) with f names");
+    p.vertices = v > 0 ? points_from(py::array_t<double, py::array::c_style |
+                                                           py::array::forcecast>::ensure(g[1]),
+                                     "a piece's V")
+                       : PointMatrix(0, 3);
+    if (p.vertices.rows() != v) throw Error("a piece's V must have a row per key");
+    p.keys.resize(std::size_t(v));
+    for (py::ssize_t i = 0; i < v; ++i) {
+      p.keys[std::size_t(i)] = {keys.data()[2 * i], keys.data()[2 * i + 1]};
+      if (i > 0 && !(p.keys[std::size_t(i - 1)] < p.keys[std::size_t(i)]))
+        throw Error("a piece's keys must be ascending and distinct");
+    }
+    p.triangles.resize(f, 3);
+    for (py::ssize_t i = 0; i < 3 * f; ++i) {
+      if (F.data()[i] < 0 || F.data()[i] >= v)
+        throw Error("a piece's triangles must index its vertices");
+      p.triangles.data()[i] = int(F.data()[i]);
+    }
+    p.triangle_names.assign(names.data(), names.data() + f);
+    if (!std::is_sorted(p.triangle_names.begin(), p.triangle_names.end()))
+      throw Error("a piece's triangle names must be ascending");
+  }
+  Mesh mesh;
+  {
+    py::gil_scoped_release release;
+    mesh = join_local_pieces(std::move(pieces));
+  }
+  return py::make_tuple(to_numpy(std::move(mesh.vertices)), to_numpy(std::move(mesh.triangles)));
+}
+
 // detect_truncation's counts (band.h) over a part of a grid, `block` (each sample in one part):
 // (most negative, most positive, at the most negative, at the most positive, negatives, count).
 py::tuple run_truncation_counts(const py::array& block) {
@@ -809,6 +856,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def("thin_parts_need_gaps", &thin_parts_need_gaps, py::arg("samples_per_axis"),
         "Whether the choice of thin parts needs the grid's subspacing gaps (the single "
         "process's rule; elsewhere auto_thin_parts(samples_per_axis, 0, 0) decides).");
+  m.def("join_local_pieces", &run_join_local_pieces, py::arg("pieces"));
   m.def("truncation_counts", &run_truncation_counts, py::arg("block"));
   m.def("truncation_of_parts", &run_truncation_of_parts, py::arg("parts"));
   m.def("subspacing_gaps", &run_subspacing_gaps, py::arg("block"), py::arg("first"),

@@ -77,9 +77,10 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
     ``truncation``: (inside, outside) found on the whole grid (inf: none); ``value_scale``: the
     factor that makes the values distances (found on the whole grid).
 
-    Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V), and with
-    ``with_stats`` the piece's stats dict: joined with the other bricks' pieces (`join_pieces`),
-    the whole grid's local mesh, bit for bit."""
+    Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V, the
+    triangles' names (f,) uint64 ascending), with ``with_stats`` the piece's whole stats dict in
+    the names' place: joined with the other bricks' pieces (``_sdfcontour.join_local_pieces``,
+    the core's join), the whole grid's local mesh, bit for bit."""
     own_first = [int(f) for f in first]
     # Its cells' low samples; the brick at the grid's end also owns the last sample (whose
     # contact point adaptivity reads), as the core's bricks do.
@@ -102,7 +103,7 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
         except ValueError as e:
             raise _brick_error(index, lo_read, hi_read, e) from None
         if piece is not None:
-            return piece if with_stats else piece[:3]
+            return piece if with_stats else (*piece[:3], piece[3]["triangle_names"])
         whole = all(a == 0 for a in lo_read) and all(b == n for b, n in zip(hi_read, shape))
         if whole:
             raise RuntimeError("internal error: the whole grid's block reported too small a halo")

@@ -218,26 +218,27 @@ def contour_callable_gcp(grid, scale, options, progress=False):
     size = options["brick_size"] if options["brick_size"] > 0 else _sdfcontour.LOCAL_BRICK
     todo = [(index, first, dims) for index, first, dims in bricks(grid.shape, size)
             if grid.owns_surface(first, [f0 + d - 1 for f0, d in zip(first, dims)])]
-    pieces, contact_points, owned, names = [], 0, [], []
+    pieces, contact_points, owned = [], 0, []
     for number, (index, first, dims) in enumerate(todo):
         keys, V, F, stats = gcp_brick_piece(grid.read, index, first, dims, grid.shape, grid.lo,
                                             grid.hi, options, (np.inf, np.inf), value_scale,
                                             with_stats=True)
         contact_points += stats["contact_points"]
-        pieces.append((number, (keys, V, F)))
-        names.append(stats["triangle_names"])
+        pieces.append((keys, V, F, stats["triangle_names"]))
         if "owned_samples" in stats:
             owned.append((stats["owned_samples"], stats["owned_points"], stats["owned_normals"]))
         if callable(progress):
             progress("bricks", number + 1, len(todo))
     if progress is True:
         print(file=sys.stderr, flush=True)
-    V, F, stats = join_pieces(pieces, len(pieces))
+    # The core's join: vertices by key, triangles by name, the same arrays for any bricks (what
+    # adaptivity's merges depend on).
+    empty = sum(len(p[2]) == 0 for p in pieces)
+    V, F = _sdfcontour.join_local_pieces(pieces)
+    del pieces
     if len(F) == 0:
         raise ValueError("the local reconstruction found no surface inside the grid")
-    # Triangles by their global names, as the core joins its bricks: the same order for any
-    # bricks (what adaptivity's merges depend on).
-    F = F[np.argsort(np.concatenate(names), kind="stable")]
+    stats = {"vertices": len(V), "triangles": len(F), "empty_bricks": empty}
     stats.update(local_bricks=len(todo), contact_points=contact_points, value_scale=value_scale,
                  gradient_norm=norm, samples=n ** 3)
     if options.get("adaptivity", 0.0) > 0:

@@ -1,13 +1,17 @@
 """Joining bricks' mesh pieces (keys, V, F) into one mesh: vertices with equal keys become one, in
-ascending key order; triangles follow in brick order. Either in memory, or streamed into a binary
-PLY whose join holds only the keys in memory (8 bytes per vertex of a piece, 8 per vertex kept),
-the pieces' vertices and triangles staying on disk. Keys are uint64 (marching cubes) or pairs of
-uint64 (the local reconstruction's), compared as pairs."""
+ascending key order; triangles follow in brick order, or where the pieces carry their triangles'
+names (keys, V, F, names: GCP's local reconstruction) in name order, as the core joins its bricks
+(in memory, the core's join itself). Either in memory, or streamed into a binary PLY whose join
+holds only the keys (8 bytes per vertex of a piece, 8 per vertex kept) and the names' order (16
+bytes per triangle) in memory, the pieces' vertices and triangles staying on disk. Keys are uint64
+(marching cubes) or pairs of uint64 (the local reconstruction's), compared as pairs."""
 import os
 import shutil
 import tempfile
 
 import numpy as np
+
+from . import _sdfcontour
 
 _FACE = np.dtype([("n", "u1"), ("v", "<i4", (3,))])  # PLY's "list uchar int", 13 bytes
 _CHUNK = 1 << 20
@@ -51,6 +55,10 @@ def join_pieces(arrivals, count):
     pieces = [None] * count
     for b, piece in arrivals:
         pieces[b] = piece
+    if pieces and len(pieces[0]) == 4:  # named triangles: the core's join
+        empty = sum(len(p[2]) == 0 for p in pieces)
+        V, F = _sdfcontour.join_local_pieces(pieces)
+        return V, F, {"vertices": len(V), "triangles": len(F), "empty_bricks": empty}
     keys = np.concatenate([_comparable(p[0]) for p in pieces])
     V = np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in pieces])
     offsets = np.cumsum([0] + [len(p[0]) for p in pieces])
@@ -70,13 +78,18 @@ def write_pieces_as_ply(arrivals, count, out):
     leaves no file); returns the stats."""
     folder = tempfile.mkdtemp(prefix=".sdfcontour-join-", dir=os.path.dirname(os.path.abspath(out)))
     try:
-        names = {n: os.path.join(folder, n) for n in ("keys", "vertices", "faces", "mesh.ply")}
+        names = {n: os.path.join(folder, n)
+                 for n in ("keys", "vertices", "faces", "names", "mesh.ply")}
         rows = [None] * count  # brick number -> (first face row, face rows)
         occurrences = face_rows = empty = 0
         key_type = None
+        named = False
         with open(names["keys"], "wb") as kf, open(names["vertices"], "wb") as vf, \
-                open(names["faces"], "wb") as ff:
-            for b, (keys, V, F) in arrivals:
+                open(names["faces"], "wb") as ff, open(names["names"], "wb") as nf:
+            for b, (keys, V, F, *named_triangles) in arrivals:
+                if named_triangles:
+                    named = True
+                    np.asarray(named_triangles[0], np.uint64).tofile(nf)
                 keys = _comparable(keys)
                 if len(keys):
                     key_type = keys.dtype
@@ -96,13 +109,20 @@ def write_pieces_as_ply(arrivals, count, out):
         _check_same_positions(V, kept, inverse)
         F = np.memmap(names["faces"], np.int64, "r", shape=(face_rows, 3)) \
             if face_rows else np.zeros((0, 3), np.int64)
+        # Triangles in name order (the names as the pieces arrived, with their faces), or in
+        # brick order, whatever order the bricks finished in.
+        order = None
+        if named and face_rows:
+            order = np.argsort(np.fromfile(names["names"], np.uint64), kind="stable")
+        spans = [(0, face_rows)] if order is not None else rows
         with open(names["mesh.ply"], "wb") as mesh:
             mesh.write(_ply_header(len(kept), face_rows))
             for start in range(0, len(kept), _CHUNK):
                 np.ascontiguousarray(V[kept[start:start + _CHUNK]]).tofile(mesh)
-            for first, size in rows:  # triangles in brick order, whatever order bricks finished
+            for first, size in spans:
                 for start in range(first, first + size, _CHUNK):
-                    part = F[start:min(start + _CHUNK, first + size)]
+                    end = min(start + _CHUNK, first + size)
+                    part = F[order[start:end]] if order is not None else F[start:end]
                     faces = np.empty(len(part), _FACE)
                     faces["n"] = 3
                     faces["v"] = inverse[part]

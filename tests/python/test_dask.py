@@ -72,6 +72,12 @@ def assert_same_mesh(a, b):
     assert np.array_equal(ca[1], cb[1])
 
 
+def assert_identical(a, b):
+    """The same arrays, in the same order (GCP's pieces join as the core's bricks do)."""
+    assert np.array_equal(np.asarray(a[0]), np.asarray(b[0]))
+    assert np.array_equal(np.asarray(a[1]), np.asarray(b[1]))
+
+
 def assert_closed_manifold(F):
     """Every directed edge once, and its reverse once: closed, 2-manifold, oriented."""
     directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64)
@@ -171,7 +177,7 @@ def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_
     V, F, stats = sdfcontour.dask.contour(store, method="gcp", brick=64, client=client,
                                           return_stats=True)
     assert stats["bricks"] == 8
-    assert_same_mesh((V, F), single)
+    assert_identical((V, F), single)
     assert_closed_manifold(F)
     # Closer to the surface than marching cubes: mean |sdf| at the triangles' centroids.
     def error(V, F):
@@ -185,18 +191,23 @@ def test_gcp_in_eight_bricks_is_the_single_process_local_mesh(client, grid, tmp_
         sdfcontour.dask.contour(bad, method="gcp", brick=64, client=client, truncation="none")
 
 
-def test_gcp_with_edge_fans_in_bricks_is_the_single_process_mesh(client, grid):
+def test_gcp_with_edge_fans_in_bricks_is_the_single_process_mesh(client, grid, tmp_path):
     # Edge fans read one ring of cells beyond a brick's own (no repair stages): bricks of 32 give
-    # the single process's mesh bit for bit, closed, on the grid and on its finer grid.
+    # the single process's arrays bit for bit (joined in memory, or streamed into a PLY), closed,
+    # on the grid and on its finer grid.
     single = sdfcontour.contour(grid, edge_fans=True, band=3)
     V, F = sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client, edge_fans=True,
                                    band=3)
-    assert_same_mesh((V, F), single)
+    assert_identical((V, F), single)
+    out = str(tmp_path / "fans.ply")
+    sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client, edge_fans=True, band=3,
+                            out=out)
+    assert_identical(sdfcontour.read_mesh(out), single)
     assert_closed_manifold(F)
     # The finer grid only when asked, there too.
     finer = sdfcontour.contour(grid, edge_fans=True, band=3, thin_parts=True)
     assert len(finer[1]) > 2 * len(F)
-    assert_same_mesh(sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client,
+    assert_identical(sdfcontour.dask.contour(grid, method="gcp", brick=32, client=client,
                                              edge_fans=True, band=3, thin_parts=True), finer)
     with pytest.raises(ValueError, match="edge_fans"):
         sdfcontour.dask.contour(grid, method="gcp", client=client, edge_fans="yes")
@@ -213,7 +224,7 @@ def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
     V, F, stats = sdfcontour.dask.contour(torus, method="gcp", resolution=48, brick=24,
                                           client=client, return_stats=True)
     assert stats["bricks"] == 8
-    assert_same_mesh((V, F), single)
+    assert_identical((V, F), single)
 
 
 class _Jittery:
@@ -245,7 +256,7 @@ def test_gcp_onto_the_zero_set_in_bricks_is_the_single_process_mesh(client):
     torus = np.sqrt((np.sqrt(X ** 2 + Y ** 2) - 0.5) ** 2 + Z ** 2) - 0.2
     single = sdfcontour.contour(torus, reconstruction="local", zero_set=True)
     V, F = sdfcontour.dask.contour(torus, method="gcp", brick=24, client=client, zero_set=True)
-    assert_same_mesh((V, F), single)
+    assert_identical((V, F), single)
     # A distance times a factor in [0.8, 1.2]: closer to the torus than marching cubes.
     values = torus * (1 + 0.2 * np.sin(2 * X + 1) * np.cos(3 * Y))
     V, F = sdfcontour.dask.contour(values, method="gcp", brick=24, client=client, zero_set=True)
@@ -323,7 +334,7 @@ def test_openvdb_level_set_read_box_by_box(client, tmp_path):
     assert sdfcontour.distances(V, F, V_gcp, F_gcp, samples=20000)["L1"] < 0.5 * (2 / 63)
     # GCP's local reconstruction of the file, read box by box in one process (the default for a
     # .vdb) and on Dask in bricks of 32: the same mesh.
-    assert_same_mesh(sdfcontour.dask.contour(vdb, method="gcp", brick=32, client=client),
+    assert_identical(sdfcontour.dask.contour(vdb, method="gcp", brick=32, client=client),
                      (V_gcp, F_gcp))
     with pytest.raises(ValueError, match="places itself"):
         sdfcontour.dask.contour(vdb, bounds=(-1, 1), client=client)
@@ -353,7 +364,7 @@ def test_a_rotated_level_set_is_placed_by_its_transform_on_every_path(client):
         d = np.abs(rotated_box_distance(V))
         assert d.mean() < 0.05 * voxel and d.max() < 0.5 * voxel, (name, d.mean(), d.max())
         assert_closed_manifold(F)
-    assert_same_mesh(meshes["dask gcp"], meshes["gcp"])
+    assert_identical(meshes["dask gcp"], meshes["gcp"])
 
 
 def test_gcp_finds_thin_parts_on_a_fine_grid_as_the_single_process_does(client):
@@ -377,7 +388,7 @@ def test_gcp_finds_thin_parts_on_a_fine_grid_as_the_single_process_does(client):
     *single, stats = sdfcontour.contour(grid, bounds=(0, hi), return_stats=True)
     assert stats["local_thin_parts"] and stats["subspacing_gaps"] == 12 * 12  # the fin's edges
     V, F = sdfcontour.dask.contour(grid, bounds=(0, hi), method="gcp", brick=64, client=client)
-    assert_same_mesh((V, F), single)
+    assert_identical((V, F), single)
     assert_closed_manifold(F)
     assert on_fin(V) > 200
     assert on_fin(sdfcontour.contour(grid, bounds=(0, hi), thin_parts=False)[0]) == 0
