@@ -39,10 +39,15 @@ double place_along(const Eigen::Vector3d& start, int axis, double h, const Eigen
 // shallow crease at 64^3: 0.085 h).
 Eigen::Vector3d slide_into_box(const Eigen::Vector3d& now, const Eigen::Vector3d& was,
                                const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  Eigen::Vector3d kept = now.cwiseMax(lo).cwiseMin(hi);
+  const Eigen::Vector3d clamped = now.cwiseMax(lo).cwiseMin(hi);
   const Eigen::Vector3d move = now - was;
-  if (kept == now || move.squaredNorm() == 0) return kept;
+  // (Not a fit that lies farther out than a quarter of the cell: its surface passes elsewhere,
+  // a finer grid's false thin part, and the slide would run across the cell.)
+  if (clamped == now || move.squaredNorm() == 0 ||
+      (clamped - now).norm() > 0.25 * (hi - lo).maxCoeff())
+    return clamped;
   const Eigen::Vector3d n = move.normalized();
+  Eigen::Vector3d kept = clamped;
   for (int round = 0; round < 3; ++round) {
     Eigen::Vector3d along = n;  // the normal within the held sides' planes
     for (int a = 0; a < 3; ++a)
