@@ -160,6 +160,21 @@ TEST(EdgeFans, APlaneIsExact) {
   EXPECT_TRUE(self_intersecting_triangles(m).empty());
 }
 
+// The projection's robust rounds left to the local reconstruction: one for edge fans on the grid
+// itself, two otherwise (the default, fans on the finer grid); a number given is kept.
+TEST(EdgeFans, RobustRoundsAreChosenOnlyWhenLeftToTheReconstruction) {
+  ContourOptions c;
+  EXPECT_EQ(c.local_projection.robust_rounds, kAutoRobustRounds);
+  EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+  c.local.edge_fans = true;
+  EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 1);
+  c.thin_parts = Switch::On;
+  EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+  c.thin_parts = Switch::Auto;
+  c.local_projection.robust_rounds = 2;
+  EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+}
+
 // A vertex whose projection lands just beyond its cell's side slides along that side back to the
 // surface instead of staying a clamp's length inside it: on the torus at 32^3 (lattice gradients,
 // a band of 2) the worst vertex lies 0.030 h from the surface (0.094 h clamped), at 64^3

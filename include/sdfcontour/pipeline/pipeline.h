@@ -137,6 +137,15 @@ bool auto_carve_sides(double samples_per_axis);
 /// Coarser grids, mostly kinks, are not judged (false).
 bool auto_approximate_distances(const GradientNormSummary& norms);
 
+/// ContourOptions::local_projection's robust_rounds when the local reconstruction chooses them.
+constexpr int kAutoRobustRounds = -1;
+/// local_projection_options() with its robust rounds left to the local reconstruction.
+inline ContactProjectionOptions auto_local_projection() {
+  ContactProjectionOptions p = local_projection_options();
+  p.robust_rounds = kAutoRobustRounds;
+  return p;
+}
+
 struct ContourOptions {
   Method method = Method::Gcp;
   bool want_mesh = true;     ///< produce the method's mesh
@@ -163,9 +172,9 @@ struct ContourOptions {
   /// second fit within 2 spacings where the first has no height (with the local contact points'
   /// near misses): 0.305x -> 0.300x at 32^3, 0.278x -> 0.267x at 64^3; the analytic torus at
   /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (bench/smooth_shapes.py).
-  /// Edge fans on the grid itself take one robust round where this asks for the default's two
-  /// (local_stage.cpp).
-  ContactProjectionOptions local_projection = local_projection_options();
+  /// Its robust_rounds is kAutoRobustRounds here: two, and one for edge fans on the grid itself
+  /// (local_stage.cpp says why); any other value is taken as given.
+  ContactProjectionOptions local_projection = auto_local_projection();
   /// The local reconstruction's lattice subdivisions (LocalBrickOptions::subdivisions) before its
   /// vertices are projected onto the contact points (`project`, `projection`); -1:
   /// auto_subdivisions.

@@ -56,6 +56,8 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.thin_parts = options.thin_parts == Switch::On ? 1 : options.thin_parts == Switch::Off ? 0 : -1;
   lb.project = options.project != Switch::Off;
   lb.projection = options.local_projection;
+  if (lb.projection.robust_rounds == kAutoRobustRounds)
+    lb.projection.robust_rounds = local_projection_options().robust_rounds;
   lb.carve = options.carve != Switch::Off;
   lb.carve_passes = options.carving.passes;
   lb.refine_zero_set = options.zero_set == Switch::On;
@@ -66,8 +68,7 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
     lb.side_rounds = 0;
     // The finer grid only when asked: about 4x the fans' triangles (docs/edge_fans.md).
     if (options.thin_parts != Switch::On) lb.thin_parts = 0;
-    if (lb.thin_parts == 0 &&
-        options.local_projection.robust_rounds == local_projection_options().robust_rounds)
+    if (lb.thin_parts == 0 && options.local_projection.robust_rounds == kAutoRobustRounds)
       lb.projection.robust_rounds = kFanRobustRounds;
   }
   return lb;
