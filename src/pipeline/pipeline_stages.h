@@ -119,9 +119,9 @@ void say_cells_from_crossings(const std::string& few, const ContourOptions& opti
 std::string contact_point_shortage(const GridSource& grid, const ContourOptions& options,
                                    const ContactPoints& cp);
 
-// The reconstruction's inputs from the band (result.poisson_depth and result.sign_constraints
-// set); `band_options` as the band was selected with. result.contact_points must still name their
-// samples by index into `band.samples`.
+// The Poisson reconstruction's inputs from the band (result.poisson_depth and
+// result.sign_constraints set); `band_options` as the band was selected with. result.contact_points
+// must still name their samples by index into `band.samples`.
 ReconstructionInputs prepare_reconstruction(const BandSamples& band,
                                             const BandOptions& band_options, const GridSource& grid,
                                             const ContourOptions& options, ContourResult& result);

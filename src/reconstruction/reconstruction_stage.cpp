@@ -235,13 +235,12 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
       method == Method::Gcp &&
       (options.enforce_signs == Switch::Auto ? auto_sign_constraints(band.samples_per_axis)
                                              : options.enforce_signs == Switch::On);
-  if (result.sign_constraints && options.reconstruction != Reconstruction::Local)
+  if (result.sign_constraints)
     in.sides = samples_near_surface(band, options.sign_band * band.spacing);
   // Projection is on at every resolution with auto (ContourOptions::project). It weighs each
   // contact point by its sample's |value| (the points still name the band's samples here).
   in.project = method == Method::Gcp && options.project != Switch::Off;
-  const bool local = options.reconstruction == Reconstruction::Local;
-  in.projection = local ? options.local_projection : options.projection;
+  in.projection = options.projection;
   if (in.project) {
     const std::vector<int>& from = result.contact_points->samples;
     in.contact_depths.resize(Eigen::Index(from.size()));
