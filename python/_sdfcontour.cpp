@@ -456,6 +456,7 @@ py::tuple run_subspacing_gaps(const py::array& block, const std::array<int, 3>& 
 py::tuple run_join_local_pieces(const std::vector<py::tuple>& given) {
   using U64 = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
   using I64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  using F64 = py::array_t<double, py::array::c_style | py::array::forcecast>;
   std::vector<LocalPiece> pieces(given.size());
   for (std::size_t b = 0; b < given.size(); ++b) {
     const py::tuple& g = given[b];
@@ -467,10 +468,7 @@ py::tuple run_join_local_pieces(const std::vector<py::tuple>& given) {
     const py::ssize_t v = keys.size() / 2, f = F.size() / 3;
     if (keys.size() != 2 * v || F.size() != 3 * f || names.size() != f)
       throw Error("a piece's keys must be (v, 2), its triangles (f, 3) with f names");
-    p.vertices = v > 0 ? points_from(py::array_t<double, py::array::c_style |
-                                                           py::array::forcecast>::ensure(g[1]),
-                                     "a piece's V")
-                       : PointMatrix(0, 3);
+    p.vertices = v > 0 ? points_from(F64::ensure(g[1]), "a piece's V") : PointMatrix(0, 3);
     if (p.vertices.rows() != v) throw Error("a piece's V must have a row per key");
     p.keys.resize(std::size_t(v));
     for (py::ssize_t i = 0; i < v; ++i) {
