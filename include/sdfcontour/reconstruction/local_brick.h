@@ -77,7 +77,8 @@ constexpr int kThinPartReach = 2;
 struct GivenContactPoints {
   PointMatrix points, normals;  ///< k x 3: the points and their unit outward normals
   Eigen::VectorXd depths;       ///< k: |value| of each point's sample (the projection's weight)
-  /// k: each point's sample, its global C-order index in the whole grid, ascending.
+  /// k: each point's sample, its global C-order index in the whole grid (a brick keeps the
+  /// points in their order here, so every brick sums them alike).
   std::vector<std::uint64_t> samples;
 };
 
