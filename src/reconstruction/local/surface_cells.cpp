@@ -45,9 +45,9 @@ void slab_cells(const GridView& grid, const T* values, int i, std::vector<Active
     const T* row = values + grid.index(i, j, 0);
     for (int k = 0; k + 1 < n[2]; ++k) {
       const T* at = row + k;
-      unsigned inside = 0;
-      for (int c = 0; c < 8; ++c) inside |= unsigned(at[offset[c]] < 0) << c;
-      if (inside == 0 || inside == 0xff) continue;
+      int inside = 0;
+      for (int c = 0; c < 8; ++c) inside += at[offset[c]] < 0;
+      if (inside == 0 || inside == 8) continue;
       for (int c = 0; c < 8; ++c) v[c] = double(at[offset[c]]);
       const CubeCase cube = cube_case(v);
       ActiveCell cell;
