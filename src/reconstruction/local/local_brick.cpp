@@ -202,10 +202,7 @@ ContactPoints given_in_reach(const GivenContactPoints& given, const Index3& n, c
                              const Index3& hi, Eigen::VectorXd& depths) {
   std::vector<Eigen::Index> rows;
   for (std::size_t q = 0; q < given.samples.size(); ++q) {
-    const std::uint64_t s = given.samples[q];
-    const Index3 at{int(s / (std::uint64_t(n[1]) * std::uint64_t(n[2]))),
-                    int(s / std::uint64_t(n[2]) % std::uint64_t(n[1])),
-                    int(s % std::uint64_t(n[2]))};
+    const Index3 at = detail::grid_point_of(given.samples[q], n);
     bool in = true;
     for (std::size_t a = 0; a < 3; ++a) in = in && at[a] >= lo[a] && at[a] <= hi[a];
     if (in) rows.push_back(Eigen::Index(q));
