@@ -25,6 +25,12 @@ enum class Outcome : char { Skipped, Hidden, ZeroGradient, Discarded, Kept, Resc
 
 }  // namespace
 
+Eigen::VectorXd contact_depths(const ContactPoints& cp, const Eigen::VectorXd& values) {
+  Eigen::VectorXd depths(cp.size());
+  for (int q = 0; q < cp.size(); ++q) depths[q] = std::abs(values[cp.samples[std::size_t(q)]]);
+  return depths;
+}
+
 bool inside_neighbour_sphere(const PointMatrix& points, const Eigen::VectorXd& values,
                              const Triangulation& tri, int i, const Eigen::Vector3d& c,
                              double tau) {

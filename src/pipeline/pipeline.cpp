@@ -200,12 +200,9 @@ ContourResult contour_or_throw(const SdfInput& input, const AnalyticShape* shape
     GivenContactPoints given;
     given.points = cp.points;
     given.normals = cp.normals;
-    given.depths.resize(cp.size());
-    given.samples.resize(cp.samples.size());
-    for (std::size_t q = 0; q < cp.samples.size(); ++q) {
-      given.depths[Eigen::Index(q)] = std::abs(band.samples.values[cp.samples[q]]);
-      given.samples[q] = std::uint64_t(band.source[std::size_t(cp.samples[q])]);
-    }
+    given.depths = contact_depths(cp, band.samples.values);
+    for (const int s : cp.samples)
+      given.samples.push_back(std::uint64_t(band.source[std::size_t(s)]));
     detail::reconstruct_from_points(*grid.dense, band_options, given, options, result, stages);
   }
   std::optional<detail::ReconstructionInputs> inputs;

@@ -241,12 +241,7 @@ ReconstructionInputs prepare_reconstruction(const BandSamples& band,
   // contact point by its sample's |value| (the points still name the band's samples here).
   in.project = method == Method::Gcp && options.project != Switch::Off;
   in.projection = options.projection;
-  if (in.project) {
-    const std::vector<int>& from = result.contact_points->samples;
-    in.contact_depths.resize(Eigen::Index(from.size()));
-    for (std::size_t q = 0; q < from.size(); ++q)
-      in.contact_depths[Eigen::Index(q)] = std::abs(band.samples.values[from[q]]);
-  }
+  if (in.project) in.contact_depths = contact_depths(*result.contact_points, band.samples.values);
   // Carving needs the band's own samples after the reconstruction (not its margin).
   in.carve = method == Method::Gcp && options.carve != Switch::Off;
   // (Only with the automatic band: a band the user chose bounds every sample used.)

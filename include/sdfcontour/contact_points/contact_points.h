@@ -63,6 +63,10 @@ struct ContactPoints {
   int size() const { return int(samples.size()); }
 };
 
+/// |value| of each point's sample (`values`: the samples' values, as `cp.samples` index them): how
+/// deep each point lies, which the projection and the cells' vertices weigh by.
+Eigen::VectorXd contact_depths(const ContactPoints& cp, const Eigen::VectorXd& values);
+
 /// True if c lies inside the sphere of a triangulation neighbour of sample i (see
 /// ContactPointOptions::tie_tolerance). Because c lies on sample i's own sphere, testing the
 /// regular triangulation's neighbours is the exact power-cell test.

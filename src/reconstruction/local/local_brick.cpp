@@ -231,9 +231,7 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
     return given_in_reach(*options.given_points, n, shifted(own_first, -reach),
                           shifted(own_end, reach), depths);
   auto with_depths = [&](ContactPoints cp) {
-    depths.resize(cp.size());
-    for (int q = 0; q < cp.size(); ++q)
-      depths[q] = std::abs(band.samples.values[cp.samples[std::size_t(q)]]);
+    depths = contact_depths(cp, band.samples.values);
     return cp;
   };
   const Eigen::Vector3d flag_lo =
