@@ -231,14 +231,12 @@ def contour_callable_gcp(grid, scale, options, progress=False):
             progress("bricks", number + 1, len(todo))
     if progress is True:
         print(file=sys.stderr, flush=True)
-    # The core's join: vertices by key, triangles by name, the same arrays for any bricks (what
-    # adaptivity's merges depend on).
-    empty = sum(len(p[2]) == 0 for p in pieces)
-    V, F = _sdfcontour.join_local_pieces(pieces)
+    # The core's join (named pieces): vertices by key, triangles by name, the same arrays for
+    # any bricks (what adaptivity's merges depend on).
+    V, F, stats = join_pieces(enumerate(pieces), len(pieces))
     del pieces
     if len(F) == 0:
         raise ValueError("the local reconstruction found no surface inside the grid")
-    stats = {"vertices": len(V), "triangles": len(F), "empty_bricks": empty}
     stats.update(local_bricks=len(todo), contact_points=contact_points, value_scale=value_scale,
                  gradient_norm=norm, samples=n ** 3)
     if options.get("adaptivity", 0.0) > 0:
