@@ -2,12 +2,17 @@
 // that reach a point: what lattice_contact_points.cpp's filter and rescues read.
 #pragma once
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -24,29 +29,47 @@ constexpr int kChunk = 4;
 // radius |value| of the band samples in each column and in each chunk of kChunk along a column.
 class Lattice {
  public:
+  // Built in parallel: a brick's slots are written here first (64 MB of fresh pages at 256^3,
+  // serial a tenth of the fast path's time).
   Lattice(const GridGeometry& grid, const BandSamples& band)
       : band_(band),
         n_(grid.dims),
         chunks_((n_[2] + kChunk - 1) / kChunk),
         origin_(grid.point(0, 0, 0)),
         h_(grid.spacing()),
-        slot_(grid.size(), -1),
+        slot_(new int[grid.size()]),
         radius_(band.source.size()),
         column_max_(std::size_t(n_[0]) * n_[1], 0.0),
         chunk_max_(std::size_t(n_[0]) * n_[1] * std::size_t(chunks_), 0.0) {
-    if (band.source.size() > std::size_t(std::numeric_limits<int>::max()))
+    const std::size_t samples = band.source.size(), columns = column_max_.size();
+    if (samples > std::size_t(std::numeric_limits<int>::max()))
       throw Error("too many band samples in one brick: use smaller bricks (--brick-size)");
-    for (std::size_t s = 0; s < band.source.size(); ++s) {
-      const std::size_t p = std::size_t(band.source[s]), column = p / std::size_t(n_[2]);
-      const int k = int(p % std::size_t(n_[2]));
-      slot_[p] = int(s);
-      const double r = radius_[s] = std::abs(band.samples.values[Eigen::Index(s)]);
-      double& in_column = column_max_[column];
-      double& in_chunk = chunk_max_[column * std::size_t(chunks_) + std::size_t(k / kChunk)];
-      in_column = std::max(in_column, r);
-      in_chunk = std::max(in_chunk, r);
-      largest_ = std::max(largest_, r);
-    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.size(), 1 << 16), [&](auto r) {
+      std::fill(slot_.get() + r.begin(), slot_.get() + r.end(), -1);
+    });
+    tbb::parallel_for(std::size_t(0), samples, [&](std::size_t s) {
+      slot_[std::size_t(band.source[s])] = int(s);
+      radius_[s] = std::abs(band.samples.values[Eigen::Index(s)]);
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, columns, 256), [&](auto r) {
+      for (std::size_t column = r.begin(); column < r.end(); ++column) {
+        const int* slot = &slot_[column * std::size_t(n_[2])];
+        double* in_chunks = &chunk_max_[column * std::size_t(chunks_)];
+        for (int k = 0; k < n_[2]; ++k)
+          if (slot[k] >= 0) {
+            const double radius = radius_[std::size_t(slot[k])];
+            column_max_[column] = std::max(column_max_[column], radius);
+            in_chunks[k / kChunk] = std::max(in_chunks[k / kChunk], radius);
+          }
+      }
+    });
+    largest_ = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, columns), 0.0,
+        [&](auto r, double m) {
+          for (std::size_t c = r.begin(); c < r.end(); ++c) m = std::max(m, column_max_[c]);
+          return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
   }
 
   const Eigen::Vector3d& spacing() const { return h_; }
@@ -116,7 +139,7 @@ class Lattice {
   std::array<int, 3> n_;
   int chunks_;  // per column
   Eigen::Vector3d origin_, h_;
-  std::vector<int> slot_;
+  std::unique_ptr<int[]> slot_;  // per lattice sample: its band index, or -1
   std::vector<double> radius_;
   std::vector<double> column_max_, chunk_max_;
   double largest_ = 0;
