@@ -353,18 +353,17 @@ GridView block_view(const py::array& block, const std::array<int, 3>& first,
   return view;
 }
 
-// One brick of GCP's local reconstruction (local_brick.h): `block` holds the samples [first,
-// first + block.shape) of a grid of `dims` over [lo, hi]; the brick owns the edges from samples
-// [own_first, own_end). `options` as contour()'s; `truncation` (inside, outside; inf: none) as
-// found on the whole grid. Returns (keys (v, 2) uint64, vertices, triangles, stats), or None
-// when the block's halo is too small (read a wider one). The GIL is released meanwhile.
-py::object run_local_brick(const py::array& block, const std::array<int, 3>& first,
-                           const std::array<int, 3>& dims, const std::array<double, 3>& lo,
-                           const std::array<double, 3>& hi, const std::array<int, 3>& own_first,
-                           const std::array<int, 3>& own_end, const py::dict& options,
-                           const std::array<double, 2>& truncation, double value_scale) {
-  py::object keep;
-  const GridView view = block_view(block, first, dims, lo, hi, keep);
+// One brick of GCP's local reconstruction (local_brick.h's local_brick_piece over a BlockSource):
+// `read(first, dims)` returns the samples [first, first + dims) of a grid of `dims` over [lo, hi]
+// as an array; the brick owns the edges from samples [own_first, own_end) and reads them with
+// the core's halo, wider while its stars ask for more. `options` as contour()'s; `truncation`
+// (inside, outside; inf: none) as found on the whole grid. Returns (keys (v, 2) uint64,
+// vertices, triangles, stats). The GIL is released but while `read` runs.
+py::tuple run_local_brick(const py::function& read, const std::array<int, 3>& dims,
+                          const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                          const std::array<int, 3>& own_first, const std::array<int, 3>& own_end,
+                          const py::dict& options, const std::array<double, 2>& truncation,
+                          double value_scale) {
   LocalBrickOptions lb = local_brick_options(contour_options(options));
   lb.band.truncation_mode = TruncationMode::Resolved;
   lb.band.resolved.inside = truncation[0];
@@ -374,21 +373,34 @@ py::object run_local_brick(const py::array& block, const std::array<int, 3>& fir
   lb.band.value_scale = value_scale;
   // Adaptivity merges the joined mesh over the contact points: the pieces hand theirs on.
   lb.keep_contact_points = lb.keep_contact_points || get<double>(options, "adaptivity", 0.0) > 0;
+  // The last block read, and its converted copy where it needed one (released with the GIL).
+  py::object block, keep;
+  BlockSource source;
+  source.dims = dims;
+  source.read = [&](const std::array<int, 3>& first, const std::array<int, 3>& end) {
+    py::gil_scoped_acquire acquire;
+    block = read(py::make_tuple(first[0], first[1], first[2]),
+                 py::make_tuple(end[0] - first[0], end[1] - first[1], end[2] - first[2]));
+    const py::array array = py::array::ensure(block);
+    if (!array) throw Error("a brick's read must return an array");
+    return block_view(array, first, dims, lo, hi, keep);
+  };
+  source.release = [&] {
+    py::gil_scoped_acquire acquire;
+    block = keep = py::none();
+  };
   LocalPiece piece;
+  int wider = 0;
   {
     py::gil_scoped_release release;
-    try {
-      piece = local_brick_piece(view, own_first, own_end, lb);
-    } catch (const HaloTooSmall&) {
-      py::gil_scoped_acquire acquire;
-      return py::none();
-    }
+    piece = local_brick_piece(source, own_first, own_end, lb, &wider);
   }
   py::array_t<std::uint64_t> keys({py::ssize_t(piece.keys.size()), py::ssize_t(2)});
   for (std::size_t v = 0; v < piece.keys.size(); ++v)
     for (int c = 0; c < 2; ++c) keys.mutable_at(py::ssize_t(v), c) = piece.keys[v][std::size_t(c)];
   py::dict stats;
   stats["contact_points"] = piece.contact_points;
+  stats["wider_halos"] = wider;
   stats["local_cells"] = piece.stats.cells;
   stats["local_feature_vertices"] = piece.stats.feature_vertices;
   stats["local_field_misses"] = piece.stats.field_misses;
@@ -447,6 +459,44 @@ py::tuple run_subspacing_gaps(const py::array& block, const std::array<int, 3>& 
     counts = count_subspacing_gaps(view, own_first, own_end);
   }
   return py::make_tuple(counts.gaps, counts.crossings);
+}
+
+// Marching cubes' bricks' pieces (keys (v,) uint64 ascending, V (v, 3), F (f, 3) into V:
+// marching_cubes_brick's) joined as the core joins them (join_mesh_pieces): vertices in key
+// order, triangles in piece order. Returns (V, F).
+py::tuple run_join_mesh_pieces(const std::vector<py::tuple>& given) {
+  using U64 = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
+  using I64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  using F64 = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  std::vector<MeshPiece> pieces(given.size());
+  for (std::size_t b = 0; b < given.size(); ++b) {
+    const py::tuple& g = given[b];
+    if (g.size() != 3) throw Error("a piece is (keys, V, F)");
+    MeshPiece& p = pieces[b];
+    const U64 keys = U64::ensure(g[0]);
+    const I64 F = I64::ensure(g[2]);
+    if (!keys || !F) throw Error("a piece's keys and triangles must be integers");
+    const py::ssize_t v = keys.size(), f = F.size() / 3;
+    if (F.size() != 3 * f) throw Error("a piece's triangles must be (f, 3)");
+    p.vertices = v > 0 ? points_from(F64::ensure(g[1]), "a piece's V") : PointMatrix(0, 3);
+    if (p.vertices.rows() != v) throw Error("a piece's V must have a row per key");
+    p.keys.assign(keys.data(), keys.data() + v);
+    for (py::ssize_t i = 1; i < v; ++i)
+      if (!(p.keys[std::size_t(i - 1)] < p.keys[std::size_t(i)]))
+        throw Error("a piece's keys must be ascending and distinct");
+    p.triangles.resize(f, 3);
+    for (py::ssize_t i = 0; i < 3 * f; ++i) {
+      if (F.data()[i] < 0 || F.data()[i] >= v)
+        throw Error("a piece's triangles must index its vertices");
+      p.triangles.data()[i] = int(F.data()[i]);
+    }
+  }
+  Mesh mesh;
+  {
+    py::gil_scoped_release release;
+    mesh = join_mesh_pieces(pieces);
+  }
+  return py::make_tuple(to_numpy(std::move(mesh.vertices)), to_numpy(std::move(mesh.triangles)));
 }
 
 // GCP's bricks' pieces (keys (v, 2) uint64 ascending, V (v, 3), F (f, 3) into V, the triangles'
@@ -845,8 +895,8 @@ PYBIND11_MODULE(_sdfcontour, m) {
         py::arg("progress_callback") = py::none());
   m.def("marching_cubes_brick", &run_marching_cubes_brick, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
-  m.def("local_brick", &run_local_brick, py::arg("block"), py::arg("first"), py::arg("dims"),
-        py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"), py::arg("options"),
+  m.def("local_brick", &run_local_brick, py::arg("read"), py::arg("dims"), py::arg("lo"),
+        py::arg("hi"), py::arg("own_first"), py::arg("own_end"), py::arg("options"),
         py::arg("truncation"), py::arg("value_scale") = 1.0);
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
@@ -855,6 +905,7 @@ PYBIND11_MODULE(_sdfcontour, m) {
         "Whether the choice of thin parts needs the grid's subspacing gaps (the single "
         "process's rule; elsewhere auto_thin_parts(samples_per_axis, 0, 0) decides).");
   m.def("join_local_pieces", &run_join_local_pieces, py::arg("pieces"));
+  m.def("join_mesh_pieces", &run_join_mesh_pieces, py::arg("pieces"));
   m.def("truncation_counts", &run_truncation_counts, py::arg("block"));
   m.def("truncation_of_parts", &run_truncation_of_parts, py::arg("parts"));
   m.def("subspacing_gaps", &run_subspacing_gaps, py::arg("block"), py::arg("first"),

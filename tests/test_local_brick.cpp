@@ -188,6 +188,62 @@ TEST(LocalBrick, GridReadBlockByBlockEqualsTheGridInMemory) {
   EXPECT_THROW(local_mesh_in_bricks(blocked, auto_truncation, 10), Error);
 }
 
+TEST(LocalBrick, ABrickReadThroughItsSourceEqualsTheGridInMemory) {
+  // The bricks' driver (what the Python module and Dask call): each brick's block read through a
+  // BlockSource with local_brick_halo's halo (doubled while a star needs more: no brick here
+  // does), a block smaller than the grid; the piece equals the one read out of the whole grid,
+  // and the block is released once read.
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 64, Bounds{});
+  const GridView whole = view_of(g);
+  LocalBrickOptions o;
+  o.local.edge_fans = true;  // no repairs: a halo of a few cells and the triangulation's stars
+  o.untangle = false;
+  o.side_rounds = 0;
+  o.band.band = 2;
+  o.band.resolved = resolve_truncation(whole, o.band);
+  o.band.truncation_mode = TruncationMode::Resolved;
+  std::vector<double> values;
+  std::vector<std::array<std::array<int, 3>, 2>> reads;
+  int released = 0, with_surface = 0;
+  BlockSource source;
+  source.dims = g.dims;
+  source.read = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    reads.push_back({lo, hi});
+    GridView block = whole;
+    block.first = lo;
+    block.whole = g.dims;
+    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+    values.clear();
+    for (int i = lo[0]; i < hi[0]; ++i)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        for (int k = lo[2]; k < hi[2]; ++k) values.push_back(whole.value(whole.index(i, j, k)));
+    block.data = values.data();
+    return block;
+  };
+  source.release = [&] { ++released; };
+  const int halo = local_brick_halo(o, g.dims);
+  for (const int first : {0, 14, 27, 40, 54}) {
+    const std::array<int, 3> own_first{first, 27, first}, own_end{first + 10, 37, first + 10};
+    reads.clear();
+    int wider = 0;
+    const LocalPiece piece = local_brick_piece(source, own_first, own_end, o, &wider);
+    const LocalPiece expected = local_brick_piece(whole, own_first, own_end, o);
+    with_surface += piece.triangles.rows() > 0;
+    EXPECT_EQ(piece.vertices, expected.vertices) << first;
+    EXPECT_EQ(piece.triangles, expected.triangles) << first;
+    EXPECT_EQ(piece.triangle_names, expected.triangle_names) << first;
+    ASSERT_EQ(int(reads.size()), 1 + wider) << first;
+    for (std::size_t r = 0; r < reads.size(); ++r)
+      for (std::size_t a = 0; a < 3; ++a) {
+        EXPECT_EQ(reads[r][0][a], std::max(own_first[a] - (halo << r), 0));
+        EXPECT_EQ(reads[r][1][a], std::min(own_end[a] + (halo << r), g.dims[a]));
+      }
+    EXPECT_LT(std::size_t(reads[0][1][0] - reads[0][0][0]), std::size_t(g.dims[0])) << first;
+  }
+  EXPECT_GE(with_surface, 2);
+  EXPECT_GE(released, with_surface);  // (a brick without surface only reads its block)
+}
+
 TEST(LocalBrick, NothingReadsTheGridAfterABrickSaysItIsDone) {
   // Values spoilt (NaN) from the first grid_read on change nothing: the bricks free their
   // copied blocks there. Default options, so the carving reads the grid before it.

@@ -73,9 +73,10 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
     """The piece of GCP's local reconstruction (its mesh in bricks, local_brick.h) that one brick
     owns: the grid edges from the brick's samples [first, first + dims - 1) (its cells' low
     corners), read with a halo around them by ``read(first, dims)`` (a block of the grid; the
-    halo widens until the contact points' stars fit in it). ``options``: contour()'s options dict;
-    ``truncation``: (inside, outside) found on the whole grid (inf: none); ``value_scale``: the
-    factor that makes the values distances (found on the whole grid).
+    core's brick driver widens the halo until the contact points' stars fit in it). ``options``:
+    contour()'s options dict; ``truncation``: (inside, outside) found on the whole grid (inf:
+    none); ``value_scale``: the factor that makes the values distances (found on the whole
+    grid).
 
     Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V, the
     triangles' names (f,) uint64 ascending), with ``with_stats`` the piece's whole stats dict in
@@ -86,28 +87,23 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
     # contact point adaptivity reads), as the core's bricks do.
     own_end = [int(n) if int(f) + int(d) >= int(n) else int(f) + int(d) - 1
                for f, d, n in zip(first, dims, shape)]
-    halo = int(_sdfcontour.local_brick_halo(options, tuple(int(n) for n in shape)))
-    while True:
-        lo_read = [max(0, f - halo) for f in own_first]
-        hi_read = [min(int(n), e + halo) for e, n in zip(own_end, shape)]
-        try:
-            block = np.asarray(read(lo_read, [b - a for a, b in zip(lo_read, hi_read)]))
-            if block.dtype.kind not in "fiu":
-                raise ValueError(f"the grid must hold real numbers, not {block.dtype}")
-            piece = _sdfcontour.local_brick(block, tuple(lo_read), tuple(int(n) for n in shape),
-                                            tuple(float(x) for x in lo),
-                                            tuple(float(x) for x in hi), tuple(own_first),
-                                            tuple(own_end), options,
-                                            tuple(float(t) for t in truncation),
-                                            float(value_scale))
-        except ValueError as e:
-            raise _brick_error(index, lo_read, hi_read, e) from None
-        if piece is not None:
-            return piece if with_stats else (*piece[:3], piece[3]["triangle_names"])
-        whole = all(a == 0 for a in lo_read) and all(b == n for b, n in zip(hi_read, shape))
-        if whole:
-            raise RuntimeError("internal error: the whole grid's block reported too small a halo")
-        halo *= 2
+    last = [own_first, own_end]  # the samples of the last block read, for an error's message
+
+    def checked(at, size):
+        last[:] = [list(at), [a + s for a, s in zip(at, size)]]
+        block = np.asarray(read(list(at), list(size)))
+        if block.dtype.kind not in "fiu":
+            raise ValueError(f"the grid must hold real numbers, not {block.dtype}")
+        return block
+
+    try:
+        piece = _sdfcontour.local_brick(checked, tuple(int(n) for n in shape),
+                                        tuple(float(x) for x in lo), tuple(float(x) for x in hi),
+                                        tuple(own_first), tuple(own_end), options,
+                                        tuple(float(t) for t in truncation), float(value_scale))
+    except ValueError as e:
+        raise _brick_error(index, last[0], last[1], e) from None
+    return piece if with_stats else (*piece[:3], piece[3]["triangle_names"])
 
 
 def canonical_mesh(V, F):

@@ -51,26 +51,17 @@ def _comparable(keys):
 
 
 def join_pieces(arrivals, count):
-    """(V, F, stats) from `arrivals`, pairs (brick number < count, (keys, V, F))."""
+    """(V, F, stats) from `arrivals`, pairs (brick number < count, (keys, V, F[, names])): the
+    core's join (join_local_pieces for named pieces, join_mesh_pieces for marching cubes')."""
     pieces = [None] * count
     for b, piece in arrivals:
         pieces[b] = piece
-    if pieces and len(pieces[0]) == 4:  # named triangles: the core's join
-        empty = sum(len(p[2]) == 0 for p in pieces)
+    empty = sum(len(p[2]) == 0 for p in pieces)
+    if pieces and len(pieces[0]) == 4:
         V, F = _sdfcontour.join_local_pieces(pieces)
-        return V, F, {"vertices": len(V), "triangles": len(F), "empty_bricks": empty}
-    keys = np.concatenate([_comparable(p[0]) for p in pieces])
-    V = np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in pieces])
-    offsets = np.cumsum([0] + [len(p[0]) for p in pieces])
-    F = np.concatenate([np.asarray(p[2], np.int64).reshape(-1, 3) + offsets[b]
-                        for b, p in enumerate(pieces)])
-    _, kept, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    del keys
-    _require_int32(len(kept))
-    _check_same_positions(V, kept, inverse)
-    stats = {"vertices": len(kept), "triangles": len(F),
-             "empty_bricks": sum(len(p[2]) == 0 for p in pieces)}
-    return V[kept], inverse[F].astype(np.int32), stats
+    else:
+        V, F = _sdfcontour.join_mesh_pieces(pieces)
+    return V, F, {"vertices": len(V), "triangles": len(F), "empty_bricks": empty}
 
 
 def write_pieces_as_ply(arrivals, count, out):

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <unordered_map>
@@ -149,6 +150,9 @@ Mesh join_mesh_pieces(const std::vector<MeshPiece>& pieces) {
   for (const MeshPiece& p : pieces) keys.insert(keys.end(), p.keys.begin(), p.keys.end());
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  if (keys.size() > std::size_t(std::numeric_limits<int>::max()))
+    throw Error("the mesh has " + std::to_string(keys.size()) +
+                " vertices: its int32 indices hold at most 2147483647");
   Mesh mesh;
   mesh.vertices.resize(Eigen::Index(keys.size()), 3);
   std::vector<char> placed(keys.size(), 0);
@@ -182,12 +186,12 @@ Mesh marching_cubes(const BlockedGrid& grid, int brick) {
   const std::array<int, 3> cells{grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1};
   // (A brick's cells [first, end) read samples up to end: grown by one.)
   const std::vector<long> visit = bricks_to_visit(grid, cells, brick, 1);
-  for_each_listed_brick(cells, brick, visit, [&](long, const std::array<int, 3>& first,
-                                                 std::array<int, 3> end) {
-    for (int& e : end) ++e;  // its cells' samples
-    if (grid.may_hold_surface && !grid.may_hold_surface(first, end)) return;
-    pieces.push_back(marching_cubes_brick(read_block(grid, first, end, values), grid, first));
-  });
+  for_each_listed_brick(
+      cells, brick, visit, [&](long, const std::array<int, 3>& first, std::array<int, 3> end) {
+        for (int& e : end) ++e;  // its cells' samples
+        if (grid.may_hold_surface && !grid.may_hold_surface(first, end)) return;
+        pieces.push_back(marching_cubes_brick(read_block(grid, first, end, values), grid, first));
+      });
   return join_mesh_pieces(pieces);
 }
 

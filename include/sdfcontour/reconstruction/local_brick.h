@@ -206,6 +206,26 @@ double local_values_reach(const LocalBrickOptions& options, const std::array<int
 LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
                              const std::array<int, 3>& own_end, const LocalBrickOptions& options);
 
+/// A grid read a block at a time, for the bricks' halo loop.
+struct BlockSource {
+  std::array<int, 3> dims{};  ///< the whole grid's samples per axis
+  /// Views the samples [lo, hi) as a block of the whole grid (GridGeometry::first = lo, ::whole =
+  /// dims); the view stays valid until the next read or release.
+  std::function<GridView(const std::array<int, 3>& lo, const std::array<int, 3>& hi)> read;
+  /// Frees the last block read, once a brick has read all it needs of it; may be empty.
+  std::function<void()> release;
+  /// The grid itself, where it is in memory: a block that would be all of it is not read.
+  const GridView* whole = nullptr;
+};
+
+/// The piece owned by the edges with low sample in [own_first, own_end) of `source`'s grid, its
+/// block read with local_brick_halo's halo, which doubles while the block is too small for a
+/// star (HaloTooSmall); `wider` (optional) counts the doublings. What local_mesh_in_bricks does
+/// per brick, and what the Python module's and Dask's bricks call.
+LocalPiece local_brick_piece(const BlockSource& source, const std::array<int, 3>& own_first,
+                             const std::array<int, 3>& own_end, const LocalBrickOptions& options,
+                             int* wider = nullptr);
+
 /// Joins pieces: vertices with equal keys become one (ascending keys), triangles in the order of
 /// their names: the same arrays whatever the bricks. Throws InternalError if two pieces give one
 /// key two positions.

@@ -44,46 +44,36 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
   return block;
 }
 
-// Reads the samples [lo, hi) of the whole grid into `floats` or `doubles` and views them.
-using BlockRead = std::function<GridView(const Index3& lo, const Index3& hi,
-                                         std::vector<float>& floats, std::vector<double>& doubles)>;
+}  // namespace
 
-// The piece that a brick owns, from its block read with a halo that doubles until its stars fit.
-// `whole_grid`: the grid itself where it is in memory (a block that is all of it is not copied).
-LocalPiece brick_piece(const Index3& dims, const BlockRead& read, const GridView* whole_grid,
-                       const Index3& own_first, const Index3& own_end,
-                       const LocalBrickOptions& options, int& wider) {
-  int halo = local_brick_halo(options, dims);
-  std::vector<float> floats;
-  std::vector<double> doubles;
+LocalPiece local_brick_piece(const BlockSource& source, const Index3& own_first,
+                             const Index3& own_end, const LocalBrickOptions& options, int* wider) {
+  if (!source.read) throw Error("a brick's grid needs its reader");
+  int halo = local_brick_halo(options, source.dims);
   for (;;) {
     Index3 lo, hi;
     bool whole = true;
     for (std::size_t a = 0; a < 3; ++a) {
       lo[a] = std::max(own_first[a] - halo, 0);
-      hi[a] = std::min(own_end[a] + halo, dims[a]);
-      whole = whole && lo[a] == 0 && hi[a] == dims[a];
+      hi[a] = std::min(own_end[a] + halo, source.dims[a]);
+      whole = whole && lo[a] == 0 && hi[a] == source.dims[a];
     }
     try {
-      if (whole && whole_grid) return local_brick_piece(*whole_grid, own_first, own_end, options);
-      const GridView block = read(lo, hi, floats, doubles);
+      if (whole && source.whole)
+        return local_brick_piece(*source.whole, own_first, own_end, options);
+      const GridView block = source.read(lo, hi);
       if (options.grid_read) options.grid_read();
-      // The copy goes as soon as the brick has read what it needs of it.
+      // The block goes as soon as the brick has read what it needs of it.
       LocalBrickOptions inner = options;
-      inner.grid_read = [&] {
-        std::vector<float>().swap(floats);
-        std::vector<double>().swap(doubles);
-      };
+      inner.grid_read = source.release;
       return local_brick_piece(block, own_first, own_end, inner);
     } catch (const HaloTooSmall&) {
       if (whole) throw InternalError("a block holding the whole grid reported too small a halo");
       halo *= 2;
-      ++wider;
+      if (wider) ++*wider;
     }
   }
 }
-
-}  // namespace
 
 namespace {
 
@@ -205,11 +195,12 @@ namespace {
 // local_mesh_in_bricks of a grid `dims` across, read by `read`; bricks whose own samples grown by
 // one cannot hold the surface (`may_hold_surface`, if set) are left out unread, and where `boxes`
 // is set only the bricks that meet one of them are visited at all.
-Mesh mesh_in_bricks(const Index3& dims, const BlockRead& read, const GridView* whole_grid,
+Mesh mesh_in_bricks(const BlockSource& source,
                     const std::function<bool(const Index3&, const Index3&)>& may_hold_surface,
                     const std::vector<SampleBox>* boxes, const LocalBrickOptions& options,
                     int brick, LocalBricksStats* stats, OrientedPoints* contact_points) {
   if (brick < 0) throw Error("the brick size must be positive (0: one brick)");
+  const Index3& dims = source.dims;
   require_nameable(dims, options);
   const int side = brick > 0 ? brick : *std::max_element(dims.begin(), dims.end());
   const std::vector<long> visit = bricks_meeting(dims, side, boxes, 1);
@@ -227,7 +218,8 @@ Mesh mesh_in_bricks(const Index3& dims, const BlockRead& read, const GridView* w
     check_cancel(options.cancel);
     if (!may_hold_surface || may_hold_surface(near_first, near_end)) {
       pieces[std::size_t(b)] =
-          brick_piece(dims, read, whole_grid, first, end, options, wider[std::size_t(b)]);
+          local_brick_piece(source, first, end, options, &wider[std::size_t(b)]);
+      if (source.release) source.release();  // (a brick without surface keeps its block)
       if (options.grid_read) options.grid_read();
       detail::return_free_memory();
     }
@@ -266,12 +258,19 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
     options.band.resolved = resolve_truncation(grid, options.band);
     options.band.truncation_mode = TruncationMode::Resolved;
   }
-  const BlockRead copy = [&](const Index3& lo, const Index3& hi, std::vector<float>& floats,
-                             std::vector<double>& doubles) {
-    return grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
-                                            : copy_block(grid, lo, hi, doubles);
-  };
-  return mesh_in_bricks(grid.dims, copy, &grid, {}, nullptr, options, brick, stats, contact_points);
+  std::vector<float> floats;
+  std::vector<double> doubles;
+  BlockSource source{grid.dims,
+                     [&](const Index3& lo, const Index3& hi) {
+                       return grid.type == ScalarType::Float32 ? copy_block(grid, lo, hi, floats)
+                                                               : copy_block(grid, lo, hi, doubles);
+                     },
+                     [&] {
+                       std::vector<float>().swap(floats);
+                       std::vector<double>().swap(doubles);
+                     },
+                     &grid};
+  return mesh_in_bricks(source, {}, nullptr, options, brick, stats, contact_points);
 }
 
 Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& options, int brick,
@@ -280,9 +279,12 @@ Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& opti
   if (!grid.read) throw Error("a grid read block by block needs its reader");
   if (options.band.truncation_mode == TruncationMode::Auto)
     throw Error("a grid read block by block needs its truncation resolved (none, given or found)");
-  const BlockRead read = [&](const Index3& lo, const Index3& hi, std::vector<float>& floats,
-                             std::vector<double>&) { return read_block(grid, lo, hi, floats); };
-  return mesh_in_bricks(grid.dims, read, nullptr, grid.may_hold_surface,
+  std::vector<float> floats;
+  BlockSource source{
+      grid.dims,
+      [&](const Index3& lo, const Index3& hi) { return read_block(grid, lo, hi, floats); },
+      [&] { std::vector<float>().swap(floats); }, nullptr};
+  return mesh_in_bricks(source, grid.may_hold_surface,
                         grid.surface_boxes ? &*grid.surface_boxes : nullptr, options, brick, stats,
                         contact_points);
 }
