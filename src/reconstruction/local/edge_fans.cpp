@@ -1,11 +1,13 @@
 // An edge-fanned mesh's vertices in their regions (edge_fans.h).
 #include "reconstruction/local/edge_fans.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
+#include <functional>
 
 #include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/mesh_geometry.h"
@@ -105,8 +107,9 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
   const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
   const VertexKeyBases bases = vertex_key_bases(n);
   const Eigen::Vector3d h = grid.spacing(), min = grid.bounds.min;
-  std::atomic<long> put_back{0};
-  tbb::parallel_for(Eigen::Index(0), vertices.rows(), [&](Eigen::Index v) {
+  // (A count per range, not one shared atomic: nearly every vertex moves, and two threads
+  // incrementing one counter made the loop no faster on two cores than on one.)
+  auto keep = [&](Eigen::Index v) {
     const std::uint64_t key = keys[std::size_t(v)][0];
     const Eigen::Vector3d was = before.row(v).transpose(), now = vertices.row(v).transpose();
     Eigen::Vector3d kept = now;
@@ -148,12 +151,17 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
       kept = start;
       kept[axis] += place_along(start, axis, h[axis], was, now);
     }
-    if (kept != now) {
-      vertices.row(v) = kept.transpose();
-      put_back.fetch_add(1, std::memory_order_relaxed);
-    }
-  });
-  return put_back.load();
+    if (kept == now) return 0L;
+    vertices.row(v) = kept.transpose();
+    return 1L;
+  };
+  return tbb::parallel_reduce(
+      tbb::blocked_range<Eigen::Index>(0, vertices.rows()), 0L,
+      [&](const tbb::blocked_range<Eigen::Index>& r, long count) {
+        for (Eigen::Index v = r.begin(); v < r.end(); ++v) count += keep(v);
+        return count;
+      },
+      std::plus<long>());
 }
 
 void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoints& cp,
