@@ -1,6 +1,7 @@
 #include "sdfcontour/contact_points/bricks.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <Eigen/Geometry>
@@ -456,16 +457,17 @@ ContactPoints brick_contact_points(const Samples& samples, double spacing,
     st.triangulated += o.triangulated;
     st.largest_brick = std::max(st.largest_brick, o.largest);
   }
-  std::sort(order.begin(), order.end());
+  // (Each sample is one brick's: the keys are distinct, so any sort gives this order.)
+  tbb::parallel_sort(order.begin(), order.end());
   result.points.resize(Eigen::Index(order.size()), 3);
   result.normals.resize(Eigen::Index(order.size()), 3);
   result.samples.resize(order.size());
-  for (std::size_t r = 0; r < order.size(); ++r) {
+  tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t r) {
     const auto& [a, row] = order[r].second;
     result.samples[r] = order[r].first;
     result.points.row(Eigen::Index(r)) = outputs[a].kept.points.row(row);
     result.normals.row(Eigen::Index(r)) = outputs[a].kept.normals.row(row);
-  }
+  });
   if (stats) *stats = st;
   return result;
 }
