@@ -98,6 +98,33 @@ def test_eight_bricks_on_two_workers_are_the_single_process_mesh(grid, client, s
         assert np.sum(np.abs(V[:, axis] - value) < 1e-12) > 10
 
 
+def test_marching_cubes_pieces_join_in_the_core(grid, single):
+    # The pieces of bricks of 40 (seams through every part) join through the core's
+    # join_mesh_pieces, in whatever order they arrive: the single process's mesh, vertices in key
+    # order; a piece that puts a shared vertex elsewhere is refused.
+    from sdfcontour._io_join import join_pieces
+    shape, todo = grid.shape, sdfcontour.dask.bricks(grid.shape, 40)
+    pieces = [sdfcontour.dask.brick_piece(grid[tuple(slice(f, f + d) for f, d in zip(first, dims))],
+                                          index, first, shape, LO, HI)
+              for index, first, dims in todo]
+    arrivals = list(enumerate(pieces))[::-1]
+    V, F, stats = join_pieces(arrivals, len(pieces))
+    assert stats["vertices"] == len(V) and stats["triangles"] == len(F)
+    assert_same_mesh((V, F), single)
+    assert_closed_manifold(F)
+    keys = np.unique(np.concatenate([p[0] for p in pieces]))
+    assert len(keys) == len(V)
+    shared = [b for b, p in enumerate(pieces) if len(p[0]) and np.isin(p[0], np.concatenate(
+        [q[0] for c, q in enumerate(pieces) if c != b])).any()]
+    b = shared[0]
+    keys_b, V_b, F_b = pieces[b]
+    moved = np.array(V_b, copy=True)
+    moved[np.isin(keys_b, np.concatenate([q[0] for c, q in enumerate(pieces) if c != b]))] += 1e-9
+    bad = pieces[:b] + [(keys_b, moved, F_b)] + pieces[b + 1:]
+    with pytest.raises(RuntimeError, match="differently"):
+        join_pieces(list(enumerate(bad)), len(bad))
+
+
 def test_sources_agree_zarr_hdf5_npy_dask_callable(grid, client, single, tmp_path):
     import dask.array as da
     z = zarr.open(str(tmp_path / "g.zarr"), mode="w", shape=grid.shape, chunks=(32, 32, 32),
