@@ -461,35 +461,50 @@ py::tuple run_subspacing_gaps(const py::array& block, const std::array<int, 3>& 
   return py::make_tuple(counts.gaps, counts.crossings);
 }
 
+using U64Array = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
+
+// A brick's piece as the joins read it, (keys, V, F[, names]): its keys (`width` uint64 per
+// vertex, ascending and distinct), V (v, 3) into `vertices` and F (f, 3) into `triangles`;
+// `keys` and `names` (when the piece has them) stay as given.
+void read_piece(const py::tuple& g, std::size_t width, const char* form, U64Array& keys,
+                U64Array& names, PointMatrix& vertices, TriangleMatrix& triangles) {
+  using I64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  using F64 = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  const bool named = width == 2;
+  if (g.size() != (named ? 4 : 3)) throw Error(std::string("a piece is ") + form);
+  keys = U64Array::ensure(g[0]);
+  const I64 F = I64::ensure(g[2]);
+  if (named) names = U64Array::ensure(g[3]);
+  if (!keys || !F || (named && !names))
+    throw Error("a piece's keys, triangles and names must be integers");
+  const py::ssize_t v = keys.size() / py::ssize_t(width), f = F.size() / 3;
+  if (keys.size() != py::ssize_t(width) * v || F.size() != 3 * f || (named && names.size() != f))
+    throw Error(std::string("a piece must be ") + form + " with a row of V per key and " +
+                "triangles (f, 3)");
+  for (py::ssize_t i = 1; i < v; ++i)
+    if (!std::lexicographical_compare(keys.data() + (i - 1) * width, keys.data() + i * width,
+                                      keys.data() + i * width, keys.data() + (i + 1) * width))
+      throw Error("a piece's keys must be ascending and distinct");
+  vertices = v > 0 ? points_from(F64::ensure(g[1]), "a piece's V") : PointMatrix(0, 3);
+  if (vertices.rows() != v) throw Error("a piece's V must have a row per key");
+  triangles.resize(f, 3);
+  for (py::ssize_t i = 0; i < 3 * f; ++i) {
+    if (F.data()[i] < 0 || F.data()[i] >= v)
+      throw Error("a piece's triangles must index its vertices");
+    triangles.data()[i] = int(F.data()[i]);
+  }
+}
+
 // Marching cubes' bricks' pieces (keys (v,) uint64 ascending, V (v, 3), F (f, 3) into V:
 // marching_cubes_brick's) joined as the core joins them (join_mesh_pieces): vertices in key
 // order, triangles in piece order. Returns (V, F).
 py::tuple run_join_mesh_pieces(const std::vector<py::tuple>& given) {
-  using U64 = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
-  using I64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-  using F64 = py::array_t<double, py::array::c_style | py::array::forcecast>;
   std::vector<MeshPiece> pieces(given.size());
   for (std::size_t b = 0; b < given.size(); ++b) {
-    const py::tuple& g = given[b];
-    if (g.size() != 3) throw Error("a piece is (keys, V, F)");
     MeshPiece& p = pieces[b];
-    const U64 keys = U64::ensure(g[0]);
-    const I64 F = I64::ensure(g[2]);
-    if (!keys || !F) throw Error("a piece's keys and triangles must be integers");
-    const py::ssize_t v = keys.size(), f = F.size() / 3;
-    if (F.size() != 3 * f) throw Error("a piece's triangles must be (f, 3)");
-    p.vertices = v > 0 ? points_from(F64::ensure(g[1]), "a piece's V") : PointMatrix(0, 3);
-    if (p.vertices.rows() != v) throw Error("a piece's V must have a row per key");
-    p.keys.assign(keys.data(), keys.data() + v);
-    for (py::ssize_t i = 1; i < v; ++i)
-      if (!(p.keys[std::size_t(i - 1)] < p.keys[std::size_t(i)]))
-        throw Error("a piece's keys must be ascending and distinct");
-    p.triangles.resize(f, 3);
-    for (py::ssize_t i = 0; i < 3 * f; ++i) {
-      if (F.data()[i] < 0 || F.data()[i] >= v)
-        throw Error("a piece's triangles must index its vertices");
-      p.triangles.data()[i] = int(F.data()[i]);
-    }
+    U64Array keys, unnamed;
+    read_piece(given[b], 1, "(keys, V, F)", keys, unnamed, p.vertices, p.triangles);
+    p.keys.assign(keys.data(), keys.data() + keys.size());
   }
   Mesh mesh;
   {
@@ -504,35 +519,16 @@ py::tuple run_join_mesh_pieces(const std::vector<py::tuple>& given) {
 // (join_local_pieces): vertices in key order, triangles in name order, the one-brick arrays
 // whatever the bricks. Returns (V, F).
 py::tuple run_join_local_pieces(const std::vector<py::tuple>& given) {
-  using U64 = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
-  using I64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-  using F64 = py::array_t<double, py::array::c_style | py::array::forcecast>;
   std::vector<LocalPiece> pieces(given.size());
   for (std::size_t b = 0; b < given.size(); ++b) {
-    const py::tuple& g = given[b];
-    if (g.size() != 4) throw Error("a piece is (keys, V, F, triangle names)");
     LocalPiece& p = pieces[b];
-    const U64 keys = U64::ensure(g[0]), names = U64::ensure(g[3]);
-    const I64 F = I64::ensure(g[2]);
-    if (!keys || !names || !F) throw Error("a piece's keys, triangles and names must be integers");
-    const py::ssize_t v = keys.size() / 2, f = F.size() / 3;
-    if (keys.size() != 2 * v || F.size() != 3 * f || names.size() != f)
-      throw Error("a piece's keys must be (v, 2), its triangles (f, 3) with f names");
-    p.vertices = v > 0 ? points_from(F64::ensure(g[1]), "a piece's V") : PointMatrix(0, 3);
-    if (p.vertices.rows() != v) throw Error("a piece's V must have a row per key");
-    p.keys.resize(std::size_t(v));
-    for (py::ssize_t i = 0; i < v; ++i) {
-      p.keys[std::size_t(i)] = {keys.data()[2 * i], keys.data()[2 * i + 1]};
-      if (i > 0 && !(p.keys[std::size_t(i - 1)] < p.keys[std::size_t(i)]))
-        throw Error("a piece's keys must be ascending and distinct");
-    }
-    p.triangles.resize(f, 3);
-    for (py::ssize_t i = 0; i < 3 * f; ++i) {
-      if (F.data()[i] < 0 || F.data()[i] >= v)
-        throw Error("a piece's triangles must index its vertices");
-      p.triangles.data()[i] = int(F.data()[i]);
-    }
-    p.triangle_names.assign(names.data(), names.data() + f);
+    U64Array keys, names;
+    read_piece(given[b], 2, "(keys (v, 2), V, F, triangle names)", keys, names, p.vertices,
+               p.triangles);
+    p.keys.resize(std::size_t(keys.size() / 2));
+    for (std::size_t i = 0; i < p.keys.size(); ++i)
+      p.keys[i] = {keys.data()[2 * i], keys.data()[2 * i + 1]};
+    p.triangle_names.assign(names.data(), names.data() + names.size());
     if (!std::is_sorted(p.triangle_names.begin(), p.triangle_names.end()))
       throw Error("a piece's triangle names must be ascending");
   }
