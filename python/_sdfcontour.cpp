@@ -383,6 +383,16 @@ py::tuple run_local_brick(const py::function& read, const std::array<int, 3>& di
                  py::make_tuple(end[0] - first[0], end[1] - first[1], end[2] - first[2]));
     const py::array array = py::array::ensure(block);
     if (!array) throw Error("a brick's read must return an array");
+    std::string want, got;
+    bool same = array.ndim() == 3;
+    for (std::size_t a = 0; a < 3; ++a) want += (a ? ", " : "") + std::to_string(end[a] - first[a]);
+    for (py::ssize_t a = 0; a < array.ndim(); ++a) {
+      got += (a ? ", " : "") + std::to_string(array.shape(a));
+      same = same && array.shape(a) == end[std::size_t(a)] - first[std::size_t(a)];
+    }
+    if (!same)
+      throw Error("the grid's reader returned an array of shape (" + got + ") for a block of (" +
+                  want + ")");
     return block_view(array, first, dims, lo, hi, keep);
   };
   source.release = [&] {

@@ -294,6 +294,28 @@ def test_gcp_onto_the_zero_set_in_bricks_is_the_single_process_mesh(client):
     assert 4 * error(V) < error(sdfcontour.contour(values, method="mc")[0])
 
 
+def test_a_gcp_brick_whose_reader_misbehaves_is_one_clear_error(grid):
+    # The core's brick driver reads through the given reader: a block of the wrong shape, of no
+    # numbers, or the reader's own exception, each one line (or the reader's error) naming the
+    # brick, never a piece of the wrong block.
+    first, dims = (32, 32, 32), (33, 33, 33)
+    def good(f, d):
+        return grid[f[0]:f[0] + d[0], f[1]:f[1] + d[1], f[2]:f[2] + d[2]]
+    keys, V, F, names = sdfcontour.dask.gcp_brick_piece(
+        good, (0, 0, 0), first, dims, grid.shape, LO, HI, {"edge_fans": True}, (np.inf, np.inf))
+    assert len(F) > 0 and len(names) == len(F)
+    for read, kind, words in [
+            (lambda f, d: good(f, d)[:-1], ValueError,
+             r"^brick \(0, 0, 0\) \(samples \[\d+:\d+, .*\]\): the grid's reader returned an array "
+             r"of shape \(\d+, \d+, \d+\) for a block of \(\d+, \d+, \d+\)$"),
+            (lambda f, d: good(f, d).ravel(), ValueError, "reader returned an array of shape"),
+            (lambda f, d: np.full(tuple(d), "x"), ValueError, "real numbers"),
+            (lambda f, d: 1 / 0, ZeroDivisionError, "division by zero")]:
+        with pytest.raises(kind, match=words):
+            sdfcontour.dask.gcp_brick_piece(read, (0, 0, 0), first, dims, grid.shape, LO, HI,
+                                            {"edge_fans": True}, (np.inf, np.inf))
+
+
 @pytest.mark.parametrize("call, kind, words", [
     (lambda c: sdfcontour.dask.contour(np.zeros((8, 8, 8)) + 1j, client=c), TypeError,
      "real numbers"),
