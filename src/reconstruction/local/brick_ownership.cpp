@@ -1,6 +1,9 @@
 // What a brick of the local reconstruction owns (brick_ownership.h).
 #include "reconstruction/local/brick_ownership.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <utility>
 #include <vector>
@@ -24,16 +27,30 @@ bool in_range(const Index3& p, const Index3& lo, const Index3& hi) {
   return true;
 }
 
+// Per triangle t < count: whether the low sample of its grid edge edge_of(t) lies in [lo, hi),
+// in parallel (three divisions a triangle).
+template <class EdgeOf>
+std::vector<char> triangles_in_range(Eigen::Index count, EdgeOf edge_of, const Index3& n,
+                                     const Index3& lo, const Index3& hi) {
+  std::vector<char> inside(static_cast<std::size_t>(count));
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index t) {
+    inside[std::size_t(t)] = in_range(edge_low_point(edge_of(t), n), lo, hi);
+  });
+  return inside;
+}
+
 detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, const Index3& n,
                                           const Index3& lo, const Index3& hi,
                                           PointMatrix& crossing_means) {
+  const std::vector<char> inside = triangles_in_range(
+      keyed.mesh.triangles.rows(),
+      [&](Eigen::Index t) { return keyed.triangle_edge[std::size_t(t)]; }, n, lo, hi);
   std::vector<std::pair<std::uint64_t, Eigen::Index>> kept;
-  for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t) {
-    const std::uint64_t edge = keyed.triangle_edge[std::size_t(t)];
-    if (in_range(edge_low_point(edge, n), lo, hi))
-      kept.push_back({edge * 8 + keyed.triangle_rank[std::size_t(t)], t});
-  }
-  std::sort(kept.begin(), kept.end());
+  for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t)
+    if (inside[std::size_t(t)])
+      kept.push_back(
+          {keyed.triangle_edge[std::size_t(t)] * 8 + keyed.triangle_rank[std::size_t(t)], t});
+  tbb::parallel_sort(kept.begin(), kept.end());  // (distinct names: the same order)
   std::vector<int> id(std::size_t(keyed.mesh.vertices.rows()), -1);
   detail::KeyedTriangles out;
   out.triangles.resize(Eigen::Index(kept.size()), 3);
@@ -110,10 +127,12 @@ void keep_owned_contact_points(const GridView& block, const BandSamples& band,
 
 void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const Index3& own_first,
                      const Index3& own_end, LocalPiece& piece) {
+  const std::vector<char> inside = triangles_in_range(
+      sub.mesh.triangles.rows(), [&](Eigen::Index t) { return sub.parent[std::size_t(t)] / 8; }, n,
+      own_first, own_end);
   std::vector<Eigen::Index> owned;
   for (Eigen::Index t = 0; t < sub.mesh.triangles.rows(); ++t)
-    if (in_range(edge_low_point(sub.parent[std::size_t(t)] / 8, n), own_first, own_end))
-      owned.push_back(t);
+    if (inside[std::size_t(t)]) owned.push_back(t);
   std::vector<int> id(std::size_t(sub.mesh.vertices.rows()), -1);
   for (Eigen::Index t : owned)
     for (int c = 0; c < 3; ++c) id[std::size_t(sub.mesh.triangles(t, c))] = 0;
@@ -122,18 +141,20 @@ void take_owned_part(const detail::SubdividedMesh& sub, const Index3& n, const I
     if (v == 0) v = next++;
   piece.vertices.resize(next, 3);
   piece.keys.resize(std::size_t(next));
-  for (std::size_t v = 0; v < id.size(); ++v)
-    if (id[v] >= 0) {
-      piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
-      piece.keys[std::size_t(id[v])] = sub.keys[v];
-    }
+  tbb::parallel_for(std::size_t(0), id.size(), [&](std::size_t v) {
+    if (id[v] < 0) return;
+    piece.vertices.row(id[v]) = sub.mesh.vertices.row(Eigen::Index(v));
+    piece.keys[std::size_t(id[v])] = sub.keys[v];
+  });
   piece.triangles.resize(Eigen::Index(owned.size()), 3);
-  for (const Eigen::Index t : owned)
-    piece.triangle_names.push_back(sub.parent[std::size_t(t)] * 256 +
-                                   std::uint64_t(sub.child[std::size_t(t)]));
-  for (std::size_t r = 0; r < owned.size(); ++r)
+  piece.triangle_names.resize(owned.size());
+  tbb::parallel_for(std::size_t(0), owned.size(), [&](std::size_t r) {
+    const Eigen::Index t = owned[r];
+    piece.triangle_names[r] =
+        sub.parent[std::size_t(t)] * 256 + std::uint64_t(sub.child[std::size_t(t)]);
     for (int c = 0; c < 3; ++c)
-      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(owned[r], c))];
+      piece.triangles(Eigen::Index(r), c) = id[std::size_t(sub.mesh.triangles(t, c))];
+  });
 }
 
 }  // namespace sdfcontour::detail
