@@ -5,7 +5,6 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/reconstruction/sphere_carving.h"
 
 namespace sdfcontour::detail {
@@ -16,6 +15,13 @@ class WorkCounter;
 /// spacing is positive and finite: the samples whose balls carving and side repair keep clear.
 void check_ball_samples(const char* what, const PointMatrix& points, const Eigen::VectorXd& values,
                         double spacing);
+
+/// The triangles around each vertex: those of vertex v are triangles[offsets[v] .. offsets[v+1]).
+/// Built once per mesh (carving moves vertices, never triangles).
+struct VertexTriangles {
+  std::vector<int> offsets, triangles;
+  explicit VertexTriangles(const Mesh& mesh);
+};
 
 /// Scales each vertex's move in `moves` (per vertex, factor[v] times its row: 1, halved, then 0)
 /// until no triangle's normal turns by more than options.max_turn_degrees; returns the vertices

@@ -89,6 +89,18 @@ void check_ball_samples(const char* what, const PointMatrix& points, const Eigen
     throw Error(name + ": the samples must be finite");
 }
 
+VertexTriangles::VertexTriangles(const Mesh& mesh) {
+  const TriangleMatrix& F = mesh.triangles;
+  offsets.assign(std::size_t(mesh.vertices.rows()) + 1, 0);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) ++offsets[std::size_t(F(t, c)) + 1];
+  for (std::size_t v = 1; v < offsets.size(); ++v) offsets[v] += offsets[v - 1];
+  triangles.resize(std::size_t(offsets.back()));
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) triangles[std::size_t(fill[std::size_t(F(t, c))]++)] = int(t);
+}
+
 std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& around,
                                   const std::vector<int>& seeds, int rings) {
   const TriangleMatrix& F = mesh.triangles;
