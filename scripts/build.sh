@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Configures and builds sdfcontour (Release, -O2) into build/: every target, or only those named
+# Configures and builds sdfcontour (Release, -O3) into build/: every target, or only those named
 # (scripts/example.sh builds the command-line tool alone: bash scripts/build.sh sdfcontour_cli).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,0 +1,54 @@
+"""Two builds of `sdfcontour` against each other, in alternating pairs (this machine's speed
+drifts between runs): runs `A contour ARGS` and `B contour ARGS` PAIRS times each, alternating,
+checks that both write the same bytes, and prints each one's median total and local stages
+(`--stats`) and B's time over A's, per pair and of the medians.
+
+    /usr/bin/python3 bench/binaries_pairs.py 5 old/sdfcontour build/sdfcontour \\
+        bunny256.npy --edge-fans on --gradient lattice --band 2
+"""
+import filecmp
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def run(cli, args, mesh, stats):
+    subprocess.run([cli, "contour", *args, "-o", mesh, "--quiet", "--stats", stats], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(stats) as f:
+        return json.load(f)
+
+
+def main():
+    if len(sys.argv) < 5:
+        sys.exit(__doc__)
+    pairs, clis, args = int(sys.argv[1]), sys.argv[2:4], sys.argv[4:]
+    totals, stages = ([], []), ([], [])
+    with tempfile.TemporaryDirectory() as tmp:
+        meshes = [os.path.join(tmp, f"{k}.ply") for k in "ab"]
+        stats = os.path.join(tmp, "stats.json")
+        for _ in range(pairs):
+            for k in (0, 1):
+                s = run(clis[k], args, meshes[k], stats)
+                totals[k].append(s["seconds_total"])
+                stages[k].append(s.get("local_seconds", {}))
+            if not filecmp.cmp(meshes[0], meshes[1], shallow=False):
+                sys.exit("the two builds wrote different meshes")
+    print(f"{' '.join(args)}: {pairs} pairs, the same mesh bytes from both builds")
+    for k, name in enumerate("AB"):
+        print(f"{name} {clis[k]}: median {statistics.median(totals[k]):.3f} s")
+    print("B / A per pair: " + ", ".join(f"{b / a:.3f}" for a, b in zip(*totals)))
+    print(f"B / A of the medians: "
+          f"{statistics.median(totals[1]) / statistics.median(totals[0]):.3f}")
+    for name in sorted(stages[0][0]):
+        a = statistics.median(s.get(name, 0) for s in stages[0])
+        b = statistics.median(s.get(name, 0) for s in stages[1])
+        if a > 0.01:
+            print(f"  {name}: {a:.3f} -> {b:.3f} s ({b / a:.2f}x)")
+
+
+if __name__ == "__main__":
+    main()
