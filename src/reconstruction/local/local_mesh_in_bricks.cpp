@@ -2,7 +2,9 @@
 // a halo (copied out of a grid in memory, or read from a file: BlockedGrid), one brick after
 // another (each parallel inside), the pieces joined by their vertices' keys.
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <functional>
@@ -77,28 +79,59 @@ LocalPiece local_brick_piece(const BlockSource& source, const Index3& own_first,
 
 namespace {
 
-// Calls visit(list, row) for every entry of the ascending `lists` in ascending (value, list)
-// order: a k-way merge, so joining needs no sorted copy of the pieces' entries.
+// Calls visit(list, row) for every entry of the ascending `lists` whose rows lie in [from[l],
+// to[l]), in ascending (value, list) order: a k-way merge, so joining needs no sorted copy.
 template <class Key, class Visit>
-void merge_ascending(const std::vector<const std::vector<Key>*>& lists, Visit visit) {
+void merge_ascending(const std::vector<const std::vector<Key>*>& lists,
+                     const std::vector<std::size_t>& from, const std::vector<std::size_t>& to,
+                     Visit visit) {
   using Head = std::pair<Key, std::size_t>;
   std::priority_queue<Head, std::vector<Head>, std::greater<Head>> heads;
-  std::vector<std::size_t> next(lists.size(), 0);
+  std::vector<std::size_t> next = from;
   for (std::size_t l = 0; l < lists.size(); ++l)
-    if (!lists[l]->empty()) heads.push({lists[l]->front(), l});
+    if (next[l] < to[l]) heads.push({(*lists[l])[next[l]], l});
   while (!heads.empty()) {
     const std::size_t l = heads.top().second;
     heads.pop();
     visit(l, next[l]);
-    if (++next[l] < lists[l]->size()) heads.push({(*lists[l])[next[l]], l});
+    if (++next[l] < to[l]) heads.push({(*lists[l])[next[l]], l});
   }
+}
+
+// The ascending `lists` cut into key ranges that merge independently (in parallel): part q holds
+// rows [cuts[q][l], cuts[q + 1][l]) of list l, and equal keys fall in one part. The cuts are the
+// largest list's quantiles, so the parts are about equally long.
+template <class Key>
+std::vector<std::vector<std::size_t>> merge_parts(
+    const std::vector<const std::vector<Key>*>& lists) {
+  std::size_t total = 0, largest = 0;
+  for (std::size_t l = 0; l < lists.size(); ++l) {
+    total += lists[l]->size();
+    if (lists[l]->size() > lists[largest]->size()) largest = l;
+  }
+  constexpr std::size_t kPartLength = 1 << 12;
+  const std::size_t parts =
+      lists.empty() ? 1 : std::clamp<std::size_t>(total / kPartLength, 1, 256);
+  std::vector<std::vector<std::size_t>> cuts;
+  cuts.emplace_back(lists.size(), 0);
+  for (std::size_t q = 1; q < parts; ++q) {
+    const Key& at = (*lists[largest])[lists[largest]->size() * q / parts];
+    std::vector<std::size_t> cut(lists.size());
+    for (std::size_t l = 0; l < lists.size(); ++l)
+      cut[l] =
+          std::size_t(std::lower_bound(lists[l]->begin(), lists[l]->end(), at) - lists[l]->begin());
+    if (cut != cuts.back()) cuts.push_back(std::move(cut));
+  }
+  std::vector<std::size_t> end(lists.size());
+  for (std::size_t l = 0; l < lists.size(); ++l) end[l] = lists[l]->size();
+  cuts.push_back(std::move(end));
+  return cuts;
 }
 
 // join_local_pieces; with `owned` (the same pieces), each piece's arrays are freed once read, so
 // the join holds little beyond the output mesh (23 M triangles at 1024³).
 Mesh join_pieces(const std::vector<LocalPiece>& pieces, std::vector<LocalPiece>* owned) {
-  // One piece is already in key and name order (LocalPiece): the merges below would copy it
-  // entry by entry through a heap, serially.
+  // One piece is already in key and name order (LocalPiece): the merges below would copy it.
   if (pieces.size() == 1) {
     Mesh mesh;
     if (owned) {
@@ -117,46 +150,77 @@ Mesh join_pieces(const std::vector<LocalPiece>& pieces, std::vector<LocalPiece>*
     keys.push_back(&p.keys);
     names.push_back(&p.triangle_names);
   }
-  // Each key's vertex number, ascending; a key in several pieces is one vertex.
+  // Each key's vertex number, ascending; a key in several pieces is one vertex. Per part of the
+  // keys: its distinct keys numbered from 0, then shifted by the parts before it.
   std::vector<std::vector<int>> id(pieces.size());
   for (std::size_t p = 0; p < pieces.size(); ++p) id[p].resize(pieces[p].keys.size());
-  int count = 0;
-  bool first = true;
-  VertexKey last{};
-  merge_ascending(keys, [&](std::size_t p, std::size_t row) {
-    const VertexKey key = pieces[p].keys[row];
-    if (first || key != last) ++count;
-    first = false;
-    last = key;
-    id[p][row] = count - 1;
+  const std::vector<std::vector<std::size_t>> key_cuts = merge_parts(keys);
+  const std::size_t key_parts = key_cuts.size() - 1;
+  std::vector<int> distinct(key_parts, 0);
+  tbb::parallel_for(std::size_t(0), key_parts, [&](std::size_t q) {
+    int count = 0;
+    bool first = true;
+    VertexKey last{};
+    merge_ascending(keys, key_cuts[q], key_cuts[q + 1], [&](std::size_t p, std::size_t row) {
+      const VertexKey key = pieces[p].keys[row];
+      if (first || key != last) ++count;
+      first = false;
+      last = key;
+      id[p][row] = count - 1;
+    });
+    distinct[q] = count;
   });
+  std::vector<int> base(key_parts + 1, 0);
+  for (std::size_t q = 0; q < key_parts; ++q) base[q + 1] = base[q] + distinct[q];
+  tbb::parallel_for(std::size_t(0), key_parts, [&](std::size_t q) {
+    for (std::size_t p = 0; p < pieces.size(); ++p)
+      for (std::size_t row = key_cuts[q][p]; row < key_cuts[q + 1][p]; ++row) id[p][row] += base[q];
+  });
+  const int vertices = base[key_parts];
   Mesh mesh;
-  mesh.vertices.resize(count, 3);
-  std::vector<bool> placed(std::size_t(count), false);
+  mesh.vertices.resize(vertices, 3);
+  std::vector<char> placed(static_cast<std::size_t>(vertices), 0);
   for (std::size_t p = 0; p < pieces.size(); ++p) {
-    for (std::size_t row = 0; row < pieces[p].keys.size(); ++row) {
-      const int v = id[p][row];
-      const auto position = pieces[p].vertices.row(Eigen::Index(row));
-      if (!placed[std::size_t(v)]) {
-        mesh.vertices.row(v) = position;
-        placed[std::size_t(v)] = true;
-      } else if (mesh.vertices.row(v) != position) {
-        throw InternalError("two bricks placed one vertex differently");
-      }
-    }
+    // (A piece's keys are distinct: its rows write distinct vertices.)
+    const bool moved = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, pieces[p].keys.size()), false,
+        [&](const tbb::blocked_range<std::size_t>& r, bool differs) {
+          for (std::size_t row = r.begin(); row < r.end(); ++row) {
+            const int v = id[p][row];
+            const auto position = pieces[p].vertices.row(Eigen::Index(row));
+            if (!placed[std::size_t(v)]) {
+              mesh.vertices.row(v) = position;
+              placed[std::size_t(v)] = 1;
+            } else if (mesh.vertices.row(v) != position) {
+              differs = true;
+            }
+          }
+          return differs;
+        },
+        [](bool a, bool b) { return a || b; });
+    if (moved) throw InternalError("two bricks placed one vertex differently");
     if (owned) {
       (*owned)[p].vertices = PointMatrix();
       std::vector<VertexKey>().swap((*owned)[p].keys);
     }
   }
-  Eigen::Index rows = 0;
-  for (const LocalPiece& p : pieces) rows += p.triangles.rows();
-  mesh.triangles.resize(rows, 3);
-  Eigen::Index f = 0;
-  merge_ascending(names, [&](std::size_t p, std::size_t t) {
-    for (int c = 0; c < 3; ++c)
-      mesh.triangles(f, c) = id[p][std::size_t(pieces[p].triangles(Eigen::Index(t), c))];
-    ++f;
+  // The triangles in name order (names are distinct): each part's start is the rows before it.
+  const std::vector<std::vector<std::size_t>> name_cuts = merge_parts(names);
+  const std::size_t name_parts = name_cuts.size() - 1;
+  std::vector<Eigen::Index> start(name_parts + 1, 0);
+  for (std::size_t q = 0; q < name_parts; ++q) {
+    start[q + 1] = start[q];
+    for (std::size_t p = 0; p < pieces.size(); ++p)
+      start[q + 1] += Eigen::Index(name_cuts[q + 1][p] - name_cuts[q][p]);
+  }
+  mesh.triangles.resize(start[name_parts], 3);
+  tbb::parallel_for(std::size_t(0), name_parts, [&](std::size_t q) {
+    Eigen::Index f = start[q];
+    merge_ascending(names, name_cuts[q], name_cuts[q + 1], [&](std::size_t p, std::size_t t) {
+      for (int c = 0; c < 3; ++c)
+        mesh.triangles(f, c) = id[p][std::size_t(pieces[p].triangles(Eigen::Index(t), c))];
+      ++f;
+    });
   });
   return mesh;
 }
