@@ -6,6 +6,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <random>
+#include <set>
 #include <vector>
 
 #include "sdfcontour/extraction/marching.h"
@@ -410,6 +413,54 @@ TEST(LocalBrick, JoinMergesSharedKeysAndOrdersTrianglesByName) {
   EXPECT_EQ(freed.vertices, kept.vertices);
   EXPECT_EQ(freed.triangles, kept.triangles);
   EXPECT_TRUE(pieces.empty());
+}
+
+TEST(LocalBrick, JoinOfManyLargePiecesEqualsASortedJoin) {
+  // Pieces large enough to be joined in many ranges at once: 7 pieces of 3,000 to 21,000 keys,
+  // each in a slab of the key space of its own that overlaps its neighbours' (as a brick's
+  // halo), and names scattered over them all. The join must equal the plain one: every distinct
+  // key once in ascending order, each triangle's corners renumbered, the triangles in name order.
+  std::mt19937_64 random(7);
+  std::vector<LocalPiece> pieces;
+  std::map<VertexKey, int> all_keys;
+  std::map<std::uint64_t, std::array<VertexKey, 3>> all_triangles;
+  for (int p = 0; p < 7; ++p) {
+    std::set<VertexKey> keys;
+    const std::uint64_t low = std::uint64_t(p) * 40000;
+    while (keys.size() < std::size_t(3000 * (p + 1)))
+      keys.insert({low + random() % 50000, random() % 3});
+    const std::vector<VertexKey> sorted(keys.begin(), keys.end());
+    std::vector<std::array<int, 3>> triangles;
+    std::set<std::uint64_t> names;
+    while (names.size() < sorted.size()) names.insert(random() % 4000000 * 7 + std::uint64_t(p));
+    for (std::size_t t = 0; t < names.size(); ++t)
+      triangles.push_back({int(random() % sorted.size()), int(random() % sorted.size()),
+                           int(random() % sorted.size())});
+    const std::vector<std::uint64_t> name_list(names.begin(), names.end());
+    pieces.push_back(piece_of(sorted, 0, triangles, name_list));
+    for (const VertexKey& k : sorted) all_keys[k] = 0;
+    for (std::size_t t = 0; t < triangles.size(); ++t)
+      all_triangles[name_list[t]] = {sorted[std::size_t(triangles[t][0])],
+                                     sorted[std::size_t(triangles[t][1])],
+                                     sorted[std::size_t(triangles[t][2])]};
+  }
+  int next = 0;
+  for (auto& [key, id] : all_keys) id = next++;
+  const Mesh joined = join_local_pieces(pieces);
+  ASSERT_EQ(joined.vertices.rows(), Eigen::Index(all_keys.size()));
+  Eigen::Index v = 0;
+  for (const auto& [key, id] : all_keys) {
+    EXPECT_EQ(joined.vertices(v, 0), double(key[0])) << v;
+    EXPECT_EQ(joined.vertices(v, 1), double(key[1])) << v;
+    ++v;
+  }
+  ASSERT_EQ(joined.triangles.rows(), Eigen::Index(all_triangles.size()));
+  Eigen::Index t = 0;
+  for (const auto& [name, corners] : all_triangles) {
+    for (int c = 0; c < 3; ++c)
+      ASSERT_EQ(joined.triangles(t, c), all_keys.at(corners[std::size_t(c)])) << name;
+    ++t;
+  }
 }
 
 TEST(LocalBrick, JoinRejectsOneKeyPlacedTwice) {

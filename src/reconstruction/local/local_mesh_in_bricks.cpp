@@ -99,23 +99,29 @@ void merge_ascending(const std::vector<const std::vector<Key>*>& lists,
 }
 
 // The ascending `lists` cut into key ranges that merge independently (in parallel): part q holds
-// rows [cuts[q][l], cuts[q + 1][l]) of list l, and equal keys fall in one part. The cuts are the
-// largest list's quantiles, so the parts are about equally long.
+// rows [cuts[q][l], cuts[q + 1][l]) of list l, and equal keys fall in one part. The cuts come
+// from every list's quantiles weighed by its length, so the parts are about equally long wherever
+// each list's keys lie (a brick's keys span only its own slab of the grid).
 template <class Key>
 std::vector<std::vector<std::size_t>> merge_parts(
     const std::vector<const std::vector<Key>*>& lists) {
-  std::size_t total = 0, largest = 0;
-  for (std::size_t l = 0; l < lists.size(); ++l) {
-    total += lists[l]->size();
-    if (lists[l]->size() > lists[largest]->size()) largest = l;
-  }
+  std::size_t total = 0;
+  for (const auto* list : lists) total += list->size();
   constexpr std::size_t kPartLength = 1 << 12;
-  const std::size_t parts =
-      lists.empty() ? 1 : std::clamp<std::size_t>(total / kPartLength, 1, 256);
+  const std::size_t parts = std::clamp<std::size_t>(total / kPartLength, 1, 256);
+  // Each list's parts-quantiles stand for size / parts of its entries each.
+  std::vector<std::pair<Key, std::size_t>> samples;
+  for (const auto* list : lists)
+    for (std::size_t q = 1; q < parts && !list->empty(); ++q)
+      samples.emplace_back((*list)[list->size() * q / parts], list->size());
+  std::sort(samples.begin(), samples.end());
   std::vector<std::vector<std::size_t>> cuts;
   cuts.emplace_back(lists.size(), 0);
-  for (std::size_t q = 1; q < parts; ++q) {
-    const Key& at = (*lists[largest])[lists[largest]->size() * q / parts];
+  std::size_t weight = 0, next = 1;
+  for (const auto& [at, size] : samples) {
+    weight += size;  // in units of 1 / parts entries
+    if (weight < total * next) continue;
+    while (next < parts && weight >= total * next) ++next;
     std::vector<std::size_t> cut(lists.size());
     for (std::size_t l = 0; l < lists.size(); ++l)
       cut[l] =
@@ -124,7 +130,7 @@ std::vector<std::vector<std::size_t>> merge_parts(
   }
   std::vector<std::size_t> end(lists.size());
   for (std::size_t l = 0; l < lists.size(); ++l) end[l] = lists[l]->size();
-  cuts.push_back(std::move(end));
+  if (cuts.size() == 1 || end != cuts.back()) cuts.push_back(std::move(end));
   return cuts;
 }
 
