@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,9 @@ void check_ball_samples(const char* what, const PointMatrix& points, const Eigen
 }
 
 VertexTriangles::VertexTriangles(const Mesh& mesh) {
+  if (mesh.vertices.rows() >= std::numeric_limits<int>::max() ||
+      3 * mesh.triangles.rows() >= std::numeric_limits<int>::max())
+    throw Error("too many vertices or triangles for one mesh piece (2^31 corners)");
   const TriangleMatrix& F = mesh.triangles;
   offsets.assign(std::size_t(mesh.vertices.rows()) + 1, 0);
   for (Eigen::Index t = 0; t < F.rows(); ++t)
