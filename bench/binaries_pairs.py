@@ -7,19 +7,13 @@ checks that both write the same bytes, and prints each one's median total and lo
         bunny256.npy --edge-fans on --gradient lattice --band 2
 """
 import filecmp
-import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 
-
-def run(cli, args, mesh, stats):
-    subprocess.run([cli, "contour", *args, "-o", mesh, "--quiet", "--stats", stats], check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    with open(stats) as f:
-        return json.load(f)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common import contour_stats  # noqa: E402
 
 
 def main():
@@ -32,9 +26,9 @@ def main():
         stats = os.path.join(tmp, "stats.json")
         for _ in range(pairs):
             for k in (0, 1):
-                s = run(clis[k], args, meshes[k], stats)
-                totals[k].append(s["seconds_total"])
-                stages[k].append(s.get("local_seconds", {}))
+                total, stage = contour_stats(clis[k], args, meshes[k], stats)
+                totals[k].append(total)
+                stages[k].append(stage)
             if not filecmp.cmp(meshes[0], meshes[1], shallow=False):
                 sys.exit("the two builds wrote different meshes")
     print(f"{' '.join(args)}: {pairs} pairs, the same mesh bytes from both builds")

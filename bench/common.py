@@ -27,6 +27,16 @@ def timed(cmd):
     return wall, int(m.group(2)) / 1024, r.stdout, None
 
 
+def contour_stats(cli, args, mesh, stats):
+    """Runs `cli contour ARGS -o MESH --quiet --stats STATS` (quiet, failing on error): its total
+    seconds and its local stages' seconds (`--stats`)."""
+    subprocess.run([cli, "contour", *args, "-o", mesh, "--quiet", "--stats", stats], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(stats) as f:
+        d = json.load(f)
+    return d["seconds_total"], d.get("local_seconds", {})
+
+
 def l1(cli, mesh, gt):
     """The paper's L1 distance between two meshes, or None if eval failed."""
     r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True)

@@ -6,14 +6,14 @@ the medians. Issue 64 asks for at least 1.9x.
     /usr/bin/python3 bench/threads_pairs.py 3 bunny256.npy --edge-fans on --gradient lattice --band 2
 
 SDFCONTOUR_CLI names the binary (default: build/sdfcontour)."""
-import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from common import contour_stats  # noqa: E402
 
 
 def main():
@@ -26,13 +26,9 @@ def main():
         mesh, stats = os.path.join(tmp, "mesh.ply"), os.path.join(tmp, "stats.json")
         for _ in range(pairs):
             for threads in (1, 2):
-                subprocess.run([cli, "contour", *args, "-o", mesh, "--quiet", "--threads",
-                                str(threads), "--stats", stats], check=True,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                with open(stats) as f:
-                    d = json.load(f)
-                totals[threads].append(d["seconds_total"])
-                stages[threads].append(d.get("local_seconds", {}))
+                total, stage = contour_stats(cli, [*args, "--threads", str(threads)], mesh, stats)
+                totals[threads].append(total)
+                stages[threads].append(stage)
     for threads in (1, 2):
         median = {k: statistics.median(s[k] for s in stages[threads])
                   for k in stages[threads][0]}
