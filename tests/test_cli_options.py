@@ -50,7 +50,7 @@ OPTIONS = {
     "--adaptivity-bricks": (ADAPT, "16", "changes"),
     "--adaptivity-fit": (ADAPT, "0", "changes"),
     "--subdivisions": ([GRID], "0", "changes"),
-    "--split-sag": ([GRID], "0.001", "changes"),
+    "--split-sag": ([GRID], "0.01", "changes"),
     "--thin-parts": ([GRID], "off", "changes"),
     "--edge-fans": ([GRID], "on", "changes"),
     "--local-reach": ([GRID], "0.4", "changes"),
