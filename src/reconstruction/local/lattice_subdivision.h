@@ -72,8 +72,9 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
 /// (lattice_subdivision(near, levels)) was projected onto the contact points `cp` (`depths` their
 /// samples' |value|s, `h` the spacing), each edge whose chord sags by more than `limit` (its
 /// length times its ends' normals' turn / 8, a circular arc's sag) or that crosses a crease
-/// (chord_sags with creases) is split and the new vertices projected; `reconstructed` (the positions the untangling returns vertices to: the new ones at
-/// their edges' midpoints) and `corners` (per vertex: a shared corner) follow the new numbering.
+/// (chord_sags with creases) is split and the new vertices projected; `reconstructed` (the
+/// positions the untangling returns vertices to: the new ones at their edges' midpoints) and
+/// `corners` (per vertex: a shared corner) follow the new numbering.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const ContactPoints& cp, const Eigen::VectorXd& depths, double h,
                          const LocalBrickOptions& options, SubdividedMesh& sub,
