@@ -49,7 +49,7 @@ OPTIONS = {
     "--side-passes": ([GRID], "3", "refused"),
     "--adaptivity-bricks": (ADAPT, "16", "changes"),
     "--adaptivity-fit": (ADAPT, "0", "changes"),
-    "--subdivisions": ([GRID], "0", "changes"),
+    "--subdivisions": ([GRID], "2", "changes"),
     "--split-sag": ([GRID], "0.01", "changes"),
     "--thin-parts": ([GRID], "off", "changes"),
     "--edge-fans": ([GRID], "on", "changes"),
