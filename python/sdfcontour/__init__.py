@@ -143,12 +143,11 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         for scattered samples. CLI ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
-        (0 to 4; "auto": 1, which the grid of twice the resolution for thin parts replaces).
+        (0 to 4; "auto": 2 below 96 samples per axis, else 1).
     split_sag : float, "auto" or "off"
         Local reconstruction on grids: after the projection, each edge whose chord sags by more
-        than this many spacings (its length times its ends' normals' turn / 8), or that crosses a
-        crease, is split once more and its midpoint projected (0 to 1; "auto": 0.001 below 96
-        samples per axis, else 0.004). CLI ``--split-sag``.
+        than this many spacings (its length times its ends' normals' turn / 8) is split once
+        more and its midpoint projected (0 to 1; "auto": 0.004). CLI ``--split-sag``.
     thin_parts : bool or "auto"
         Local reconstruction on grids: find the parts thinner than a spacing that the samples
         straddle without a sign change (a wing, a blade) from the contact points on their two

@@ -20,12 +20,12 @@ bool auto_local_reconstruction(double /*samples_per_axis*/) {
   return true;
 }
 
-int auto_subdivisions(double /*samples_per_axis*/) {
-  return 1;
+int auto_subdivisions(double samples_per_axis) {
+  return samples_per_axis < 96 ? 2 : 1;
 }
 
-double auto_split_sag(double samples_per_axis) {
-  return samples_per_axis < 96 ? 0.001 : 0.004;
+double auto_split_sag(double /*samples_per_axis*/) {
+  return 0.004;
 }
 
 bool auto_thin_parts(double samples_per_axis) {

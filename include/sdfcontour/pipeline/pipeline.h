@@ -69,18 +69,14 @@ std::string reconstruction_name(Reconstruction reconstruction);
 bool auto_local_reconstruction(double samples_per_axis);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
-/// dimension): 1 at any size, which the grid of twice the resolution (auto_thin_parts) replaces,
-/// and then auto_split_sag's edges once more. Below 96, one level on that finer grid too gave the
-/// same L1 with 1.6-1.7x the triangles and 1.2x the time (the 17 shared meshes at 32^3 and 64^3,
-/// docs/results/no_uniform_level_32_64.md); at 256^3, on the grid itself, no level is 1.27x
-/// farther (bunny, spot, armadillo).
+/// dimension): 2 below 96, else 1, and then auto_split_sag's edges once more (64^3: bunny 4.00e-4
+/// with 2 against 4.57e-4 with 1; at 128^3 a second uniform level is 2% closer than one level and
+/// the split, for 2.5x the triangles and 1.7x the time: `bench/local.py --methods mc --variant
+/// s1:"--subdivisions 1" --variant s2:"--subdivisions 2 --split-sag 0"`).
 int auto_subdivisions(double samples_per_axis);
 
 /// The local reconstruction's split_sag (LocalBrickOptions) for a grid `samples_per_axis` across:
-/// 0.001 spacings below 96, where no uniform level precedes it (auto_subdivisions; 0.004 there
-/// left blub and the sphere 12-15% farther at 64^3), else 0.004 (at 128^3, 0.001 was 2.7% closer
-/// for 1.8x the triangles and 1.2x the time). With 0.004 at every size, the 17 shared meshes' L1
-/// over MC's (geometric means,
+/// 0.004 spacings at any size. The 17 shared meshes' L1 over MC's (geometric means,
 /// `bench/local.py --res 32,64,128 --methods mc,gcp-local --variant nosplit:"--split-sag 0"`):
 /// 128^3 0.390x -> 0.356x for 1.6x the triangles, 64^3 0.257x -> 0.253x, 32^3 0.295x -> 0.292x;
 /// the analytic torus at 256^3 splits no edge (its chords sag less).

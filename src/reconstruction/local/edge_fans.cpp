@@ -175,7 +175,7 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
     const VertexKey &kx = sub.keys[std::size_t(x)], &ky = sub.keys[std::size_t(y)];
     if (kx[1] != 0 || ky[1] != 0 || kx[0] >= bases.segments || ky[0] >= bases.segments)
       return false;  // only between two cells' vertices: the edge crosses their face
-    return chord_sags(sub, normals, x, y, limit, false);
+    return chord_sags(sub, normals, x, y, limit);
   };
   SplitMesh split_mesh = split_curved_edges(near, sub, 0, split);
   const Eigen::Index count = split_mesh.sub.mesh.vertices.rows();

@@ -321,13 +321,12 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
 // angle) cross a crease.
 const double kCreaseTurnCosine = std::cos(30.0 * M_PI / 180.0);
 
-bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, int y, double limit,
-                bool creases) {
-  // Without `creases`, not along a sharp edge (straight), nor across a crease (its normals turn
-  // by more than kCreaseTurn): only where the surface curves.
-  if (!creases && sub.on_feature[std::size_t(x)] && sub.on_feature[std::size_t(y)]) return false;
+bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, int y, double limit) {
+  // Not along a sharp edge (straight), nor across a crease (its normals turn by more than
+  // kCreaseTurn; the fit is least sure next to it): only where the surface curves.
+  if (sub.on_feature[std::size_t(x)] && sub.on_feature[std::size_t(y)]) return false;
   const double c = std::clamp(normals.row(x).dot(normals.row(y)), -1.0, 1.0);
-  if (c < kCreaseTurnCosine) return creases;
+  if (c < kCreaseTurnCosine) return false;
   const double length = (sub.mesh.vertices.row(x) - sub.mesh.vertices.row(y)).norm();
   // The turn t lies between its chord 2 sin(t/2) and 1.05 times it below the crease's 30
   // degrees: the arc cosine only where those bounds disagree (most edges sag far less).
@@ -343,7 +342,7 @@ void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const LocalBrickOptions& options, SubdividedMesh& sub,
                          PointMatrix& reconstructed, std::vector<char>& corners) {
   const PointMatrix normals = vertex_normals(sub.mesh);
-  auto split = [&](int x, int y) { return chord_sags(sub, normals, x, y, limit, true); };
+  auto split = [&](int x, int y) { return chord_sags(sub, normals, x, y, limit); };
   SplitMesh split_mesh = split_curved_edges(near, sub, levels, split);
   PointMatrix start(split_mesh.sub.mesh.vertices.rows(), 3);
   std::vector<char> stay(split_mesh.source.size(), 0);

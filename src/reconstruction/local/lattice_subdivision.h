@@ -44,11 +44,9 @@ inline std::uint64_t far_end_key(const VertexKey& key) {
 }
 
 /// Whether the edge (x, y) of `sub`, with `normals` its vertex normals, sags by more than
-/// `limit` (its length times its ends' normals' turn / 8, a circular arc's sag). With `creases`,
-/// an edge whose normals turn by more than 30 degrees (across a crease) is split too, and so is
-/// one along a sharp edge that sags; without, neither is.
-bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, int y, double limit,
-                bool creases);
+/// `limit` (its length times its ends' normals' turn / 8, a circular arc's sag), off sharp edges
+/// and creases.
+bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, int y, double limit);
 
 /// Per vertex of `sub`: a corner that samples share (on_feature 2), which stays where it is.
 std::vector<char> shared_corners(const SubdividedMesh& sub);
@@ -71,10 +69,9 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
 /// The local reconstruction's use of it (LocalBrickOptions::split_sag): after `sub`
 /// (lattice_subdivision(near, levels)) was projected onto the contact points `cp` (`depths` their
 /// samples' |value|s, `h` the spacing), each edge whose chord sags by more than `limit` (its
-/// length times its ends' normals' turn / 8, a circular arc's sag) or that crosses a crease
-/// (chord_sags with creases) is split and the new vertices projected; `reconstructed` (the
-/// positions the untangling returns vertices to: the new ones at their edges' midpoints) and
-/// `corners` (per vertex: a shared corner) follow the new numbering.
+/// length times its ends' normals' turn / 8, a circular arc's sag) is split and the new vertices
+/// projected; `reconstructed` (the positions the untangling returns vertices to: the new ones at
+/// their edges' midpoints) and `corners` (per vertex: a shared corner) follow the new numbering.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const ContactPoints& cp, const Eigen::VectorXd& depths, double h,
                          const LocalBrickOptions& options, SubdividedMesh& sub,
