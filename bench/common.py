@@ -37,10 +37,17 @@ def contour_stats(cli, args, mesh, stats):
     return d["seconds_total"], d.get("local_seconds", {})
 
 
+def evaluate(cli, mesh, gt):
+    """`cli eval MESH GT`'s JSON (distances, and the reconstruction's topology under
+    "recon_mesh"), or None if eval failed."""
+    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True)
+    return json.loads(r.stdout) if r.returncode == 0 else None
+
+
 def l1(cli, mesh, gt):
     """The paper's L1 distance between two meshes, or None if eval failed."""
-    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True)
-    return json.loads(r.stdout)["L1"] if r.returncode == 0 else None
+    e = evaluate(cli, mesh, gt)
+    return e["L1"] if e else None
 
 
 def keep(rows, row):

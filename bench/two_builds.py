@@ -17,21 +17,23 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import MESHES, geomean, report, timed  # noqa: E402
+from common import MESHES, evaluate, geomean, report, timed  # noqa: E402
 
 
 def run(cli, grid, gt, out, options):
     seconds, _, _, err = timed([cli, "contour", grid, "-o", out, "--quiet", *options])
     if err is not None:
         return {"error": " ".join(err)}
-    e = json.loads(subprocess.run([cli, "eval", out, gt], capture_output=True, text=True).stdout)
+    e = evaluate(cli, out, gt)
+    if e is None:
+        return {"error": f"eval of {out} failed"}
     return {"L1": e["L1"], "Linf": e["L_inf"], "triangles": e["recon_mesh"]["triangles"],
             "crossings": e["recon_mesh"]["self_intersections"], "seconds": seconds}
 
 
-def table(res, rows, labels):
-    lines = [f"## {res}³", "", f"| mesh | L1 B/A | L∞ B/A | triangles B/A | seconds B/A | "
-             f"triangles / MC (A, B) | L1 / MC (A, B) | crossing pairs (B) |",
+def table(res, rows):
+    lines = [f"## {res}³", "", "| mesh | L1 B/A | L∞ B/A | triangles B/A | seconds B/A | "
+             "triangles / MC (A, B) | L1 / MC (A, B) | crossing pairs (B) |",
              "|---|---|---|---|---|---|---|---|"]
     ratios = {k: [] for k in ("l1", "linf", "tri", "sec", "tri_a", "tri_b", "mc_a", "mc_b")}
     for mesh, (mc, a, b) in sorted(rows.items()):
@@ -90,7 +92,7 @@ def main():
             a, b = run(args.a, grid, gt, out, options), run(args.b, grid, gt, out, options)
             rows[name] = (mc, a, b)
             print(json.dumps({"mesh": name, "res": res, "mc": mc, "a": a, "b": b}), flush=True)
-        lines += table(res, rows, (args.a, args.b))
+        lines += table(res, rows)
     report("\n".join(lines), args.markdown)
 
 
