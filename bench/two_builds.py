@@ -17,7 +17,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import MESHES, evaluate, geomean, report, timed  # noqa: E402
+from common import MESHES, evaluate, geomean, mesh_names, report, timed  # noqa: E402
 
 
 def run(cli, grid, gt, out, options):
@@ -69,8 +69,7 @@ def main():
     args = ap.parse_args()
     if not os.path.isdir(MESHES):
         sys.exit(f"no shared meshes at {MESHES}")
-    names = [m for m in args.meshes.split(",") if m] or sorted(
-        f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
+    names = mesh_names(args.meshes)
     options = args.options.split()
     os.makedirs(args.work, exist_ok=True)
     lines = [f"# Two builds on the shared meshes: A `{args.a}`, B `{args.b}`", "",
