@@ -254,6 +254,8 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, i
   std::vector<char> moved_vertices(std::size_t(n), 0);
   for (Eigen::Index v = 0; v < n; ++v) moved_vertices[std::size_t(v)] = moved(int(v));
   std::vector<char> watch = triangles_with(mesh, moved_vertices);
+  // Nothing moved: nothing to undo, and no search over the whole mesh to build.
+  if (std::none_of(watch.begin(), watch.end(), [](char w) { return w != 0; })) return stats;
   CrossingSearch search(mesh, &before);
   detail::WorkCounter tested(
       progress, long(watch.size() - std::size_t(std::count(watch.begin(), watch.end(), char(0)))));
