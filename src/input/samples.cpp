@@ -102,6 +102,7 @@ void validate_grid_geometry(const GridGeometry& grid) {
 
 void validate_grid(const GridView& grid) {
   validate_grid_geometry(grid);
+  if (grid.values_checked) return;
   if (const auto at = first_non_finite(grid))
     throw Error("grid values contain a NaN, infinite or too large (over 1e100) value (at [" +
                 std::to_string((*at)[0]) + ", " + std::to_string((*at)[1]) + ", " +

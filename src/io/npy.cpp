@@ -425,6 +425,7 @@ SdfInput sdf_input_from_npy(std::shared_ptr<const MappedNpy> array, const Bounds
     if (array->count * item > kKeepPagesUpTo) input.view.drop_pages = &mapped->drop;
     input.storage = mapped;
     validate_grid(input.view);
+    input.view.values_checked = true;  // the pipeline's own checks need not pass over them again
     return input;
   }
   if (array->shape.size() == 2 && array->shape[1] == 4)

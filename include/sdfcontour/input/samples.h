@@ -79,6 +79,10 @@ struct GridView : GridGeometry {
   /// memory (read from the file again if used), so a pass over a grid larger than memory holds a
   /// window of it. It ignores whatever lies outside its mapping. Null: the values stay.
   const std::function<void(const void*, std::size_t)>* drop_pages = nullptr;
+  /// Set by whoever made the view once it has checked its values finite (a .npy's reader):
+  /// validate_grid then checks the dims and bounds alone instead of passing over the values
+  /// again. Views made from it with other values start unset.
+  bool values_checked = false;
 
   double value(std::size_t p) const {
     return type == ScalarType::Float32 ? double(static_cast<const float*>(data)[p])
@@ -95,8 +99,8 @@ struct GridView : GridGeometry {
 /// A view of `grid`'s values (valid while `grid` lives).
 GridView view_of(const Grid& grid);
 
-/// Throws Error unless: dims >= 2 on every axis, values match dims, values finite,
-/// bounds min < max on every axis.
+/// Throws Error unless: dims >= 2 on every axis, values match dims, values finite (unless
+/// `grid.values_checked`), bounds min < max on every axis.
 void validate_grid(const GridView& grid);
 void validate_grid(const Grid& grid);
 /// The dims and bounds part of validate_grid.
