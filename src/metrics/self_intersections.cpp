@@ -2,15 +2,20 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
+#include <type_traits>
 
 #include "pipeline/work_counter.h"
 
@@ -21,72 +26,104 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 
+// A triangle's axis-aligned box. Its arrays are allocated without being written (Eigen leaves
+// its vectors unset) and filled in parallel: value-initialised, the page faults of two arrays of
+// boxes and the buckets were a quarter of a 256^3 mesh's search set-up, on one thread.
+struct Box {
+  Eigen::Vector3d lo, hi;
+  bool meets(const Box& b) const {
+    return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all();
+  }
+};
+
+template <class T>
+std::unique_ptr<T[]> unwritten(std::size_t n) {
+  static_assert(std::is_trivially_destructible_v<T>);
+  return std::unique_ptr<T[]>(new T[n]);
+}
+
 // Triangles bucketed by the cubes of side `cell` that their bounding boxes meet, sorted by cube
 // (x fastest). The cubes are about twice a typical triangle's extent, so most triangles sit in one
 // to eight of them.
 class TriangleCubes {
  public:
-  explicit TriangleCubes(const std::vector<Eigen::AlignedBox3d>& boxes) {
-    Eigen::AlignedBox3d all;
-    std::vector<double> extents(boxes.size());
-    for (std::size_t t = 0; t < boxes.size(); ++t) {
-      all.extend(boxes[t]);
-      extents[t] = (boxes[t].max() - boxes[t].min()).maxCoeff();
-    }
-    auto middle = extents.begin() + long(extents.size() / 2);
+  TriangleCubes(const Box* boxes, std::size_t count) {
+    const Box all = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, count),
+        Box{Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)},
+        [&](const tbb::blocked_range<std::size_t>& r, Box b) {
+          for (std::size_t t = r.begin(); t < r.end(); ++t) {
+            b.lo = b.lo.cwiseMin(boxes[t].lo);
+            b.hi = b.hi.cwiseMax(boxes[t].hi);
+          }
+          return b;
+        },
+        [](const Box& a, const Box& b) {
+          return Box{a.lo.cwiseMin(b.lo), a.hi.cwiseMax(b.hi)};
+        });
+    std::vector<double> extents(count);
+    tbb::parallel_for(std::size_t(0), count,
+                      [&](std::size_t t) { extents[t] = (boxes[t].hi - boxes[t].lo).maxCoeff(); });
+    auto middle = extents.begin() + long(count / 2);
     std::nth_element(extents.begin(), middle, extents.end());
-    origin_ = all.min();
-    const Eigen::Vector3d extent = all.max() - all.min();
+    origin_ = all.lo;
+    const Eigen::Vector3d extent = all.hi - all.lo;
     cell_ = std::max(2 * *middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
     // Only occupied cubes are stored, so empty space between far-apart parts costs nothing; but
     // the triangles may not sit in too many cubes in all (a few huge ones would): coarser cubes
-    // only cost more tests.
+    // only cost more tests. (Sums of whole numbers: the same in any order.)
     auto entries = [&] {
-      double sum = 0;
-      for (const auto& b : boxes) sum += (((b.max() - b.min()).array() / cell_).floor() + 2).prod();
-      return sum;
+      return tbb::parallel_reduce(
+          tbb::blocked_range<std::size_t>(0, count), 0.0,
+          [&](const tbb::blocked_range<std::size_t>& r, double sum) {
+            for (std::size_t t = r.begin(); t < r.end(); ++t)
+              sum += (((boxes[t].hi - boxes[t].lo).array() / cell_).floor() + 2).prod();
+            return sum;
+          },
+          std::plus<double>());
     };
-    while (entries() > 64.0 * double(boxes.size()) + 1e6) cell_ *= 2;
+    while (entries() > 64.0 * double(count) + 1e6) cell_ *= 2;
     // One 64-bit key per cube: coarser cubes where the parts spread over more than 2^62 of them.
     for (;; cell_ *= 2) {
       for (int a = 0; a < 3; ++a) size_[a] = std::uint64_t(std::min(extent[a] / cell_, 1e15)) + 1;
       if (double(size_[0]) * double(size_[1]) * double(size_[2]) < 0x1p62) break;
     }
-    std::vector<long> offsets(boxes.size() + 1, 0);
-    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
-      const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
+    std::vector<long> offsets(count + 1, 0);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
+      const auto lo = cube_of(boxes[t].lo), hi = cube_of(boxes[t].hi);
       offsets[t + 1] = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
     });
-    for (std::size_t t = 0; t < boxes.size(); ++t) offsets[t + 1] += offsets[t];
-    keyed_.resize(std::size_t(offsets.back()));
-    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t t) {
-      const auto lo = cube_of(boxes[t].min()), hi = cube_of(boxes[t].max());
+    for (std::size_t t = 0; t < count; ++t) offsets[t + 1] += offsets[t];
+    entries_ = std::size_t(offsets.back());
+    keyed_ = unwritten<Entry>(entries_);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
+      const auto lo = cube_of(boxes[t].lo), hi = cube_of(boxes[t].hi);
       long at = offsets[t];
       for (long k = lo[2]; k <= hi[2]; ++k)
         for (long j = lo[1]; j <= hi[1]; ++j)
           for (long i = lo[0]; i <= hi[0]; ++i) keyed_[std::size_t(at++)] = {key(i, j, k), int(t)};
     });
-    tbb::parallel_sort(keyed_.begin(), keyed_.end());
+    tbb::parallel_sort(keyed_.get(), keyed_.get() + entries_);
   }
 
   // Calls f(u) once for every triangle u whose current box (`current`) meets `box`, found in the
   // cube holding the lower corner of `box`'s overlap with u's bucketed box (`bucketed`, as given
   // to the constructor, which holds u's current box).
   template <class F>
-  void for_each_near(const Eigen::AlignedBox3d& box,
-                     const std::vector<Eigen::AlignedBox3d>& bucketed,
-                     const std::vector<Eigen::AlignedBox3d>& current, F&& f) const {
-    const auto lo = cube_of(box.min()), hi = cube_of(box.max());
+  void for_each_near(const Box& box, const Box* bucketed, const Box* current, F&& f) const {
+    const auto lo = cube_of(box.lo), hi = cube_of(box.hi);
+    const Entry* begin = keyed_.get();
+    const Entry* end = begin + entries_;
     for (long k = lo[2]; k <= hi[2]; ++k)
       for (long j = lo[1]; j <= hi[1]; ++j)
         for (long i = lo[0]; i <= hi[0]; ++i) {
           const Key here = key(i, j, k);
-          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), std::pair<Key, int>{here, -1});
-          for (; it != keyed_.end() && it->first == here; ++it) {
-            const std::size_t u = std::size_t(it->second);
-            if (!box.intersects(current[u])) continue;
-            const auto corner = cube_of(box.min().cwiseMax(bucketed[u].min()));
-            if (key(corner[0], corner[1], corner[2]) == here) f(it->second);
+          const Entry* it = std::lower_bound(begin, end, Entry{here, -1});
+          for (; it != end && it->key == here; ++it) {
+            const std::size_t u = std::size_t(it->triangle);
+            if (!box.meets(current[u])) continue;
+            const auto corner = cube_of(box.lo.cwiseMax(bucketed[u].lo));
+            if (key(corner[0], corner[1], corner[2]) == here) f(it->triangle);
           }
         }
   }
@@ -103,10 +140,19 @@ class TriangleCubes {
   using Key = std::uint64_t;
   Key key(long i, long j, long k) const { return (Key(k) * size_[1] + Key(j)) * size_[0] + Key(i); }
 
+  struct Entry {
+    Key key;
+    int triangle;
+    bool operator<(const Entry& e) const {
+      return key < e.key || (key == e.key && triangle < e.triangle);
+    }
+  };
+
   double cell_ = 1;
   Eigen::Vector3d origin_;
   std::uint64_t size_[3] = {1, 1, 1};
-  std::vector<std::pair<Key, int>> keyed_;  // (cube key, triangle), sorted
+  std::unique_ptr<Entry[]> keyed_;  // (cube key, triangle), sorted
+  std::size_t entries_ = 0;
 };
 
 Point vertex_point(const Mesh& mesh, int v) {
@@ -169,17 +215,23 @@ std::vector<char> triangles_with(const Mesh& mesh, const std::vector<char>& vert
 class CrossingSearch {
  public:
   CrossingSearch(const Mesh& mesh, const PointMatrix* before)
-      : current_(std::size_t(mesh.triangles.rows())),
-        flat_(std::size_t(mesh.triangles.rows()), 0),
-        cubes_(bucketed_boxes(mesh, before)) {
+      : triangles_(std::size_t(mesh.triangles.rows())),
+        bucketed_(bucketed_boxes(mesh, before)),
+        current_(unwritten<Box>(triangles_)),
+        flat_(unwritten<char>(triangles_)),
+        cubes_(bucketed_.get(), triangles_) {
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(),
                       [&](Eigen::Index t) { refresh(mesh, int(t)); });
   }
 
   // Triangle t's box and flatness from the mesh's current positions.
   void refresh(const Mesh& mesh, int t) {
-    Eigen::AlignedBox3d box;
-    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.row(mesh.triangles(t, c)).transpose());
+    Box box{Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)};
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d x = mesh.vertices.row(mesh.triangles(t, c)).transpose();
+      box.lo = box.lo.cwiseMin(x);
+      box.hi = box.hi.cwiseMax(x);
+    }
     current_[std::size_t(t)] = box;
     flat_[std::size_t(t)] = degenerate(mesh, t);
   }
@@ -195,7 +247,7 @@ class CrossingSearch {
       if (!watched(t)) return;
       if (counter) counter->add();
       if (flat_[std::size_t(t)]) return;
-      cubes_.for_each_near(current_[std::size_t(t)], bucketed_, current_, [&](int u) {
+      cubes_.for_each_near(current_[std::size_t(t)], bucketed_.get(), current_.get(), [&](int u) {
         // Each pair once: from its lower triangle when both are watched.
         if (u == t || (watched(u) && u < t) || flat_[std::size_t(u)]) return;
         if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
@@ -208,22 +260,27 @@ class CrossingSearch {
   }
 
  private:
-  const std::vector<Eigen::AlignedBox3d>& bucketed_boxes(const Mesh& mesh,
-                                                         const PointMatrix* before) {
-    bucketed_.resize(std::size_t(mesh.triangles.rows()));
+  static std::unique_ptr<Box[]> bucketed_boxes(const Mesh& mesh, const PointMatrix* before) {
+    auto boxes = unwritten<Box>(std::size_t(mesh.triangles.rows()));
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
-      Eigen::AlignedBox3d& box = bucketed_[std::size_t(t)];
+      Box box{Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)};
       for (int c = 0; c < 3; ++c) {
         const int v = mesh.triangles(t, c);
-        box.extend(mesh.vertices.row(v).transpose());
-        if (before) box.extend(before->row(v).transpose());
+        box.lo = box.lo.cwiseMin(mesh.vertices.row(v).transpose());
+        box.hi = box.hi.cwiseMax(mesh.vertices.row(v).transpose());
+        if (before) {
+          box.lo = box.lo.cwiseMin(before->row(v).transpose());
+          box.hi = box.hi.cwiseMax(before->row(v).transpose());
+        }
       }
+      boxes[std::size_t(t)] = box;
     });
-    return bucketed_;
+    return boxes;
   }
 
-  std::vector<Eigen::AlignedBox3d> bucketed_, current_;
-  std::vector<char> flat_;
+  std::size_t triangles_;
+  std::unique_ptr<Box[]> bucketed_, current_;
+  std::unique_ptr<char[]> flat_;
   TriangleCubes cubes_;
 };
 
