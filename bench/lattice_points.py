@@ -4,10 +4,11 @@ are kept, the local reconstruction's L1 and its time, for `--gradient regular` a
 `--gradient lattice`, measured in the same run.
 
     /usr/bin/python3 bench/lattice_points.py --res 32,64,128 --out docs/results/lattice_points.md
+
+`--lattice-options "--tie-tolerance 1e-3"` adds options to the lattice's runs alone.
 """
 import argparse
 import json
-import os
 import subprocess
 import tempfile
 
@@ -21,11 +22,11 @@ def eval_points(points, gt):
     return json.loads(r.stdout)
 
 
-def run_one(prefix, gradient, h):
+def run_one(prefix, gradient, h, extra=()):
     out = f"{prefix}_{gradient}"
     wall, rss, _, err = timed([CLI, "contour", prefix + ".npy", "-o", out + ".ply", "--points",
                                out + "_cp.ply", "--gradient", gradient, "--stats", out + ".json",
-                               "-q"])
+                               "-q", *extra])
     if err:
         return {"error": " ".join(err)}
     stats = json.load(open(out + ".json"))
@@ -42,7 +43,9 @@ def main():
     ap.add_argument("--res", default="32,64,128")
     ap.add_argument("--meshes", default="")
     ap.add_argument("--out", default="")
+    ap.add_argument("--lattice-options", default="", help="more options for the lattice's runs")
     a = ap.parse_args()
+    extra = {"regular": (), "lattice": tuple(a.lattice_options.split())}
     names = mesh_names(a.meshes)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -55,11 +58,13 @@ def main():
                     continue
                 row = {"mesh": name, "res": res}
                 for g in GRADIENTS:
-                    row[g] = run_one(prefix, g, h)
+                    row[g] = run_one(prefix, g, h, extra[g])
                 keep(rows, row)
     lines = ["# Contact points: the grid's lattice against the regular triangulation", "",
              "`" + " ".join(["/usr/bin/python3 bench/lattice_points.py", "--res", a.res] +
-                            (["--meshes", a.meshes] if a.meshes else [])) + "` (2 cores).", "",
+                            (["--meshes", a.meshes] if a.meshes else []) +
+                            ([f'--lattice-options "{a.lattice_options}"']
+                             if a.lattice_options else [])) + "` (2 cores).", "",
              "Distances of the contact points to the true surface in spacings h (median, p95), "
              "points kept, the local reconstruction's L1 and wall time; ratios lattice / regular, "
              "geometric means over the meshes.", "",
