@@ -10,14 +10,13 @@ table.
     /usr/bin/python3 bench/adaptivity.py --res 128 --tol 0,0.05,0.1,0.25,0.5 --markdown docs/results/adaptivity.md
 """
 import argparse
-import json
 import os
 import subprocess
 import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import CLI, MESHES, geomean, keep, timed  # noqa: E402
+from common import CLI, MESHES, evaluate, geomean, keep, timed  # noqa: E402
 from local import mean_distance, read_ply, sharp_edge_points  # noqa: E402
 
 DECIMATE = os.path.join(os.path.dirname(CLI), "bench", "decimate")
@@ -76,8 +75,10 @@ def cases(a):
                 yield res, name, tol, prefix, gt, edges, h
 
 
-def evaluate(out, gt, edge_points, h):
-    e = json.loads(subprocess.run([CLI, "eval", out, gt], capture_output=True, text=True).stdout)
+def measure(out, gt, edge_points, h):
+    e = evaluate(CLI, out, gt)
+    if e is None:
+        raise SystemExit(f"sdfcontour eval failed on {out}")
     topo = e["recon_mesh"]
     row = dict(L1=e["L1"], triangles=topo["triangles"], closed=topo["closed"],
                manifold=topo["manifold"], self_intersections=topo["self_intersections"])
@@ -101,7 +102,7 @@ def main():
         if err:
             raise SystemExit(" ".join(err))
         row = dict(mesh=name, res=res, tol=tol, method="adaptivity", seconds=seconds,
-                   **evaluate(out, gt, edges, h))
+                   **measure(out, gt, edges, h))
         keep(rows, row)
         if tol == 0:
             full = out
@@ -111,14 +112,14 @@ def main():
         if err:
             raise SystemExit(" ".join(err))
         row = dict(mesh=name, res=res, tol=tol, method="cgal-gh", seconds=seconds,
-                   **evaluate(peer, gt, edges, h))
+                   **measure(peer, gt, edges, h))
         keep(rows, row)
         if a.no_openvdb:
             continue
         vdb = f"{prefix}_vdb{tol:g}.ply"
         adaptivity, seconds = vdb_at_count(prefix + ".npy", vdb, row["triangles"])
         row = dict(mesh=name, res=res, tol=tol, method="openvdb", seconds=seconds,
-                   vdb_adaptivity=adaptivity, **evaluate(vdb, gt, edges, h))
+                   vdb_adaptivity=adaptivity, **measure(vdb, gt, edges, h))
         keep(rows, row)
     if a.markdown:
         write_markdown(rows, a.markdown)

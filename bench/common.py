@@ -37,10 +37,10 @@ def contour_stats(cli, args, mesh, stats):
     return d["seconds_total"], d.get("local_seconds", {})
 
 
-def evaluate(cli, mesh, gt):
-    """`cli eval MESH GT`'s JSON (distances, and the reconstruction's topology under
+def evaluate(cli, mesh, gt, *options):
+    """`cli eval MESH GT [OPTIONS]`'s JSON (distances, and the reconstruction's topology under
     "recon_mesh"), or None if eval failed."""
-    r = subprocess.run([cli, "eval", mesh, gt], capture_output=True, text=True)
+    r = subprocess.run([cli, "eval", mesh, gt, *options], capture_output=True, text=True)
     return json.loads(r.stdout) if r.returncode == 0 else None
 
 

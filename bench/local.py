@@ -22,7 +22,7 @@ import tempfile
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import CLI, MESHES, geomean, timed  # noqa: E402
+from common import CLI, MESHES, evaluate, geomean, timed  # noqa: E402
 
 METHODS = {
     "mc": ["--method", "mc"],
@@ -177,9 +177,11 @@ def main():
                                                *METHODS[method]])
                 row = {"mesh": name, "res": res, "method": method, "seconds": seconds,
                        "peak_mb": peak}
-                if err is None:
-                    e = json.loads(subprocess.run([CLI, "eval", out, gt], capture_output=True,
-                                                  text=True).stdout)
+                if err is not None:
+                    row["error"] = " ".join(err)
+                elif (e := evaluate(CLI, out, gt)) is None:
+                    row["error"] = "eval failed"
+                else:
                     topo = e["recon_mesh"]
                     row.update(L1=e["L1"], Linf=e["L_inf"], triangles=topo["triangles"],
                                closed=topo["closed"], manifold=topo["manifold"],
@@ -187,8 +189,6 @@ def main():
                     if len(edge_points):
                         d = mean_distance(edge_points, out)
                         row["edge_distance_h"] = d / h if d is not None else None
-                else:
-                    row["error"] = " ".join(err)
                 rows.append(row)
                 print(json.dumps(row), flush=True)
     if args.markdown:
