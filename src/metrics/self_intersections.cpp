@@ -13,10 +13,9 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <string>
-#include <type_traits>
 
+#include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
 
 namespace sdfcontour {
@@ -26,31 +25,35 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 
-// A triangle's axis-aligned box. Its arrays are allocated without being written (Eigen leaves
-// its vectors unset) and filled in parallel: value-initialised, the page faults of two arrays of
+// A triangle's axis-aligned box. Its arrays are left unwritten when made (Eigen leaves its
+// vectors unset) and filled in parallel: value-initialised, the page faults of two arrays of
 // boxes and the buckets were a quarter of a 256^3 mesh's search set-up, on one thread.
 struct Box {
   Eigen::Vector3d lo, hi;
+  static Box empty() {
+    return {Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)};
+  }
+  void extend(const Eigen::Vector3d& x) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
   bool meets(const Box& b) const {
     return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all();
   }
 };
 
 template <class T>
-std::unique_ptr<T[]> unwritten(std::size_t n) {
-  static_assert(std::is_trivially_destructible_v<T>);
-  return std::unique_ptr<T[]>(new T[n]);
-}
+using Unwritten = std::vector<T, detail::UninitialisedAllocator<T>>;
 
 // Triangles bucketed by the cubes of side `cell` that their bounding boxes meet, sorted by cube
 // (x fastest). The cubes are about twice a typical triangle's extent, so most triangles sit in one
 // to eight of them.
 class TriangleCubes {
  public:
-  TriangleCubes(const Box* boxes, std::size_t count) {
+  explicit TriangleCubes(const Unwritten<Box>& boxes) {
+    const std::size_t count = boxes.size();
     const Box all = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, count),
-        Box{Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)},
+        tbb::blocked_range<std::size_t>(0, count), Box::empty(),
         [&](const tbb::blocked_range<std::size_t>& r, Box b) {
           for (std::size_t t = r.begin(); t < r.end(); ++t) {
             b.lo = b.lo.cwiseMin(boxes[t].lo);
@@ -94,8 +97,7 @@ class TriangleCubes {
       offsets[t + 1] = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
     });
     for (std::size_t t = 0; t < count; ++t) offsets[t + 1] += offsets[t];
-    entries_ = std::size_t(offsets.back());
-    keyed_ = unwritten<Entry>(entries_);
+    keyed_.resize(std::size_t(offsets.back()));
     tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
       const auto lo = cube_of(boxes[t].lo), hi = cube_of(boxes[t].hi);
       long at = offsets[t];
@@ -103,23 +105,22 @@ class TriangleCubes {
         for (long j = lo[1]; j <= hi[1]; ++j)
           for (long i = lo[0]; i <= hi[0]; ++i) keyed_[std::size_t(at++)] = {key(i, j, k), int(t)};
     });
-    tbb::parallel_sort(keyed_.get(), keyed_.get() + entries_);
+    tbb::parallel_sort(keyed_.begin(), keyed_.end());
   }
 
   // Calls f(u) once for every triangle u whose current box (`current`) meets `box`, found in the
   // cube holding the lower corner of `box`'s overlap with u's bucketed box (`bucketed`, as given
   // to the constructor, which holds u's current box).
   template <class F>
-  void for_each_near(const Box& box, const Box* bucketed, const Box* current, F&& f) const {
+  void for_each_near(const Box& box, const Unwritten<Box>& bucketed, const Unwritten<Box>& current,
+                     F&& f) const {
     const auto lo = cube_of(box.lo), hi = cube_of(box.hi);
-    const Entry* begin = keyed_.get();
-    const Entry* end = begin + entries_;
     for (long k = lo[2]; k <= hi[2]; ++k)
       for (long j = lo[1]; j <= hi[1]; ++j)
         for (long i = lo[0]; i <= hi[0]; ++i) {
           const Key here = key(i, j, k);
-          const Entry* it = std::lower_bound(begin, end, Entry{here, -1});
-          for (; it != end && it->key == here; ++it) {
+          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), Entry{here, -1});
+          for (; it != keyed_.end() && it->key == here; ++it) {
             const std::size_t u = std::size_t(it->triangle);
             if (!box.meets(current[u])) continue;
             const auto corner = cube_of(box.lo.cwiseMax(bucketed[u].lo));
@@ -151,8 +152,7 @@ class TriangleCubes {
   double cell_ = 1;
   Eigen::Vector3d origin_;
   std::uint64_t size_[3] = {1, 1, 1};
-  std::unique_ptr<Entry[]> keyed_;  // (cube key, triangle), sorted
-  std::size_t entries_ = 0;
+  Unwritten<Entry> keyed_;  // (cube key, triangle), sorted
 };
 
 Point vertex_point(const Mesh& mesh, int v) {
@@ -215,23 +215,18 @@ std::vector<char> triangles_with(const Mesh& mesh, const std::vector<char>& vert
 class CrossingSearch {
  public:
   CrossingSearch(const Mesh& mesh, const PointMatrix* before)
-      : triangles_(std::size_t(mesh.triangles.rows())),
-        bucketed_(bucketed_boxes(mesh, before)),
-        current_(unwritten<Box>(triangles_)),
-        flat_(unwritten<char>(triangles_)),
-        cubes_(bucketed_.get(), triangles_) {
+      : bucketed_(bucketed_boxes(mesh, before)),
+        current_(bucketed_.size()),
+        flat_(bucketed_.size()),
+        cubes_(bucketed_) {
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(),
                       [&](Eigen::Index t) { refresh(mesh, int(t)); });
   }
 
   // Triangle t's box and flatness from the mesh's current positions.
   void refresh(const Mesh& mesh, int t) {
-    Box box{Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)};
-    for (int c = 0; c < 3; ++c) {
-      const Eigen::Vector3d x = mesh.vertices.row(mesh.triangles(t, c)).transpose();
-      box.lo = box.lo.cwiseMin(x);
-      box.hi = box.hi.cwiseMax(x);
-    }
+    Box box = Box::empty();
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.row(mesh.triangles(t, c)).transpose());
     current_[std::size_t(t)] = box;
     flat_[std::size_t(t)] = degenerate(mesh, t);
   }
@@ -247,7 +242,7 @@ class CrossingSearch {
       if (!watched(t)) return;
       if (counter) counter->add();
       if (flat_[std::size_t(t)]) return;
-      cubes_.for_each_near(current_[std::size_t(t)], bucketed_.get(), current_.get(), [&](int u) {
+      cubes_.for_each_near(current_[std::size_t(t)], bucketed_, current_, [&](int u) {
         // Each pair once: from its lower triangle when both are watched.
         if (u == t || (watched(u) && u < t) || flat_[std::size_t(u)]) return;
         if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
@@ -260,27 +255,22 @@ class CrossingSearch {
   }
 
  private:
-  static std::unique_ptr<Box[]> bucketed_boxes(const Mesh& mesh, const PointMatrix* before) {
-    auto boxes = unwritten<Box>(std::size_t(mesh.triangles.rows()));
+  static Unwritten<Box> bucketed_boxes(const Mesh& mesh, const PointMatrix* before) {
+    Unwritten<Box> boxes(std::size_t(mesh.triangles.rows()));
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
-      Box box{Eigen::Vector3d::Constant(INFINITY), Eigen::Vector3d::Constant(-INFINITY)};
+      Box box = Box::empty();
       for (int c = 0; c < 3; ++c) {
         const int v = mesh.triangles(t, c);
-        box.lo = box.lo.cwiseMin(mesh.vertices.row(v).transpose());
-        box.hi = box.hi.cwiseMax(mesh.vertices.row(v).transpose());
-        if (before) {
-          box.lo = box.lo.cwiseMin(before->row(v).transpose());
-          box.hi = box.hi.cwiseMax(before->row(v).transpose());
-        }
+        box.extend(mesh.vertices.row(v).transpose());
+        if (before) box.extend(before->row(v).transpose());
       }
       boxes[std::size_t(t)] = box;
     });
     return boxes;
   }
 
-  std::size_t triangles_;
-  std::unique_ptr<Box[]> bucketed_, current_;
-  std::unique_ptr<char[]> flat_;
+  Unwritten<Box> bucketed_, current_;
+  Unwritten<char> flat_;
   TriangleCubes cubes_;
 };
 

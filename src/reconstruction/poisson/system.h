@@ -8,32 +8,14 @@
 #include <utility>
 #include <vector>
 
+#include "pipeline/uninitialised_allocator.h"
 #include "reconstruction/poisson/normal_field.h"
 #include "reconstruction/poisson/octree.h"
 #include "reconstruction/poisson/points.h"
 
 namespace sdfcontour::poisson {
 
-/// Leaves trivial elements uninitialised on resize, so that a large array is first touched (its
-/// pages faulted in and zeroed by the system) by the parallel loop that fills it, not serially.
-template <class T>
-struct UninitialisedAllocator : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = UninitialisedAllocator<U>;
-  };
-  UninitialisedAllocator() = default;
-  template <class U>
-  UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
-  template <class U>
-  void construct(U* p) noexcept {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
+using detail::UninitialisedAllocator;
 
 /// The order of n items by group (group(r) in [0, G)), each group keeping the items' order (a
 /// counting sort): item r goes to position at[r]; group g is [begin[g], begin[g + 1]).
