@@ -212,11 +212,12 @@ PoissonOptions poisson_options(const py::dict& o) {
 ContourOptions contour_options(const py::dict& o) {
   ContourOptions c;
   c.method = parse_method(get<std::string>(o, "method", "gcp"));
-  c.gradient_source = parse_gradient_source(get<std::string>(o, "gradient", "regular"));
+  c.gradient_source = parse_gradient_source(get<std::string>(o, "gradient", "auto"));
   c.gradient.weighting = parse_gradient_weighting(get<std::string>(o, "weights", "james"));
   c.knn = get<int>(o, "knn", c.knn);
   c.contact.try_tet_gradients = get<bool>(o, "fn", false);
-  c.contact.tie_tolerance = get<double>(o, "tie_tolerance", c.contact.tie_tolerance);
+  if (o.contains("tie_tolerance") && !o["tie_tolerance"].is_none())
+    c.contact.tie_tolerance = c.lattice_tie_tolerance = o["tie_tolerance"].cast<double>();
   c.band.band = get<double>(o, "band", c.band.band);
   c.band.margin = get<double>(o, "margin", c.band.margin);
   const std::string truncation = get<std::string>(o, "truncation", "auto");

@@ -128,10 +128,15 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.gradient.weighting = parse_gradient_weighting(a.weights);
   require_in_range("--knn", a.knn, "--knn");
   require_in_range("--james-epsilon", a.james_epsilon, "--james-epsilon");
-  require_in_range("--tie-tolerance", a.tie_tolerance, "--tie-tolerance");
   opt.knn = a.knn;
   opt.gradient.james_epsilon = a.james_epsilon;
-  opt.contact.tie_tolerance = a.tie_tolerance;
+  if (a.tie_tolerance != "auto") {
+    const std::optional<double> tie = parse_finite(a.tie_tolerance);
+    if (!tie) throw Error("--tie-tolerance: '" + a.tie_tolerance + "' is not a number or 'auto'");
+    require_in_range("--tie-tolerance", *tie, "--tie-tolerance");
+    opt.contact.tie_tolerance = *tie;
+    opt.lattice_tie_tolerance = opt.contact.tie_tolerance;
+  }
   opt.contact.try_tet_gradients = a.fn;
   opt.parallel = !a.serial_triangulation;
   opt.poisson = a.poisson.resolved();
@@ -264,7 +269,9 @@ int run_contour(const ContourArgs& a) {
 void add_contact_point_options(CLI::App* c, ContourArgs& a) {
   c->add_option("--gradient", a.gradient,
                 "GCP gradients from the regular or delaunay triangulation, knn least squares, or a "
-                "grid's lattice (finite differences; the local reconstruction only)")
+                "grid's lattice (finite differences; the local reconstruction only); auto: the "
+                "lattice for the local reconstruction of a grid with 64 or more samples along its "
+                "longest axis, else regular")
       ->capture_default_str();
   c->add_option("--weights", a.weights, "Averaging of tet gradients: uniform, volume or james")
       ->capture_default_str();
@@ -275,7 +282,8 @@ void add_contact_point_options(CLI::App* c, ContourArgs& a) {
       ->capture_default_str();
   c->add_option("--tie-tolerance", a.tie_tolerance,
                 "Contact point c is discarded only if |c - p_n| < |value_n| - tol * |p_n - p|; "
-                "0 is the strict test")
+                "0 is the strict test; auto: 1e-6 for the triangulation's points, 1e-3 for the "
+                "lattice's")
       ->capture_default_str();
   c->add_option("--band", a.band,
                 "Triangulation methods (all but mc) use only samples with |value| <= BAND "

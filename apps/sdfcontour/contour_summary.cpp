@@ -84,7 +84,8 @@ void add_stage_counts(nlohmann::json& j, const ContourOptions& opt, const Contou
     j["local_bricks"] = {{"bricks", r.local_bricks->bricks},
                          {"wider_halos", r.local_bricks->wider_halos},
                          {"contact_points", r.local_bricks->contact_points},
-                         {"thin_parts", r.local_bricks->thin_parts}};
+                         {"thin_parts", r.local_bricks->thin_parts},
+                         {"gradient", r.local_bricks->lattice_points ? "lattice" : "regular"}};
   if (r.subspacing_gaps)
     j["subspacing_gaps"] = {{"gaps", r.subspacing_gaps->gaps},
                             {"crossings", r.subspacing_gaps->crossings}};
@@ -139,9 +140,10 @@ void add_contact_points(nlohmann::json& j, const ContourArgs& a, const ContourOp
       {"kept", cp.size()},         {"hidden", cp.hidden},      {"zero_gradient", cp.zero_gradient},
       {"discarded", cp.discarded}, {"rescued_fn", cp.rescued}, {"file", a.points}};
   if (opt.method != Method::Gtcp) {
-    c["gradient"] =
-        a.gradient == "knn" ? "knn" + std::to_string(a.knn) : a.gradient + "/" + a.weights;
-    c["tie_tolerance"] = a.tie_tolerance;
+    // (Off the local reconstruction's bricks, 'auto' is the regular triangulation.)
+    const std::string gradient = a.gradient == "auto" ? "regular" : a.gradient;
+    c["gradient"] = gradient == "knn" ? "knn" + std::to_string(a.knn) : gradient + "/" + a.weights;
+    c["tie_tolerance"] = opt.contact.tie_tolerance;
     c["fn"] = a.fn;
   }
   if (in.shape) c["error"] = errors_json(cp, *in.shape, grid ? grid->spacing().maxCoeff() : 0.0);

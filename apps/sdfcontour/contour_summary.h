@@ -15,7 +15,7 @@ namespace sdfcontour::cli {
 
 struct ContourArgs {
   std::string input, output, points,
-      method = "gcp", bounds = "-1,1", gradient = "regular", weights = "james", band = "auto",
+      method = "gcp", bounds = "-1,1", gradient = "auto", weights = "james", band = "auto",
       truncation = "auto", grid, brick_size = "auto", side_passes = "auto", projection = "auto",
       edge_fans = "off", reconstruction = "auto", subdivisions = "auto", split_sag = "auto",
       zero_set = "auto", thin_parts = "auto";
@@ -25,8 +25,8 @@ struct ContourArgs {
   double adaptivity = 0;
   int adaptivity_bricks = AdaptivityOptions{}.brick_spacings;
   int adaptivity_fit = AdaptivityOptions{}.fit_rounds;
-  double james_epsilon = GradientOptions{}.james_epsilon,
-         tie_tolerance = ContactPointOptions{}.tie_tolerance;
+  double james_epsilon = GradientOptions{}.james_epsilon;
+  std::string tie_tolerance = "auto";
   bool fn = false, serial_triangulation = false, no_sign_constraints = false,
        sign_constraints = false, no_carve = false, no_side_repair = false;
   double sign_band = ContourOptions{}.sign_band, sign_radius = ContourOptions{}.sign_radius,

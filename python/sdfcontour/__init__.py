@@ -62,8 +62,8 @@ class Mesh(tuple):
 
 
 def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", margin=1.0,
-            truncation="auto", gradient="regular", weights="james", knn=18, fn=False,
-            tie_tolerance=1e-6, brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
+            truncation="auto", gradient="auto", weights="james", knn=18, fn=False,
+            tie_tolerance="auto", brick_size="auto", brick_halo=0.0, depth="auto", full_depth=5,
             alpha=10.0, samples_per_node=1.5, scale=1.1, boundary="neumann",
             solver_tolerance=1e-4, finest_solver_tolerance=1e-3, sign_constraints="auto",
             carve=True, side_passes="auto", projection="auto", refine_dilation="auto",
@@ -101,18 +101,20 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Samples up to this many spacings beyond the band close the band's stars.
     truncation : "auto", "none" or a number (or a number as text)
         Values clamped at +-T (a TSDF) carry no distance: detect ("auto"), none, or given.
-    gradient : {"regular", "delaunay", "knn", "lattice"}
+    gradient : {"auto", "regular", "delaunay", "knn", "lattice"}
         Where GCP's gradients come from ("lattice": a grid's finite differences, for the local
-        reconstruction of grids only).
+        reconstruction of grids only; "auto": the lattice's for the local reconstruction of a grid
+        with at least 64 samples along its longest axis, the regular triangulation's elsewhere).
     weights : {"james", "volume", "uniform"}
         Averaging of the incident tetrahedra's gradients.
     knn : int
         k for ``gradient="knn"``.
     fn : bool
         +FN: retry a discarded contact point with each incident tet's gradient.
-    tie_tolerance : float
+    tie_tolerance : float or "auto"
         Contact point c is discarded only if it is inside another sample's sphere by more than
-        this relative tolerance.
+        this relative tolerance ("auto": 1e-6 for the triangulation's points, 1e-3 for the
+        lattice's).
     sign_constraints : bool or "auto"
         GCP: correct the reconstruction where samples within 2 spacings of the surface would end
         on the wrong side of the mesh. "auto": below 128 samples per axis, where it is more
@@ -376,7 +378,7 @@ def _differs(value, default):
 
 
 def contact_points(sdf, bounds=None, *, resolution=None, band="auto", margin=1.0, truncation="auto",
-                   gradient="regular", weights="james", knn=18, fn=False, tie_tolerance=1e-6,
+                   gradient="regular", weights="james", knn=18, fn=False, tie_tolerance="auto",
                    brick_size="auto", brick_halo=0.0, batch_size=65536, progress=False,
                    grid_name=None, lipschitz=1.0, return_stats=False):
     """GCP's contact points with their normals, without the surface reconstruction.

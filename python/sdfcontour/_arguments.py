@@ -102,10 +102,11 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
                              f"got {truncation!r}")
     o = dict(method=method, band=float(band), margin=_checks.in_range("margin", margin),
              truncation=truncation,
-             gradient=_checks.choice("gradient", gradient, ("regular", "delaunay", "knn", "lattice")),
+             gradient=_checks.choice("gradient", gradient,
+                                     ("auto", "regular", "delaunay", "knn", "lattice")),
              weights=_checks.choice("weights", weights, ("james", "volume", "uniform")),
              knn=_checks.in_range("knn", knn, whole=True), fn=_checks.flag("fn", fn),
-             tie_tolerance=_checks.in_range("tie_tolerance", tie_tolerance),
+             tie_tolerance=_tie_tolerance(tie_tolerance),
              brick_size=_brick_size(brick_size),
              brick_halo=_checks.in_range("brick_halo", brick_halo),
              progress=_progress(progress) is True,  # a callable is passed on apart
@@ -122,6 +123,17 @@ def _options(method, band, margin, truncation, gradient, weights, knn, fn, tie_t
             raise ValueError(f"{error}, or 'auto'") from None
         _full_depth_within(o)
     return o
+
+
+def _tie_tolerance(value):
+    """None for "auto" (the core's: 1e-6 for the triangulation's points, 1e-3 for the
+    lattice's), else the number, for both."""
+    if isinstance(value, str) and value == "auto":
+        return None
+    try:
+        return _checks.in_range("tie_tolerance", value)
+    except (TypeError, ValueError) as error:
+        raise type(error)(f"{error}, or 'auto'") from None
 
 
 def _check_callable_arguments(resolution, batch_size):

@@ -63,8 +63,9 @@ def _vdb_by_boxes(sdf, method, reconstruction, gradient, band, level):
     import os
     if not isinstance(sdf, (str, os.PathLike)) or not os.fspath(sdf).lower().endswith(".vdb"):
         return None
-    local = reconstruction == "local" or (reconstruction == "auto" and gradient in ("regular", "lattice") and
-                                          not (isinstance(band, str) and band == "all"))
+    local = reconstruction == "local" or (
+        reconstruction == "auto" and gradient in ("auto", "regular", "lattice") and
+        not (isinstance(band, str) and band == "all"))
     boxes = method == "mc" or (method == "gcp" and local)
     return os.fspath(sdf) if boxes and level == 0 else None
 
@@ -92,7 +93,7 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
     n = int(resolution)
     bricked = options["method"] == "mc" and want_mesh and not want_points
     local = (options["method"] == "gcp" and options.get("reconstruction") == "local" and
-             options["gradient"] in ("regular", "lattice") and want_mesh and not want_points)
+             options["gradient"] in ("auto", "regular", "lattice") and want_mesh and not want_points)
     # (Adaptivity of marching cubes' mesh merges it whole, in the core.)
     bricked = bricked and not options.get("adaptivity", 0.0) > 0
     _check_callable_arguments(resolution, batch_size)

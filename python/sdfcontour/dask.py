@@ -474,7 +474,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
     options = None
     if method == "gcp":
         from ._arguments import _count_or_auto, _options, _split_sag, _switch
-        options = _options("gcp", band, 1.0, truncation, "regular", "james", 18, False, 1e-6,
+        options = _options("gcp", band, 1.0, truncation, "auto", "james", 18, False, "auto",
                            "auto", 0.0, "auto", 5, 10.0, 1.5, 1.1, "neumann", 1e-4, False)
         options["reconstruction"] = "local"
         options["subdivisions"] = _count_or_auto("subdivisions", subdivisions, 4)

@@ -17,6 +17,7 @@ PointMatrix sample_gradients(const Samples& s, const SampleTriangulations& t,
       return knn_gradients(s.points, s.values, options.knn);
     case GradientSource::Delaunay:
       return vertex_gradients(s.points, s.values, *t.delaunay, options.gradient);
+    case GradientSource::Auto:  // the triangulation's, off the local reconstruction's bricks
     case GradientSource::Regular:
     case GradientSource::Lattice:  // refused before (contact_point_stage)
       break;
@@ -58,8 +59,9 @@ SampleTriangulations contact_point_stage(const BandSamples& band, const Analytic
   const double largest = s.values.size() ? s.values.cwiseAbs().maxCoeff() : 0.0;
   const bool bounded = std::isfinite(options.band.band) || (std::isfinite(band.truncation.inside) &&
                                                             std::isfinite(band.truncation.outside));
-  const bool gcp_in_bricks = need_gcp && options.gradient_source == GradientSource::Regular &&
-                             options.bricks.size != 0 && bounded;
+  const bool regular = options.gradient_source == GradientSource::Regular ||
+                       options.gradient_source == GradientSource::Auto;
+  const bool gcp_in_bricks = need_gcp && regular && options.bricks.size != 0 && bounded;
   const bool need_regular =
       (need_gcp && !gcp_in_bricks) || (method == Method::MtRt && options.want_mesh);
   const bool need_delaunay = (method == Method::MtDt && options.want_mesh) ||

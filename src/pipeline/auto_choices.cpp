@@ -20,6 +20,10 @@ bool auto_local_reconstruction(double /*samples_per_axis*/) {
   return true;
 }
 
+bool auto_lattice_points(double samples_per_axis) {
+  return samples_per_axis >= 64;
+}
+
 int auto_subdivisions(double samples_per_axis) {
   return samples_per_axis < 96 ? 2 : 1;
 }

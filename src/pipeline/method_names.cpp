@@ -10,7 +10,8 @@ const detail::NameTable<Method> kMethods = {{"gcp", Method::Gcp},
                                             {"mc", Method::Mc},
                                             {"mt-rt", Method::MtRt},
                                             {"mt-dt", Method::MtDt}};
-const detail::NameTable<GradientSource> kGradientSources = {{"regular", GradientSource::Regular},
+const detail::NameTable<GradientSource> kGradientSources = {{"auto", GradientSource::Auto},
+                                                            {"regular", GradientSource::Regular},
                                                             {"delaunay", GradientSource::Delaunay},
                                                             {"knn", GradientSource::Knn},
                                                             {"lattice", GradientSource::Lattice}};

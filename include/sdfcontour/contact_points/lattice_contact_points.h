@@ -17,6 +17,14 @@
 
 namespace sdfcontour {
 
+/// The lattice's contact points' tie tolerance (ContactPointOptions::tie_tolerance for them)
+/// unless one is given: a candidate that another sample's sphere holds by less than a
+/// thousandth of the two samples' distance is kept. At 1e-6, as the triangulation's, about a
+/// third of a band of 8's candidates are held, mostly by 1e-3-1e-1 spacings near medial axes, and
+/// their rescues take 40-46% of the run; 1e-3 lowers the L1 above by 4-11% for 0.67-0.99x the time
+/// (docs/results/lattice_rescue_s36.md; pipeline.h's auto_lattice_points).
+constexpr double kLatticeTieTolerance = 1e-3;
+
 /// The contact points of `band`'s core samples (select_band of the grid `grid` describes: its
 /// dims and spacing; `band.source` indexes it in C order). `options`:
 ///   tie_tolerance: as ContactPointOptions says, against every band sample's sphere;

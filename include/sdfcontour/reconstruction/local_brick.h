@@ -23,6 +23,7 @@
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/contact_points.h"
 #include "sdfcontour/contact_points/gradients.h"
+#include "sdfcontour/contact_points/lattice_contact_points.h"
 #include "sdfcontour/input/blocked_grid.h"
 #include "sdfcontour/input/samples.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
@@ -87,10 +88,12 @@ struct LocalBrickOptions {
   /// whole grid (TruncationMode None, Given or Resolved: a block cannot see the whole's).
   BandOptions band;
   GradientOptions gradient;
-  /// Contact points from the grid's lattice (lattice_contact_points.h) instead of the band's
-  /// regular triangulation in certified bricks (brick_contact_points).
-  bool lattice_points = false;
-  ContactPointOptions contact;
+  /// Contact points from the grid's lattice (lattice_contact_points.h), 1, or from the band's
+  /// regular triangulation in certified bricks (brick_contact_points), 0; -1: auto_lattice_points
+  /// of the whole grid (pipeline.h), and the triangulation with refine_zero_set.
+  int lattice_points = -1;
+  ContactPointOptions contact;          ///< the triangulation's contact points'
+  ContactPointOptions lattice_contact;  ///< the lattice's
   LocalReconstructionOptions local;
   /// Lattice subdivisions of each triangle (2^s segments per edge), 0..4; -1: auto_subdivisions
   /// of the whole grid (pipeline.h).
@@ -145,7 +148,7 @@ struct LocalBrickOptions {
   /// Keep the owned samples' contact points in LocalPiece (for adaptivity after the join).
   bool keep_contact_points = false;
   /// When set, the bricks take their contact points from here (the caller keeps them alive);
-  /// `gradient`, `lattice_points` and `contact` are then not read.
+  /// `gradient`, `lattice_points`, `contact` and `lattice_contact` are then not read.
   const GivenContactPoints* given_points = nullptr;
 };
 
@@ -184,6 +187,10 @@ constexpr std::array<const char*, 6> kLocalSteps{"band",           "contact poin
 /// grid edge's index and more (3 edges a sample; the grid at twice the resolution with thin
 /// parts), so the samples must stay under 2^64 / 6144 (3e15).
 void require_nameable(const std::array<int, 3>& dims, const LocalBrickOptions& options);
+
+/// Whether the bricks of a grid `dims` across (the whole grid's) make their contact points from
+/// the lattice (LocalBrickOptions::lattice_points).
+bool local_lattice_points(const LocalBrickOptions& options, const std::array<int, 3>& dims);
 
 /// Whether the bricks of a grid `dims` across (the whole grid's) look for thin parts
 /// (LocalBrickOptions::thin_parts; never with refine_zero_set).
@@ -241,6 +248,7 @@ struct LocalBricksStats {
   int bricks = 0;                   ///< bricks with a piece of the surface
   int wider_halos = 0;              ///< bricks read again with a wider halo
   bool thin_parts = false;          ///< whether they looked for thin parts (local_thin_parts)
+  bool lattice_points = false;      ///< whether they made lattice contact points
   long contact_points = 0;          ///< over all bricks (a halo's samples counted again)
   LocalReconstructionStats local;   ///< summed over the bricks' owned cells
   std::array<double, 6> seconds{};  ///< LocalPiece::seconds summed over the bricks

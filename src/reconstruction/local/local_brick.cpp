@@ -247,9 +247,9 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
     flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
                               (p.array() <= flag_hi.array()).all();
   }
-  if (options.lattice_points) {
-    require_lattice_reach(block, band, flagged, options.contact, largest);
-    return with_depths(lattice_contact_points(block, band, options.contact, &flagged));
+  if (local_lattice_points(options, n)) {
+    require_lattice_reach(block, band, flagged, options.lattice_contact, largest);
+    return with_depths(lattice_contact_points(block, band, options.lattice_contact, &flagged));
   }
   const Bounds within = certain_box(block);
   BrickOptions bricks;
@@ -280,6 +280,15 @@ void require_nameable(const Index3& dims, const LocalBrickOptions& options) {
                 std::to_string(dims[2]) +
                 " samples; at most 3e15): use --reconstruction poisson "
                 "or --method mc");
+}
+
+bool local_lattice_points(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
+  if (options.lattice_points >= 0) return options.lattice_points > 0;
+  // Values that are no distances keep the triangulation's points: on a torus's quartic implicit
+  // at 64^3 the lattice's left 112 vertices that the zero set's refinement could not bring back
+  // (the worst 6.9e-4 off, 2.2e-5 with the triangulation's; marching cubes 8.8e-4).
+  return !options.refine_zero_set &&
+         auto_lattice_points(*std::max_element(dims.begin(), dims.end()));
 }
 
 bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>& dims) {

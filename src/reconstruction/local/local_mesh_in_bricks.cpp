@@ -298,6 +298,7 @@ Mesh mesh_in_bricks(const BlockSource& source,
   if (stats) {
     *stats = {};
     stats->thin_parts = local_thin_parts(options, dims);
+    stats->lattice_points = !options.given_points && local_lattice_points(options, dims);
     for (std::size_t b = 0; b < pieces.size(); ++b) {
       const LocalPiece& p = pieces[b];
       stats->bricks += p.triangles.rows() > 0;

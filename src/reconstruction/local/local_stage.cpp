@@ -43,13 +43,18 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   LocalBrickOptions lb;
   lb.band = options.band;
   lb.gradient = options.gradient;
-  lb.lattice_points = options.gradient_source == GradientSource::Lattice;
+  lb.lattice_points = options.gradient_source == GradientSource::Lattice   ? 1
+                      : options.gradient_source == GradientSource::Regular ? 0
+                                                                           : -1;
   lb.contact = options.contact;
   lb.contact.max_slope_miss = kLocalSlopeMiss;
   lb.contact.try_tet_gradients = false;  // (the slide, below, rescues those points)
-  lb.contact.sphere_slide_rounds = lb.lattice_points ? kLatticeSlideRounds : kLocalSlideRounds;
+  lb.contact.sphere_slide_rounds = kLocalSlideRounds;
   lb.contact.power_vertex_tolerance = kLocalPowerVertex;
   lb.contact.near_miss_tolerance = kLocalNearMiss;
+  lb.lattice_contact = lb.contact;
+  lb.lattice_contact.sphere_slide_rounds = kLatticeSlideRounds;
+  lb.lattice_contact.tie_tolerance = options.lattice_tie_tolerance;
   lb.local = options.local;
   lb.subdivisions = options.subdivisions;
   lb.split_sag = options.split_sag;
