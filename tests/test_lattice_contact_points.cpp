@@ -184,3 +184,32 @@ TEST(LatticeContactPoints, LocalBricksEqualOneBrick) {
     EXPECT_EQ(m.triangles, whole.triangles) << brick;
   }
 }
+
+TEST(LatticeContactPoints, TheDefaultTakesTheLatticeFrom64SamplesPerAxis) {
+  // --gradient auto: the lattice's points with their tie tolerance from 64 samples per axis (the
+  // whole grid's longest), the triangulation's below; each is the explicit choice bit for bit.
+  const auto torus = make_builtin_shape("torus");
+  for (const int n : {48, 64}) {
+    const Grid g = sample_grid(*torus, n, Bounds{});
+    const ContourResult automatic = contour(grid_input(g), ContourOptions{});
+    ContourOptions regular, lattice;
+    regular.gradient_source = GradientSource::Regular;
+    lattice.gradient_source = GradientSource::Lattice;
+    const ContourResult chosen = contour(grid_input(g), n >= 64 ? lattice : regular);
+    const ContourResult other = contour(grid_input(g), n >= 64 ? regular : lattice);
+    ASSERT_TRUE(automatic.local_bricks && chosen.mesh && other.mesh);
+    EXPECT_EQ(automatic.local_bricks->lattice_points, n >= 64) << n;
+    EXPECT_EQ(automatic.mesh->vertices, chosen.mesh->vertices) << n;
+    EXPECT_EQ(automatic.mesh->triangles, chosen.mesh->triangles) << n;
+    EXPECT_NE(automatic.mesh->vertices, other.mesh->vertices) << n;
+  }
+  // A grid of 64 along one axis alone counts by that axis; values that are no distances (the
+  // zero set refined) keep the triangulation.
+  LocalBrickOptions o;
+  EXPECT_TRUE(local_lattice_points(o, {64, 8, 8}));
+  EXPECT_FALSE(local_lattice_points(o, {63, 63, 63}));
+  o.refine_zero_set = true;
+  EXPECT_FALSE(local_lattice_points(o, {128, 128, 128}));
+  o.lattice_points = 1;
+  EXPECT_TRUE(local_lattice_points(o, {32, 32, 32}));
+}
