@@ -196,10 +196,14 @@ TEST(Band, AutoBandFollowsTheResolution) {
   EXPECT_EQ(auto_band(255), 4);
   EXPECT_EQ(auto_band(256), 3);
   EXPECT_EQ(auto_band(1024), 3);
-  // The local reconstruction's: 8 below 384, then the same.
-  EXPECT_EQ(auto_local_band(128), 8);
-  EXPECT_EQ(auto_local_band(383), 8);
-  EXPECT_EQ(auto_local_band(384), 3);
+  // The local reconstruction's: 8 below 384, then the same; with the lattice's points 6 from 128.
+  EXPECT_EQ(auto_local_band(128, false), 8);
+  EXPECT_EQ(auto_local_band(383, false), 8);
+  EXPECT_EQ(auto_local_band(384, false), 3);
+  EXPECT_EQ(auto_local_band(127, true), 8);
+  EXPECT_EQ(auto_local_band(128, true), 6);
+  EXPECT_EQ(auto_local_band(383, true), 6);
+  EXPECT_EQ(auto_local_band(384, true), 3);
   const Grid grid = torus_grid(40);
   const BandSamples b = select_band(grid, BandOptions{});
   EXPECT_EQ(b.band, 8);

@@ -487,6 +487,7 @@ TEST(LocalBrick, AutoBandIsTheLocalReconstructionsOwn) {
         g.values[Eigen::Index(g.index(i, j, k))] = shape->distance(g.point(i, j, k));
   LocalBrickOptions o;
   o.thin_parts = 0;
+  o.lattice_points = 0;  // (the lattice's points take 6 there: below)
   LocalBricksStats auto_stats, four_stats;
   const Mesh automatic = local_mesh_in_bricks(view_of(g), o, 0, &auto_stats);
   o.band.band = 8;
@@ -501,4 +502,12 @@ TEST(LocalBrick, AutoBandIsTheLocalReconstructionsOwn) {
   EXPECT_FALSE(automatic.vertices.rows() == four.vertices.rows() &&
                automatic.vertices == four.vertices);
   EXPECT_GT(auto_stats.contact_points, four_stats.contact_points);
+  // With the lattice's points (the default there) the auto band is 6's, in bricks as in one.
+  o.lattice_points = 1;
+  o.band.band = 0;
+  const Mesh lattice = local_mesh_in_bricks(view_of(g), o, 0);
+  o.band.band = 6;
+  const Mesh six = local_mesh_in_bricks(view_of(g), o, 64);
+  EXPECT_EQ(lattice.vertices, six.vertices);
+  EXPECT_EQ(lattice.triangles, six.triangles);
 }

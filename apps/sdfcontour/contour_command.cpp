@@ -290,7 +290,7 @@ void add_contact_point_options(CLI::App* c, ContourArgs& a) {
                 "grid spacings (scattered samples: the side of a cube holding one sample); "
                 "'all' keeps every sample, as in the paper; 'auto': 8 below 128 samples per "
                 "axis, 4 from 128, 3 from 256; GCP's local reconstruction (the default on grids) "
-                "8 below 384, 3 from 384")
+                "8 below 384 (with the lattice's contact points 6 from 128), 3 from 384")
       ->capture_default_str();
 }
 

@@ -213,8 +213,9 @@ double auto_band(double samples_per_axis) {
   return samples_per_axis < 128 ? 8.0 : samples_per_axis < 256 ? 4.0 : 3.0;
 }
 
-double auto_local_band(double samples_per_axis) {
-  return samples_per_axis < 384 ? 8.0 : auto_band(samples_per_axis);
+double auto_local_band(double samples_per_axis, bool lattice_points) {
+  if (samples_per_axis >= 384) return auto_band(samples_per_axis);
+  return lattice_points && samples_per_axis >= 128 ? 6.0 : 8.0;
 }
 
 void validate_band_options(const BandOptions& options) {

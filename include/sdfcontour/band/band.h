@@ -112,14 +112,19 @@ constexpr double kIsolationReach = 4;
 double auto_band(double samples_per_axis);
 
 /// The automatic band of GCP's local reconstruction (LocalBrickOptions::band with band 0), in
-/// spacings: 8 below 384 samples per axis, then auto_band's. Its vertices fit the contact points
+/// spacings: 8 below 384 samples per axis, then auto_band's; with `lattice_points` (the lattice's
+/// contact points, whose exact sphere search reads (band + 1)^2 columns per point) 6 from 128 to
+/// 383. There band 6 against 8 gave 1.04x the L1 in 0.64x the time (five shared meshes at 128^3),
+/// 1.05x in 0.77x (bunny, spot, armadillo at 256^3); at 64^3, 1.06x in 0.61x, but the torus lost
+/// 1.40x and blub, the sphere 1.11x over the triangulation's band of 8, so below 128 it stays 8
+/// (docs/lattice_contact_points.md). Its vertices fit the contact points
 /// of the samples around their cells, and farther samples' points are still exact there: bunny
 /// 128^3 L1 7.38e-5 (band 4) -> 6.54e-5 (6) -> 5.78e-5 (8), boot 4.08e-4 -> 3.84e-4 (8); bunny
 /// 256^3 2.18e-5 (band 3) -> 2.03e-5 (4) -> 1.77e-5 (6) -> 1.61e-5 (8), boot 1.19e-4 -> 1.01e-4
 /// (8), for 1.5-1.9x the time and up to 1.6x the memory (`bench/local.py --res 128,256 --methods mc
 /// --variant b4:"--band 4" --variant b8:"--band 8"`). From 384 the
 /// narrower band keeps large grids' time and memory (1024^3 within 4 GB).
-double auto_local_band(double samples_per_axis);
+double auto_local_band(double samples_per_axis, bool lattice_points);
 
 /// The grid's samples with |value| <= (band + margin) * h (h the largest grid spacing) that are
 /// not truncated, in C order; core flags those with |value| <= band * h and a margin inside the

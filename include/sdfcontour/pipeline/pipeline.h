@@ -60,7 +60,8 @@ inline bool local_gradients(GradientSource source) {
 /// against the regular triangulation's (the local reconstruction's L1 and time, geometric means
 /// over the shared meshes, 2 cores; docs/lattice_contact_points.md): 64^3 0.849x the L1 in 1.11x
 /// the time, 128^3 0.938x in 0.99x, 256^3 0.874x in 0.74x, 512^3 0.909x in 0.67x; at 32^3
-/// 1.062x (the cube 1.91x, the plane 1.45x), so coarser grids keep the triangulation.
+/// 1.062x (the cube 1.91x, the plane 1.45x), so coarser grids keep the triangulation. (All on a
+/// band of 8; from 128 the lattice's auto band is now 6: band.h's auto_local_band.)
 bool auto_lattice_points(double samples_per_axis);
 
 /// How GCP's mesh is made from its contact points: the paper's global screened Poisson solve

@@ -49,16 +49,20 @@ class StepClock {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-// The band's options with its auto band (0) resolved for the whole grid of `dims`.
-BandOptions resolved_band(BandOptions band, const std::array<int, 3>& dims) {
-  if (band.band == 0) band.band = auto_local_band(*std::max_element(dims.begin(), dims.end()));
+// The band's options with its auto band (0) resolved for the whole grid of `dims` (and the
+// contact points that the bricks make there).
+BandOptions resolved_band(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
+  BandOptions band = options.band;
+  if (band.band == 0)
+    band.band = auto_local_band(*std::max_element(dims.begin(), dims.end()),
+                                local_lattice_points(options, dims));
   return band;
 }
 
 // The largest |value| a band sample can have, in spacings. With every sample (band 'all') no
 // sphere reaches farther than the grid's diagonal matters.
-double largest_in_spacings(const BandOptions& band, const std::array<int, 3>& dims) {
-  const double largest = resolved_band(band, dims).band + band.margin;
+double largest_in_spacings(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
+  const double largest = resolved_band(options, dims).band + options.band.margin;
   if (std::isfinite(largest)) return largest;
   return std::sqrt(3.0) * *std::max_element(dims.begin(), dims.end());
 }
@@ -160,7 +164,7 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
 // The block's band; none where it has no usable one (its cells then use their edge crossings).
 BandSamples brick_band(const GridView& block, const LocalBrickOptions& options) {
   try {
-    return select_band(block, resolved_band(options.band, block.whole_dims()));
+    return select_band(block, resolved_band(options, block.whole_dims()));
   } catch (const InternalError&) {
     throw;
   } catch (const Cancelled&) {
@@ -225,7 +229,7 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
                                          Eigen::VectorXd& depths) {
   const double h = block.spacing().maxCoeff();
   const Index3 n = block.whole_dims();
-  const double largest = largest_in_spacings(options.band, n) * h;
+  const double largest = largest_in_spacings(options, n) * h;
   const int reach = flag_reach(options, largest / h, n);
   if (options.given_points)
     return given_in_reach(*options.given_points, n, shifted(own_first, -reach),
@@ -298,7 +302,7 @@ bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>
 }
 
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
-  const double largest = largest_in_spacings(options.band, dims);
+  const double largest = largest_in_spacings(options, dims);
   const int stars = flag_reach(options, largest, dims) + int(auto_brick_halo(largest, 1.0)) +
                     int(std::ceil(2 * largest)) + 1;
   // Carving: the balls around the owned edges' vertices (within 2 cells of the owned samples).
@@ -306,7 +310,7 @@ int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>&
 }
 
 double local_values_reach(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
-  return std::max(largest_in_spacings(options.band, dims), detail::carving_band(options, dims));
+  return std::max(largest_in_spacings(options, dims), detail::carving_band(options, dims));
 }
 
 LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& own_first,
