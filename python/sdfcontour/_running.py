@@ -7,6 +7,10 @@ from . import _checks, _sdfcontour
 from ._arguments import _bounds, _check_callable_arguments
 from ._warning_types import DroppedSamplesWarning, FallbackWarning, LipschitzWarning, RescaleWarning
 
+# The gradients with which GCP's local reconstruction runs brick by brick (the core's
+# local_gradients): the regular triangulation's, the lattice's, or the choice between them.
+_LOCAL_GRADIENTS = ("auto", "regular", "lattice")
+
 
 def _input_array(sdf):
     """The samples as an array the core reads: a grid, an (n, 4) array, or (points, values)."""
@@ -64,7 +68,7 @@ def _vdb_by_boxes(sdf, method, reconstruction, gradient, band, level):
     if not isinstance(sdf, (str, os.PathLike)) or not os.fspath(sdf).lower().endswith(".vdb"):
         return None
     local = reconstruction == "local" or (
-        reconstruction == "auto" and gradient in ("auto", "regular", "lattice") and
+        reconstruction == "auto" and gradient in _LOCAL_GRADIENTS and
         not (isinstance(band, str) and band == "all"))
     boxes = method == "mc" or (method == "gcp" and local)
     return os.fspath(sdf) if boxes and level == 0 else None
@@ -93,7 +97,7 @@ def _run_callable(f, lo, hi, resolution, batch_size, options, want_mesh, want_po
     n = int(resolution)
     bricked = options["method"] == "mc" and want_mesh and not want_points
     local = (options["method"] == "gcp" and options.get("reconstruction") == "local" and
-             options["gradient"] in ("auto", "regular", "lattice") and want_mesh and not want_points)
+             options["gradient"] in _LOCAL_GRADIENTS and want_mesh and not want_points)
     # (Adaptivity of marching cubes' mesh merges it whole, in the core.)
     bricked = bricked and not options.get("adaptivity", 0.0) > 0
     _check_callable_arguments(resolution, batch_size)

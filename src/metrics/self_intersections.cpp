@@ -37,6 +37,10 @@ struct Box {
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
   }
+  void extend(const Box& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
   bool meets(const Box& b) const {
     return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all();
   }
@@ -55,14 +59,12 @@ class TriangleCubes {
     const Box all = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, count), Box::empty(),
         [&](const tbb::blocked_range<std::size_t>& r, Box b) {
-          for (std::size_t t = r.begin(); t < r.end(); ++t) {
-            b.lo = b.lo.cwiseMin(boxes[t].lo);
-            b.hi = b.hi.cwiseMax(boxes[t].hi);
-          }
+          for (std::size_t t = r.begin(); t < r.end(); ++t) b.extend(boxes[t]);
           return b;
         },
-        [](const Box& a, const Box& b) {
-          return Box{a.lo.cwiseMin(b.lo), a.hi.cwiseMax(b.hi)};
+        [](Box a, const Box& b) {
+          a.extend(b);
+          return a;
         });
     std::vector<double> extents(count);
     tbb::parallel_for(std::size_t(0), count,
