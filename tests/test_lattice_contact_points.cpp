@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "contact_points/lattice_spheres.h"
 #include "metrics/statistics.h"
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/bricks.h"
@@ -212,4 +213,52 @@ TEST(LatticeContactPoints, TheDefaultTakesTheLatticeFrom64SamplesPerAxis) {
   EXPECT_FALSE(local_lattice_points(o, {128, 128, 128}));
   o.lattice_points = 1;
   EXPECT_TRUE(local_lattice_points(o, {32, 32, 32}));
+}
+
+TEST(LatticeContactPoints, TheSphereSearchFindsWhatBruteForceFinds) {
+  // Random values keep random samples in the band: columns with several runs and gaps, and
+  // empty ones. Every sphere that comes within `extra` of a query point, in the band's order.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int n = 7 + trial;
+    Grid g = sample_grid(*make_builtin_shape("torus"), n, Bounds{});
+    for (Eigen::Index i = 0; i < g.values.size(); ++i)
+      if (trial % 2 || u(rng) > 0.5) g.values[i] = 0.5 * u(rng);
+    const BandSamples band = band_of(g, 1 + trial % 3);
+    const detail::Lattice lattice(g, band);
+    const double h = g.spacing().maxCoeff();
+    const Eigen::Index m = band.samples.values.size();
+    for (int query = 0; query < 200; ++query) {
+      const Vector3d c(1.1 * u(rng), 1.1 * u(rng), 1.1 * u(rng));
+      const double extra = query % 2 ? 0.3 * h : 0.0;
+      const long self = query % 3 == 0 && m > 0 ? long(rng() % std::uint32_t(m)) : -1;
+      std::vector<long> found;
+      lattice.any_sphere_near(c, extra, self, [&](long t, double d2) {
+        EXPECT_NEAR(d2, (c - band.samples.points.row(t).transpose()).squaredNorm(), 1e-12);
+        found.push_back(t);
+        return false;
+      });
+      std::vector<long> expected;
+      for (Eigen::Index t = 0; t < m; ++t) {
+        const double d = (c - band.samples.points.row(t).transpose()).norm();
+        const double r = std::abs(band.samples.values[t]) + extra;
+        if (t != self && d < r) expected.push_back(long(t));
+      }
+      EXPECT_EQ(found, expected) << "trial " << trial << " query " << query;
+    }
+    // The samples along each column, against the band's own indices.
+    std::vector<long> at(std::size_t(g.values.size()), -1);
+    for (Eigen::Index t = 0; t < m; ++t) at[std::size_t(band.source[std::size_t(t)])] = long(t);
+    std::vector<long> column(std::size_t(n) + 4);
+    for (int i = -1; i <= n; ++i)
+      for (int j = -1; j <= n; ++j) {
+        lattice.along(i, j, -2, n + 1, column.data());
+        for (int k = -2; k <= n + 1; ++k) {
+          const bool inside = i >= 0 && j >= 0 && k >= 0 && i < n && j < n && k < n;
+          const long want = inside ? at[std::size_t((i * n + j) * n + k)] : -1;
+          ASSERT_EQ(column[std::size_t(k + 2)], want) << i << " " << j << " " << k;
+        }
+      }
+  }
 }

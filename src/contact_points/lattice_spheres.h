@@ -2,16 +2,11 @@
 // that reach a point: what lattice_contact_points.cpp's filter and rescues read.
 #pragma once
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
-#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -22,57 +17,18 @@
 
 namespace sdfcontour::detail {
 
-// Lattice samples per chunk of a column that the sphere search bounds by its largest radius.
+// Lattice samples per chunk of a column (counted from k = 0) that the sphere search bounds by its
+// largest radius.
 constexpr int kChunk = 4;
 
-// The band samples on their lattice: each lattice sample's band index (or -1), and the largest
-// radius |value| of the band samples in each column and in each chunk of kChunk along a column.
+// The band samples on their lattice, held compactly: memory in the band, not in the grid (a dense
+// index per lattice sample was 0.84 GB of a 1024^3 grid's brick of 512). A grid's band is in C
+// order, so each column's samples are consecutive band indices, sorted along the column, in runs
+// of consecutive places (one per crossing of the surface, mostly).
 class Lattice {
  public:
-  // Built in parallel, every large array written first there: a brick's slots and chunk maxima
-  // are 64 MB and 34 MB of fresh pages at 256^3, whose faults took a tenth of the fast path's
-  // time when they were serial.
-  Lattice(const GridGeometry& grid, const BandSamples& band)
-      : band_(band),
-        n_(grid.dims),
-        chunks_((n_[2] + kChunk - 1) / kChunk),
-        origin_(grid.point(0, 0, 0)),
-        h_(grid.spacing()),
-        slot_(new int[grid.size()]),
-        radius_(new double[band.source.size()]),
-        column_max_(std::size_t(n_[0]) * n_[1], 0.0),
-        chunk_max_(new double[column_max_.size() * std::size_t(chunks_)]) {
-    const std::size_t samples = band.source.size(), columns = column_max_.size();
-    if (samples > std::size_t(std::numeric_limits<int>::max()))
-      throw Error("too many band samples in one brick: use smaller bricks (--brick-size)");
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.size(), 1 << 16), [&](auto r) {
-      std::fill(slot_.get() + r.begin(), slot_.get() + r.end(), -1);
-    });
-    tbb::parallel_for(std::size_t(0), samples, [&](std::size_t s) {
-      slot_[std::size_t(band.source[s])] = int(s);
-      radius_[s] = std::abs(band.samples.values[Eigen::Index(s)]);
-    });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, columns, 256), [&](auto r) {
-      for (std::size_t column = r.begin(); column < r.end(); ++column) {
-        const int* slot = &slot_[column * std::size_t(n_[2])];
-        double* in_chunks = &chunk_max_[column * std::size_t(chunks_)];
-        std::fill(in_chunks, in_chunks + chunks_, 0.0);
-        for (int k = 0; k < n_[2]; ++k)
-          if (slot[k] >= 0) {
-            const double radius = radius_[std::size_t(slot[k])];
-            column_max_[column] = std::max(column_max_[column], radius);
-            in_chunks[k / kChunk] = std::max(in_chunks[k / kChunk], radius);
-          }
-      }
-    });
-    largest_ = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, columns), 0.0,
-        [&](auto r, double m) {
-          for (std::size_t c = r.begin(); c < r.end(); ++c) m = std::max(m, column_max_[c]);
-          return m;
-        },
-        [](double a, double b) { return std::max(a, b); });
-  }
+  // band: a grid's band samples, in the grid's C order (select_band's).
+  Lattice(const GridGeometry& grid, const BandSamples& band);
 
   const Eigen::Vector3d& spacing() const { return h_; }
   double value(long s) const { return band_.samples.values[Eigen::Index(s)]; }
@@ -82,10 +38,17 @@ class Lattice {
     return {int(p / (long(n_[1]) * n_[2])), int(p / n_[2] % n_[1]), int(p % n_[2])};
   }
 
-  // The band sample at lattice (i, j, k), or -1.
-  long find(int i, int j, int k) const {
-    if (i < 0 || j < 0 || k < 0 || i >= n_[0] || j >= n_[1] || k >= n_[2]) return -1;
-    return slot_[(std::size_t(i) * n_[1] + j) * n_[2] + k];
+  // The band samples at (i, j, k0..k1) into out[0 .. k1 - k0]: -1 where there is none.
+  void along(int i, int j, int k0, int k1, long* out) const {
+    std::fill(out, out + (k1 - k0 + 1), -1L);
+    if (i < 0 || j < 0 || i >= n_[0] || j >= n_[1]) return;
+    const std::size_t column = std::size_t(i) * n_[1] + j;
+    for (int r = column_runs_[column]; r < column_runs_[column + 1]; ++r) {
+      const Run& run = runs_[std::size_t(r)];
+      const int last = run.first + runs_[std::size_t(r) + 1].begin - 1 - run.begin;
+      for (int k = std::max(k0, run.first); k <= std::min(k1, last); ++k)
+        out[k - k0] = run.begin + k - run.first;
+    }
   }
 
   // Calls f(j, squared distance from c to p_j) for each band sample j != self whose sphere holds
@@ -109,26 +72,34 @@ class Lattice {
       for (int j = j0; j <= j1; ++j) {
         const std::size_t column = std::size_t(i) * n_[1] + j;
         const double dy = origin_[1] + j * h_[1] - c[1];
-        const double across = dx * dx + dy * dy, top = column_max_[column] + extra;
+        const double across = dx * dx + dy * dy, top = double(column_max_[column]) + extra;
         if (across >= top * top) continue;
         const double reach = std::sqrt(top * top - across);
         const int k0 = std::max(0, int(std::ceil((c[2] - reach - origin_[2]) / h_[2])));
         const int k1 = std::min(n_[2] - 1, int((c[2] + reach - origin_[2]) / h_[2]));
-        const double* chunk_max = &chunk_max_[column * std::size_t(chunks_)];
-        const int* slot = &slot_[column * std::size_t(n_[2])];
-        // Chunk by chunk, each skipped where its largest sphere cannot reach c.
-        for (int q = k0 / kChunk; q * kChunk <= k1; ++q) {
-          const int a = std::max(k0, q * kChunk), b = std::min(k1, q * kChunk + kChunk - 1);
-          const double below = origin_[2] + a * h_[2] - c[2], above = origin_[2] + b * h_[2] - c[2];
-          const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
-                       m = chunk_max[q] + extra;
-          if (across + dz * dz >= m * m) continue;
-          for (int k = a; k <= b; ++k) {
-            const int t = slot[k];
-            if (t < 0 || t == self) continue;
-            const double z = origin_[2] + k * h_[2] - c[2];
-            const double d2 = across + z * z, r = radius_[std::size_t(t)] + extra;
-            if (d2 < r * r && f(long(t), d2)) return true;
+        for (int r = column_runs_[column]; r < column_runs_[column + 1]; ++r) {
+          const Run& run = runs_[std::size_t(r)];
+          if (run.first > k1) break;
+          const int last = run.first + runs_[std::size_t(r) + 1].begin - 1 - run.begin;
+          const int ka = std::max(k0, run.first), kb = std::min(k1, last);
+          const float* chunk_max = &chunk_max_[std::size_t(run.chunks - run.first / kChunk)];
+          // Chunk by chunk, each skipped where its largest sphere cannot reach c.
+          for (int q = ka / kChunk; q * kChunk <= kb; ++q) {
+            const int a = std::max(ka, q * kChunk), b = std::min(kb, q * kChunk + kChunk - 1);
+            const double below = origin_[2] + a * h_[2] - c[2],
+                         above = origin_[2] + b * h_[2] - c[2];
+            const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
+                         m = double(chunk_max[q]) + extra;
+            if (across + dz * dz >= m * m) continue;
+            for (int k = a; k <= b; ++k) {
+              const int t = run.begin + k - run.first;
+              const double z = origin_[2] + k * h_[2] - c[2], d2 = across + z * z;
+              // First against the radius rounded up to a float, then (rarely) the exact one.
+              const double bound = double(radius_up_[std::size_t(t)]) + extra;
+              if (!(d2 < bound * bound) || t == self) continue;
+              const double exact = std::abs(value(t)) + extra;
+              if (d2 < exact * exact && f(long(t), d2)) return true;
+            }
           }
         }
       }
@@ -137,14 +108,21 @@ class Lattice {
   }
 
  private:
+  // Consecutive places k along a column, held by consecutive band samples.
+  struct Run {
+    int begin;   // its first band sample (the next run's: one past its last)
+    int first;   // its first sample's k
+    int chunks;  // where its chunks' maxima start in chunk_max_
+  };
+
   const BandSamples& band_;
   std::array<int, 3> n_;
-  int chunks_;  // per column
   Eigen::Vector3d origin_, h_;
-  std::unique_ptr<int[]> slot_;       // per lattice sample: its band index, or -1
-  std::unique_ptr<double[]> radius_;  // per band sample
-  std::vector<double> column_max_;
-  std::unique_ptr<double[]> chunk_max_;  // per column, kChunk samples at a time
+  std::unique_ptr<float[]> radius_up_;  // per band sample: |value| rounded up to a float
+  std::vector<int> column_runs_;        // per column: its first run (and one past the last)
+  std::vector<Run> runs_;               // in band order, and one past the last
+  std::vector<float> column_max_;       // per column: its largest radius_up
+  std::vector<float> chunk_max_;  // per run, per chunk of kChunk it meets: its largest radius_up
   double largest_ = 0;
 };
 

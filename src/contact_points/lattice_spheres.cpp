@@ -1,0 +1,93 @@
+// The band samples' lattice for the sphere search (lattice_spheres.h).
+#include "contact_points/lattice_spheres.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <limits>
+
+namespace sdfcontour::detail {
+
+Lattice::Lattice(const GridGeometry& grid, const BandSamples& band)
+    : band_(band),
+      n_(grid.dims),
+      origin_(grid.point(0, 0, 0)),
+      h_(grid.spacing()),
+      radius_up_(new float[band.source.size()]),
+      column_runs_(std::size_t(n_[0]) * n_[1] + 1, 0),
+      column_max_(std::size_t(n_[0]) * n_[1], 0.0f) {
+  const std::size_t samples = band.source.size(), columns = column_max_.size();
+  if (samples > std::size_t(std::numeric_limits<int>::max()))
+    throw Error("too many band samples in one brick: use smaller bricks (--brick-size)");
+  const bool sorted = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(1, std::max<std::size_t>(samples, 1)), true,
+      [&](auto r, bool ok) {
+        for (std::size_t s = r.begin(); ok && s < r.end(); ++s)
+          ok = band.source[s - 1] < band.source[s];
+        return ok;
+      },
+      [](bool a, bool b) { return a && b; });
+  if (!sorted) throw InternalError("the lattice's band samples are not in the grid's order");
+  tbb::parallel_for(std::size_t(0), samples, [&](std::size_t s) {
+    const double radius = std::abs(band.samples.values[Eigen::Index(s)]);
+    float up = float(radius);
+    if (double(up) < radius) up = std::nextafter(up, INFINITY);
+    radius_up_[s] = up;
+  });
+  // Each column's band samples, then its runs: counted, numbered in column order, filled.
+  const long nz = n_[2];
+  auto k_of = [&](int s) { return int(band.source[std::size_t(s)] % nz); };
+  std::vector<int> column_begin(columns + 1);
+  tbb::parallel_for(std::size_t(0), columns + 1, [&](std::size_t column) {
+    column_begin[column] =
+        int(std::lower_bound(band.source.begin(), band.source.end(), long(column) * nz) -
+            band.source.begin());
+  });
+  tbb::parallel_for(std::size_t(0), columns, [&](std::size_t column) {
+    int runs = 0;
+    for (int s = column_begin[column]; s < column_begin[column + 1]; ++s)
+      runs += s == column_begin[column] || k_of(s) != k_of(s - 1) + 1;
+    column_runs_[column + 1] = runs;
+  });
+  for (std::size_t column = 0; column < columns; ++column)
+    column_runs_[column + 1] += column_runs_[column];
+  runs_.resize(std::size_t(column_runs_.back()) + 1);
+  tbb::parallel_for(std::size_t(0), columns, [&](std::size_t column) {
+    int r = column_runs_[column];
+    for (int s = column_begin[column]; s < column_begin[column + 1]; ++s)
+      if (s == column_begin[column] || k_of(s) != k_of(s - 1) + 1)
+        runs_[std::size_t(r++)] = {s, k_of(s), 0};
+  });
+  runs_.back() = {int(samples), 0, 0};
+  // Chunk maxima: each run's chunks counted, numbered in run order, filled.
+  int chunks = 0;
+  for (std::size_t r = 0; r + 1 < runs_.size(); ++r) {
+    const int last = runs_[r].first + runs_[r + 1].begin - 1 - runs_[r].begin;
+    runs_[r].chunks = chunks;
+    chunks += last / kChunk - runs_[r].first / kChunk + 1;
+  }
+  runs_.back().chunks = chunks;
+  chunk_max_.assign(std::size_t(chunks), 0.0f);
+  tbb::parallel_for(std::size_t(0), columns, [&](std::size_t column) {
+    for (int r = column_runs_[column]; r < column_runs_[column + 1]; ++r) {
+      const Run& run = runs_[std::size_t(r)];
+      for (int s = run.begin; s < runs_[std::size_t(r) + 1].begin; ++s) {
+        const float up = radius_up_[std::size_t(s)];
+        float& chunk = chunk_max_[std::size_t(run.chunks + (run.first + s - run.begin) / kChunk -
+                                              run.first / kChunk)];
+        chunk = std::max(chunk, up);
+        column_max_[column] = std::max(column_max_[column], up);
+      }
+    }
+  });
+  largest_ = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, columns), 0.0,
+      [&](auto r, double m) {
+        for (std::size_t c = r.begin(); c < r.end(); ++c) m = std::max(m, double(column_max_[c]));
+        return m;
+      },
+      [](double a, double b) { return std::max(a, b); });
+}
+
+}  // namespace sdfcontour::detail
