@@ -64,11 +64,12 @@ Eigen::Vector3d feature_normal(const Mesh& mesh, const VertexTriangles& around, 
 constexpr std::size_t kManyQueries = 2000;
 
 // A vertex's requested move, from sample `sample`, `length` long.
+// A checked sample's move of a vertex: per vertex, the first request (one int: 40 bytes a vertex
+// were a tenth of a 1024^3 brick's side check).
 struct Request {
   int sample = -1;
   bool wrong_side = false;
   double length = 0;
-  Eigen::Vector3d move = Eigen::Vector3d::Zero();
   // Whether this request goes before r: a wrong side first, then the longer, then the lower sample.
   bool before(const Request& r) const {
     if (r.sample < 0 || wrong_side != r.wrong_side) return r.sample < 0 || wrong_side;
@@ -255,18 +256,25 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
     if (asked[w].norm() > longest) feature.clear();
     features[w] = std::move(feature);
   });
-  std::vector<Request> best(std::size_t(V.rows()));
+  // Per vertex: the checked sample (its place in `which`) whose request goes first, or -1.
+  std::vector<int> best(std::size_t(V.rows()), -1);
+  auto request = [&](int w) {
+    return w < 0 ? Request{}
+                 : Request{which[std::size_t(w)], bool(wrong[std::size_t(w)]),
+                           asked[std::size_t(w)].norm()};
+  };
   for (std::size_t w = 0; w < which.size(); ++w) {
     if (!out.failed[w]) continue;
     ++out.violations;
     out.wrong_side += wrong[w];
     if (features[w].empty()) continue;
-    const Request asks{which[w], bool(wrong[w]), asked[w].norm(), asked[w]};
+    const Request asks = request(int(w));
     for (int v : features[w])
-      if (asks.before(best[std::size_t(v)])) best[std::size_t(v)] = asks;
+      if (asks.before(request(best[std::size_t(v)]))) best[std::size_t(v)] = int(w);
   }
   for (Eigen::Index v = 0; v < V.rows(); ++v)
-    if (best[std::size_t(v)].sample >= 0) out.moves.row(v) = best[std::size_t(v)].move.transpose();
+    if (best[std::size_t(v)] >= 0)
+      out.moves.row(v) = asked[std::size_t(best[std::size_t(v)])].transpose();
   return out;
 }
 

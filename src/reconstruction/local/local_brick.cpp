@@ -370,6 +370,15 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                                       shifted(cells_end, scale * ring(options)), crossing_means);
   }
   refined = detail::RefinedGrid();
+  // The carving's samples are taken now: where no vertex goes onto the grid's zero set, the rest
+  // reads the band alone, and the block's values may go (a copied block of 567³ floats is 0.73 GB,
+  // the largest part of a brick's memory through its subdivision and carving).
+  const bool carve = options.carve && options.carve_passes > 0;
+  Samples balls = carve ? detail::carving_samples(block, band, options) : Samples();
+  if (!options.refine_zero_set) {
+    if (options.grid_read) options.grid_read();
+    detail::return_free_memory();
+  }
   if (options.refine_zero_set) {
     // First the cells' own vertices: the subdivision's then start near the zero set, and so do
     // the positions that the untangling goes back to.
@@ -427,16 +436,13 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (options.refine_zero_set)
     detail::refine_vertices_on_zero_set(block, band, options, sub.mesh, fixed, &stay);
   clock.next(3);
-  if (options.carve && options.carve_passes > 0) {
-    const Samples balls = detail::carving_samples(block, band, options);
-    if (balls.points.rows() > 0)
-      detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
-                                   options.carve_passes, kMaxCarveMove,
-                                   stay.empty() ? nullptr : &stay);
-  }
-  // The rest reads the band alone: the block's values may go (a copied block of 567³ floats is
-  // 0.73 GB, and the side checks and the untangling are a brick's largest stages).
-  if (options.grid_read) options.grid_read();
+  if (carve && balls.points.rows() > 0)
+    detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
+                                 options.carve_passes, kMaxCarveMove,
+                                 stay.empty() ? nullptr : &stay);
+  balls = Samples();
+
+  if (options.refine_zero_set && options.grid_read) options.grid_read();
   detail::return_free_memory();
   if (options.side_rounds > 0) {
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
@@ -476,6 +482,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       // more, without a crossing.
       const PointMatrix settled = sub.mesh.vertices;
       detail::put_samples_on_their_sides(sub.mesh, band, h, 1, &reverted);
+      detail::return_free_memory();
       revert_self_intersections(sub.mesh, settled, 1);
     }
   }
