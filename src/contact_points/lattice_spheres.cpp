@@ -7,6 +7,8 @@
 
 #include <limits>
 
+#include "pipeline/float_bounds.h"
+
 namespace sdfcontour::detail {
 
 Lattice::Lattice(const GridGeometry& grid, const BandSamples& band)
@@ -30,10 +32,7 @@ Lattice::Lattice(const GridGeometry& grid, const BandSamples& band)
       [](bool a, bool b) { return a && b; });
   if (!sorted) throw InternalError("the lattice's band samples are not in the grid's order");
   tbb::parallel_for(std::size_t(0), samples, [&](std::size_t s) {
-    const double radius = std::abs(band.samples.values[Eigen::Index(s)]);
-    float up = float(radius);
-    if (double(up) < radius) up = std::nextafter(up, INFINITY);
-    radius_up_[s] = up;
+    radius_up_[s] = float_above(std::abs(band.samples.values[Eigen::Index(s)]));
   });
   // Each column's band samples, then its runs: counted, numbered in column order, filled.
   const long nz = n_[2];

@@ -15,6 +15,7 @@
 #include <functional>
 #include <string>
 
+#include "pipeline/float_bounds.h"
 #include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
 
@@ -36,11 +37,8 @@ struct Box {
   }
   void extend(const Eigen::Vector3d& x) {
     for (int a = 0; a < 3; ++a) {
-      float down = float(x[a]), up = down;
-      if (double(down) > x[a]) down = std::nextafter(down, -INFINITY);
-      if (double(up) < x[a]) up = std::nextafter(up, INFINITY);
-      lo[a] = std::min(lo[a], down);
-      hi[a] = std::max(hi[a], up);
+      lo[a] = std::min(lo[a], detail::float_below(x[a]));
+      hi[a] = std::max(hi[a], detail::float_above(x[a]));
     }
   }
   void extend(const Box& b) {

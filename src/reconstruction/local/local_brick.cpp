@@ -441,7 +441,6 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
                                  options.carve_passes, kMaxCarveMove,
                                  stay.empty() ? nullptr : &stay);
   balls = Samples();
-
   if (options.refine_zero_set && options.grid_read) options.grid_read();
   detail::return_free_memory();
   if (options.side_rounds > 0) {
