@@ -246,6 +246,24 @@ TEST(LatticeContactPoints, TheSphereSearchFindsWhatBruteForceFinds) {
         if (t != self && d < r) expected.push_back(long(t));
       }
       EXPECT_EQ(found, expected) << "trial " << trial << " query " << query;
+      // The list gathered for a box around c gives the same spheres in the same order, with the
+      // same squared distances, wherever it covers c.
+      detail::SphereList list;
+      const Vector3d below(u(rng) + 1, u(rng) + 1, u(rng) + 1), above(u(rng) + 1, u(rng) + 1, 0);
+      lattice.gather(c - 0.7 * h * below, c + 0.7 * h * above, 0.3 * h, list);
+      ASSERT_TRUE(list.covers(c, extra));
+      EXPECT_FALSE(list.covers(c, 0.31 * h));
+      EXPECT_FALSE(list.covers(c + Vector3d(0, 0, 0.7 * h * above[2] + 0.31 * h), 0.0));
+      std::vector<std::pair<long, double>> from_list, from_lattice;
+      list.any_sphere_near(c, extra, self, [&](long t, double d2) {
+        from_list.emplace_back(t, d2);
+        return false;
+      });
+      lattice.any_sphere_near(c, extra, self, [&](long t, double d2) {
+        from_lattice.emplace_back(t, d2);
+        return false;
+      });
+      EXPECT_EQ(from_list, from_lattice) << "trial " << trial << " query " << query;
     }
     // The samples along each column, against the band's own indices.
     std::vector<long> at(std::size_t(g.values.size()), -1);

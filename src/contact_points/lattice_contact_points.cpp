@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
@@ -33,6 +34,16 @@ constexpr double kTinyGradient = 1e-300;
 // triangulation 0.32 s, the lattice without power vertices 6,426 at 0.0044 h).
 constexpr double kPowerBox = 0.25;
 
+// The samples whose points lie in one box of this many spacings a side read the spheres gathered
+// for it.
+constexpr double kListBox = 3.0;
+
+// How far beyond a sphere the first rescues read: the slide's first round (half a spacing) and
+// kPowerBox's box.
+double near_start_reach(const Eigen::Vector3d& h) {
+  return std::max(h.minCoeff() / 2, std::sqrt(3.0) * kPowerBox * h.maxCoeff());
+}
+
 enum class Outcome : char { Skipped, ZeroGradient, Discarded, Kept, Rescued };
 
 // One sample's point: its gradient from the lattice, the candidate, the filter and the rescues.
@@ -45,21 +56,41 @@ class SamplePoint {
   // cell on its sphere (the triangulation's rescue). A sample across a crease has only the
   // latter. (A near miss's rescue stays off: on the lattice it kept points 0.016 h off a box's
   // medial planes where the filter alone keeps none.)
-  Outcome solve() {
+  // First the gradient and where it puts the point (start()); false if it has none.
+  bool prepare() {
     gather_neighbours();
-    Eigen::Vector3d g;
-    if (!gradient(g)) return Outcome::ZeroGradient;
-    start_ = p_ - v_ * g.normalized();
-    if (o_.max_slope_miss > 0 && misses_linear_prediction(g, o_.max_slope_miss))
+    if (!gradient(g_)) return false;
+    start_ = p_ - v_ * g_.normalized();
+    return true;
+  }
+
+  // Then the rest, reading `list` for the points that lie in its box.
+  Outcome solve(const detail::SphereList* list) {
+    list_ = list;
+    if (o_.max_slope_miss > 0 && misses_linear_prediction(g_, o_.max_slope_miss))
       return power_vertex() ? Outcome::Rescued : Outcome::Discarded;
-    if (candidate(g)) return Outcome::Kept;
+    if (candidate(g_)) return Outcome::Kept;
     if (v_ != 0 && (slide(start_) || power_vertex())) return Outcome::Rescued;
     return Outcome::Discarded;
   }
 
+  const Eigen::Vector3d& start() const { return start_; }
+
   Eigen::Vector3d point, normal;
 
  private:
+  // Lattice::any_sphere_near and any_sphere_holding, from the gathered list where it covers c.
+  template <class F>
+  bool any_sphere_near(const Eigen::Vector3d& c, double extra, F&& f) const {
+    if (list_ && list_->covers(c, extra))
+      return list_->any_sphere_near(c, extra, s_, std::forward<F>(f));
+    return l_.any_sphere_near(c, extra, s_, std::forward<F>(f));
+  }
+  template <class F>
+  bool any_sphere_holding(const Eigen::Vector3d& c, F&& f) const {
+    return any_sphere_near(c, 0.0, std::forward<F>(f));
+  }
+
   // The band samples around this one, read column by column once: its 3x3x3 block, and two
   // steps along each axis.
   void gather_neighbours() {
@@ -148,7 +179,7 @@ class SamplePoint {
 
   bool held(const Eigen::Vector3d& c) const {
     const double tau = o_.tie_tolerance;
-    return l_.any_sphere_holding(c, s_, [&](long t, double d2) {
+    return any_sphere_holding(c, [&](long t, double d2) {
       const double radius =
           std::abs(l_.value(t)) - (tau > 0 ? tau * (l_.point(t) - p_).norm() : 0.0);
       return radius > 0 && d2 < radius * radius;
@@ -212,7 +243,7 @@ class SamplePoint {
     // without a tolerance, the strict test with its tie tolerance. Over every sphere.
     const double tol = o_.power_vertex_tolerance / 2;
     if (tol > 0) {
-      const bool deep = l_.any_sphere_holding(c, s_, [&](long t, double d2) {
+      const bool deep = any_sphere_holding(c, [&](long t, double d2) {
         return std::abs(l_.value(t)) - std::sqrt(d2) > tol * radius;
       });
       if (deep) return false;
@@ -230,9 +261,8 @@ class SamplePoint {
     thread_local std::vector<std::pair<long, double>> near;
     if (!gathered_) {
       near.clear();
-      const Eigen::Vector3d h = l_.spacing();
-      const double reach = std::max(h.minCoeff() / 2, std::sqrt(3.0) * kPowerBox * h.maxCoeff());
-      l_.any_sphere_near(start_, reach, s_, [&](long t, double d2) {
+      const double reach = near_start_reach(l_.spacing());
+      any_sphere_near(start_, reach, [&](long t, double d2) {
         near.emplace_back(t, d2);
         return false;
       });
@@ -251,7 +281,7 @@ class SamplePoint {
     find_power_vertex();
     if (!(power_miss_ <= tolerance * v_ * v_)) return false;
     const double r = std::abs(v_);
-    const bool deep = l_.any_sphere_holding(power_at_, s_, [&](long t, double d2) {
+    const bool deep = any_sphere_holding(power_at_, [&](long t, double d2) {
       return std::abs(l_.value(t)) - std::sqrt(d2) > tolerance / 2 * r;
     });
     if (deep) return false;
@@ -330,7 +360,9 @@ class SamplePoint {
   long s_;
   Eigen::Vector3d p_;
   double v_;
+  Eigen::Vector3d g_;      // the gradient
   Eigen::Vector3d start_;  // where the gradient puts the point
+  const detail::SphereList* list_ = nullptr;
   bool gathered_ = false;  // near_start()
   double power_miss_ = INFINITY;
   Eigen::Vector3d power_at_;
@@ -353,30 +385,81 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
     throw Error("contact points need a tie tolerance >= 0 and slide rounds >= 0");
   const Eigen::Index n = band.samples.values.size();
   const Lattice lattice(grid, band);
+  const double h = grid.spacing().maxCoeff();
   // Fixed pieces of the band, each with its own kept points (the kept are a fraction of the band:
   // a point and normal per band sample were 0.3 GB of a 1024^3 grid's bricks), joined in order.
-  constexpr Eigen::Index kPiece = 4096;
+  constexpr Eigen::Index kPiece = 16384;
   struct Piece {
     std::vector<int> samples;
     std::vector<std::array<double, 6>> kept;  // point, normal
     int zero_gradient = 0, discarded = 0, rescued = 0;
   };
   std::vector<Piece> pieces(std::size_t((n + kPiece - 1) / kPiece));
+  const Eigen::Vector3d origin = grid.point(0, 0, 0);
+  // The box (kListBox spacings a side) where a sample's point lies, as one key.
+  auto box_key = [&](const Eigen::Vector3d& c) {
+    std::uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double at = std::floor((c[a] - origin[a]) / (kListBox * h));
+      key = key << 21 |
+            std::uint64_t(std::isnan(at) ? 0.0 : std::clamp(at, -1048576.0, 1048575.0) + 1048576.0);
+    }
+    return key;
+  };
   tbb::parallel_for(std::size_t(0), pieces.size(), [&](std::size_t q) {
     Piece& piece = pieces[q];
-    const Eigen::Index end = std::min(n, Eigen::Index(q + 1) * kPiece);
-    for (Eigen::Index i = Eigen::Index(q) * kPiece; i < end; ++i) {
+    const Eigen::Index begin = Eigen::Index(q) * kPiece, end = std::min(n, begin + kPiece);
+    // First where each sample's gradient puts its point; then, box by box, the spheres that meet
+    // the box are gathered once for the points there; the outcomes go back into band order.
+    thread_local std::vector<std::pair<std::uint64_t, int>> order;
+    thread_local std::vector<Eigen::Vector3d> starts;
+    thread_local std::vector<Outcome> outcome;
+    thread_local std::vector<std::array<double, 6>> found;
+    thread_local detail::SphereList spheres;
+    order.clear();
+    starts.assign(std::size_t(end - begin), Eigen::Vector3d::Zero());
+    outcome.assign(std::size_t(end - begin), Outcome::Skipped);
+    found.resize(std::size_t(end - begin));
+    for (Eigen::Index i = begin; i < end; ++i) {
       if (!band.core[std::size_t(i)] || (only && !(*only)[std::size_t(i)])) continue;
       SamplePoint sample(lattice, options, long(i));
-      const Outcome out = sample.solve();
+      if (!sample.prepare()) {
+        outcome[std::size_t(i - begin)] = Outcome::ZeroGradient;
+        continue;
+      }
+      starts[std::size_t(i - begin)] = sample.start();
+      order.emplace_back(box_key(sample.start()), int(i - begin));
+    }
+    std::sort(order.begin(), order.end());
+    for (std::size_t a = 0; a < order.size();) {
+      std::size_t b = a;
+      Eigen::Vector3d lo = starts[std::size_t(order[a].second)], hi = lo;
+      for (; b < order.size() && order[b].first == order[a].first; ++b) {
+        lo = lo.cwiseMin(starts[std::size_t(order[b].second)]);
+        hi = hi.cwiseMax(starts[std::size_t(order[b].second)]);
+      }
+      const bool gathered = b - a > 1 && lo.allFinite() && hi.allFinite();
+      if (gathered) lattice.gather(lo, hi, near_start_reach(grid.spacing()), spheres);
+      for (; a < b; ++a) {
+        const int at = order[a].second;
+        SamplePoint sample(lattice, options, long(begin + at));
+        sample.prepare();
+        const Outcome out = sample.solve(gathered ? &spheres : nullptr);
+        outcome[std::size_t(at)] = out;
+        const Eigen::Vector3d& c = sample.point;
+        const Eigen::Vector3d& m = sample.normal;
+        if (out == Outcome::Kept || out == Outcome::Rescued)
+          found[std::size_t(at)] = {c[0], c[1], c[2], m[0], m[1], m[2]};
+      }
+    }
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const Outcome out = outcome[std::size_t(i - begin)];
       piece.zero_gradient += out == Outcome::ZeroGradient;
       piece.discarded += out == Outcome::Discarded;
       piece.rescued += out == Outcome::Rescued;
       if (out == Outcome::Kept || out == Outcome::Rescued) {
         piece.samples.push_back(int(i));
-        const Eigen::Vector3d& c = sample.point;
-        const Eigen::Vector3d& m = sample.normal;
-        piece.kept.push_back({c[0], c[1], c[2], m[0], m[1], m[2]});
+        piece.kept.push_back(found[std::size_t(i - begin)]);
       }
     }
   });

@@ -21,6 +21,32 @@ namespace sdfcontour::detail {
 // largest radius.
 constexpr int kChunk = 4;
 
+// The spheres that come within `widen` of a box, gathered once for the points that nearby samples
+// test: each point then reads this short list, not the lattice, in the lattice's order.
+struct SphereList {
+  Eigen::Vector3d lo, hi;          // the box
+  double widen = 0;                // how far beyond the box the spheres were gathered
+  std::vector<double> x, y, z, r;  // per sphere: its centre and radius (|value|)
+  std::vector<long> sample;        // per sphere: its band sample
+
+  // Whether the list holds every sphere that comes within `extra` of c.
+  bool covers(const Eigen::Vector3d& c, double extra) const {
+    const double in = widen - extra;
+    return in >= 0 && (c.array() >= lo.array() - in).all() && (c.array() <= hi.array() + in).all();
+  }
+
+  // Lattice::any_sphere_near's answer where the list covers c (the same squared distances).
+  template <class F>
+  bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
+    for (std::size_t t = 0; t < r.size(); ++t) {
+      const double dx = x[t] - c[0], dy = y[t] - c[1], dz = z[t] - c[2];
+      const double d2 = (dx * dx + dy * dy) + dz * dz, reach = r[t] + extra;
+      if (d2 < reach * reach && sample[t] != self && f(sample[t], d2)) return true;
+    }
+    return false;
+  }
+};
+
 // The band samples on their lattice, held compactly: memory in the band, not in the grid (a dense
 // index per lattice sample was 0.84 GB of a 1024^3 grid's brick of 512). A grid's band is in C
 // order, so each column's samples are consecutive band indices, sorted along the column, in runs
@@ -57,6 +83,11 @@ class Lattice {
   bool any_sphere_holding(const Eigen::Vector3d& c, long self, F&& f) const {
     return any_sphere_near(c, 0.0, self, std::forward<F>(f));
   }
+
+  // Into `out`: every sphere that comes within `widen` of the box [lo, hi] (a superset of those
+  // that come within `widen` of a point there), in the lattice's order.
+  void gather(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double widen,
+              SphereList& out) const;
 
   // The same for the spheres that come within `extra` of c (|c - p_j| < |value_j| + extra).
   template <class F>
