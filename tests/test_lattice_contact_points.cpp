@@ -7,6 +7,7 @@
 
 #include "contact_points/lattice_spheres.h"
 #include "metrics/statistics.h"
+#include "reconstruction/carving_internal.h"
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/contact_points/gradients.h"
@@ -278,5 +279,43 @@ TEST(LatticeContactPoints, TheSphereSearchFindsWhatBruteForceFinds) {
           ASSERT_EQ(column[std::size_t(k + 2)], want) << i << " " << j << " " << k;
         }
       }
+  }
+}
+
+TEST(LatticeContactPoints, TheLatticesBallsPushAsTheBallsAlone) {
+  // Carving's deepest pushes read box by box from the lattice against the ball-driven search:
+  // the same moves, bit for bit, on exact and on perturbed values, for all vertices or a few.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 4; ++trial) {
+    const int n = 12 + 5 * trial;
+    Grid g = sample_grid(*make_builtin_shape(trial % 2 ? "torus" : "sphere"), n, Bounds{});
+    const double h = g.spacing().maxCoeff();
+    if (trial >= 2)
+      for (Eigen::Index i = 0; i < g.values.size(); ++i) g.values[i] += 0.3 * h * u(rng);
+    const BandSamples band = band_of(g, 2 + trial);
+    const detail::Lattice lattice(g, band);
+    // Vertices near the surface (the balls' samples moved by up to their values and more).
+    PointMatrix V(1500, 3);
+    for (Eigen::Index v = 0; v < V.rows(); ++v) {
+      const Eigen::Index s = Eigen::Index(rng() % std::uint32_t(band.samples.values.size()));
+      const Vector3d dir = Vector3d(u(rng), u(rng), u(rng)).normalized();
+      V.row(v) = band.samples.points.row(s) +
+                 (std::abs(band.samples.values[s]) * (1 + 0.2 * u(rng))) * dir.transpose();
+    }
+    std::vector<int> all(std::size_t(V.rows())), some;
+    for (int v = 0; v < int(V.rows()); ++v) {
+      all[std::size_t(v)] = v;
+      if (v % 7 == 0) some.push_back(v);
+    }
+    for (const auto* which : {&all, &some}) {
+      const PointMatrix by_balls =
+          detail::deepest_pushes(V, *which, band.samples.points, band.samples.values, h);
+      const PointMatrix by_boxes = detail::deepest_pushes(V, *which, lattice, h);
+      long pushed = 0;
+      for (Eigen::Index v = 0; v < V.rows(); ++v) pushed += by_balls.row(v).squaredNorm() > 0;
+      EXPECT_GT(pushed, long(which->size()) / 10) << "trial " << trial;
+      EXPECT_TRUE(by_boxes == by_balls) << "trial " << trial;
+    }
   }
 }

@@ -57,6 +57,8 @@ class Lattice {
   Lattice(const GridGeometry& grid, const BandSamples& band);
 
   const Eigen::Vector3d& spacing() const { return h_; }
+  const PointMatrix& points() const { return band_.samples.points; }
+  const Eigen::VectorXd& values() const { return band_.samples.values; }
   double value(long s) const { return band_.samples.values[Eigen::Index(s)]; }
   Eigen::Vector3d point(long s) const { return band_.samples.points.row(Eigen::Index(s)); }
   std::array<int, 3> index(long s) const {

@@ -36,6 +36,7 @@ struct SideCheck {
   long wrong_side = 0;       ///< of those, the samples on the wrong side
   PointMatrix moves;         ///< per vertex (rows of mesh.vertices); zero where none is asked
   std::vector<int> nearest;  ///< per checked sample, its nearest triangle
+  double farthest = 0;       ///< the largest distance from a checked sample to its nearest point
   std::vector<char> failed;  ///< per checked sample, whether it violates
 };
 
@@ -84,6 +85,14 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
                            const PointMatrix& points, const Eigen::VectorXd& values, double spacing,
                            WorkCounter* samples_done = nullptr);
 
+class Lattice;
+
+/// The same for the balls on a grid's lattice (`balls`: its samples and their values): each box
+/// of vertices reads the balls that meet it, gathered once, in place of each ball reading the
+/// vertices near it. The same pushes, bit for bit.
+PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
+                           const Lattice& balls, double spacing);
+
 /// Up to `passes` rounds of each vertex of V pushed onto the sphere of the ball it enters
 /// deepest, every vertex on its own (no triangle checks): the result of a vertex depends on its
 /// position and the balls near it alone, as bricks need. A push that would take a vertex more
@@ -93,5 +102,9 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
 void carve_vertices_alone(PointMatrix& V, const PointMatrix& points, const Eigen::VectorXd& values,
                           double spacing, int passes, double max_move,
                           const std::vector<char>* fixed = nullptr);
+
+/// The same for balls on a grid's lattice (deepest_pushes' second form).
+void carve_vertices_alone(PointMatrix& V, const Lattice& balls, double spacing, int passes,
+                          double max_move, const std::vector<char>* fixed = nullptr);
 
 }  // namespace sdfcontour::detail

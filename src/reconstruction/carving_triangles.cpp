@@ -234,6 +234,7 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
   std::vector<char> wrong(which.size(), 0);
   out.nearest.assign(which.size(), -1);
   out.failed.assign(which.size(), 0);
+  std::vector<double> distance(which.size(), 0.0);
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t w) {
     const int s = which[w];
     const double r = std::abs(values[s]);
@@ -242,6 +243,7 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
     const NearestTriangles::Hit nearest = tree.closest(p);
     const int t = nearest.triangle;
     out.nearest[w] = t;
+    distance[w] = (p - nearest.point).norm();
     NearestFeature at = feature_at(mesh, around, t, nearest.point, p);
     const Eigen::Vector3d q = at.point, n = at.normal;
     std::vector<int>& feature = at.vertices;
@@ -264,6 +266,7 @@ SideCheck check_sample_sides(const Mesh& mesh, const VertexTriangles& around,
                            asked[std::size_t(w)].norm()};
   };
   for (std::size_t w = 0; w < which.size(); ++w) {
+    out.farthest = std::max(out.farthest, distance[w]);
     if (!out.failed[w]) continue;
     ++out.violations;
     out.wrong_side += wrong[w];

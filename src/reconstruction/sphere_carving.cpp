@@ -10,6 +10,7 @@
 #include <numeric>
 #include <vector>
 
+#include "contact_points/lattice_spheres.h"
 #include "pipeline/work_counter.h"
 #include "reconstruction/carving_internal.h"
 
@@ -203,6 +204,21 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
   return set_indices(moved);
 }
 
+// Per vertex with a push (best[v].vertex >= 0), the move onto its ball's sphere; zero elsewhere.
+PointMatrix pushes_onto_spheres(const PointMatrix& V, const std::vector<Push>& best,
+                                const PointMatrix& points, const Eigen::VectorXd& values) {
+  PointMatrix moves = PointMatrix::Zero(V.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) {
+    const Push& b = best[std::size_t(v)];
+    if (b.vertex < 0) return;
+    const Eigen::Vector3d p = points.row(b.sample).transpose();
+    const Eigen::Vector3d from = V.row(v).transpose() - p;
+    const double r = std::abs(values[b.sample]);
+    moves.row(v) = (p + from * (r / from.norm()) - V.row(v).transpose()).transpose();
+  });
+  return moves;
+}
+
 }  // namespace
 
 // For each vertex of `which` inside at least one ball, the ball it enters deepest (ties: the
@@ -236,28 +252,75 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
       Push& b = best[std::size_t(q.vertex)];
       if (b.vertex < 0 || q.depth > b.depth || (q.depth == b.depth && q.sample < b.sample)) b = q;
     }
-  PointMatrix moves = PointMatrix::Zero(V.rows(), 3);
-  tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) {
-    const Push& b = best[std::size_t(v)];
-    if (b.vertex < 0) return;
-    const Eigen::Vector3d p = points.row(b.sample).transpose();
-    const Eigen::Vector3d from = V.row(v).transpose() - p;
-    const double r = std::abs(values[b.sample]);
-    moves.row(v) = (p + from * (r / from.norm()) - V.row(v).transpose()).transpose();
-  });
-  return moves;
+  return pushes_onto_spheres(V, best, points, values);
 }
 
-void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
-                                  const Eigen::VectorXd& values, double spacing, int passes,
-                                  double max_move, const std::vector<char>* fixed) {
+// Vertices in boxes of this many spacings a side read the balls gathered for their box.
+constexpr double kBallListBox = 2;
+
+PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
+                                   const Lattice& balls, double spacing) {
+  const double inside = kInside * spacing, cell = kBallListBox * spacing;
+  std::vector<std::pair<std::array<long, 3>, int>> keyed(which.size());
+  tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t q) {
+    std::array<long, 3> key;
+    for (int a = 0; a < 3; ++a) key[std::size_t(a)] = long(std::floor(V(which[q], a) / cell));
+    keyed[q] = {key, which[q]};
+  });
+  tbb::parallel_sort(keyed.begin(), keyed.end());
+  std::vector<std::size_t> starts;  // where each box's vertices begin in keyed
+  for (std::size_t q = 0; q < keyed.size(); ++q)
+    if (q == 0 || keyed[q].first != keyed[q - 1].first) starts.push_back(q);
+  starts.push_back(keyed.size());
+  std::vector<Push> best(std::size_t(V.rows()), Push{-1, -1, 0.0});
+  const PointMatrix& points = balls.points();
+  tbb::parallel_for(std::size_t(0), starts.size() - 1, [&](std::size_t b) {
+    thread_local SphereList list;
+    Eigen::Vector3d lo = V.row(keyed[starts[b]].second).transpose(), hi = lo;
+    for (std::size_t q = starts[b]; q < starts[b + 1]; ++q) {
+      lo = lo.cwiseMin(V.row(keyed[q].second).transpose());
+      hi = hi.cwiseMax(V.row(keyed[q].second).transpose());
+    }
+    if (!(lo.allFinite() && hi.allFinite())) return;
+    balls.gather(lo, hi, 0.0, list);
+    for (std::size_t q = starts[b]; q < starts[b + 1]; ++q) {
+      const int v = keyed[q].second;
+      const Eigen::Vector3d x = V.row(v).transpose();
+      Push& found = best[std::size_t(v)];
+      for (std::size_t t = 0; t < list.r.size(); ++t) {
+        const double r = list.r[t];
+        if (!(r > 0)) continue;
+        // The list's centres are the lattice's, which may differ from the samples' own points in
+        // the last bit: a hair wider first, then the same test as the ball-driven search.
+        const double dx = list.x[t] - x[0], dy = list.y[t] - x[1], dz = list.z[t] - x[2];
+        const double reach = r * (1 + 1e-12) + 1e-300;
+        if (!((dx * dx + dy * dy) + dz * dz < reach * reach)) continue;
+        const long s = list.sample[t];
+        const double d2 = (x - points.row(s).transpose()).squaredNorm();
+        if (!(d2 < r * r && d2 > 0)) continue;
+        const double depth = r - std::sqrt(d2);
+        if (!(depth > inside)) continue;
+        if (found.vertex < 0 || depth > found.depth || (depth == found.depth && s < found.sample))
+          found = {v, int(s), depth};
+      }
+    }
+  });
+  return pushes_onto_spheres(V, best, points, balls.values());
+}
+
+namespace {
+
+// carve_vertices_alone's rounds, `pushes(V, candidates)` the deepest pushes.
+template <class Pushes>
+void carve_alone(PointMatrix& V, double spacing, int passes, double max_move,
+                 const std::vector<char>* fixed, Pushes&& pushes) {
   const PointMatrix start = V;
   std::vector<int> candidates;
   for (Eigen::Index v = 0; v < V.rows(); ++v)
     if (!fixed || !(*fixed)[std::size_t(v)]) candidates.push_back(int(v));
   const double limit2 = max_move * max_move * spacing * spacing;
   for (int round = 0; round < passes && !candidates.empty(); ++round) {
-    const PointMatrix moves = deepest_pushes(V, candidates, points, values, spacing);
+    const PointMatrix moves = pushes(V, candidates);
     candidates.clear();
     for (Eigen::Index v = 0; v < V.rows(); ++v) {
       if (!(moves.row(v).squaredNorm() > 0)) continue;
@@ -267,6 +330,23 @@ void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
       candidates.push_back(int(v));
     }
   }
+}
+
+}  // namespace
+
+void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
+                                  const Eigen::VectorXd& values, double spacing, int passes,
+                                  double max_move, const std::vector<char>* fixed) {
+  carve_alone(V, spacing, passes, max_move, fixed, [&](const PointMatrix& at, const auto& which) {
+    return deepest_pushes(at, which, points, values, spacing);
+  });
+}
+
+void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls, double spacing, int passes,
+                                  double max_move, const std::vector<char>* fixed) {
+  carve_alone(V, spacing, passes, max_move, fixed, [&](const PointMatrix& at, const auto& which) {
+    return deepest_pushes(at, which, balls, spacing);
+  });
 }
 
 CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,

@@ -16,25 +16,37 @@ double carving_band(const LocalBrickOptions& o, const std::array<int, 3>& dims) 
   return o.carve ? auto_carving_band(o.band, *std::max_element(dims.begin(), dims.end())) : 0.0;
 }
 
-// The samples whose balls carve the mesh: the band's own (not its margin), or the wider
-// carving band's.
-Samples carving_samples(const GridView& block, const BandSamples& band,
-                        const LocalBrickOptions& o) {
+// The core samples of `band` alone, in its order.
+BandSamples core_of(BandSamples band) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
+    if (band.core[std::size_t(i)]) rows.push_back(i);
+  if (rows.size() == band.core.size()) return band;
+  band.samples = samples_at(band.samples, rows);
+  std::vector<long> source(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) source[r] = band.source[std::size_t(rows[r])];
+  band.source = std::move(source);
+  band.core.assign(rows.size(), 1);
+  return band;
+}
+
+BandSamples carving_samples(const GridView& block, const BandSamples& band,
+                            const LocalBrickOptions& o) {
   if (carving_band(o, block.whole_dims()) > 0) {
     BandOptions wide = o.band;
     wide.band = carving_band(o, block.whole_dims());
     wide.margin = 0;
     try {
-      return core_samples(select_band(block, wide));
+      return core_of(select_band(block, wide));
     } catch (const InternalError&) {
       throw;
     } catch (const Cancelled&) {
       throw;
     } catch (const Error&) {
-      return Samples();
+      return BandSamples();
     }
   }
-  return core_samples(band);
+  return core_of(band);
 }
 
 // Rounds of moving the nearest feature (triangle, edge or vertex) of each band sample within a
@@ -42,6 +54,9 @@ Samples carving_samples(const GridView& block, const BandSamples& band,
 // sample lies on its own side, kSideMargin |value| beyond it (sphere_carving.h's triangle rounds,
 // for the samples' sides alone; moves of more than kLongestSideMove spacings are not made).
 constexpr double kSideMargin = 0.1;
+
+// See put_samples_on_their_sides.
+constexpr double kNearbyTriangles = 2;
 
 // Flags, per sample, whether it lies within `reach` of a flagged vertex (cubes of side reach).
 std::vector<char> samples_near(const PointMatrix& samples, const PointMatrix& V,
@@ -67,6 +82,27 @@ std::vector<char> samples_near(const PointMatrix& samples, const PointMatrix& V,
   return out;
 }
 
+// The triangles of `mesh` that come within `reach` of one of the samples `which`: those with a
+// vertex within reach plus the longest edge of one.
+std::vector<int> triangles_near_samples(const Mesh& mesh, const PointMatrix& points,
+                                        const std::vector<int>& which, double reach) {
+  const TriangleMatrix& F = mesh.triangles;
+  const PointMatrix& V = mesh.vertices;
+  double longest = 0;
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c)
+      longest = std::max(longest, (V.row(F(t, c)) - V.row(F(t, (c + 1) % 3))).squaredNorm());
+  PointMatrix at(Eigen::Index(which.size()), 3);
+  for (std::size_t q = 0; q < which.size(); ++q) at.row(Eigen::Index(q)) = points.row(which[q]);
+  const std::vector<char> near =
+      samples_near(V, at, std::vector<char>(which.size(), 1), reach + std::sqrt(longest));
+  std::vector<int> out;
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    if (near[std::size_t(F(t, 0))] || near[std::size_t(F(t, 1))] || near[std::size_t(F(t, 2))])
+      out.push_back(int(t));
+  return out;
+}
+
 void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds,
                                 const std::vector<char>* near_vertices) {
   std::vector<char> nearby;
@@ -82,9 +118,21 @@ void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, i
   // The feature moves until the sample is just on its side (kSideMargin of its |value| beyond),
   // not its whole ball away: a smooth surface moved further would leave the samples next to it.
   const Eigen::VectorXd margins = kSideMargin * band.samples.values;
+  // A few samples (near given vertices) search, in the first round, the triangles within
+  // kNearbyTriangles spacings of them alone: exact wherever each one's nearest point lies within
+  // that (else all are searched).
+  const double reach = kNearbyTriangles * h;
+  const std::vector<int> among =
+      near_vertices ? triangles_near_samples(mesh, band.samples.points, near, reach)
+                    : std::vector<int>();
   for (int round = 0; round < rounds; ++round) {
-    const detail::SideCheck found = detail::check_sample_sides(
-        mesh, around, band.samples.points, margins, near, INFINITY, kLongestSideMove * h);
+    const bool nearby_only = round == 0 && !among.empty();
+    detail::SideCheck found =
+        detail::check_sample_sides(mesh, around, band.samples.points, margins, near, INFINITY,
+                                   kLongestSideMove * h, nearby_only ? &among : nullptr);
+    if (nearby_only && !(found.farthest <= reach))
+      found = detail::check_sample_sides(mesh, around, band.samples.points, margins, near, INFINITY,
+                                         kLongestSideMove * h);
     if (found.wrong_side == 0) return;
     mesh.vertices += found.moves;
   }

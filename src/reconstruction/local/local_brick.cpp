@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "contact_points/lattice_spheres.h"
 #include "reconstruction/carving_internal.h"
 #include "reconstruction/free_memory.h"
 #include "reconstruction/local/brick_moves.h"
@@ -374,7 +375,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // reads the band alone, and the block's values may go (a copied block of 567³ floats is 0.73 GB,
   // the largest part of a brick's memory through its subdivision and carving).
   const bool carve = options.carve && options.carve_passes > 0;
-  Samples balls = carve ? detail::carving_samples(block, band, options) : Samples();
+  BandSamples balls = carve ? detail::carving_samples(block, band, options) : BandSamples();
+  const GridGeometry block_geometry = block;
   if (!options.refine_zero_set) {
     if (options.grid_read) options.grid_read();
     detail::return_free_memory();
@@ -436,11 +438,12 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (options.refine_zero_set)
     detail::refine_vertices_on_zero_set(block, band, options, sub.mesh, fixed, &stay);
   clock.next(3);
-  if (carve && balls.points.rows() > 0)
-    detail::carve_vertices_alone(sub.mesh.vertices, balls.points, balls.values, h,
-                                 options.carve_passes, kMaxCarveMove,
+  if (carve && balls.samples.points.rows() > 0) {
+    const detail::Lattice lattice(block_geometry, balls);
+    detail::carve_vertices_alone(sub.mesh.vertices, lattice, h, options.carve_passes, kMaxCarveMove,
                                  stay.empty() ? nullptr : &stay);
-  balls = Samples();
+  }
+  balls = BandSamples();
   if (options.refine_zero_set && options.grid_read) options.grid_read();
   detail::return_free_memory();
   if (options.side_rounds > 0) {
