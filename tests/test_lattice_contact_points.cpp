@@ -311,11 +311,17 @@ TEST(LatticeContactPoints, TheLatticesBallsPushAsTheBallsAlone) {
     for (const auto* which : {&all, &some}) {
       const PointMatrix by_balls =
           detail::deepest_pushes(V, *which, band.samples.points, band.samples.values, h);
-      const PointMatrix by_boxes = detail::deepest_pushes(V, *which, lattice, h);
+      const PointMatrix by_boxes = detail::deepest_pushes(V, *which, lattice, nullptr, h);
       long pushed = 0;
       for (Eigen::Index v = 0; v < V.rows(); ++v) pushed += by_balls.row(v).squaredNorm() > 0;
       EXPECT_GT(pushed, long(which->size()) / 10) << "trial " << trial;
       EXPECT_TRUE(by_boxes == by_balls) << "trial " << trial;
+      // The band's core alone, as a brick carves: against the core's own samples.
+      const Samples core = core_samples(band);
+      EXPECT_LT(core.values.size(), band.samples.values.size());
+      const PointMatrix by_core = detail::deepest_pushes(V, *which, core.points, core.values, h);
+      EXPECT_TRUE(detail::deepest_pushes(V, *which, lattice, &band.core, h) == by_core)
+          << "trial " << trial;
     }
   }
 }

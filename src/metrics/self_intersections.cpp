@@ -138,6 +138,32 @@ class TriangleCubes {
         }
   }
 
+  // Calls f(t, u), t < u, once for every pair of triangles whose current boxes meet, from the
+  // cube holding the lower corner of their bucketed boxes' overlap (both are bucketed there):
+  // cube by cube, with no search for the cubes, where every triangle is asked about.
+  template <class F>
+  void for_each_pair(const Unwritten<Box>& bucketed, const Unwritten<Box>& current, F&& f) const {
+    const std::size_t n = keyed_.size();
+    // Each range of entries takes the cubes that begin in it, whole.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
+      std::size_t begin = range.begin();
+      while (begin > 0 && begin < n && keyed_[begin].key == keyed_[begin - 1].key) ++begin;
+      for (std::size_t start = begin, end; start < range.end(); start = end) {
+        const Key here = keyed_[start].key;
+        for (end = start + 1; end < n && keyed_[end].key == here;) ++end;
+        for (std::size_t a = start; a < end; ++a) {
+          const std::size_t t = std::size_t(keyed_[a].triangle);
+          for (std::size_t b = a + 1; b < end; ++b) {
+            const std::size_t u = std::size_t(keyed_[b].triangle);
+            if (!current[t].meets(current[u])) continue;
+            const auto corner = cube_of(bucketed[t].lo.cwiseMax(bucketed[u].lo).cast<double>());
+            if (key(corner[0], corner[1], corner[2]) == here) f(int(t), int(u));
+          }
+        }
+      }
+    });
+  }
+
  private:
   std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
     std::array<long, 3> c;
@@ -246,6 +272,14 @@ class CrossingSearch {
                                         detail::WorkCounter* counter = nullptr) const {
     auto watched = [&](int t) { return !watch || (*watch)[std::size_t(t)]; };
     tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>> found;
+    if (!watch) {
+      cubes_.for_each_pair(bucketed_, current_, [&](int t, int u) {
+        if (!flat_[std::size_t(t)] && !flat_[std::size_t(u)] && cross(mesh, t, u))
+          found.local().emplace_back(t, u);
+      });
+      if (counter) counter->add(long(mesh.triangles.rows()));
+      return sorted_pairs(found);
+    }
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index ti) {
       const int t = int(ti);
       if (!watched(t)) return;
@@ -257,13 +291,18 @@ class CrossingSearch {
         if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
       });
     });
+    return sorted_pairs(found);
+  }
+
+ private:
+  static std::vector<std::pair<int, int>> sorted_pairs(
+      const tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>>& found) {
     std::vector<std::pair<int, int>> pairs;
     for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
     std::sort(pairs.begin(), pairs.end());
     return pairs;
   }
 
- private:
   static Unwritten<Box> bucketed_boxes(const Mesh& mesh, const PointMatrix* before) {
     Unwritten<Box> boxes(std::size_t(mesh.triangles.rows()));
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {

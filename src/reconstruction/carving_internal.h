@@ -87,11 +87,12 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
 
 class Lattice;
 
-/// The same for the balls on a grid's lattice (`balls`: its samples and their values): each box
-/// of vertices reads the balls that meet it, gathered once, in place of each ball reading the
-/// vertices near it. The same pushes, bit for bit.
+/// The same for the balls on a grid's lattice (`balls`: its samples and their values; with `use`,
+/// one flag per sample, the flagged alone): each box of vertices reads the balls that meet it,
+/// gathered once, in place of each ball reading the vertices near it. The same pushes, bit for
+/// bit.
 PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                           const Lattice& balls, double spacing);
+                           const Lattice& balls, const std::vector<char>* use, double spacing);
 
 /// Up to `passes` rounds of each vertex of V pushed onto the sphere of the ball it enters
 /// deepest, every vertex on its own (no triangle checks): the result of a vertex depends on its
@@ -104,7 +105,8 @@ void carve_vertices_alone(PointMatrix& V, const PointMatrix& points, const Eigen
                           const std::vector<char>* fixed = nullptr);
 
 /// The same for balls on a grid's lattice (deepest_pushes' second form).
-void carve_vertices_alone(PointMatrix& V, const Lattice& balls, double spacing, int passes,
-                          double max_move, const std::vector<char>* fixed = nullptr);
+void carve_vertices_alone(PointMatrix& V, const Lattice& balls, const std::vector<char>* use,
+                          double spacing, int passes, double max_move,
+                          const std::vector<char>* fixed = nullptr);
 
 }  // namespace sdfcontour::detail

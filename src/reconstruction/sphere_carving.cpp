@@ -259,7 +259,8 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
 constexpr double kBallListBox = 2;
 
 PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                                   const Lattice& balls, double spacing) {
+                                   const Lattice& balls, const std::vector<char>* use,
+                                   double spacing) {
   const double inside = kInside * spacing, cell = kBallListBox * spacing;
   std::vector<std::pair<std::array<long, 3>, int>> keyed(which.size());
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t q) {
@@ -296,6 +297,7 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
         const double reach = r * (1 + 1e-12) + 1e-300;
         if (!((dx * dx + dy * dy) + dz * dz < reach * reach)) continue;
         const long s = list.sample[t];
+        if (use && !(*use)[std::size_t(s)]) continue;
         const double d2 = (x - points.row(s).transpose()).squaredNorm();
         if (!(d2 < r * r && d2 > 0)) continue;
         const double depth = r - std::sqrt(d2);
@@ -342,10 +344,11 @@ void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
   });
 }
 
-void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls, double spacing, int passes,
+void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls,
+                                  const std::vector<char>* use, double spacing, int passes,
                                   double max_move, const std::vector<char>* fixed) {
   carve_alone(V, spacing, passes, max_move, fixed, [&](const PointMatrix& at, const auto& which) {
-    return deepest_pushes(at, which, balls, spacing);
+    return deepest_pushes(at, which, balls, use, spacing);
   });
 }
 

@@ -16,37 +16,20 @@ double carving_band(const LocalBrickOptions& o, const std::array<int, 3>& dims) 
   return o.carve ? auto_carving_band(o.band, *std::max_element(dims.begin(), dims.end())) : 0.0;
 }
 
-// The core samples of `band` alone, in its order.
-BandSamples core_of(BandSamples band) {
-  std::vector<Eigen::Index> rows;
-  for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
-    if (band.core[std::size_t(i)]) rows.push_back(i);
-  if (rows.size() == band.core.size()) return band;
-  band.samples = samples_at(band.samples, rows);
-  std::vector<long> source(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) source[r] = band.source[std::size_t(rows[r])];
-  band.source = std::move(source);
-  band.core.assign(rows.size(), 1);
-  return band;
-}
-
-BandSamples carving_samples(const GridView& block, const BandSamples& band,
-                            const LocalBrickOptions& o) {
-  if (carving_band(o, block.whole_dims()) > 0) {
-    BandOptions wide = o.band;
-    wide.band = carving_band(o, block.whole_dims());
-    wide.margin = 0;
-    try {
-      return core_of(select_band(block, wide));
-    } catch (const InternalError&) {
-      throw;
-    } catch (const Cancelled&) {
-      throw;
-    } catch (const Error&) {
-      return BandSamples();
-    }
+std::optional<BandSamples> wider_carving_band(const GridView& block, const LocalBrickOptions& o) {
+  if (!(carving_band(o, block.whole_dims()) > 0)) return std::nullopt;
+  BandOptions wide = o.band;
+  wide.band = carving_band(o, block.whole_dims());
+  wide.margin = 0;
+  try {
+    return select_band(block, wide);
+  } catch (const InternalError&) {
+    throw;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const Error&) {
+    return BandSamples();
   }
-  return core_of(band);
 }
 
 // Rounds of moving the nearest feature (triangle, edge or vertex) of each band sample within a

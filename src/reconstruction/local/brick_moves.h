@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <vector>
 
 #include "sdfcontour/band/band.h"
@@ -15,10 +16,10 @@ namespace sdfcontour::detail {
 /// own, or no carving).
 double carving_band(const LocalBrickOptions& options, const std::array<int, 3>& dims);
 
-/// The samples whose balls carve the mesh, on the block's lattice (their band): the band's own
-/// (not its margin), or the wider carving band's.
-BandSamples carving_samples(const GridView& block, const BandSamples& band,
-                            const LocalBrickOptions& o);
+/// The samples whose balls carve a brick's mesh where they are more than the band's core: the
+/// wider carving band's, from `block` (none where there is no wider band; empty where the block
+/// has none).
+std::optional<BandSamples> wider_carving_band(const GridView& block, const LocalBrickOptions& o);
 
 /// `rounds` of moving the nearest feature of each band sample within a spacing `h` of the
 /// surface that lies on the wrong side of `mesh` until it lies just on its own side.

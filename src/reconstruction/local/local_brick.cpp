@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -375,7 +376,9 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // reads the band alone, and the block's values may go (a copied block of 567³ floats is 0.73 GB,
   // the largest part of a brick's memory through its subdivision and carving).
   const bool carve = options.carve && options.carve_passes > 0;
-  BandSamples balls = carve ? detail::carving_samples(block, band, options) : BandSamples();
+  // (The balls are the band's core samples, or a wider band's, which is taken from the block.)
+  std::optional<BandSamples> wider =
+      carve ? detail::wider_carving_band(block, options) : std::optional<BandSamples>();
   const GridGeometry block_geometry = block;
   if (!options.refine_zero_set) {
     if (options.grid_read) options.grid_read();
@@ -438,12 +441,13 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   if (options.refine_zero_set)
     detail::refine_vertices_on_zero_set(block, band, options, sub.mesh, fixed, &stay);
   clock.next(3);
+  const BandSamples& balls = wider ? *wider : band;
   if (carve && balls.samples.points.rows() > 0) {
     const detail::Lattice lattice(block_geometry, balls);
-    detail::carve_vertices_alone(sub.mesh.vertices, lattice, h, options.carve_passes, kMaxCarveMove,
-                                 stay.empty() ? nullptr : &stay);
+    detail::carve_vertices_alone(sub.mesh.vertices, lattice, &balls.core, h, options.carve_passes,
+                                 kMaxCarveMove, stay.empty() ? nullptr : &stay);
   }
-  balls = BandSamples();
+  wider.reset();
   if (options.refine_zero_set && options.grid_read) options.grid_read();
   detail::return_free_memory();
   if (options.side_rounds > 0) {
