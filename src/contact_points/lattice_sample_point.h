@@ -226,7 +226,10 @@ class SamplePoint {
       Eigen::Vector3d push = Eigen::Vector3d::Zero();
       for (const Sphere& q : near) {
         const Eigen::Vector3d away = c - q.centre;
-        const double d = away.norm();
+        // (The square root only where the sphere may hold c: most do not.)
+        const double d2 = away.squaredNorm();
+        if (!(d2 < q.radius * q.radius * (1 + 1e-12))) continue;
+        const double d = std::sqrt(d2);
         if (d < q.radius && d > 0) push += (q.radius - d) * away / d;
       }
       if (push.squaredNorm() == 0) break;
