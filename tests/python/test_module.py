@@ -332,7 +332,7 @@ sys.path.insert(0, {here!r})
 import sdfcontour
 from test_module import full_grid, sphere, torus
 at, options = {at!r}, {options!r}
-grid = full_grid(torus, 160 if not options else 96)
+grid = full_grid(torus, 256 if not options else 96)
 sent = []
 timer = threading.Timer(at, lambda: (sent.append(time.monotonic()),
                                      os.kill(os.getpid(), signal.SIGINT)))
@@ -352,7 +352,8 @@ assert len(F) > 0
 @pytest.mark.parametrize("at, options", [(1.0, {}), (4.0, {}),
                                          (1.0, {"band": "all", "brick_size": 0})])
 def test_ctrl_c_interrupts_within_a_second(at, options):
-    # GCP takes ~10 s: bricks first, then the reconstruction; the last case is one long global
+    # GCP takes ~6 s at 256^3 (on 2 cores; 160^3 took under 4 s once the sphere tests went box
+    # by box), so both times fall inside the run; the last case is one long global
     # triangulation with no checkpoint inside, left to finish in the background. In a fresh
     # interpreter: the threads that earlier tests leave (a Dask client's loop) do not share it.
     import sys
