@@ -94,45 +94,26 @@ void Lattice::gather(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, doubl
   out.lo = lo, out.hi = hi, out.widen = widen;
   for (auto* v : {&out.x, &out.y, &out.z, &out.r}) v->clear();
   out.sample.clear();
-  // The box widened, and by a hair more, so that rounding cannot leave out a sphere that a
-  // point's own test would find.
+  // The box widened by a hair more, so that rounding cannot leave out a sphere that a point's own
+  // test would find.
   const Eigen::Vector3d slop = 1e-9 * h_;
   const Eigen::Vector3d a = lo - slop, b = hi + slop;
-  const double far = largest_ + widen;
-  const Eigen::Vector3d first = (a.array() - far - origin_.array()) / h_.array();
-  const Eigen::Vector3d last = (b.array() + far - origin_.array()) / h_.array();
-  if (!(first.allFinite() && last.allFinite())) return;
-  auto gap = [](double x, double from, double to) {
-    return x < from ? from - x : (x > to ? x - to : 0.0);
-  };
-  const int i0 = std::max(0, int(std::ceil(first[0]))), i1 = std::min(n_[0] - 1, int(last[0]));
-  const int j0 = std::max(0, int(std::ceil(first[1]))), j1 = std::min(n_[1] - 1, int(last[1]));
-  for (int i = i0; i <= i1; ++i) {
-    const double x = origin_[0] + i * h_[0], dx = gap(x, a[0], b[0]);
-    for (int j = j0; j <= j1; ++j) {
-      const std::size_t column = std::size_t(i) * n_[1] + j;
-      const double y = origin_[1] + j * h_[1], dy = gap(y, a[1], b[1]);
-      const double across = dx * dx + dy * dy, top = double(column_max_[column]) + widen;
-      if (across >= top * top) continue;
-      const double reach = std::sqrt(top * top - across);
-      const int k0 = std::max(0, int(std::ceil((a[2] - reach - origin_[2]) / h_[2])));
-      const int k1 = std::min(n_[2] - 1, int((b[2] + reach - origin_[2]) / h_[2]));
-      for (int r = column_runs_[column]; r < column_runs_[column + 1]; ++r) {
-        const Run& run = runs_[std::size_t(r)];
-        if (run.first > k1) break;
-        const int end = run.first + runs_[std::size_t(r) + 1].begin - run.begin;
-        for (int k = std::max(k0, run.first); k <= std::min(k1, end - 1); ++k) {
-          const long t = run.begin + k - run.first;
-          const double z = origin_[2] + k * h_[2], dz = gap(z, a[2], b[2]);
-          const double bound = double(radius_up_[std::size_t(t)]) + widen;
-          if (!(across + dz * dz < bound * bound)) continue;
-          out.x.push_back(x), out.y.push_back(y), out.z.push_back(z);
-          out.r.push_back(std::abs(value(t)));
-          out.sample.push_back(t);
-        }
-      }
+  for_each_column_near(a, b, widen, [&](const Run& run, int ka, int kb, double across) {
+    const int i = int(band_.source[std::size_t(run.begin)] / (long(n_[1]) * n_[2]));
+    const int j = int(band_.source[std::size_t(run.begin)] / n_[2] % n_[1]);
+    const double x = origin_[0] + i * h_[0], y = origin_[1] + j * h_[1];
+    for (int k = ka; k <= kb; ++k) {
+      const long t = run.begin + k - run.first;
+      const double z = origin_[2] + k * h_[2];
+      const double dz = z < a[2] ? a[2] - z : (z > b[2] ? z - b[2] : 0.0);
+      const double bound = double(radius_up_[std::size_t(t)]) + widen;
+      if (!(across + dz * dz < bound * bound)) continue;
+      out.x.push_back(x), out.y.push_back(y), out.z.push_back(z);
+      out.r.push_back(std::abs(value(t)));
+      out.sample.push_back(t);
     }
-  }
+    return false;
+  });
 }
 
 }  // namespace sdfcontour::detail

@@ -94,52 +94,30 @@ class Lattice {
   // The same for the spheres that come within `extra` of c (|c - p_j| < |value_j| + extra).
   template <class F>
   bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
-    const double far = largest_ + extra;
-    const Eigen::Vector3d lo = (c.array() - far - origin_.array()) / h_.array();
-    const Eigen::Vector3d hi = (c.array() + far - origin_.array()) / h_.array();
-    if (!(lo.allFinite() && hi.allFinite())) return false;
-    const int i0 = std::max(0, int(std::ceil(lo[0]))), i1 = std::min(n_[0] - 1, int(hi[0]));
-    const int j0 = std::max(0, int(std::ceil(lo[1]))), j1 = std::min(n_[1] - 1, int(hi[1]));
-    for (int i = i0; i <= i1; ++i) {
-      const double dx = origin_[0] + i * h_[0] - c[0];
-      for (int j = j0; j <= j1; ++j) {
-        const std::size_t column = std::size_t(i) * n_[1] + j;
-        const double dy = origin_[1] + j * h_[1] - c[1];
-        const double across = dx * dx + dy * dy, top = double(column_max_[column]) + extra;
-        if (across >= top * top) continue;
-        const double reach = std::sqrt(top * top - across);
-        const int k0 = std::max(0, int(std::ceil((c[2] - reach - origin_[2]) / h_[2])));
-        const int k1 = std::min(n_[2] - 1, int((c[2] + reach - origin_[2]) / h_[2]));
-        for (int r = column_runs_[column]; r < column_runs_[column + 1]; ++r) {
-          const Run& run = runs_[std::size_t(r)];
-          if (run.first > k1) break;
-          const int last = run.first + runs_[std::size_t(r) + 1].begin - 1 - run.begin;
-          const int ka = std::max(k0, run.first), kb = std::min(k1, last);
-          const float* chunk_max = &chunk_max_[std::size_t(run.chunks - run.first / kChunk)];
-          // Chunk by chunk, each skipped where its largest sphere cannot reach c.
-          for (int q = ka / kChunk; q * kChunk <= kb; ++q) {
-            const int a = std::max(ka, q * kChunk), b = std::min(kb, q * kChunk + kChunk - 1);
-            const double below = origin_[2] + a * h_[2] - c[2],
-                         above = origin_[2] + b * h_[2] - c[2];
-            const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
-                         m = double(chunk_max[q]) + extra;
-            if (across + dz * dz >= m * m) continue;
-            for (int k = a; k <= b; ++k) {
-              const int t = run.begin + k - run.first;
-              const double z = origin_[2] + k * h_[2] - c[2], d2 = across + z * z;
-              // First against the radius rounded up to a float, then (rarely) the exact one.
-              const double bound = double(radius_up_[std::size_t(t)]) + extra;
-              if (!(d2 < bound * bound) || t == self) continue;
-              const double exact = std::abs(value(t)) + extra;
-              if (d2 < exact * exact && f(long(t), d2)) return true;
-            }
-          }
+    return for_each_column_near(c, c, extra, [&](const Run& run, int ka, int kb, double across) {
+      const float* chunk_max = &chunk_max_[std::size_t(run.chunks - run.first / kChunk)];
+      // Chunk by chunk, each skipped where its largest sphere cannot reach c.
+      for (int q = ka / kChunk; q * kChunk <= kb; ++q) {
+        const int a = std::max(ka, q * kChunk), b = std::min(kb, q * kChunk + kChunk - 1);
+        const double below = origin_[2] + a * h_[2] - c[2], above = origin_[2] + b * h_[2] - c[2];
+        const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
+                     m = double(chunk_max[q]) + extra;
+        if (across + dz * dz >= m * m) continue;
+        for (int k = a; k <= b; ++k) {
+          const int t = run.begin + k - run.first;
+          const double z = origin_[2] + k * h_[2] - c[2], d2 = across + z * z;
+          // First against the radius rounded up to a float, then (rarely) the exact one.
+          const double bound = double(radius_up_[std::size_t(t)]) + extra;
+          if (!(d2 < bound * bound) || t == self) continue;
+          const double exact = std::abs(value(t)) + extra;
+          if (d2 < exact * exact && f(long(t), d2)) return true;
         }
       }
-    }
-    return false;
+      return false;
+    });
   }
 
+ private:
  private:
   // Consecutive places k along a column, held by consecutive band samples.
   struct Run {
@@ -147,6 +125,45 @@ class Lattice {
     int first;   // its first sample's k
     int chunks;  // where its chunks' maxima start in chunk_max_
   };
+
+  // Calls f(run, ka, kb, across) for the places ka..kb of each run along each column whose
+  // spheres, grown by `widen`, can reach the box [lo, hi] (by the column's largest): `across`
+  // the column's squared distance to the box across x and y. Stops where f returns true, and
+  // returns whether it did.
+  template <class F>
+  bool for_each_column_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double widen,
+                            F&& f) const {
+    const double far = largest_ + widen;
+    const Eigen::Vector3d first = (lo.array() - far - origin_.array()) / h_.array();
+    const Eigen::Vector3d last = (hi.array() + far - origin_.array()) / h_.array();
+    if (!(first.allFinite() && last.allFinite())) return false;
+    // (Beside the box its distance; a point's box gives |x - c| exactly, as x - c would.)
+    auto gap = [](double x, double from, double to) {
+      return x < from ? from - x : (x > to ? x - to : 0.0);
+    };
+    const int i0 = std::max(0, int(std::ceil(first[0]))), i1 = std::min(n_[0] - 1, int(last[0]));
+    const int j0 = std::max(0, int(std::ceil(first[1]))), j1 = std::min(n_[1] - 1, int(last[1]));
+    for (int i = i0; i <= i1; ++i) {
+      const double dx = gap(origin_[0] + i * h_[0], lo[0], hi[0]);
+      for (int j = j0; j <= j1; ++j) {
+        const std::size_t column = std::size_t(i) * n_[1] + j;
+        const double dy = gap(origin_[1] + j * h_[1], lo[1], hi[1]);
+        const double across = dx * dx + dy * dy, top = double(column_max_[column]) + widen;
+        if (across >= top * top) continue;
+        const double reach = std::sqrt(top * top - across);
+        const int k0 = std::max(0, int(std::ceil((lo[2] - reach - origin_[2]) / h_[2])));
+        const int k1 = std::min(n_[2] - 1, int((hi[2] + reach - origin_[2]) / h_[2]));
+        for (int r = column_runs_[column]; r < column_runs_[column + 1]; ++r) {
+          const Run& run = runs_[std::size_t(r)];
+          if (run.first > k1) break;
+          const int last_k = run.first + runs_[std::size_t(r) + 1].begin - 1 - run.begin;
+          const int ka = std::max(k0, run.first), kb = std::min(k1, last_k);
+          if (ka <= kb && f(run, ka, kb, across)) return true;
+        }
+      }
+    }
+    return false;
+  }
 
   const BandSamples& band_;
   std::array<int, 3> n_;
