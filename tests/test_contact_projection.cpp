@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <random>
 
+#include "reconstruction/carving_internal.h"
+#include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/extraction/marching.h"
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/metrics/metrics.h"
@@ -311,4 +313,20 @@ TEST(ContactProjection, PointsWhoseNormalsDisagreeWithTheirPlaceLoseTheirPull) {
   const double alike = worst_height(o);
   EXPECT_LT(weighed, 0.005);      // measured: 0.0014 h
   EXPECT_GT(alike, 5 * weighed);  // measured: 0.040 h
+}
+
+// The vertex normals that each vertex sums from its own triangles (in parallel) are the serial
+// sweep's, bit for bit, on a noisy mesh with a triangle that names one vertex twice.
+TEST(ContactProjection, ParallelVertexNormalsAreTheSweepsBitForBit) {
+  Mesh mesh = marching_cubes(sample_grid(*make_builtin_shape("torus"), 24, Bounds{}));
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-0.02, 0.02);
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+    for (int a = 0; a < 3; ++a) mesh.vertices(v, a) += u(rng);
+  mesh.triangles.conservativeResize(mesh.triangles.rows() + 1, 3);
+  mesh.triangles.row(mesh.triangles.rows() - 1) << 0, 0, 5;
+  const PointMatrix sweep = detail::vertex_normals(mesh);
+  const PointMatrix parallel = detail::vertex_normals(mesh, detail::VertexTriangles(mesh));
+  EXPECT_GT(sweep.rows(), 1000);
+  EXPECT_TRUE(parallel == sweep);
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pipeline/work_counter.h"
+#include "reconstruction/carving_internal.h"
 #include "reconstruction/mesh_geometry.h"
 #include "reconstruction/point_cubes.h"
 
@@ -156,31 +157,32 @@ struct EdgeMoments {
   std::vector<Eigen::Matrix3d> sum;
   std::vector<int> triangles;
 };
-EdgeMoments edge_moments(const Mesh& mesh, double spacing, const std::vector<char>* fixed) {
+EdgeMoments edge_moments(const Mesh& mesh, const detail::VertexTriangles& around, double spacing,
+                         const std::vector<char>* fixed) {
   EdgeMoments m;
   m.slot.resize(std::size_t(mesh.vertices.rows()));
   int moving = 0;
   for (std::size_t v = 0; v < m.slot.size(); ++v) m.slot[v] = fixed && (*fixed)[v] ? -1 : moving++;
   m.sum.assign(std::size_t(moving), Eigen::Matrix3d::Zero());
   m.triangles.assign(std::size_t(moving), 0);
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
-    int slots[3];
-    for (int k = 0; k < 3; ++k) slots[k] = m.slot[std::size_t(mesh.triangles(t, k))];
-    if (slots[0] < 0 && slots[1] < 0 && slots[2] < 0) continue;
-    Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
-                                 mesh.vertices.row(mesh.triangles(t, k)))
-                                    .transpose() /
-                                spacing;
-      e2 += e * e.transpose();
-    }
-    for (const int s : slots)
-      if (s >= 0) {
-        m.sum[std::size_t(s)] += e2;
-        ++m.triangles[std::size_t(s)];
+  // Each vertex sums its triangles in ascending order (the same bits as a sweep over them).
+  tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
+    const int s = m.slot[std::size_t(v)];
+    if (s < 0) return;
+    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
+      const int t = around.triangles[std::size_t(o)];
+      Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
+                                   mesh.vertices.row(mesh.triangles(t, k)))
+                                      .transpose() /
+                                  spacing;
+        e2 += e * e.transpose();
       }
-  }
+      m.sum[std::size_t(s)] += e2;
+      ++m.triangles[std::size_t(s)];
+    }
+  });
   return m;
 }
 
@@ -202,8 +204,10 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
                                       : 0;
   ContactProjectionStats stats;
   if (points.rows() == 0 || mesh.vertices.rows() == 0) return stats;
-  const PointMatrix N = detail::vertex_normals(mesh);
-  const EdgeMoments chords = o.chord_offset ? edge_moments(mesh, spacing, fixed) : EdgeMoments{};
+  const detail::VertexTriangles around(mesh);
+  const PointMatrix N = detail::vertex_normals(mesh, around);
+  const EdgeMoments chords =
+      o.chord_offset ? edge_moments(mesh, around, spacing, fixed) : EdgeMoments{};
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   // Points within each radius, in cubes of the narrower (the wider reads more of them).
   const detail::PointCubes cubes(points, radii[0]);

@@ -1,5 +1,9 @@
 #include "reconstruction/mesh_geometry.h"
 
+#include <tbb/parallel_for.h>
+
+#include "reconstruction/carving_internal.h"
+
 namespace sdfcontour::detail {
 
 PointMatrix vertex_normals(const Mesh& mesh) {
@@ -15,6 +19,23 @@ PointMatrix vertex_normals(const Mesh& mesh) {
     const double len = N.row(v).norm();
     N.row(v) = len > 0 ? Eigen::RowVector3d(N.row(v) / len) : Eigen::RowVector3d::Zero();
   }
+  return N;
+}
+
+PointMatrix vertex_normals(const Mesh& mesh, const VertexTriangles& around) {
+  PointMatrix N(mesh.vertices.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
+    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
+      const int t = around.triangles[std::size_t(o)];
+      const Eigen::RowVector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
+                               b = mesh.vertices.row(mesh.triangles(t, 1)),
+                               c = mesh.vertices.row(mesh.triangles(t, 2));
+      sum += (b - a).cross(c - a);
+    }
+    const double len = sum.norm();
+    N.row(v) = len > 0 ? Eigen::RowVector3d(sum / len) : Eigen::RowVector3d::Zero();
+  });
   return N;
 }
 

@@ -9,6 +9,12 @@ namespace sdfcontour::detail {
 /// none). Serial: the sums' order, hence the result, is fixed.
 PointMatrix vertex_normals(const Mesh& mesh);
 
+struct VertexTriangles;
+
+/// The same, bit for bit, in parallel: each vertex sums its triangles (`around`, the mesh's) in
+/// ascending order, as the serial sweep does.
+PointMatrix vertex_normals(const Mesh& mesh, const VertexTriangles& around);
+
 /// Barycentric coordinates of q (in the plane of triangle t) in triangle t; zero for a degenerate
 /// triangle.
 Eigen::Vector3d barycentric(const Mesh& mesh, Eigen::Index t, const Eigen::Vector3d& q);

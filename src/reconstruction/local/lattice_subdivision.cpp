@@ -83,15 +83,30 @@ struct KeyOrder {
 
 KeyOrder order_by_key(std::vector<std::pair<VertexKey, std::size_t>> order) {
   tbb::parallel_sort(order.begin(), order.end());
+  // Each distinct key's rank, counted in blocks of the sorted list (in parallel), then the blocks'
+  // counts summed in order.
+  const std::size_t count = order.size(), block = 1 << 16, blocks = (count + block - 1) / block;
+  auto starts_key = [&](std::size_t i) { return i == 0 || order[i].first != order[i - 1].first; };
+  std::vector<std::size_t> before(blocks + 1, 0);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    for (std::size_t i = b * block; i < std::min(count, (b + 1) * block); ++i)
+      before[b + 1] += starts_key(i);
+  });
+  for (std::size_t b = 0; b < blocks; ++b) before[b + 1] += before[b];
   KeyOrder out;
-  out.id.resize(order.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    if (i == 0 || order[i].first != order[i - 1].first) {
-      out.keys.push_back(order[i].first);
-      out.first_of.push_back(order[i].second);
+  out.id.resize(count);
+  out.keys.resize(before.back());
+  out.first_of.resize(before.back());
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    std::size_t rank = before[b];
+    for (std::size_t i = b * block; i < std::min(count, (b + 1) * block); ++i) {
+      if (starts_key(i)) {
+        out.keys[rank] = order[i].first;
+        out.first_of[rank++] = order[i].second;
+      }
+      out.id[order[i].second] = int(rank) - 1;
     }
-    out.id[order[i].second] = int(out.keys.size()) - 1;
-  }
+  });
   return out;
 }
 
@@ -147,7 +162,7 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
       for (int v = 0; u + v <= n; ++v, ++i) out[i] = lattice_point(in, t, u, v, n);
   });
   std::vector<std::pair<VertexKey, std::size_t>> order(all.size());
-  for (std::size_t i = 0; i < all.size(); ++i) order[i] = {all[i].key, i};
+  tbb::parallel_for(std::size_t(0), all.size(), [&](std::size_t i) { order[i] = {all[i].key, i}; });
   KeyOrder named = order_by_key(std::move(order));
   const std::vector<std::size_t>& first_of = named.first_of;
   const std::vector<int>& id = named.id;
@@ -155,10 +170,10 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   out.keys = std::move(named.keys);
   out.mesh.vertices.resize(Eigen::Index(first_of.size()), 3);
   out.on_feature.resize(first_of.size());
-  for (std::size_t v = 0; v < first_of.size(); ++v) {
+  tbb::parallel_for(std::size_t(0), first_of.size(), [&](std::size_t v) {
     out.mesh.vertices.row(Eigen::Index(v)) = all[first_of[v]].position.transpose();
     out.on_feature[v] = all[first_of[v]].on_feature;
-  }
+  });
   const int children = n * n;
   const auto corners = child_corners(n);
   out.mesh.triangles.resize(f * children, 3);
