@@ -9,6 +9,7 @@
 #include <optional>
 #include <utility>
 
+#include "pipeline/uninitialised_allocator.h"
 #include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 
@@ -28,10 +29,12 @@ std::uint64_t inside_slot(int u, int v, int n) {
   return std::uint64_t(u * s) * (kFinestLattice + 1) + std::uint64_t(v * s);
 }
 
+// (No default member values: a large array of them is first written by the parallel loop that
+// fills it.)
 struct KeyedPosition {
   VertexKey key;
   Eigen::Vector3d position;
-  char on_feature = 0;
+  char on_feature;
 };
 
 // The vertex at j / n of the way from level-0 vertex x to y, named and placed from the end with
@@ -58,7 +61,8 @@ KeyedPosition lattice_point(const KeyedTriangles& in, Eigen::Index t, int u, int
   return {{kInside | in.triangle_name[std::size_t(t)], inside_slot(u, v, n)},
           (double(n - u - v) / n) * in.vertices.row(a).transpose() +
               (double(u) / n) * in.vertices.row(b).transpose() +
-              (double(v) / n) * in.vertices.row(c).transpose()};
+              (double(v) / n) * in.vertices.row(c).transpose(),
+          char(0)};
 }
 
 // The lattice coordinates (u, v) of the corners of child k of a triangle cut into n x n, in the
@@ -155,7 +159,8 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   const Eigen::Index f = in.triangles.rows();
   // Lattice point (u, v): u steps towards the triangle's 2nd vertex, v towards its 3rd.
   const int points = (n + 1) * (n + 2) / 2;
-  std::vector<KeyedPosition> all(std::size_t(f) * std::size_t(points));
+  std::vector<KeyedPosition, UninitialisedAllocator<KeyedPosition>> all(std::size_t(f) *
+                                                                        std::size_t(points));
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
     KeyedPosition* out = all.data() + std::size_t(t) * std::size_t(points);
     for (int u = 0, i = 0; u <= n; ++u)
