@@ -95,16 +95,11 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
                            const Lattice& balls, const std::vector<char>* use, double spacing);
 
 /// Up to `passes` rounds of each vertex of V pushed onto the sphere of the ball it enters
-/// deepest, every vertex on its own (no triangle checks): the result of a vertex depends on its
-/// position and the balls near it alone, as bricks need. A push that would take a vertex more
-/// than `max_move` spacings from where it started is not made (a long one meets a part the mesh
-/// lacks, or the other side of a thin part), which also bounds how far apart two triangles that
-/// come to cross can have started.
-void carve_vertices_alone(PointMatrix& V, const PointMatrix& points, const Eigen::VectorXd& values,
-                          double spacing, int passes, double max_move,
-                          const std::vector<char>* fixed = nullptr);
-
-/// The same for balls on a grid's lattice (deepest_pushes' second form).
+/// deepest (the balls on a grid's lattice, `use` as in deepest_pushes), every vertex on its own
+/// (no triangle checks): the result of a vertex depends on its position and the balls near it
+/// alone, as bricks need. A push that would take a vertex more than `max_move` spacings from
+/// where it started is not made (a long one meets a part the mesh lacks, or the other side of a
+/// thin part), which also bounds how far apart two triangles that come to cross can have started.
 void carve_vertices_alone(PointMatrix& V, const Lattice& balls, const std::vector<char>* use,
                           double spacing, int passes, double max_move,
                           const std::vector<char>* fixed = nullptr);

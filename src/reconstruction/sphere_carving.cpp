@@ -310,19 +310,16 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
   return pushes_onto_spheres(V, best, points, balls.values());
 }
 
-namespace {
-
-// carve_vertices_alone's rounds, `pushes(V, candidates)` the deepest pushes.
-template <class Pushes>
-void carve_alone(PointMatrix& V, double spacing, int passes, double max_move,
-                 const std::vector<char>* fixed, Pushes&& pushes) {
+void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls,
+                                  const std::vector<char>* use, double spacing, int passes,
+                                  double max_move, const std::vector<char>* fixed) {
   const PointMatrix start = V;
   std::vector<int> candidates;
   for (Eigen::Index v = 0; v < V.rows(); ++v)
     if (!fixed || !(*fixed)[std::size_t(v)]) candidates.push_back(int(v));
   const double limit2 = max_move * max_move * spacing * spacing;
   for (int round = 0; round < passes && !candidates.empty(); ++round) {
-    const PointMatrix moves = pushes(V, candidates);
+    const PointMatrix moves = deepest_pushes(V, candidates, balls, use, spacing);
     candidates.clear();
     for (Eigen::Index v = 0; v < V.rows(); ++v) {
       if (!(moves.row(v).squaredNorm() > 0)) continue;
@@ -332,24 +329,6 @@ void carve_alone(PointMatrix& V, double spacing, int passes, double max_move,
       candidates.push_back(int(v));
     }
   }
-}
-
-}  // namespace
-
-void detail::carve_vertices_alone(PointMatrix& V, const PointMatrix& points,
-                                  const Eigen::VectorXd& values, double spacing, int passes,
-                                  double max_move, const std::vector<char>* fixed) {
-  carve_alone(V, spacing, passes, max_move, fixed, [&](const PointMatrix& at, const auto& which) {
-    return deepest_pushes(at, which, points, values, spacing);
-  });
-}
-
-void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls,
-                                  const std::vector<char>* use, double spacing, int passes,
-                                  double max_move, const std::vector<char>* fixed) {
-  carve_alone(V, spacing, passes, max_move, fixed, [&](const PointMatrix& at, const auto& which) {
-    return deepest_pushes(at, which, balls, use, spacing);
-  });
 }
 
 CarvingStats carve_mesh(Mesh& mesh, const PointMatrix& points, const Eigen::VectorXd& values,
