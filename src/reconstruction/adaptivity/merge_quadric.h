@@ -35,6 +35,15 @@ struct PlaneQuadric {
   // gently curved regions (bunny 128^3, TOL 0.1: L1 1.28x TOL 0's against 1.13x with 1e-6).
   Eigen::Vector3d minimiser(const Eigen::Vector3d& centre) const {
     constexpr double kFree = 1e-6;
+    // Where every direction is fixed by a clear margin (most merges on a curved surface), the
+    // minimiser is A's solve; the eigenvalues alone, in closed form, tell. Closed-form
+    // eigenvectors of a nearly flat region's quadric are not accurate enough: the built-in box
+    // at 32^3, TOL 0.25, merged to 82 triangles with them against 72.
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> values;
+    values.computeDirect(A, Eigen::EigenvaluesOnly);
+    const Eigen::Vector3d approximate = values.eigenvalues();
+    if (approximate[0] > 2 * kFree * approximate[2])
+      return centre + A.ldlt().solve(Eigen::Vector3d(-(A * centre + b)));
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(A);
     const Eigen::Vector3d lambda = eig.eigenvalues();
     const Eigen::Matrix3d U = eig.eigenvectors();
