@@ -190,50 +190,24 @@ class TriangleCubes {
   Unwritten<Entry> keyed_;  // (cube key, triangle), sorted
 };
 
-Point vertex_point(const Mesh& mesh, int v) {
-  return Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
+std::array<Eigen::Vector3d, 3> corners(const Mesh& mesh, int t) {
+  std::array<Eigen::Vector3d, 3> c;
+  for (int k = 0; k < 3; ++k)
+    c[std::size_t(k)] = mesh.vertices.row(mesh.triangles(t, k)).transpose();
+  return c;
+}
+
+std::array<int, 3> ids(const Mesh& mesh, int t) {
+  return {mesh.triangles(t, 0), mesh.triangles(t, 1), mesh.triangles(t, 2)};
 }
 
 // Whether triangles s and t meet other than in the vertices and edge they share.
 bool cross(const Mesh& mesh, int s, int t) {
-  auto at = [&](int v) { return vertex_point(mesh, v); };
-  const auto S = mesh.triangles.row(s), T = mesh.triangles.row(t);
-  int shared_s = -1, shared_t = -1, shared = 0;
-  bool in_t[3] = {false, false, false};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (S[i] == T[j]) shared_s = i, shared_t = j, ++shared, in_t[i] = true;
-  if (shared == 3) return true;  // the same triangle twice
-  if (shared == 2) {
-    // A shared edge: they overlap iff they fold onto each other (coplanar, the opposite vertices
-    // on the same side of the edge); subdividing such a fold makes triangles that cross.
-    const int a = !in_t[0] ? 0 : !in_t[1] ? 1 : 2;
-    int b = 0;
-    while (T[b] == S[0] || T[b] == S[1] || T[b] == S[2]) ++b;
-    const Point u = at(S[(a + 1) % 3]), v = at(S[(a + 2) % 3]), p = at(S[a]), q = at(T[b]);
-    return !CGAL::collinear(u, v, p) && CGAL::coplanar(u, v, p, q) &&
-           CGAL::coplanar_orientation(u, v, p, q) == CGAL::POSITIVE;
-  }
-  const K::Triangle_3 a(at(S[0]), at(S[1]), at(S[2])), b(at(T[0]), at(T[1]), at(T[2]));
-  if (shared == 0) return CGAL::do_intersect(a, b);
-  // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.
-  const K::Segment_3 opposite_s(at(S[(shared_s + 1) % 3]), at(S[(shared_s + 2) % 3])),
-      opposite_t(at(T[(shared_t + 1) % 3]), at(T[(shared_t + 2) % 3]));
-  // An edge with both ends strictly on one side of the other's plane cuts neither triangle, and
-  // then the two meet in the shared vertex alone (most neighbours on a mesh: two orientations
-  // instead of two segment-triangle tests).
-  auto apart = [](const K::Triangle_3& x, const K::Segment_3& e) {
-    const CGAL::Orientation side = CGAL::orientation(x[0], x[1], x[2], e.source());
-    return side != CGAL::COPLANAR && CGAL::orientation(x[0], x[1], x[2], e.target()) == side;
-  };
-  if (apart(a, opposite_t) || apart(b, opposite_s)) return false;
-  return CGAL::do_intersect(opposite_s, b) || CGAL::do_intersect(opposite_t, a);
+  return detail::triangles_cross(corners(mesh, s), ids(mesh, s), corners(mesh, t), ids(mesh, t));
 }
 
 bool degenerate(const Mesh& mesh, int t) {
-  const auto T = mesh.triangles.row(t);
-  return CGAL::collinear(vertex_point(mesh, T[0]), vertex_point(mesh, T[1]),
-                         vertex_point(mesh, T[2]));
+  return detail::collinear_corners(corners(mesh, t));
 }
 
 // One flag per triangle: whether any of its vertices is flagged in `vertices`.
@@ -323,6 +297,55 @@ class CrossingSearch {
 };
 
 }  // namespace
+
+namespace detail {
+
+bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s_at, const std::array<int, 3>& S,
+                     const std::array<Eigen::Vector3d, 3>& t_at, const std::array<int, 3>& T) {
+  auto point = [](const Eigen::Vector3d& x) { return Point(x[0], x[1], x[2]); };
+  int shared_s = -1, shared_t = -1, shared = 0;
+  bool in_t[3] = {false, false, false};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (S[std::size_t(i)] == T[std::size_t(j)])
+        shared_s = i, shared_t = j, ++shared, in_t[i] = true;
+  if (shared == 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // A shared edge: they overlap iff they fold onto each other (coplanar, the opposite vertices
+    // on the same side of the edge); subdividing such a fold makes triangles that cross.
+    const int a = !in_t[0] ? 0 : !in_t[1] ? 1 : 2;
+    int b = 0;
+    while (T[std::size_t(b)] == S[0] || T[std::size_t(b)] == S[1] || T[std::size_t(b)] == S[2]) ++b;
+    const Point u = point(s_at[std::size_t(a + 1) % 3]), v = point(s_at[std::size_t(a + 2) % 3]),
+                p = point(s_at[std::size_t(a)]), q = point(t_at[std::size_t(b)]);
+    return !CGAL::collinear(u, v, p) && CGAL::coplanar(u, v, p, q) &&
+           CGAL::coplanar_orientation(u, v, p, q) == CGAL::POSITIVE;
+  }
+  const K::Triangle_3 a(point(s_at[0]), point(s_at[1]), point(s_at[2])),
+      b(point(t_at[0]), point(t_at[1]), point(t_at[2]));
+  if (shared == 0) return CGAL::do_intersect(a, b);
+  // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.
+  const K::Segment_3 opposite_s(point(s_at[std::size_t(shared_s + 1) % 3]),
+                                point(s_at[std::size_t(shared_s + 2) % 3])),
+      opposite_t(point(t_at[std::size_t(shared_t + 1) % 3]),
+                 point(t_at[std::size_t(shared_t + 2) % 3]));
+  // An edge with both ends strictly on one side of the other's plane cuts neither triangle, and
+  // then the two meet in the shared vertex alone (most neighbours on a mesh: two orientations
+  // instead of two segment-triangle tests).
+  auto apart = [](const K::Triangle_3& x, const K::Segment_3& e) {
+    const CGAL::Orientation side = CGAL::orientation(x[0], x[1], x[2], e.source());
+    return side != CGAL::COPLANAR && CGAL::orientation(x[0], x[1], x[2], e.target()) == side;
+  };
+  if (apart(a, opposite_t) || apart(b, opposite_s)) return false;
+  return CGAL::do_intersect(opposite_s, b) || CGAL::do_intersect(opposite_t, a);
+}
+
+bool collinear_corners(const std::array<Eigen::Vector3d, 3>& c) {
+  return CGAL::collinear(Point(c[0][0], c[0][1], c[0][2]), Point(c[1][0], c[1][1], c[1][2]),
+                         Point(c[2][0], c[2][1], c[2][2]));
+}
+
+}  // namespace detail
 
 std::vector<std::pair<int, int>> self_intersecting_triangles(const Mesh& mesh,
                                                              const std::vector<char>* watch) {

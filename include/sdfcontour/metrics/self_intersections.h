@@ -4,6 +4,7 @@
 // breaks booleans, tetrahedral meshing and inside tests).
 #pragma once
 
+#include <array>
 #include <functional>
 #include <utility>
 #include <vector>
@@ -21,6 +22,16 @@ namespace sdfcontour {
 /// (TBB), the same result for any thread count.
 std::vector<std::pair<int, int>> self_intersecting_triangles(
     const Mesh& mesh, const std::vector<char>* watch = nullptr);
+
+namespace detail {
+/// Whether two triangles, given by their corners and vertex ids (an id they share is a corner
+/// they share), meet other than in what they share: the test self_intersecting_triangles makes
+/// of each pair. Exact predicates.
+bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s, const std::array<int, 3>& s_ids,
+                     const std::array<Eigen::Vector3d, 3>& t, const std::array<int, 3>& t_ids);
+/// Whether a triangle's corners are collinear (exact): the search leaves such triangles out.
+bool collinear_corners(const std::array<Eigen::Vector3d, 3>& corners);
+}  // namespace detail
 
 /// What revert_self_intersections did.
 struct UntangleStats {
