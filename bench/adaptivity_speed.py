@@ -14,7 +14,7 @@ import json
 import os
 import subprocess
 
-from common import CLI, MESHES, geomean, l1, report
+from common import CLI, geomean, l1, report, scale_grid
 
 
 def run(cli, grid, out, stats, *options):
@@ -41,11 +41,7 @@ def main():
     rows = []
     for res in map(int, args.res.split(",")):
         for name in args.meshes.split(","):
-            prefix = os.path.join(args.work, f"{name}_{res}")
-            if not os.path.exists(prefix + ".npy"):
-                extra = ["--truncate", "8"] if res > 128 else []
-                subprocess.run([args.cli, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
-                                prefix, "--float32", "-q", *extra], check=True, stdout=subprocess.DEVNULL)
+            prefix = scale_grid(args.cli, args.work, name, res)
             grid, gt = prefix + ".npy", prefix + "_mesh.ply"
             out, stats = os.path.join(args.work, "out_adapt.ply"), os.path.join(args.work, "out_adapt.json")
             _, _, mc_triangles = run(args.cli, grid, out, stats, "--method", "mc")

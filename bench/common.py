@@ -76,6 +76,17 @@ def mesh_names(given):
     return sorted(f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
 
 
+def scale_grid(cli, work, name, res):
+    """The prefix of bench/scale.py's grid of the shared mesh `name` at res^3 in `work` (float32;
+    exact at <= 128^3, truncated at 8 spacings above), sampled if it is not there yet."""
+    prefix = os.path.join(work, f"{name}_{res}")
+    if not os.path.exists(prefix + ".npy"):
+        extra = ["--truncate", "8"] if res > 128 else []
+        subprocess.run([cli, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
+                        prefix, "--float32", "-q", *extra], check=True, stdout=subprocess.DEVNULL)
+    return prefix
+
+
 def sample_shared_mesh(name, res, folder, truncate=None):
     """Samples the shared mesh `name` on a res^3 grid into `folder` (`sdfcontour sample`; with
     `truncate`, the distances truncated at that many spacings): the prefix of its `.npy` grid and

@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 
-from common import CLI, MESHES, geomean, l1, timed
+from common import CLI, MESHES, geomean, l1, scale_grid, timed
 
 
 def write_ply(path, v, f):
@@ -133,11 +133,7 @@ def main():
     self_cmd = [sys.executable, os.path.abspath(__file__), "--peer"]
     for res in map(int, args.res.split(",")):
         for name in args.meshes.split(","):
-            prefix = os.path.join(args.work, f"{name}_{res}")
-            if not os.path.exists(prefix + ".npy"):
-                extra = ["--truncate", "8"] if res > 128 else []
-                subprocess.run([args.cli, "sample", os.path.join(MESHES, name + ".obj"), "--res", str(res), "-o",
-                                prefix, "--float32", "-q", *extra], check=True, stdout=subprocess.DEVNULL)
+            prefix = scale_grid(args.cli, args.work, name, res)
             gt = prefix + "_mesh.ply"
             for method in args.methods.split(","):
                 if method == "mt-rt" and res > args.mtrt_max:
