@@ -121,6 +121,7 @@ class Collapser {
     for (std::size_t t = 0; t < triangles_.size(); ++t)
       for (int v : triangles_[t]) star_[std::size_t(v)].push_back(int(t));
     alive_.assign(triangles_.size(), 1);
+    seen_.assign(triangles_.size(), 0);
     removed_.assign(n, 0);
     version_.assign(n, 0);
     blocked_.resize(n);
@@ -277,18 +278,18 @@ class Collapser {
   // crossing pairs, each within 0.2 h, which a second round of merges had to freeze).
   bool crosses_nearby(int a, int b, const std::vector<Corners>& star, const std::vector<int>& na,
                       const std::vector<int>& nb) const {
-    std::vector<int> ring;
+    // Each triangle once: the star's marked first, so that only the others join the ring.
+    if (++ring_id_ == 0) std::fill(seen_.begin(), seen_.end(), 0u), ring_id_ = 1;
+    for (int v : {a, b})
+      for (int t : star_[std::size_t(v)]) seen_[std::size_t(t)] = ring_id_;
+    std::vector<int>& ring = ring_;
+    ring.clear();
     for (const std::vector<int>* link : {&na, &nb})
       for (int u : *link)
         if (u != a && u != b)
-          for (int t : star_[std::size_t(u)]) {
-            const Triangle& T = triangles_[std::size_t(t)];
-            bool in_star = false;
-            for (int w : T) in_star |= w == a || w == b;
-            if (!in_star) ring.push_back(t);
-          }
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+          for (int t : star_[std::size_t(u)])
+            if (seen_[std::size_t(t)] != ring_id_)
+              seen_[std::size_t(t)] = ring_id_, ring.push_back(t);
     auto cross = [](const Corners& s, const Corners& t) {
       return !clearly_apart(s, t) && !collinear_corners(s.at) && !collinear_corners(t.at) &&
              triangles_cross(s.at, s.ids, t.at, t.ids);
@@ -369,6 +370,9 @@ class Collapser {
   std::vector<char> alive_, removed_;
   std::vector<unsigned> version_;
   std::priority_queue<Entry> heap_;
+  mutable std::vector<unsigned> seen_;  // per triangle: the last crossing test that read it
+  mutable unsigned ring_id_ = 0;
+  mutable std::vector<int> ring_;
   std::unordered_set<long long> refused_;  // edges refused since their ends last changed
   std::vector<std::vector<int>> blocked_;  // per vertex: the other ends of its refused edges
 };
