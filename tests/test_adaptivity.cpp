@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cmath>
+#include <map>
 
 #include "reconstruction/adaptivity/edge_collapse.h"
 #include "sdfcontour/extraction/marching.h"
@@ -231,6 +232,69 @@ TEST(Adaptivity, ThinPartsMergeWithoutCrossing) {
   EXPECT_LT(5 * coarse.mesh->triangles.rows(), fine.mesh->triangles.rows());
 }
 
+// A unit sphere's triangles: an octahedron's faces split in four `levels` times, the vertices
+// put on the sphere.
+Mesh subdivided_octahedron(int levels) {
+  std::vector<Eigen::Vector3d> v = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                    {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
+  std::vector<std::array<int, 3>> f = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                       {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> middle;
+    auto mid = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      const auto found = middle.find(key);
+      if (found != middle.end()) return found->second;
+      v.push_back((v[std::size_t(a)] + v[std::size_t(b)]).normalized());
+      return middle[key] = int(v.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> next;
+    for (const auto& [a, b, c] : f) {
+      const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      next.insert(next.end(), {{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}});
+    }
+    f = next;
+  }
+  Mesh m;
+  m.vertices.resize(Eigen::Index(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.vertices.row(Eigen::Index(i)) = v[i].transpose();
+  m.triangles.resize(Eigen::Index(f.size()), 3);
+  for (std::size_t t = 0; t < f.size(); ++t)
+    for (int k = 0; k < 3; ++k) m.triangles(Eigen::Index(t), k) = f[t][std::size_t(k)];
+  return m;
+}
+
+TEST(Adaptivity, CrossingsBetweenSeparatePartsAreMergedAgainWithTheirRegionFrozen) {
+  // A hollow shell: a sphere of radius 1 around one of radius 0.99 turned inside out, two parts
+  // that share no vertex. Merged on their own planes with a loose tolerance, the outer sphere's
+  // large triangles cut chords deeper than the gap (a spacing of 0.05 here: 0.2 h apart), through
+  // the inner sphere. The test of each collapse reads only the triangles around it, so the
+  // whole-mesh check finds these crossings and the merging runs again with their regions frozen:
+  // the result is free of crossings and still merged (measured: two rounds, 4,096 -> 1,652
+  // triangles).
+  Mesh outer = subdivided_octahedron(4), inner = subdivided_octahedron(4);
+  inner.vertices *= 0.99;
+  Mesh shell;
+  const Eigen::Index n = outer.vertices.rows();
+  shell.vertices.resize(2 * n, 3);
+  shell.vertices << outer.vertices, inner.vertices;
+  shell.triangles.resize(2 * outer.triangles.rows(), 3);
+  shell.triangles.topRows(outer.triangles.rows()) = outer.triangles;
+  for (Eigen::Index t = 0; t < inner.triangles.rows(); ++t)
+    shell.triangles.row(outer.triangles.rows() + t) << inner.triangles(t, 0) + int(n),
+        inner.triangles(t, 2) + int(n), inner.triangles(t, 1) + int(n);
+  ASSERT_TRUE(self_intersecting_triangles(shell).empty());
+  AdaptivityOptions o;
+  o.tolerance = 0.5;
+  o.brick_spacings = 0;
+  o.fit_rounds = 0;  // the fit moves chords back out to the surface, which can undo a crossing
+  AdaptivityStats stats;
+  const Mesh merged = adapt_mesh(shell, PointMatrix(0, 3), PointMatrix(0, 3), 0.05, o, &stats);
+  EXPECT_GE(stats.freeze_rounds, 1);
+  EXPECT_TRUE(self_intersecting_triangles(merged).empty());
+  EXPECT_LT(2 * merged.triangles.rows(), shell.triangles.rows());
+}
+
 TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {
   const auto sphere = make_builtin_shape("sphere");
   const Grid g = sample_grid(*sphere, 16, Bounds{});
@@ -242,7 +306,7 @@ TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {
   AdaptivityOptions o;
   o.tolerance = -1;
   EXPECT_THROW(adapt_mesh(m, none, none, 0.1, o), Error);
-  o.tolerance = 0.1;
+  o.tolerance = 0.5;
   EXPECT_THROW(adapt_mesh(m, none, none, 0, o), Error);
   EXPECT_THROW(adapt_mesh(m, PointMatrix::Zero(2, 3), none, 0.1, o), Error);
   o.brick_spacings = -1;
