@@ -71,10 +71,7 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
   // the crossings frozen: the input's own triangles stay there.
   std::vector<char> frozen(std::size_t(mesh.vertices.rows()), 0);
   std::vector<int> source(frozen.size());
-  // The input's own crossings (the cube's at 128^3) stay as they are, frozen from the start, so
-  // that the rounds below chase only new ones.
   for (std::size_t v = 0; v < source.size(); ++v) source[v] = int(v);
-  freeze_around_crossings(mesh, mesh, source, spacing, frozen);
   const detail::CollapseLimits limits{spacing, options.tolerance, options.max_normal_turn};
   // Bricks on a lattice from the mesh's lowest corner; 0 spacings: one brick holds it all.
   const Eigen::Vector3d origin = mesh.vertices.colwise().minCoeff().transpose();
@@ -91,6 +88,10 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
     if (round == kFreezeRounds ||
         !freeze_around_crossings(mesh, state.mesh, state.source, spacing, frozen))
       break;
+    // The input's own crossings (the cube's at 128^3) stay as they are, so that the rounds chase
+    // only new ones. Searched only here: most inputs have none, and the search over the input
+    // took 1.05 s of bunny 256^3's 9.8 s of merging.
+    if (round == 0) freeze_around_crossings(mesh, mesh, source, spacing, frozen);
     ++s.freeze_rounds;
   }
   Mesh out = std::move(state.mesh);
