@@ -98,9 +98,7 @@ void Lattice::gather(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, doubl
   // test would find.
   const Eigen::Vector3d slop = 1e-9 * h_;
   const Eigen::Vector3d a = lo - slop, b = hi + slop;
-  for_each_column_near(a, b, widen, [&](const Run& run, int ka, int kb, double across) {
-    const int i = int(band_.source[std::size_t(run.begin)] / (long(n_[1]) * n_[2]));
-    const int j = int(band_.source[std::size_t(run.begin)] / n_[2] % n_[1]);
+  auto take = [&](const Run& run, int i, int j, int ka, int kb, double across) {
     const double x = origin_[0] + i * h_[0], y = origin_[1] + j * h_[1];
     for (int k = ka; k <= kb; ++k) {
       const long t = run.begin + k - run.first;
@@ -113,7 +111,8 @@ void Lattice::gather(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, doubl
       out.sample.push_back(t);
     }
     return false;
-  });
+  };
+  for_each_column_near(a, b, widen, take);
 }
 
 }  // namespace sdfcontour::detail

@@ -94,7 +94,7 @@ class Lattice {
   // The same for the spheres that come within `extra` of c (|c - p_j| < |value_j| + extra).
   template <class F>
   bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
-    return for_each_column_near(c, c, extra, [&](const Run& run, int ka, int kb, double across) {
+    auto search = [&](const Run& run, int, int, int ka, int kb, double across) {
       const float* chunk_max = &chunk_max_[std::size_t(run.chunks - run.first / kChunk)];
       // Chunk by chunk, each skipped where its largest sphere cannot reach c.
       for (int q = ka / kChunk; q * kChunk <= kb; ++q) {
@@ -114,10 +114,10 @@ class Lattice {
         }
       }
       return false;
-    });
+    };
+    return for_each_column_near(c, c, extra, search);
   }
 
- private:
  private:
   // Consecutive places k along a column, held by consecutive band samples.
   struct Run {
@@ -126,7 +126,7 @@ class Lattice {
     int chunks;  // where its chunks' maxima start in chunk_max_
   };
 
-  // Calls f(run, ka, kb, across) for the places ka..kb of each run along each column whose
+  // Calls f(run, i, j, ka, kb, across) for the places ka..kb of each run along column (i, j) whose
   // spheres, grown by `widen`, can reach the box [lo, hi] (by the column's largest): `across`
   // the column's squared distance to the box across x and y. Stops where f returns true, and
   // returns whether it did.
@@ -158,7 +158,7 @@ class Lattice {
           if (run.first > k1) break;
           const int last_k = run.first + runs_[std::size_t(r) + 1].begin - 1 - run.begin;
           const int ka = std::max(k0, run.first), kb = std::min(k1, last_k);
-          if (ka <= kb && f(run, ka, kb, across)) return true;
+          if (ka <= kb && f(run, i, j, ka, kb, across)) return true;
         }
       }
     }

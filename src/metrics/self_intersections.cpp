@@ -190,6 +190,10 @@ class TriangleCubes {
   Unwritten<Entry> keyed_;  // (cube key, triangle), sorted
 };
 
+Point point(const Eigen::Vector3d& x) {
+  return Point(x[0], x[1], x[2]);
+}
+
 std::array<Eigen::Vector3d, 3> corners(const Mesh& mesh, int t) {
   std::array<Eigen::Vector3d, 3> c;
   for (int k = 0; k < 3; ++k)
@@ -302,7 +306,6 @@ namespace detail {
 
 bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s_at, const std::array<int, 3>& S,
                      const std::array<Eigen::Vector3d, 3>& t_at, const std::array<int, 3>& T) {
-  auto point = [](const Eigen::Vector3d& x) { return Point(x[0], x[1], x[2]); };
   int shared_s = -1, shared_t = -1, shared = 0;
   bool in_t[3] = {false, false, false};
   for (int i = 0; i < 3; ++i)
@@ -341,8 +344,7 @@ bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s_at, const std::arra
 }
 
 bool collinear_corners(const std::array<Eigen::Vector3d, 3>& c) {
-  return CGAL::collinear(Point(c[0][0], c[0][1], c[0][2]), Point(c[1][0], c[1][1], c[1][2]),
-                         Point(c[2][0], c[2][1], c[2][2]));
+  return CGAL::collinear(point(c[0]), point(c[1]), point(c[2]));
 }
 
 }  // namespace detail

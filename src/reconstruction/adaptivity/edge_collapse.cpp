@@ -26,7 +26,8 @@ struct Entry {
   double cost, length;
   int a, b;  // a < b
   unsigned version_a, version_b;
-  // The heap's top is the cheapest, ties broken by the edge's ends: the same order every run.
+  // The heap's top is the cheapest (costs under 1e-12 count as 0: a flat region's merges are
+  // equal), then the shortest, then by the edge's ends: the same order every run.
   bool operator<(const Entry& o) const {
     return std::tie(cost, length, a, b) > std::tie(o.cost, o.length, o.a, o.b);
   }
@@ -41,12 +42,6 @@ struct Corners {
     Eigen::AlignedBox3d b(at[0]);
     b.extend(at[1]), b.extend(at[2]);
     return b;
-  }
-  bool shares(const Corners& o) const {
-    for (int u : ids)
-      for (int v : o.ids)
-        if (u == v) return true;
-    return false;
   }
 };
 
@@ -102,7 +97,10 @@ class Collapser {
  public:
   Collapser(const Mesh& mesh, std::vector<MergeQuadric>& quadrics, const std::vector<char>& frozen,
             const CollapseLimits& limits)
-      : quadrics_(quadrics), frozen_(frozen), limits_(limits) {
+      : quadrics_(quadrics),
+        frozen_(frozen),
+        limits_(limits),
+        min_cosine_(std::cos(limits.max_normal_turn * std::acos(-1.0) / 180)) {
     const std::size_t n = std::size_t(mesh.vertices.rows());
     points_.resize(n);
     for (std::size_t v = 0; v < n; ++v) points_[v] = mesh.vertices.row(Eigen::Index(v)).transpose();
@@ -231,8 +229,8 @@ class Collapser {
     return out;
   }
 
-  // The link condition (the ends share exactly the two vertices opposite their edge, each of which
-  // keeps at least three neighbours), and no triangle of the star flipped or turned past the bound.
+  // The link condition (the ends share exactly the two vertices opposite their edge), no triangle
+  // of the star flipped or turned past the bound, and no crossing next to it.
   bool collapsible(int a, int b, const Eigen::Vector3d& x) const {
     std::vector<int> opposite;
     for (int t : star_[std::size_t(a)]) {
@@ -245,16 +243,14 @@ class Collapser {
     const std::vector<int> na = neighbours(a), nb = neighbours(b);
     std::vector<int> common;
     std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
-    // The merged vertex keeps at least three neighbours.
     if (common.size() != 2) return false;
-    const double min_cosine = std::cos(limits_.max_normal_turn * std::acos(-1.0) / 180);
     std::vector<Corners> star;  // the merged vertex's triangles, as they would be
     for (int v : {a, b})
       for (int t : star_[std::size_t(v)]) {
         const Triangle& T = triangles_[std::size_t(t)];
         const bool has_a = T[0] == a || T[1] == a || T[2] == a;
         const bool has_b = T[0] == b || T[1] == b || T[2] == b;
-        if ((has_a && has_b) || (v == b && has_a)) continue;  // vanishes
+        if (has_a && has_b) continue;  // vanishes
         Corners after;
         std::array<Eigen::Vector3d, 3> p;
         for (std::size_t k = 0; k < 3; ++k) {
@@ -266,7 +262,7 @@ class Collapser {
         const Eigen::Vector3d before = (p[1] - p[0]).cross(p[2] - p[0]);
         const Eigen::Vector3d now = after.normal();
         const double norms = before.norm() * now.norm();
-        if (!(norms > 0) || before.dot(now) < min_cosine * norms) return false;
+        if (!(norms > 0) || before.dot(now) < min_cosine_ * norms) return false;
         star.push_back(after);
       }
     return !crosses_nearby(a, b, star, na, nb);
@@ -364,6 +360,7 @@ class Collapser {
   std::vector<MergeQuadric>& quadrics_;
   const std::vector<char>& frozen_;
   const CollapseLimits& limits_;
+  const double min_cosine_;  // of the largest turn a triangle of a merge's star may take
   std::vector<Eigen::Vector3d> points_;
   std::vector<Triangle> triangles_;
   std::vector<std::vector<int>> star_;  // each vertex's triangles
