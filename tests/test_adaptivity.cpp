@@ -295,6 +295,27 @@ TEST(Adaptivity, CrossingsBetweenSeparatePartsAreMergedAgainWithTheirRegionFroze
   EXPECT_LT(2 * merged.triangles.rows(), shell.triangles.rows());
 }
 
+TEST(Adaptivity, ATetrahedronKeepsItsFourTriangles) {
+  // A tetrahedron passes the link condition on each edge (its two ends share exactly the two
+  // vertices opposite it), but collapsing one leaves two triangles on the same three vertices,
+  // back to back: no longer 2-manifold. CGAL refused it as a special case; here the star's own
+  // crossing test does (the same triangle twice), however loose the tolerance.
+  Mesh m;
+  m.vertices.resize(4, 3);
+  m.vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  m.triangles.resize(4, 3);
+  m.triangles << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3;
+  std::vector<detail::MergeQuadric> quadrics(4);  // no planes: every merge costs nothing
+  const std::vector<char> frozen(4, 0);
+  const detail::CollapseLimits limits{1.0, 10, 180};
+  std::vector<int> source;
+  long merges = 0;
+  const Mesh merged = detail::collapse_edges(m, quadrics, frozen, limits, source, merges);
+  EXPECT_EQ(merges, 0);
+  EXPECT_EQ(merged.triangles.rows(), 4);
+  test::expect_closed_and_outward(merged);
+}
+
 TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {
   const auto sphere = make_builtin_shape("sphere");
   const Grid g = sample_grid(*sphere, 16, Bounds{});
