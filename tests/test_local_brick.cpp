@@ -16,6 +16,7 @@
 #include "sdfcontour/metrics/mesh_properties.h"
 #include "sdfcontour/metrics/metrics.h"
 #include "sdfcontour/metrics/self_intersections.h"
+#include "sdfcontour/pipeline/pipeline.h"
 #include "sdfcontour/reconstruction/local_brick.h"
 #include "test_support.h"
 
@@ -49,6 +50,26 @@ TEST(LocalBrick, BricksEqualOneBrickBitForBit) {
     const Mesh m = bricked(g, o, brick, threads);
     EXPECT_EQ(m.vertices, whole.vertices) << brick << " " << threads;
     EXPECT_EQ(m.triangles, whole.triangles) << brick << " " << threads;
+  }
+}
+
+TEST(LocalBrick, BricksOf8And16EqualOneBrickWithTheDefaults) {
+  // The command line's options (the triangulation's contact points below 64 samples per axis,
+  // thin parts, two levels, carving, untangling) and the lattice's points, at 24^3: bricks of 8
+  // and 16 samples, each with the halo its repairs read (most of the grid), give the one brick's
+  // arrays.
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 24, Bounds{});
+  for (const int lattice : {-1, 1}) {
+    LocalBrickOptions o = local_brick_options(ContourOptions{});
+    o.lattice_points = lattice;
+    const Mesh whole = bricked(g, o, 0, 2);
+    ASSERT_GT(whole.triangles.rows(), 1000);
+    test::expect_closed_and_outward(whole);
+    for (const auto& [brick, threads] : {std::pair{8, 2}, std::pair{16, 1}}) {
+      const Mesh m = bricked(g, o, brick, threads);
+      EXPECT_EQ(m.vertices, whole.vertices) << brick << " " << threads << " " << lattice;
+      EXPECT_EQ(m.triangles, whole.triangles) << brick << " " << threads << " " << lattice;
+    }
   }
 }
 
