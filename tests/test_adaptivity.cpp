@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "reconstruction/adaptivity/edge_collapse.h"
 #include "sdfcontour/extraction/marching.h"
@@ -330,7 +331,7 @@ TEST(Adaptivity, ZeroToleranceKeepsTheMeshAndBadInputIsRefused) {
   o.tolerance = 0.5;
   EXPECT_THROW(adapt_mesh(m, none, none, 0, o), Error);
   EXPECT_THROW(adapt_mesh(m, PointMatrix::Zero(2, 3), none, 0.1, o), Error);
-  o.brick_spacings = -1;
+  o.brick_spacings = -2;  // (-1 is kAutoBricks)
   EXPECT_THROW(adapt_mesh(m, none, none, 0.1, o), Error);
   o.brick_spacings = AdaptivityOptions{}.brick_spacings;
   o.fit_rounds = -1;
@@ -389,6 +390,40 @@ TEST(Adaptivity, SmallBricksMergeAcrossTheirSeamsAlike) {
   test::expect_closed_and_outward(one);
   EXPECT_TRUE(self_intersecting_triangles(one).empty());
   EXPECT_LT(largest_distance(*torus, one), 0.25 * h);
+}
+
+TEST(Adaptivity, AutoBricksAre32OnAMeshOfAtMost64SpacingsAnd64Above) {
+  // The torus's mesh at 40^3, merged in spacings that make it span 60 (bricks of 64 would leave
+  // it whole, on one core: auto takes 32) and then 100 (auto takes 64). Each time the other size
+  // gives another mesh, so the comparison tells them apart.
+  const Grid g = sample_grid(*make_builtin_shape("torus"), 40, Bounds{});
+  ContourOptions o;
+  o.reconstruction = Reconstruction::Local;
+  o.want_points = true;
+  const ContourResult fine = contour(grid_input(g), o);
+  ASSERT_TRUE(fine.contact_points);
+  const PointMatrix& P = fine.contact_points->points;
+  const PointMatrix& N = fine.contact_points->normals;
+  const double extent =
+      (fine.mesh->vertices.colwise().maxCoeff() - fine.mesh->vertices.colwise().minCoeff())
+          .maxCoeff();
+  auto same = [](const Mesh& a, const Mesh& b) {
+    return a.vertices.rows() == b.vertices.rows() && a.triangles.rows() == b.triangles.rows() &&
+           a.vertices == b.vertices && a.triangles == b.triangles;
+  };
+  for (const auto& [spans, expected, other] : {std::tuple{60, 32, 64}, std::tuple{100, 64, 32}}) {
+    AdaptivityOptions a;
+    a.tolerance = 0.1;
+    ASSERT_EQ(a.brick_spacings, AdaptivityOptions::kAutoBricks);
+    const double spacing = extent / spans;
+    const Mesh automatic = adapt_mesh(*fine.mesh, P, N, spacing, a);
+    a.brick_spacings = expected;
+    const Mesh chosen = adapt_mesh(*fine.mesh, P, N, spacing, a);
+    a.brick_spacings = other;
+    const Mesh not_chosen = adapt_mesh(*fine.mesh, P, N, spacing, a);
+    EXPECT_TRUE(same(automatic, chosen)) << spans;
+    EXPECT_FALSE(same(not_chosen, chosen)) << spans;
+  }
 }
 
 }  // namespace

@@ -182,8 +182,10 @@ ContourOptions contour_options(const ContourArgs& a) {
   }
   require_in_range("--adaptivity", a.adaptivity, "--adaptivity");
   opt.adaptivity.tolerance = a.adaptivity;
-  require_in_range("--adaptivity-bricks", a.adaptivity_bricks, "--adaptivity-bricks");
-  opt.adaptivity.brick_spacings = a.adaptivity_bricks;
+  opt.adaptivity.brick_spacings = parse_count_or_auto("--adaptivity-bricks", a.adaptivity_bricks,
+                                                      int(option_range("--adaptivity-bricks").hi),
+                                                      "a whole number of spacings, 0 for one brick")
+                                      .value_or(AdaptivityOptions::kAutoBricks);
   require_in_range("--adaptivity-fit", a.adaptivity_fit, "--adaptivity-fit");
   opt.adaptivity.fit_rounds = a.adaptivity_fit;
   require_range("--local-reach", a.local.reach, 0, 1);
@@ -346,7 +348,8 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                 "Adaptivity merges brick by brick, in parallel: bricks of this many spacings, "
                 "then again on bricks shifted by half a brick (across the first pass's seams). "
                 "0: the whole mesh as one brick, sequential (the same mesh for any thread count "
-                "either way)")
+                "either way); auto: 32 where the mesh spans at most 64 spacings (a 64^3 grid: "
+                "half the time, 0.1-2.6% more triangles), else 64")
       ->capture_default_str();
   c->add_option("--adaptivity-fit", a.adaptivity_fit,
                 "Adaptivity's last step: rounds of a least-squares fit that moves the merged "

@@ -23,7 +23,7 @@ struct ContourArgs {
   int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;
   double adaptivity = 0;
-  int adaptivity_bricks = AdaptivityOptions{}.brick_spacings;
+  std::string adaptivity_bricks = "auto";
   int adaptivity_fit = AdaptivityOptions{}.fit_rounds;
   double james_epsilon = GradientOptions{}.james_epsilon;
   std::string tie_tolerance = "auto";

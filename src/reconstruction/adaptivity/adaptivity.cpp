@@ -56,7 +56,8 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
     throw Error("adaptivity: the tolerance must lie in [0, 10] spacings");
   if (!(options.max_normal_turn > 0 && options.max_normal_turn <= 180))
     throw Error("adaptivity: the normal turn must lie in (0, 180] degrees");
-  if (options.brick_spacings < 0) throw Error("adaptivity: the brick size must not be negative");
+  if (options.brick_spacings < 0 && options.brick_spacings != AdaptivityOptions::kAutoBricks)
+    throw Error("adaptivity: the brick size must not be negative (but for -1: auto)");
   if (options.fit_rounds < 0 || options.fit_rounds > 100)
     throw Error("adaptivity: the fit's rounds must lie in [0, 100]");
   AdaptivityStats s;
@@ -76,15 +77,15 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
   // Bricks on a lattice from the mesh's lowest corner; 0 spacings: one brick holds it all.
   const Eigen::Vector3d origin = mesh.vertices.colwise().minCoeff().transpose();
   const double extent = (mesh.vertices.colwise().maxCoeff().transpose() - origin).maxCoeff();
-  const double side =
-      options.brick_spacings > 0 ? options.brick_spacings * spacing : 2 * extent + spacing;
+  int bricks = options.brick_spacings;
+  if (bricks == AdaptivityOptions::kAutoBricks) bricks = extent <= 64 * spacing ? 32 : 64;
+  const double side = bricks > 0 ? bricks * spacing : 2 * extent + spacing;
   detail::MergeState state;
   for (int round = 0;; ++round) {
     state = {mesh, quadrics, frozen, source};
     // Every seam of the first pass lies inside a brick of the second, shifted by half a brick.
     s.merges = detail::merge_in_bricks(state, origin, side, 0.0, limits);
-    if (options.brick_spacings > 0)
-      s.merges += detail::merge_in_bricks(state, origin, side, 0.5, limits);
+    if (bricks > 0) s.merges += detail::merge_in_bricks(state, origin, side, 0.5, limits);
     if (round == kFreezeRounds ||
         !freeze_around_crossings(mesh, state.mesh, state.source, spacing, frozen))
       break;
