@@ -28,6 +28,14 @@ ContourResult local_mesh(const Grid& g, double tolerance, int fit_rounds = -1,
   return contour(grid_input(g), o);
 }
 
+// The local reconstruction of g with its contact points (what adapt_mesh merges).
+ContourResult local_mesh_with_points(const Grid& g) {
+  ContourOptions o;
+  o.reconstruction = Reconstruction::Local;
+  o.want_points = true;
+  return contour(grid_input(g), o);
+}
+
 // The mean |distance| to the shape over the triangles (area-weighted), from their centroids and
 // edge midpoints: where chords leave the surface.
 double mean_surface_distance(const AnalyticShape& shape, const Mesh& m) {
@@ -360,10 +368,7 @@ TEST(Adaptivity, SmallBricksMergeAcrossTheirSeamsAlike) {
   const auto torus = make_builtin_shape("torus");
   const Grid g = sample_grid(*torus, 40, Bounds{});
   const double h = g.spacing().maxCoeff();
-  ContourOptions o;
-  o.reconstruction = Reconstruction::Local;
-  o.want_points = true;
-  const ContourResult fine = contour(grid_input(g), o);
+  const ContourResult fine = local_mesh_with_points(g);
   ASSERT_TRUE(fine.contact_points);
   const PointMatrix& P = fine.contact_points->points;
   const PointMatrix& N = fine.contact_points->normals;
@@ -397,10 +402,7 @@ TEST(Adaptivity, AutoBricksAre32OnAMeshOfAtMost64SpacingsAnd64Above) {
   // it whole, on one core: auto takes 32) and then 100 (auto takes 64). Each time the other size
   // gives another mesh, so the comparison tells them apart.
   const Grid g = sample_grid(*make_builtin_shape("torus"), 40, Bounds{});
-  ContourOptions o;
-  o.reconstruction = Reconstruction::Local;
-  o.want_points = true;
-  const ContourResult fine = contour(grid_input(g), o);
+  const ContourResult fine = local_mesh_with_points(g);
   ASSERT_TRUE(fine.contact_points);
   const PointMatrix& P = fine.contact_points->points;
   const PointMatrix& N = fine.contact_points->normals;
