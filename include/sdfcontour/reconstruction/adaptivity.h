@@ -56,7 +56,7 @@ struct AdaptivityStats {
 /// (options.brick_spacings): a vertex merges within its brick while its neighbours lie in it too;
 /// the bricks run in parallel and are joined in order: the same mesh for any thread count.
 /// Throws Error for mismatched sizes, a spacing that is not positive, a tolerance outside
-/// [0, 10], a negative brick size or fit rounds outside [0, 100].
+/// [0, 10], a negative brick size (but kAutoBricks) or fit rounds outside [0, 100].
 Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
                 double spacing, const AdaptivityOptions& options, AdaptivityStats* stats = nullptr);
 

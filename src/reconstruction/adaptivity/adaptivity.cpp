@@ -77,6 +77,7 @@ Mesh adapt_mesh(const Mesh& mesh, const PointMatrix& points, const PointMatrix& 
   // Bricks on a lattice from the mesh's lowest corner; 0 spacings: one brick holds it all.
   const Eigen::Vector3d origin = mesh.vertices.colwise().minCoeff().transpose();
   const double extent = (mesh.vertices.colwise().maxCoeff().transpose() - origin).maxCoeff();
+  // (Auto: bricks of 64 would leave a mesh that spans at most 64 spacings whole, on one core.)
   int bricks = options.brick_spacings;
   if (bricks == AdaptivityOptions::kAutoBricks) bricks = extent <= 64 * spacing ? 32 : 64;
   const double side = bricks > 0 ? bricks * spacing : 2 * extent + spacing;
