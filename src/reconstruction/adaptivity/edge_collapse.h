@@ -17,8 +17,9 @@ struct CollapseLimits {
 /// `mesh` (2-manifold, oriented; it may have borders, whose vertices must be `frozen`) with its
 /// edges collapsed, cheapest first, over one `quadrics` entry per vertex. A collapse must keep
 /// the link condition, turn no triangle of its star past the normal bound, and cross none of the
-/// triangles of its star or around it. No merge moves a vertex whose `frozen` entry is set. On return `quadrics[source[r]]` is the
-/// summed quadric of output vertex r, and `source[r]` its index in `mesh` (increasing in r).
+/// triangles of its star or around it. No merge moves a vertex whose `frozen` entry is set. On
+/// return `quadrics[source[r]]` is the summed quadric of output vertex r, and `source[r]` its
+/// index in `mesh` (increasing in r).
 /// Sequential and deterministic. Returns the merged mesh; `merges` counts the collapses.
 Mesh collapse_edges(const Mesh& mesh, std::vector<MergeQuadric>& quadrics,
                     const std::vector<char>& frozen, const CollapseLimits& limits,
