@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "contact_points/lattice_spheres.h"
 #include "reconstruction/local/lattice_subdivision.h"
 #include "sdfcontour/contact_points/contact_points.h"
 #include "sdfcontour/input/samples.h"
@@ -21,6 +22,20 @@ struct VertexKeyBases {
 };
 VertexKeyBases vertex_key_bases(const std::array<int, 3>& n);
 
+/// The band samples' spheres by grid point (radius |value|: where the values are distances, a
+/// sphere holds no surface), on the block `lattice` was made on.
+class SampleSpheres {
+ public:
+  SampleSpheres(const Lattice& lattice, const std::array<int, 3>& block_first)
+      : lattice_(lattice), first_(block_first) {}
+  /// The radius of the sphere of the sample at whole-grid point p; 0 where p is not in the band.
+  double radius(const std::array<int, 3>& p) const;
+
+ private:
+  const Lattice& lattice_;
+  std::array<int, 3> first_;
+};
+
 /// After the vertices of an edge-fanned mesh moved from `before` (the projection onto the contact
 /// points), each goes back into its region: a cell's vertex into its cell (a thousandth of the
 /// cell inside; slid along the sides that hold it back to the plane through its new place,
@@ -31,11 +46,13 @@ VertexKeyBases vertex_key_bases(const std::array<int, 3>& n);
 /// `grid`: the grid (or block) the keys were made on. A cell with more than one polygon
 /// (`split_cells`: ascending cell numbers, split_cells() of the whole dual mesh) holds as many
 /// cones, which its vertices alone cannot keep apart: they go to `crossing_means` (per vertex:
-/// the mean of its polygon's edge crossings, as marching cubes' polygons lie). Returns the
-/// vertices that had to be put back.
+/// the mean of its polygon's edge crossings, as marching cubes' polygons lie). With `spheres`
+/// (on the same grid), an edge's vertex also stays out of its two samples' spheres, where they
+/// leave room. Returns the vertices that had to be put back.
 long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& keys,
                          const PointMatrix& before, const PointMatrix& crossing_means,
-                         const std::vector<std::uint64_t>& split_cells, const GridGeometry& grid);
+                         const std::vector<std::uint64_t>& split_cells, const GridGeometry& grid,
+                         const SampleSpheres* spheres = nullptr);
 
 /// The cells (4 * cell + polygon keys / 4) that hold more than one polygon, ascending, among the
 /// dual mesh's vertex keys `keys` on a grid of `n` points.

@@ -467,8 +467,18 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       if (it != dual.end() && it->first == sub.keys[v][0])
         means.row(Eigen::Index(v)) = fan_means.row(it->second);
     });
+    // On the grid itself, where the values are distances (as the carving takes them), the
+    // samples' spheres bound the edges' vertices too.
+    const bool distances =
+        carve && scale == 1 && !options.refine_zero_set && band.samples.points.rows() > 0;
+    std::optional<detail::Lattice> lattice;
+    std::optional<detail::SampleSpheres> spheres;
+    if (distances) {
+      lattice.emplace(block_geometry, band);
+      spheres.emplace(*lattice, block_geometry.first);
+    }
     detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, split_cells,
-                                cells_geometry);
+                                cells_geometry, spheres ? &*spheres : nullptr);
   }
   // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
   // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is
