@@ -245,7 +245,11 @@ ContourOptions contour_options(const py::dict& o) {
   c.fallback_to_mc = get<bool>(o, "fallback_to_mc", c.fallback_to_mc);
   c.subdivisions = get<int>(o, "subdivisions", -1);
   c.split_sag = get<double>(o, "split_sag", -1.0);
-  c.local.edge_fans = get<bool>(o, "edge_fans", false);
+  // (A brick's options from Dask's gcp_brick_piece may say True or False.)
+  if (o.contains("edge_fans") && py::isinstance<py::bool_>(o["edge_fans"]))
+    c.edge_fans = o["edge_fans"].cast<bool>() ? Switch::On : Switch::Off;
+  else
+    c.edge_fans = parse_switch("edge_fans", get<std::string>(o, "edge_fans", "auto"));
   c.adaptivity.tolerance = get<double>(o, "adaptivity", 0.0);
   c.bricks.halo = get<double>(o, "brick_halo", c.bricks.halo);
   c.poisson = poisson_options(o);
@@ -354,6 +358,11 @@ GridView block_view(const py::array& block, const std::array<int, 3>& first,
   return view;
 }
 
+// A grid's samples along its longest axis (what the automatic choices read).
+double largest(const std::array<int, 3>& dims) {
+  return double(*std::max_element(dims.begin(), dims.end()));
+}
+
 // One brick of GCP's local reconstruction (local_brick.h's local_brick_piece over a BlockSource):
 // `read(first, dims)` returns the samples [first, first + dims) of a grid of `dims` over [lo, hi]
 // as an array; the brick owns the edges from samples [own_first, own_end) and reads them with
@@ -365,7 +374,8 @@ py::tuple run_local_brick(const py::function& read, const std::array<int, 3>& di
                           const std::array<int, 3>& own_first, const std::array<int, 3>& own_end,
                           const py::dict& options, const std::array<double, 2>& truncation,
                           double value_scale) {
-  LocalBrickOptions lb = local_brick_options(contour_options(options));
+  LocalBrickOptions lb =
+      local_brick_options(with_edge_fans(contour_options(options), largest(dims)));
   lb.band.truncation_mode = TruncationMode::Resolved;
   lb.band.resolved.inside = truncation[0];
   lb.band.resolved.outside = truncation[1];
@@ -671,6 +681,7 @@ py::dict contour_input(const SdfInput& input, const py::object& owners, const py
     stats["local_bricks"] = r.local_bricks->bricks;
     stats["contact_points"] = r.local_bricks->contact_points;
     stats["local_thin_parts"] = r.local_bricks->thin_parts;
+    stats["local_edge_fans"] = r.edge_fans;
   }
   if (r.subspacing_gaps) {
     stats["subspacing_gaps"] = r.subspacing_gaps->gaps;
@@ -908,6 +919,9 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
+  m.def("auto_edge_fans", &auto_edge_fans, py::arg("samples_per_axis"),
+        "Whether the local reconstruction fans grid edges on a grid this many samples across "
+        "(the single process's rule).");
   m.def("thin_parts_need_gaps", &thin_parts_need_gaps, py::arg("samples_per_axis"),
         "Whether the choice of thin parts needs the grid's subspacing gaps (the single "
         "process's rule; elsewhere auto_thin_parts(samples_per_axis, 0, 0) decides).");
@@ -946,13 +960,15 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.def(
       "local_values_reach",
       [](const py::dict& options, const std::array<int, 3>& dims) {
-        return local_values_reach(local_brick_options(contour_options(options)), dims);
+        return local_values_reach(
+            local_brick_options(with_edge_fans(contour_options(options), largest(dims))), dims);
       },
       py::arg("options"), py::arg("dims"));
   m.def(
       "local_brick_halo",
       [](const py::dict& options, const std::array<int, 3>& dims) {
-        return local_brick_halo(local_brick_options(contour_options(options)), dims);
+        return local_brick_halo(
+            local_brick_options(with_edge_fans(contour_options(options), largest(dims))), dims);
       },
       py::arg("options"), py::arg("dims"));
   m.def(

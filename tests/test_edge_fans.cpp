@@ -12,6 +12,7 @@
 
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/input/mesh_sdf.h"
+#include "sdfcontour/input/sdf_input.h"
 #include "sdfcontour/metrics/self_intersections.h"
 #include "sdfcontour/pipeline/pipeline.h"
 #include "sdfcontour/reconstruction/local_brick.h"
@@ -233,6 +234,40 @@ TEST(EdgeFans, EdgeVerticesStayOutOfTheirSamplesSpheres) {
     EXPECT_GT(on_edges, 1000) << n;
     EXPECT_EQ(inside, 0) << n;
     EXPECT_TRUE(self_intersecting_triangles(m).empty()) << n;
+  }
+}
+
+// contour()'s default fans the grid's edges from kEdgeFansFrom samples along its longest axis and
+// repairs below (auto_edge_fans): on a long, thin grid around a sphere (384 and 383 samples by 16
+// by 16), the default's mesh is --edge-fans on's at 384 and --edge-fans off's at 383, and the
+// fanned one is closed with no crossing.
+TEST(EdgeFans, OnByDefaultFromKEdgeFansFromSamplesPerAxis) {
+  EXPECT_FALSE(auto_edge_fans(kEdgeFansFrom - 1));
+  EXPECT_TRUE(auto_edge_fans(kEdgeFansFrom));
+  for (const int n : {kEdgeFansFrom - 1, kEdgeFansFrom}) {
+    Grid g;
+    g.dims = {n, 16, 16};
+    const double h = 0.05;
+    g.bounds.min = Eigen::Vector3d(-h * (n - 1) / 2, -h * 15 / 2, -h * 15 / 2);
+    g.bounds.max = -g.bounds.min;
+    g.values.resize(Eigen::Index(g.size()));
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < 16; ++j)
+        for (int k = 0; k < 16; ++k)
+          g.values[Eigen::Index(g.index(i, j, k))] = g.point(i, j, k).norm() - 0.27;
+    auto run = [&](Switch fans) {
+      ContourOptions o;
+      o.edge_fans = fans;
+      return contour(grid_input(g), o);
+    };
+    const ContourResult automatic = run(Switch::Auto);
+    const ContourResult chosen = run(n >= kEdgeFansFrom ? Switch::On : Switch::Off);
+    ASSERT_TRUE(automatic.mesh && chosen.mesh) << n;
+    EXPECT_EQ(automatic.edge_fans, n >= kEdgeFansFrom) << n;
+    EXPECT_TRUE(automatic.mesh->vertices == chosen.mesh->vertices) << n;
+    EXPECT_TRUE(automatic.mesh->triangles == chosen.mesh->triangles) << n;
+    test::expect_closed_and_outward(*automatic.mesh);
+    EXPECT_TRUE(self_intersecting_triangles(*automatic.mesh).empty()) << n;
   }
 }
 

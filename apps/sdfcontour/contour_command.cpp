@@ -94,15 +94,16 @@ const ProjectionOption kProjectionOptions[] = {
 void warn_of_options_not_read(const ContourArgs& a, const ContourOptions& opt,
                               const ContourResult& r) {
   if (!r.mesh || (opt.method != Method::Gcp && opt.method != Method::Gtcp)) return;
-  if (r.reconstruction == Reconstruction::Local && opt.local.edge_fans) {
+  if (r.reconstruction == Reconstruction::Local && r.edge_fans) {
     std::vector<std::string> unused;
     if (a.subdivisions != "auto") unused.push_back("--subdivisions");
     if (a.side_passes != "auto") unused.push_back("--side-passes");
     if (a.no_side_repair) unused.push_back("--no-side-repair");
     for (const std::string& name : unused)
       std::cerr << "sdfcontour: warning: " << name
-                << " is not used with --edge-fans on: its vertices stay in their cells, edges and "
-                   "faces without subdivision or side rounds\n";
+                << " is not used with edge fans (--edge-fans, on by default from " << kEdgeFansFrom
+                << " samples per axis): their vertices stay in their cells, edges and faces "
+                   "without subdivision or side rounds\n";
   }
   if (r.reconstruction == Reconstruction::Local) {
     const std::string solver = a.poisson.given(), path = given_names(a.poisson_path_options);
@@ -195,9 +196,7 @@ ContourOptions contour_options(const ContourArgs& a) {
   require_range("--local-depth-scale", a.local.depth_scale, 0, 1e6);
   require_range("--local-max-field-miss", a.local.max_field_miss, 0, 1e6);
   opt.local = a.local;
-  if (a.edge_fans != "on" && a.edge_fans != "off")
-    throw Error("--edge-fans must be on or off, got '" + a.edge_fans + "'");
-  opt.local.edge_fans = a.edge_fans == "on";
+  opt.edge_fans = parse_switch("--edge-fans", a.edge_fans);
   opt.project = parse_switch("--projection", a.projection);
   opt.zero_set = parse_switch("--zero-set", a.zero_set);
   opt.thin_parts = parse_switch("--thin-parts", a.thin_parts);
@@ -388,7 +387,8 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                     "the surface crosses the edge, every vertex kept in its cell, edge or face, so "
                     "that the mesh cannot cross itself or leave a sample on the wrong side without "
                     "any repair (about 2-3.5x marching cubes' triangles; no subdivision, side "
-                    "rounds or untangling; on, off)")
+                    "rounds or untangling; on, off; auto: on from 384 samples per axis, where it "
+                    "takes about a third of the time for 1.35x the L1)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option("--local-reach", a.local.reach,

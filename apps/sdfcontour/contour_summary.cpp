@@ -85,6 +85,7 @@ void add_stage_counts(nlohmann::json& j, const ContourOptions& opt, const Contou
                          {"wider_halos", r.local_bricks->wider_halos},
                          {"contact_points", r.local_bricks->contact_points},
                          {"thin_parts", r.local_bricks->thin_parts},
+                         {"edge_fans", r.edge_fans},
                          {"gradient", r.local_bricks->lattice_points ? "lattice" : "regular"}};
   if (r.subspacing_gaps)
     j["subspacing_gaps"] = {{"gaps", r.subspacing_gaps->gaps},

@@ -17,7 +17,7 @@ struct ContourArgs {
   std::string input, output, points,
       method = "gcp", bounds = "-1,1", gradient = "auto", weights = "james", band = "auto",
       truncation = "auto", grid, brick_size = "auto", side_passes = "auto", projection = "auto",
-      edge_fans = "off", reconstruction = "auto", subdivisions = "auto", split_sag = "auto",
+      edge_fans = "auto", reconstruction = "auto", subdivisions = "auto", split_sag = "auto",
       zero_set = "auto", thin_parts = "auto";
   double zero_set_mismatch = ZeroSetRefinementOptions{}.mismatch;
   int knn = 18;

@@ -405,7 +405,7 @@ def _one_line(error):
 def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=None,
             resolution=None, dataset=None, batch_size=65536, band="auto", truncation="auto",
             subdivisions="auto", projection="auto", zero_set="auto", progress=False,
-            return_stats=False, split_sag="auto", thin_parts="auto", edge_fans=False):
+            return_stats=False, split_sag="auto", thin_parts="auto", edge_fans="auto"):
     """Contour a grid too large for one process, brick by brick on Dask.
 
     Parameters
@@ -482,7 +482,7 @@ def contour(source, bounds=None, method="mc", *, brick=256, client=None, out=Non
         options["projection"] = _switch("projection", projection)
         options["zero_set"] = _switch("zero_set", zero_set)
         options["thin_parts"] = _switch("thin_parts", thin_parts)
-        options["edge_fans"] = _checks.flag("edge_fans", edge_fans)
+        options["edge_fans"] = _switch("edge_fans", edge_fans)
         if options["thin_parts"] == "auto" and callable(source):
             options["thin_parts"] = "off"  # (as contour(): a callable may be no distance)
     # (Smaller bricks cost more halo than cells: GCP's reads ~60 cells beyond its own.)
@@ -556,7 +556,8 @@ def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
     samples = max(shape)
     if given != "auto" or options["zero_set"] == "on":
         return given
-    if options.get("edge_fans"):
+    fans = options["edge_fans"]
+    if fans == "on" or (fans == "auto" and _sdfcontour.auto_edge_fans(samples)):
         return "off"  # the fans' finer grid only when asked, as in the single process
     if not _sdfcontour.thin_parts_need_gaps(samples):
         return "on" if _sdfcontour.auto_thin_parts(samples, 0, 0) else "off"

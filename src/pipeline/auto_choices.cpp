@@ -45,6 +45,17 @@ bool auto_thin_parts(double samples_per_axis, const SubspacingGaps& gaps) {
   return gaps.gaps > 0 && double(gaps.gaps) >= kThinPartGapShare * double(gaps.crossings);
 }
 
+bool auto_edge_fans(double samples_per_axis) {
+  return samples_per_axis >= kEdgeFansFrom;
+}
+
+ContourOptions with_edge_fans(ContourOptions options, double samples_per_axis) {
+  options.local.edge_fans = options.edge_fans == Switch::On ||
+                            (options.edge_fans == Switch::Auto &&
+                             (options.local.edge_fans || auto_edge_fans(samples_per_axis)));
+  return options;
+}
+
 bool auto_sign_constraints(double samples_per_axis) {
   return samples_per_axis < 128;
 }

@@ -240,6 +240,24 @@ def test_gcp_with_edge_fans_in_bricks_is_the_single_process_mesh(client, grid, t
         sdfcontour.dask.contour(grid, method="gcp", client=client, edge_fans="yes")
 
 
+def test_gcp_edge_fans_auto_is_the_single_process_choice(client):
+    # Edge fans by default from 384 samples along the longest axis, in bricks as in one process: a
+    # sphere in a long, thin grid (384 and 383 by 16 by 16) gives the single process's arrays,
+    # fanned at 384 (those of edge_fans=True) and repaired at 383.
+    for n in (383, 384):
+        x = (np.arange(n) - (n - 1) / 2) * 0.05
+        y = (np.arange(16) - 7.5) * 0.05
+        X, Y, Z = np.meshgrid(x, y, y, indexing="ij")
+        grid = np.sqrt(X**2 + Y**2 + Z**2) - 0.27
+        bounds = ((x[0], y[0], y[0]), (x[-1], y[-1], y[-1]))
+        V, F, stats = sdfcontour.contour(grid, bounds, return_stats=True)
+        assert stats["local_edge_fans"] == (n >= 384)
+        assert_identical((V, F), sdfcontour.contour(grid, bounds, edge_fans=n >= 384))
+        assert_identical(sdfcontour.dask.contour(grid, bounds, method="gcp", brick=32,
+                                                 client=client), (V, F))
+        assert_closed_manifold(F)
+
+
 @pytest.mark.slow
 def test_gcp_of_a_callable_in_bricks_is_the_single_process_mesh(client):
     # Each brick samples the callable near the surface, exactly wherever the local

@@ -160,20 +160,21 @@ void check_contact_points(const AnyGrid& grid, const BandOptions& band, const Lo
 // (result.contact_points holds them); the bricks take theirs from it.
 template <class AnyGrid>
 void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
-                                const ContourOptions& options, ContourResult& result,
+                                const ContourOptions& given_options, ContourResult& result,
                                 Stages& stages, const std::function<void()>& grid_read,
                                 const GivenContactPoints* given = nullptr) {
-  if (options.carve_sides == Switch::On || options.side_repair == Switch::On)
+  if (given_options.carve_sides == Switch::On || given_options.side_repair == Switch::On)
     throw Error(
         "carving's triangle rounds and side repair are whole-mesh stages: the local "
         "reconstruction runs brick by brick and carves vertex by vertex (--side-passes 0, or "
         "--reconstruction poisson)");
+  const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
+  const ContourOptions options = with_edge_fans(given_options, samples_per_axis);
   LocalBrickOptions lb = local_brick_options(options);
   lb.band = band;
   lb.grid_read = grid_read;
   // Thin parts on fine grids only where the grid has them: one pass over the values, before the
   // bricks, which must agree (none beyond kThinPartGridLimit: thin parts stay off there).
-  const double samples_per_axis = *std::max_element(grid.dims.begin(), grid.dims.end());
   if (lb.thin_parts < 0 && !lb.refine_zero_set && thin_parts_need_gaps(samples_per_axis)) {
     result.subspacing_gaps = stages.run("gaps", "edges with a thin part across",
                                         [&] { return subspacing_gaps_of(grid, band.value_scale); });
@@ -199,6 +200,7 @@ void reconstruct_grid_in_bricks(const AnyGrid& grid, const BandOptions& band,
   for (std::size_t k = 0; k < stats.seconds.size(); ++k)
     result.local_stages.push_back({kLocalSteps[k], stats.seconds[k]});
   result.local_bricks = stats;
+  result.edge_fans = options.local.edge_fans;
   result.reconstruction = Reconstruction::Local;
   result.band_spacing = grid.spacing().maxCoeff();
   if (result.mesh->triangles.rows() == 0)
