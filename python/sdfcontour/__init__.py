@@ -167,7 +167,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         marching cubes' triangles; no subdivision, side rounds or untangling; the shared meshes'
         L1 0.34x marching cubes' at 64^3, the default's 0.20x, in 0.42x the default's time;
         with ``thin_parts=True``, on the finer grid: 0.22x at 11x its triangles;
-        docs/edge_fans.md). "auto": from 384 samples per axis (at 512^3 about a third of the
+        docs/edge_fans.md). "auto": from 384 samples per axis (at 512^3 about 0.4x the
         time for 1.35x the L1). ``stats["local_edge_fans"]`` says which ran. CLI
         ``--edge-fans``.
     zero_set : bool or "auto"

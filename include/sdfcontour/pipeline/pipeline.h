@@ -121,11 +121,11 @@ bool thin_parts_need_gaps(double samples_per_axis);
 
 /// Whether the local reconstruction fans each grid edge's polygon (LocalReconstructionOptions::
 /// edge_fans: a mesh right by construction, with no subdivision and no repair stage) on a grid
-/// `samples_per_axis` across: from kEdgeFansFrom, where speed matters more than the last third of
-/// the accuracy (bunny, spot and armadillo at 512^3: 7.2x scikit-image's time at 0.38x its L1,
-/// against 19.2x at 0.28x with the repaired mesh; bunny 384^3: 8.9 s against 21.7 s at 1.36x the
-/// L1; with 2.4-2.9x marching cubes' triangles against 5x; docs/edge_fans.md). Below it the
-/// accuracy targets of issue 64 hold the repaired mesh's L1.
+/// `samples_per_axis` across: from kEdgeFansFrom, where speed matters more than the last quarter
+/// of the accuracy (bunny, spot and armadillo at 512^3: 0.37-0.44x the repaired mesh's time and
+/// 0.43x its memory, at 0.41x marching cubes' L1 against 0.30x; bunny 384^3: 8.9 s against 21.7 s
+/// at 1.36x the L1; 2.3-2.9x marching cubes' triangles against 5-6x; docs/edge_fans.md). Below it
+/// the accuracy targets of issue 64 hold the repaired mesh's L1.
 bool auto_edge_fans(double samples_per_axis);
 /// auto_edge_fans's threshold (samples per axis); the automatic band is 3 spacings there too.
 constexpr int kEdgeFansFrom = 384;
