@@ -618,6 +618,17 @@ def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     assert stats["local_bricks"] == (8 if brick == 24 else 1)
 
 
+def test_callable_gcp_says_whether_its_mesh_is_edge_fanned():
+    # A callable's stats say which local mesh ran, as a grid's do: at 48 samples per axis the
+    # repaired one by default, the fans when asked, with their fewer triangles (no subdivision).
+    def f(p):
+        return np.linalg.norm(p, axis=1) - 0.4
+    V, F, stats = sdfcontour.contour(f, resolution=48, return_stats=True)
+    Vf, Ff, fanned = sdfcontour.contour(f, resolution=48, return_stats=True, edge_fans=True)
+    assert stats["local_edge_fans"] is False and fanned["local_edge_fans"] is True
+    assert len(Ff) < len(F) / 2 and fanned["closed"] and fanned["manifold"]
+
+
 @pytest.mark.slow
 def test_callable_poisson_and_contact_points_come_from_the_bricks_near_the_surface():
     # The Poisson path and contact_points() of a callable read the bricks sampled near the
