@@ -919,9 +919,14 @@ PYBIND11_MODULE(_sdfcontour, m) {
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));
-  m.def("auto_edge_fans", &auto_edge_fans, py::arg("samples_per_axis"),
-        "Whether the local reconstruction fans grid edges on a grid this many samples across "
-        "(the single process's rule).");
+  m.def(
+      "edge_fans_chosen",
+      [](const py::dict& options, const std::array<int, 3>& dims) {
+        return with_edge_fans(contour_options(options), largest(dims)).local.edge_fans;
+      },
+      py::arg("options"), py::arg("dims"),
+      "Whether the local reconstruction fans grid edges with these options on a grid of these "
+      "dims (the single process's rule, with_edge_fans).");
   m.def("thin_parts_need_gaps", &thin_parts_need_gaps, py::arg("samples_per_axis"),
         "Whether the choice of thin parts needs the grid's subspacing gaps (the single "
         "process's rule; elsewhere auto_thin_parts(samples_per_axis, 0, 0) decides).");

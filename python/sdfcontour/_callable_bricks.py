@@ -237,11 +237,9 @@ def contour_callable_gcp(grid, scale, options, progress=False):
     del pieces
     if len(F) == 0:
         raise ValueError("the local reconstruction found no surface inside the grid")
-    fans = options.get("edge_fans", "auto")
     stats.update(local_bricks=len(todo), contact_points=contact_points, value_scale=value_scale,
                  gradient_norm=norm, samples=n ** 3,
-                 local_edge_fans=fans is True or fans == "on" or (
-                     fans == "auto" and bool(_sdfcontour.auto_edge_fans(max(grid.shape)))))
+                 local_edge_fans=_sdfcontour.edge_fans_chosen(options, tuple(grid.shape)))
     if options.get("adaptivity", 0.0) > 0:
         # Merged over the bricks' own contact points, in their samples' order (as the core's
         # join_owned_contact_points), once the mesh is whole.

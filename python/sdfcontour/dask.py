@@ -556,8 +556,7 @@ def _gcp_thin_parts(dask_client, source, shape, brick, lo, hi, options, active):
     samples = max(shape)
     if given != "auto" or options["zero_set"] == "on":
         return given
-    fans = options["edge_fans"]
-    if fans == "on" or (fans == "auto" and _sdfcontour.auto_edge_fans(samples)):
+    if _sdfcontour.edge_fans_chosen(options, tuple(shape)):
         return "off"  # the fans' finer grid only when asked, as in the single process
     if not _sdfcontour.thin_parts_need_gaps(samples):
         return "on" if _sdfcontour.auto_thin_parts(samples, 0, 0) else "off"

@@ -91,6 +91,19 @@ bool shared_face(std::uint64_t kx, std::uint64_t ky, const std::array<int, 3>& c
   return true;
 }
 
+// Where the chord between sub's vertices x and y (of the cells keyed kx and ky) crosses the plane
+// of the face between the two cells (shared_face's `axis` and `low`); false if the cells share no
+// face or the chord runs along it.
+bool chord_crossing(const SubdividedMesh& sub, int x, int y, std::uint64_t kx, std::uint64_t ky,
+                    const std::array<int, 3>& cells, const GridGeometry& grid, int& axis,
+                    Eigen::Vector3d& low, Eigen::Vector3d& at) {
+  const Eigen::Vector3d a = sub.mesh.vertices.row(x).transpose(),
+                        b = sub.mesh.vertices.row(y).transpose();
+  if (!shared_face(kx, ky, cells, grid, axis, low) || a[axis] == b[axis]) return false;
+  at = a + (low[axis] - a[axis]) / (b[axis] - a[axis]) * (b - a);
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::uint64_t> split_cells(const std::vector<std::uint64_t>& keys,
@@ -205,11 +218,8 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
     // Only a chord that crosses that face: the projection can take a vertex out of its cell, and
     // a new vertex kept on the face far from its chord lay 0.77 h off armadillo at 512^3.
     int axis = 0;
-    Eigen::Vector3d low;
-    const Eigen::Vector3d a = sub.mesh.vertices.row(x).transpose(),
-                          b = sub.mesh.vertices.row(y).transpose();
-    if (!shared_face(kx[0], ky[0], cells, grid, axis, low) || a[axis] == b[axis]) return false;
-    const Eigen::Vector3d at = a + (low[axis] - a[axis]) / (b[axis] - a[axis]) * (b - a);
+    Eigen::Vector3d low, at;
+    if (!chord_crossing(sub, x, y, kx[0], ky[0], cells, grid, axis, low, at)) return false;
     const Eigen::Vector3d h = grid.spacing();
     for (int d = 0; d < 3; ++d)
       if (d != axis &&
@@ -229,15 +239,12 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
       placed.row(v) = sub.mesh.vertices.row(x);
       continue;
     }
-    // Where the chord crosses the face between the two cells.
+    // Where the chord crosses the face between the two cells (split's test found that it does).
     const VertexKey& key = split_mesh.sub.keys[std::size_t(v)];
     int axis = 0;
-    Eigen::Vector3d low;
-    const Eigen::Vector3d a = sub.mesh.vertices.row(x).transpose(),
-                          b = sub.mesh.vertices.row(y).transpose();
-    Eigen::Vector3d at = 0.5 * (a + b);
-    if (shared_face(key[0], far_end_key(key), cells, grid, axis, low) && a[axis] != b[axis])
-      at = a + (low[axis] - a[axis]) / (b[axis] - a[axis]) * (b - a);
+    Eigen::Vector3d low, at;
+    if (!chord_crossing(sub, x, y, key[0], far_end_key(key), cells, grid, axis, low, at))
+      at = 0.5 * (sub.mesh.vertices.row(x) + sub.mesh.vertices.row(y)).transpose();
     start.row(v) = placed.row(v) = at.transpose();
   }
   split_mesh.sub.mesh.vertices = placed;
