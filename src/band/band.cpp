@@ -19,9 +19,6 @@ namespace sdfcontour {
 
 namespace {
 
-// Values within this relative distance of a truncation value count as truncated: writers
-// store T in float32 and may round it.
-constexpr double kTruncationTolerance = 1e-6;
 // Fewer samples at a sign's extreme than this are a coincidence (a grid's corners, a centre).
 constexpr long kMinTruncatedSamples = 64;
 
@@ -67,11 +64,6 @@ void require_usable(const BandSamples& b, const BandOptions& options) {
 }
 
 }  // namespace
-
-bool Truncation::truncated(double value) const {
-  const double t = value < 0 ? inside : outside;
-  return std::abs(value) >= t * (1 - kTruncationTolerance);
-}
 
 namespace {
 

@@ -34,15 +34,26 @@ CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
   std::vector<Slab> per_slab(std::size_t(to[0] - from[0]));
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, from[0], to[0], 2, [&](int i) {
-      for (int j = from[1]; j < to[1]; ++j)
+      // Only next to a sign change, where a field is read and truncation never reaches: first a
+      // row's mask (branch-free, vectorised), then its few samples there.
+      // (Through restrict pointers: a char store may alias anything, and the loop would not be
+      // vectorised.)
+      thread_local std::vector<unsigned char> row_mask;
+      row_mask.resize(std::size_t(grid.dims[2]));
+      unsigned char* __restrict crossing = row_mask.data();
+      for (int j = from[1]; j < to[1]; ++j) {
+        const auto* __restrict r = f + grid.index(i, j, 0);
+        const auto* __restrict below_i = r - stride[0], * __restrict above_i = r + stride[0];
+        const auto* __restrict below_j = r - stride[1], * __restrict above_j = r + stride[1];
         for (int k = from[2]; k < to[2]; ++k) {
+          const bool in = r[k] < 0;
+          crossing[k] = (in != (below_i[k] < 0)) | (in != (above_i[k] < 0)) |
+                        (in != (below_j[k] < 0)) | (in != (above_j[k] < 0)) |
+                        (in != (r[k - 1] < 0)) | (in != (r[k + 1] < 0));
+        }
+        for (int k = from[2]; k < to[2]; ++k) {
+          if (!crossing[k]) continue;
           const std::size_t p = grid.index(i, j, k);
-          // Only next to a sign change, where a field is read and truncation never reaches.
-          bool crossing = false;
-          for (int a = 0; a < 3; ++a)
-            crossing |=
-                (f[p - stride[a]] < 0) != (f[p] < 0) || (f[p + stride[a]] < 0) != (f[p] < 0);
-          if (!crossing) continue;
           bool clamped = false;
           for (int a = 0; a < 3; ++a)
             for (long o : {-2L, -1L, 1L, 2L})
@@ -70,6 +81,7 @@ CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
           if (bend < kSmoothCurvature) slab.smooth.push_back(norm);
           if (bend < kSmoothCurvature * std::abs(norm)) slab.kinkless.push_back(norm);
         }
+      }
     });
   });
   CrossingNorms norms;

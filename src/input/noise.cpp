@@ -25,10 +25,17 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
   std::vector<Slab> per_slab(static_cast<std::size_t>(nx));
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, 2, nx - 2, 2, [&](int i) {
-      for (int j = 2; j + 2 < ny; ++j)
+      // A row's mask first (branch-free, vectorised): few samples lie near the surface.
+      // (Through restrict pointers: a char store may alias anything.)
+      thread_local std::vector<unsigned char> row_mask;
+      row_mask.resize(std::size_t(nz));
+      unsigned char* __restrict close = row_mask.data();
+      for (int j = 2; j + 2 < ny; ++j) {
+        const auto* __restrict r = f + grid.index(i, j, 0);
+        for (int k = 2; k + 2 < nz; ++k) close[k] = std::abs(double(r[k])) < near;
         for (int k = 2; k + 2 < nz; ++k) {
+          if (!close[k]) continue;
           const long p = long(grid.index(i, j, k));
-          if (!(std::abs(double(f[p])) < near)) continue;
           for (int a = 0; a < 3; ++a) {
             double sum = 0;
             bool clamped = false;
@@ -40,6 +47,7 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
             if (!clamped) per_slab[std::size_t(i)].d4.push_back(std::abs(sum));
           }
         }
+      }
     });
   });
   std::vector<double> d4 = detail::concatenate(per_slab, &Slab::d4);

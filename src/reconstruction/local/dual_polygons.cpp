@@ -1,6 +1,6 @@
-// The dual mesh's polygons: one per sign-changing grid edge inside the grid, through the vertices
-// of the four cells around it, with a vertex of its own for each segment of a face that two cells'
-// polygons would otherwise share twice.
+// The dual mesh's polygons: one per sign-changing grid edge whose four cells are searched (inside
+// the grid, or the cells' box), through the vertices of the four cells around it, with a vertex of
+// its own for each segment of a face that two cells' polygons would otherwise share twice.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -143,8 +143,10 @@ DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
       const std::array<int, 3> at = cell_of_key(cell.key);
       for (int a = 0; a < 3; ++a) {
         const int u = (a + 1) % 3, v = (a + 2) % 3;
-        if (cell.polygon_of_edge[std::size_t(T.edge_id[0][a])] < 0 || at[std::size_t(u)] < 1 ||
-            at[std::size_t(v)] < 1)
+        // (The four cells around the edge: this one and those below it in u and v.)
+        if (cell.polygon_of_edge[std::size_t(T.edge_id[0][a])] < 0 ||
+            at[std::size_t(u)] <= box_lo[std::size_t(u)] ||
+            at[std::size_t(v)] <= box_lo[std::size_t(v)])
           continue;
         parts[part][c - first][std::size_t(a)] =
             edge_polygon(*this, cell, at, a, every_ambiguous_face);

@@ -26,10 +26,11 @@ struct KeyedLocalMesh {
   PointMatrix crossing_means;
 };
 
-KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatrix& points,
-                                          const PointMatrix& normals,
-                                          const LocalReconstructionOptions& options,
-                                          LocalReconstructionStats* stats_out,
-                                          const Eigen::VectorXd& depths);
+/// `cell_box` (if set): only the cells [box[0], box[1]) of `grid` (its own cell indices) and the
+/// grid edges whose four cells lie there; a brick reads its owned edges and a ring, not its halo.
+KeyedLocalMesh keyed_local_reconstruction(
+    const GridView& grid, const PointMatrix& points, const PointMatrix& normals,
+    const LocalReconstructionOptions& options, LocalReconstructionStats* stats_out,
+    const Eigen::VectorXd& depths, const std::array<std::array<int, 3>, 2>* cell_box = nullptr);
 
 }  // namespace sdfcontour::detail

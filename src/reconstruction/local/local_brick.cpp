@@ -336,7 +336,9 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   Eigen::VectorXd depths;
   ContactPoints cp = owned_reach_contact_points(block, band, own_first, own_end, options, depths);
   piece.contact_points = cp.size();
-  detail::return_free_memory();  // the triangulation's bricks, freed in every thread's arena
+  // The triangulation's bricks, freed in every thread's arena (the lattice's points allocate
+  // little: trimming between a brick's stages only makes its next stages fault fresh pages in).
+  if (!local_lattice_points(options, n)) detail::return_free_memory();
   // (Given points stay with their caller.)
   if (options.keep_contact_points && !options.given_points)
     detail::keep_owned_contact_points(block, band, cp, own_first, own_end, piece);
@@ -362,14 +364,22 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   detail::KeyedTriangles near;
   std::vector<std::uint64_t> split_cells;  // with edge fans: cells with more than one polygon
   {
+    // Only the cells around those edges: the four cells of an edge from point e lie in
+    // [e - 1, e] (a cell more each way for rounding's sake).
+    const Index3 edges_lo = shifted(cells_first, -scale * ring(options)),
+                 edges_hi = shifted(cells_end, scale * ring(options));
+    std::array<Index3, 2> cell_box;
+    for (std::size_t a = 0; a < 3; ++a) {
+      cell_box[0][a] = edges_lo[a] - 2 - cells_grid.first[a];
+      cell_box[1][a] = edges_hi[a] + 1 - cells_grid.first[a];
+    }
     const detail::KeyedLocalMesh keyed = detail::keyed_local_reconstruction(
-        cells_grid, cp.points, cp.normals, local, nullptr, depths);
+        cells_grid, cp.points, cp.normals, local, nullptr, depths, &cell_box);
     piece.stats = detail::owned_cell_stats(keyed, cells_n, cells_first, cells_end);
     if (local.edge_fans) split_cells = detail::split_cells(keyed.vertex_key, cells_n);
     for (const Index3& t : refined.thin_points)
       piece.stats.thin_points += in_range(t, cells_first, cells_end);
-    near = detail::triangles_of_edges(keyed, cells_n, shifted(cells_first, -scale * ring(options)),
-                                      shifted(cells_end, scale * ring(options)), crossing_means);
+    near = detail::triangles_of_edges(keyed, cells_n, edges_lo, edges_hi, crossing_means);
   }
   refined = detail::RefinedGrid();
   // The carving's samples are taken now: where no vertex goes onto the grid's zero set, the rest
@@ -380,10 +390,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   std::optional<BandSamples> wider =
       carve ? detail::wider_carving_band(block, options) : std::optional<BandSamples>();
   const GridGeometry block_geometry = block;
-  if (!options.refine_zero_set) {
-    if (options.grid_read) options.grid_read();
-    detail::return_free_memory();
-  }
+  if (!options.refine_zero_set && options.grid_read) options.grid_read();
   if (options.refine_zero_set) {
     // First the cells' own vertices: the subdivision's then start near the zero set, and so do
     // the positions that the untangling goes back to.
@@ -449,11 +456,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   }
   wider.reset();
   if (options.refine_zero_set && options.grid_read) options.grid_read();
-  detail::return_free_memory();
-  if (options.side_rounds > 0) {
+  if (options.side_rounds > 0)
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
-    detail::return_free_memory();
-  }
   if (fans) {
     // Per vertex of sub: its crossings' mean where it has one (the dual mesh's vertices).
     PointMatrix means = sub.mesh.vertices;
@@ -498,7 +502,6 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
       // more, without a crossing.
       const PointMatrix settled = sub.mesh.vertices;
       detail::put_samples_on_their_sides(sub.mesh, band, h, 1, &reverted);
-      detail::return_free_memory();
       revert_self_intersections(sub.mesh, settled, 1);
     }
   }

@@ -326,7 +326,8 @@ KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatri
                                           const PointMatrix& normals,
                                           const LocalReconstructionOptions& options,
                                           LocalReconstructionStats* stats_out,
-                                          const Eigen::VectorXd& depths) {
+                                          const Eigen::VectorXd& depths,
+                                          const std::array<std::array<int, 3>, 2>* cell_box) {
   if (points.rows() != normals.rows())
     throw Error("local reconstruction: " + std::to_string(points.rows()) + " contact points but " +
                 std::to_string(normals.rows()) + " normals");
@@ -341,7 +342,7 @@ KeyedLocalMesh keyed_local_reconstruction(const GridView& grid, const PointMatri
   if (!(options.depth_scale >= 0) || !std::isfinite(options.depth_scale))
     throw Error("local reconstruction: depth_scale must be a non-negative number of spacings");
   LocalReconstructionStats stats;
-  const SurfaceCells cells = detail::find_surface_cells(grid);
+  const SurfaceCells cells = detail::find_surface_cells(grid, cell_box);
   KeyedLocalMesh keyed;
   Mesh& mesh = keyed.mesh;
   Eigen::VectorXd weights;

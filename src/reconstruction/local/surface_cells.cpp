@@ -32,18 +32,19 @@ Eigen::Vector3d gradient_at(const GridView& grid, const std::array<int, 3>& p,
   return g;
 }
 
-// The cells of slab i (cells (i, *, *)) that the surface crosses, with their polygons' edges.
-// Most cells are on one side: their corners' signs alone rule them out.
+// The cells of slab i (cells (i, *, *)) in the box that the surface crosses, with their
+// polygons' edges. Most cells are on one side: their corners' signs alone rule them out.
 template <class T>
-void slab_cells(const GridView& grid, const T* values, int i, std::vector<ActiveCell>& out) {
+void slab_cells(const SurfaceCells& cells, const T* values, int i, std::vector<ActiveCell>& out) {
+  const GridView& grid = cells.grid;
   const auto& n = grid.dims;
   const std::int64_t slab = std::int64_t(i) * (n[1] - 1) * (n[2] - 1);
   const std::size_t sj = std::size_t(n[2]), si = std::size_t(n[1]) * sj;
   const std::size_t offset[8] = {0, si, sj, si + sj, 1, si + 1, sj + 1, si + sj + 1};
   double v[8];
-  for (int j = 0; j + 1 < n[1]; ++j) {
+  for (int j = cells.box_lo[1]; j < cells.box_hi[1]; ++j) {
     const T* row = values + grid.index(i, j, 0);
-    for (int k = 0; k + 1 < n[2]; ++k) {
+    for (int k = cells.box_lo[2]; k < cells.box_hi[2]; ++k) {
       const T* at = row + k;
       int inside = 0;
       for (int c = 0; c < 8; ++c) inside += at[offset[c]] < 0;
@@ -134,16 +135,24 @@ CellPolygons SurfaceCells::polygons(const ActiveCell& cell) const {
   return out;
 }
 
-SurfaceCells find_surface_cells(const GridView& grid) {
+SurfaceCells find_surface_cells(const GridView& grid,
+                                const std::array<std::array<int, 3>, 2>* box) {
   SurfaceCells cells;
   cells.grid = grid;
-  for (int d = 0; d < 3; ++d) cells.cell_dims[std::size_t(d)] = grid.dims[std::size_t(d)] - 1;
+  for (std::size_t d = 0; d < 3; ++d) {
+    cells.cell_dims[d] = grid.dims[d] - 1;
+    cells.box_lo[d] = box ? std::clamp((*box)[0][d], 0, cells.cell_dims[d]) : 0;
+    cells.box_hi[d] =
+        box ? std::clamp((*box)[1][d], cells.box_lo[d], cells.cell_dims[d]) : cells.cell_dims[d];
+  }
   cells.min = grid.bounds.min;
   cells.spacing = grid.spacing();
   cells.first = grid.first;
-  std::vector<std::vector<ActiveCell>> slabs(std::size_t(cells.cell_dims[0]));
-  tbb::parallel_for(0, cells.cell_dims[0], [&](int i) {
-    grid.visit([&](const auto* values) { slab_cells(grid, values, i, slabs[std::size_t(i)]); });
+  const int i0 = cells.box_lo[0];
+  std::vector<std::vector<ActiveCell>> slabs(std::size_t(cells.box_hi[0] - i0));
+  tbb::parallel_for(i0, cells.box_hi[0], [&](int i) {
+    grid.visit(
+        [&](const auto* values) { slab_cells(cells, values, i, slabs[std::size_t(i - i0)]); });
   });
   // Each slab's first cell and first vertex, then the slabs copied in parallel.
   std::vector<std::size_t> first_cell(slabs.size() + 1, 0);

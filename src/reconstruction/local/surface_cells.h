@@ -50,6 +50,8 @@ struct SurfaceCells {
   std::array<int, 3> cell_dims{};  ///< grid dims minus one
   Eigen::Vector3d min, spacing;    ///< the whole grid's first sample and spacing
   std::array<int, 3> first{};      ///< a block's offset in its whole grid (GridGeometry::first)
+  /// The cells searched, [box_lo, box_hi) in the grid's cell indices: `active` holds only these.
+  std::array<int, 3> box_lo{}, box_hi{};
   std::vector<ActiveCell> active;  ///< ascending keys
 
   std::int64_t key(const std::array<int, 3>& c) const {
@@ -88,7 +90,10 @@ struct SurfaceCells {
 std::array<int, 3> corner_of(const std::array<int, 3>& cell, int c);
 double value_at(const GridView& grid, const std::array<int, 3>& p);
 
-/// The cells of `grid` that its zero level set crosses (inside: value < 0), in key order.
-SurfaceCells find_surface_cells(const GridView& grid);
+/// The cells of `grid` that its zero level set crosses (inside: value < 0), in key order; with
+/// `box`, only those among the cells [box[0], box[1]) (clipped to the grid's), whose keys and
+/// positions stay the whole grid's.
+SurfaceCells find_surface_cells(const GridView& grid,
+                                const std::array<std::array<int, 3>, 2>* box = nullptr);
 
 }  // namespace sdfcontour::detail
