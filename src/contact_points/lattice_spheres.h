@@ -38,13 +38,18 @@ struct SphereList {
   // Lattice::any_sphere_near's answer where the list covers c (the same squared distances).
   template <class F>
   bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
-    for (std::size_t t = 0; t < r.size(); ++t) {
+    for (std::size_t t = next_near(c, extra, 0); t < r.size(); t = next_near(c, extra, t + 1)) {
       const double dx = x[t] - c[0], dy = y[t] - c[1], dz = z[t] - c[2];
       const double d2 = (dx * dx + dy * dy) + dz * dz, reach = r[t] + extra;
       if (d2 < reach * reach && sample[t] != self && f(sample[t], d2)) return true;
     }
     return false;
   }
+
+  // The first sphere from `t` on that may come within `extra` of c (a superset of those that
+  // do), or the list's size. A sample's list holds hundreds of spheres and few reach c: this
+  // scan is vectorised where the processor allows (lattice_spheres.cpp).
+  std::size_t next_near(const Eigen::Vector3d& c, double extra, std::size_t t) const;
 };
 
 // The band samples on their lattice, held compactly: memory in the band, not in the grid (a dense
