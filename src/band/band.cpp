@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "input/value_scans.h"
 #include "input/windowed_passes.h"
 #include "sdfcontour/band/point_clusters.h"
 
@@ -75,10 +76,7 @@ TruncationCounts counts_in(const T* values, std::size_t n,
   TruncationCounts c = detail::windowed_reduce(
       drop_pages, values, n, TruncationCounts{},
       [&](const tbb::blocked_range<std::size_t>& r, TruncationCounts x) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-          x.most_negative = std::min(x.most_negative, double(values[i]));
-          x.most_positive = std::max(x.most_positive, double(values[i]));
-        }
+        detail::extremes(values + r.begin(), r.size(), x.most_negative, x.most_positive);
         return x;
       },
       [](TruncationCounts a, TruncationCounts b) {
@@ -92,12 +90,8 @@ TruncationCounts counts_in(const T* values, std::size_t n,
   const TruncationCounts at = detail::windowed_reduce(
       drop_pages, values, n, TruncationCounts{},
       [&](const tbb::blocked_range<std::size_t>& r, TruncationCounts x) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-          const double v = values[i];
-          x.negatives += v < 0;
-          x.at_inside += v < 0 && -v >= lo;
-          x.at_outside += v > 0 && v >= hi;
-        }
+        detail::count_beyond(values + r.begin(), r.size(), lo, hi, x.negatives, x.at_inside,
+                             x.at_outside);
         return x;
       },
       [](TruncationCounts a, TruncationCounts b) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "input/value_scans.h"
 #include "input/windowed_passes.h"
 #include "sdfcontour/band/band.h"
 
@@ -32,32 +33,25 @@ CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
   const std::size_t stride[3] = {std::size_t(grid.dims[1]) * std::size_t(grid.dims[2]),
                                  std::size_t(grid.dims[2]), 1};
   std::vector<Slab> per_slab(std::size_t(to[0] - from[0]));
+  const bool truncated_anywhere = truncation.detected();
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, from[0], to[0], 2, [&](int i) {
       // Only next to a sign change, where a field is read and truncation never reaches: first a
-      // row's mask (branch-free, vectorised), then its few samples there.
-      // (Through restrict pointers: a char store may alias anything, and the loop would not be
-      // vectorised.)
+      // row's mask, then its few samples there.
       thread_local std::vector<unsigned char> row_mask;
       row_mask.resize(std::size_t(grid.dims[2]));
-      unsigned char* __restrict crossing = row_mask.data();
+      const std::ptrdiff_t beside[4] = {-std::ptrdiff_t(stride[0]), std::ptrdiff_t(stride[0]),
+                                        -std::ptrdiff_t(stride[1]), std::ptrdiff_t(stride[1])};
       for (int j = from[1]; j < to[1]; ++j) {
-        const auto* __restrict r = f + grid.index(i, j, 0);
-        const auto* __restrict below_i = r - stride[0], * __restrict above_i = r + stride[0];
-        const auto* __restrict below_j = r - stride[1], * __restrict above_j = r + stride[1];
+        detail::crossing_row(f + grid.index(i, j, 0), beside, from[2], to[2], row_mask.data());
         for (int k = from[2]; k < to[2]; ++k) {
-          const bool in = r[k] < 0;
-          crossing[k] = (in != (below_i[k] < 0)) | (in != (above_i[k] < 0)) |
-                        (in != (below_j[k] < 0)) | (in != (above_j[k] < 0)) |
-                        (in != (r[k - 1] < 0)) | (in != (r[k + 1] < 0));
-        }
-        for (int k = from[2]; k < to[2]; ++k) {
-          if (!crossing[k]) continue;
+          if (!row_mask[std::size_t(k)]) continue;
           const std::size_t p = grid.index(i, j, k);
           bool clamped = false;
-          for (int a = 0; a < 3; ++a)
-            for (long o : {-2L, -1L, 1L, 2L})
-              clamped |= truncation.truncated(double(f[p + o * long(stride[a])]));
+          if (truncated_anywhere)
+            for (int a = 0; a < 3; ++a)
+              for (long o : {-2L, -1L, 1L, 2L})
+                clamped |= truncation.truncated(double(f[p + o * long(stride[a])]));
           if (clamped) continue;
           // Central differences with steps h and 2h, extrapolated (Richardson): the curvature's
           // O(h^2) bias cancels, so an exact distance measures 1 to O(h^4).

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "input/value_scans.h"
 #include "input/windowed_passes.h"
 
 namespace sdfcontour {
@@ -23,25 +24,23 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
     std::vector<double> d4;
   };
   std::vector<Slab> per_slab(static_cast<std::size_t>(nx));
+  const bool truncated_anywhere = truncation.detected();
   grid.visit([&](const auto* f) {
     detail::windowed_slabs(grid, f, 2, nx - 2, 2, [&](int i) {
-      // A row's mask first (branch-free, vectorised): few samples lie near the surface.
-      // (Through restrict pointers: a char store may alias anything.)
+      // A row's mask first: few samples lie near the surface.
       thread_local std::vector<unsigned char> row_mask;
       row_mask.resize(std::size_t(nz));
-      unsigned char* __restrict close = row_mask.data();
       for (int j = 2; j + 2 < ny; ++j) {
-        const auto* __restrict r = f + grid.index(i, j, 0);
-        for (int k = 2; k + 2 < nz; ++k) close[k] = std::abs(double(r[k])) < near;
+        detail::near_row(f + grid.index(i, j, 0), near, 2, nz - 2, row_mask.data());
         for (int k = 2; k + 2 < nz; ++k) {
-          if (!close[k]) continue;
+          if (!row_mask[std::size_t(k)]) continue;
           const long p = long(grid.index(i, j, k));
           for (int a = 0; a < 3; ++a) {
             double sum = 0;
             bool clamped = false;
             for (int o = -2; o <= 2; ++o) {
               const double v = double(f[p + o * stride[a]]);
-              clamped |= truncation.truncated(v);
+              clamped |= truncated_anywhere && truncation.truncated(v);
               sum += kWeights[o + 2] * v;
             }
             if (!clamped) per_slab[std::size_t(i)].d4.push_back(std::abs(sum));

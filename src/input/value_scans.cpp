@@ -1,0 +1,109 @@
+// GCC 12 vectorises the masks with AVX2 only (a compare's result narrowed to a byte): each scan
+// has an AVX2 clone chosen at load time, and the same answers either way (compares, no
+// arithmetic). The extremes are vectorised as fast math allows: over finite values a minimum is
+// the same number in any order (a zero's sign aside, which no caller reads).
+#include "input/value_scans.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sdfcontour::detail {
+
+namespace {
+
+template <class T>
+inline void crossing_row_of(const T* __restrict row, const std::ptrdiff_t offset[4], int from,
+                            int to, unsigned char* __restrict out) {
+  const T* __restrict a = row + offset[0], * __restrict b = row + offset[1], * __restrict c = row + offset[2], * __restrict d = row + offset[3];
+  for (int k = from; k < to; ++k) {
+    const bool in = row[k] < 0;
+    out[k] = (in != (a[k] < 0)) | (in != (b[k] < 0)) | (in != (c[k] < 0)) | (in != (d[k] < 0)) |
+             (in != (row[k - 1] < 0)) | (in != (row[k + 1] < 0));
+  }
+}
+
+template <class T>
+inline void near_row_of(const T* __restrict row, double near, int from, int to,
+                        unsigned char* __restrict out) {
+  for (int k = from; k < to; ++k) out[k] = std::abs(double(row[k])) < near;
+}
+
+template <class T>
+inline void extremes_of(const T* __restrict values, std::size_t n, double& lo, double& hi) {
+  T a = T(lo), b = T(hi);
+  for (std::size_t i = 0; i < n; ++i) {
+    a = values[i] < a ? values[i] : a;
+    b = values[i] > b ? values[i] : b;
+  }
+  lo = std::min(lo, double(a));
+  hi = std::max(hi, double(b));
+}
+
+template <class T>
+inline void count_beyond_of(const T* __restrict values, std::size_t n, double inside,
+                            double outside, long& negatives, long& at_inside, long& at_outside) {
+  long a = 0, b = 0, c = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double v = values[i];
+    a += v < 0;
+    b += (v < 0) & (-v >= inside);
+    c += (v > 0) & (v >= outside);
+  }
+  negatives += a, at_inside += b, at_outside += c;
+}
+
+}  // namespace
+
+__attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void extremes(
+    const float* values, std::size_t n, double& lo, double& hi) {
+  extremes_of(values, n, lo, hi);
+}
+
+__attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void extremes(
+    const double* values, std::size_t n, double& lo, double& hi) {
+  extremes_of(values, n, lo, hi);
+}
+
+__attribute__((target_clones("avx2", "default"))) void count_beyond(const float* values,
+                                                                    std::size_t n, double inside,
+                                                                    double outside, long& negatives,
+                                                                    long& at_inside,
+                                                                    long& at_outside) {
+  count_beyond_of(values, n, inside, outside, negatives, at_inside, at_outside);
+}
+
+__attribute__((target_clones("avx2", "default"))) void count_beyond(const double* values,
+                                                                    std::size_t n, double inside,
+                                                                    double outside, long& negatives,
+                                                                    long& at_inside,
+                                                                    long& at_outside) {
+  count_beyond_of(values, n, inside, outside, negatives, at_inside, at_outside);
+}
+
+__attribute__((target_clones("avx2", "default"))) void crossing_row(const float* row,
+                                                                    const std::ptrdiff_t offset[4],
+                                                                    int from, int to,
+                                                                    unsigned char* out) {
+  crossing_row_of(row, offset, from, to, out);
+}
+
+__attribute__((target_clones("avx2", "default"))) void crossing_row(const double* row,
+                                                                    const std::ptrdiff_t offset[4],
+                                                                    int from, int to,
+                                                                    unsigned char* out) {
+  crossing_row_of(row, offset, from, to, out);
+}
+
+__attribute__((target_clones("avx2", "default"))) void near_row(const float* row, double near,
+                                                                int from, int to,
+                                                                unsigned char* out) {
+  near_row_of(row, near, from, to, out);
+}
+
+__attribute__((target_clones("avx2", "default"))) void near_row(const double* row, double near,
+                                                                int from, int to,
+                                                                unsigned char* out) {
+  near_row_of(row, near, from, to, out);
+}
+
+}  // namespace sdfcontour::detail
