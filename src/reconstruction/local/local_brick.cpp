@@ -449,12 +449,17 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     detail::refine_vertices_on_zero_set(block, band, options, sub.mesh, fixed, &stay);
   clock.next(3);
   const BandSamples& balls = wider ? *wider : band;
+  // The band's lattice, made once for the carving (where its balls are the band's) and the fans.
+  std::optional<detail::Lattice> band_lattice;
   if (carve && balls.samples.points.rows() > 0) {
-    const detail::Lattice lattice(block_geometry, balls);
+    std::optional<detail::Lattice> wider_lattice;
+    const detail::Lattice& lattice = wider ? wider_lattice.emplace(block_geometry, balls)
+                                           : band_lattice.emplace(block_geometry, band);
     detail::carve_vertices_alone(sub.mesh.vertices, lattice, &balls.core, h, options.carve_passes,
                                  kMaxCarveMove, stay.empty() ? nullptr : &stay);
   }
   wider.reset();
+  if (!fans) band_lattice.reset();
   if (options.refine_zero_set && options.grid_read) options.grid_read();
   if (options.side_rounds > 0)
     detail::put_samples_on_their_sides(sub.mesh, band, h, options.side_rounds);
@@ -475,11 +480,10 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     // samples' spheres bound the edges' vertices too.
     const bool distances =
         carve && scale == 1 && !options.refine_zero_set && band.samples.points.rows() > 0;
-    std::optional<detail::Lattice> lattice;
     std::optional<detail::SampleSpheres> spheres;
     if (distances) {
-      lattice.emplace(block_geometry, band);
-      spheres.emplace(*lattice, block_geometry.first);
+      if (!band_lattice) band_lattice.emplace(block_geometry, band);
+      spheres.emplace(*band_lattice, block_geometry.first);
     }
     detail::keep_in_fan_regions(sub.mesh.vertices, sub.keys, reconstructed, means, split_cells,
                                 cells_geometry, spheres ? &*spheres : nullptr);
