@@ -9,11 +9,11 @@
 
 namespace sdfcontour::detail {
 
-namespace {
-
 template <class T>
-inline void crossing_row_of(const T* __restrict row, const std::ptrdiff_t offset[4], int from,
-                            int to, unsigned char* __restrict out) {
+__attribute__((target_clones("avx2", "default"))) void crossing_row(const T* __restrict row,
+                                                                    const std::ptrdiff_t offset[4],
+                                                                    int from, int to,
+                                                                    unsigned char* __restrict out) {
   const T* __restrict a = row + offset[0], * __restrict b = row + offset[1], * __restrict c = row + offset[2], * __restrict d = row + offset[3];
   for (int k = from; k < to; ++k) {
     const bool in = row[k] < 0;
@@ -23,13 +23,15 @@ inline void crossing_row_of(const T* __restrict row, const std::ptrdiff_t offset
 }
 
 template <class T>
-inline void near_row_of(const T* __restrict row, double near, int from, int to,
-                        unsigned char* __restrict out) {
+__attribute__((target_clones("avx2", "default"))) void near_row(const T* __restrict row,
+                                                                double near, int from, int to,
+                                                                unsigned char* __restrict out) {
   for (int k = from; k < to; ++k) out[k] = std::abs(double(row[k])) < near;
 }
 
 template <class T>
-inline void extremes_of(const T* __restrict values, std::size_t n, double& lo, double& hi) {
+__attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void extremes(
+    const T* __restrict values, std::size_t n, double& lo, double& hi) {
   T a = T(lo), b = T(hi);
   for (std::size_t i = 0; i < n; ++i) {
     a = values[i] < a ? values[i] : a;
@@ -40,8 +42,11 @@ inline void extremes_of(const T* __restrict values, std::size_t n, double& lo, d
 }
 
 template <class T>
-inline void count_beyond_of(const T* __restrict values, std::size_t n, double inside,
-                            double outside, long& negatives, long& at_inside, long& at_outside) {
+__attribute__((target_clones("avx2", "default"))) void count_beyond(const T* __restrict values,
+                                                                    std::size_t n, double inside,
+                                                                    double outside, long& negatives,
+                                                                    long& at_inside,
+                                                                    long& at_outside) {
   long a = 0, b = 0, c = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double v = values[i];
@@ -52,58 +57,13 @@ inline void count_beyond_of(const T* __restrict values, std::size_t n, double in
   negatives += a, at_inside += b, at_outside += c;
 }
 
-}  // namespace
-
-__attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void extremes(
-    const float* values, std::size_t n, double& lo, double& hi) {
-  extremes_of(values, n, lo, hi);
-}
-
-__attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void extremes(
-    const double* values, std::size_t n, double& lo, double& hi) {
-  extremes_of(values, n, lo, hi);
-}
-
-__attribute__((target_clones("avx2", "default"))) void count_beyond(const float* values,
-                                                                    std::size_t n, double inside,
-                                                                    double outside, long& negatives,
-                                                                    long& at_inside,
-                                                                    long& at_outside) {
-  count_beyond_of(values, n, inside, outside, negatives, at_inside, at_outside);
-}
-
-__attribute__((target_clones("avx2", "default"))) void count_beyond(const double* values,
-                                                                    std::size_t n, double inside,
-                                                                    double outside, long& negatives,
-                                                                    long& at_inside,
-                                                                    long& at_outside) {
-  count_beyond_of(values, n, inside, outside, negatives, at_inside, at_outside);
-}
-
-__attribute__((target_clones("avx2", "default"))) void crossing_row(const float* row,
-                                                                    const std::ptrdiff_t offset[4],
-                                                                    int from, int to,
-                                                                    unsigned char* out) {
-  crossing_row_of(row, offset, from, to, out);
-}
-
-__attribute__((target_clones("avx2", "default"))) void crossing_row(const double* row,
-                                                                    const std::ptrdiff_t offset[4],
-                                                                    int from, int to,
-                                                                    unsigned char* out) {
-  crossing_row_of(row, offset, from, to, out);
-}
-
-__attribute__((target_clones("avx2", "default"))) void near_row(const float* row, double near,
-                                                                int from, int to,
-                                                                unsigned char* out) {
-  near_row_of(row, near, from, to, out);
-}
-
-__attribute__((target_clones("avx2", "default"))) void near_row(const double* row, double near,
-                                                                int from, int to,
-                                                                unsigned char* out) {
-  near_row_of(row, near, from, to, out);
-}
+#define SDFCONTOUR_VALUE_SCANS(T)                                                             \
+  template void crossing_row<T>(const T*, const std::ptrdiff_t[4], int, int, unsigned char*); \
+  template void near_row<T>(const T*, double, int, int, unsigned char*);                      \
+  template void extremes<T>(const T*, std::size_t, double&, double&);                         \
+  template void count_beyond<T>(const T*, std::size_t, double, double, long&, long&, long&);
+SDFCONTOUR_VALUE_SCANS(float)
+SDFCONTOUR_VALUE_SCANS(double)
+#undef SDFCONTOUR_VALUE_SCANS
 
 }  // namespace sdfcontour::detail
