@@ -7,6 +7,7 @@
 
 #include <limits>
 
+#include "input/cpu_clones.h"
 #include "pipeline/float_bounds.h"
 
 namespace sdfcontour::detail {
@@ -91,10 +92,9 @@ Lattice::Lattice(const GridGeometry& grid, const BandSamples& band)
 
 // Blocks of spheres counted branch-free, then the first that may reach within the block. The
 // slack keeps every sphere that the exact test (any_sphere_near's, in whatever rounding) takes.
-// (GCC 12 vectorises the count with AVX2 only, so there is an AVX2 clone; there is no FMA in
-// it, so the default and the clone give the same answers.)
-__attribute__((target_clones("avx2", "default"))) std::size_t SphereList::next_near(
-    const Eigen::Vector3d& c, double extra, std::size_t t) const {
+// (An AVX2 clone: cpu_clones.h.)
+SDFCONTOUR_AVX2_CLONE std::size_t SphereList::next_near(const Eigen::Vector3d& c, double extra,
+                                                        std::size_t t) const {
   const double* __restrict px = x.data(), * __restrict py = y.data(), * __restrict pz = z.data(), * __restrict pr = r.data();
   const double cx = c[0], cy = c[1], cz = c[2];
   auto may_reach = [&](std::size_t u) {

@@ -1,19 +1,18 @@
-// GCC 12 vectorises the masks with AVX2 only (a compare's result narrowed to a byte): each scan
-// has an AVX2 clone chosen at load time, and the same answers either way (compares, no
-// arithmetic). The extremes are vectorised as fast math allows: over finite values a minimum is
-// the same number in any order (a zero's sign aside, which no caller reads).
+// Each scan has an AVX2 clone (cpu_clones.h). The extremes are vectorised as fast math allows:
+// over finite values a minimum is the same number in any order (a zero's sign aside, which no
+// caller reads).
 #include "input/value_scans.h"
 
 #include <algorithm>
 #include <cmath>
 
+#include "input/cpu_clones.h"
+
 namespace sdfcontour::detail {
 
 template <class T>
-__attribute__((target_clones("avx2", "default"))) void crossing_row(const T* __restrict row,
-                                                                    const std::ptrdiff_t offset[4],
-                                                                    int from, int to,
-                                                                    unsigned char* __restrict out) {
+SDFCONTOUR_AVX2_CLONE void crossing_row(const T* __restrict row, const std::ptrdiff_t offset[4],
+                                        int from, int to, unsigned char* __restrict out) {
   const T* __restrict a = row + offset[0], * __restrict b = row + offset[1], * __restrict c = row + offset[2], * __restrict d = row + offset[3];
   for (int k = from; k < to; ++k) {
     const bool in = row[k] < 0;
@@ -23,15 +22,14 @@ __attribute__((target_clones("avx2", "default"))) void crossing_row(const T* __r
 }
 
 template <class T>
-__attribute__((target_clones("avx2", "default"))) void near_row(const T* __restrict row,
-                                                                double near, int from, int to,
-                                                                unsigned char* __restrict out) {
+SDFCONTOUR_AVX2_CLONE void near_row(const T* __restrict row, double near, int from, int to,
+                                    unsigned char* __restrict out) {
   for (int k = from; k < to; ++k) out[k] = std::abs(double(row[k])) < near;
 }
 
 template <class T>
-__attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void extremes(
-    const T* __restrict values, std::size_t n, double& lo, double& hi) {
+SDFCONTOUR_AVX2_CLONE_FAST_MATH void extremes(const T* __restrict values, std::size_t n, double& lo,
+                                              double& hi) {
   T a = T(lo), b = T(hi);
   for (std::size_t i = 0; i < n; ++i) {
     a = values[i] < a ? values[i] : a;
@@ -42,11 +40,9 @@ __attribute__((target_clones("avx2", "default"), optimize("fast-math"))) void ex
 }
 
 template <class T>
-__attribute__((target_clones("avx2", "default"))) void count_beyond(const T* __restrict values,
-                                                                    std::size_t n, double inside,
-                                                                    double outside, long& negatives,
-                                                                    long& at_inside,
-                                                                    long& at_outside) {
+SDFCONTOUR_AVX2_CLONE void count_beyond(const T* __restrict values, std::size_t n, double inside,
+                                        double outside, long& negatives, long& at_inside,
+                                        long& at_outside) {
   long a = 0, b = 0, c = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double v = values[i];
