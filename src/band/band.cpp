@@ -64,10 +64,6 @@ void require_usable(const BandSamples& b, const BandOptions& options) {
                 "; widen it with --band (or --band all)");
 }
 
-}  // namespace
-
-namespace {
-
 // `drop_pages`: the grid's page dropper (GridView::drop_pages), or null.
 template <class T>
 TruncationCounts counts_in(const T* values, std::size_t n,

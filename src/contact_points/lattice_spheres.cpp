@@ -95,7 +95,10 @@ Lattice::Lattice(const GridGeometry& grid, const BandSamples& band)
 // (An AVX2 clone: cpu_clones.h.)
 SDFCONTOUR_AVX2_CLONE std::size_t SphereList::next_near(const Eigen::Vector3d& c, double extra,
                                                         std::size_t t) const {
-  const double* __restrict px = x.data(), * __restrict py = y.data(), * __restrict pz = z.data(), * __restrict pr = r.data();
+  const double* __restrict px = x.data();
+  const double* __restrict py = y.data();
+  const double* __restrict pz = z.data();
+  const double* __restrict pr = r.data();
   const double cx = c[0], cy = c[1], cz = c[2];
   auto may_reach = [&](std::size_t u) {
     const double dx = px[u] - cx, dy = py[u] - cy, dz = pz[u] - cz, reach = pr[u] + extra;

@@ -13,7 +13,10 @@ namespace sdfcontour::detail {
 template <class T>
 SDFCONTOUR_AVX2_CLONE void crossing_row(const T* __restrict row, const std::ptrdiff_t offset[4],
                                         int from, int to, unsigned char* __restrict out) {
-  const T* __restrict a = row + offset[0], * __restrict b = row + offset[1], * __restrict c = row + offset[2], * __restrict d = row + offset[3];
+  const T* __restrict a = row + offset[0];
+  const T* __restrict b = row + offset[1];
+  const T* __restrict c = row + offset[2];
+  const T* __restrict d = row + offset[3];
   for (int k = from; k < to; ++k) {
     const bool in = row[k] < 0;
     out[k] = (in != (a[k] < 0)) | (in != (b[k] < 0)) | (in != (c[k] < 0)) | (in != (d[k] < 0)) |

@@ -365,7 +365,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   std::vector<std::uint64_t> split_cells;  // with edge fans: cells with more than one polygon
   {
     // Only the cells around those edges: the four cells of an edge from point e lie in
-    // [e - 1, e] (a cell more each way for rounding's sake).
+    // [e - 1, e]; the box holds one cell more on each side.
     const Index3 edges_lo = shifted(cells_first, -scale * ring(options)),
                  edges_hi = shifted(cells_end, scale * ring(options));
     std::array<Index3, 2> cell_box;
