@@ -72,6 +72,7 @@ class SamplePoint {
   }
 
   const Eigen::Vector3d& start() const { return start_; }
+  long sample() const { return s_; }
 
   Eigen::Vector3d point, normal;
 
