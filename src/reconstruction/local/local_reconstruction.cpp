@@ -82,19 +82,22 @@ void gather_points(const SurfaceCells& cells, const BinnedPoints& bins, const Po
   std::array<int, 3> ring;
   for (int a = 0; a < 3; ++a)
     ring[std::size_t(a)] = std::max(1, int(std::ceil(reach[a] / cells.spacing[a])));
+  // The cells along k are consecutive keys: one search per column of them.
+  const int k0 = std::max(0, at[2] - ring[2]),
+            k1 = std::min(cells.cell_dims[2] - 1, at[2] + ring[2]);
+  if (k0 > k1) return;
   for (int di = -ring[0]; di <= ring[0]; ++di)
-    for (int dj = -ring[1]; dj <= ring[1]; ++dj)
-      for (int dk = -ring[2]; dk <= ring[2]; ++dk) {
-        const std::array<int, 3> n{at[0] + di, at[1] + dj, at[2] + dk};
-        if (!cells.contains_cell(n)) continue;
-        const std::int64_t key = cells.key(n);
-        auto [first, last] = std::equal_range(bins.cell.begin(), bins.cell.end(), key);
-        for (auto it = first; it != last; ++it) {
-          const int r = bins.row[std::size_t(it - bins.cell.begin())];
-          const Eigen::Vector3d p = points.row(r).transpose();
-          if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) rows.push_back(r);
-        }
+    for (int dj = -ring[1]; dj <= ring[1]; ++dj) {
+      const std::array<int, 3> first_cell{at[0] + di, at[1] + dj, k0};
+      if (!cells.contains_cell(first_cell)) continue;
+      const std::int64_t last_key = cells.key({at[0] + di, at[1] + dj, k1});
+      auto it = std::lower_bound(bins.cell.begin(), bins.cell.end(), cells.key(first_cell));
+      for (; it != bins.cell.end() && *it <= last_key; ++it) {
+        const int r = bins.row[std::size_t(it - bins.cell.begin())];
+        const Eigen::Vector3d p = points.row(r).transpose();
+        if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) rows.push_back(r);
       }
+    }
 }
 
 // Where the polygon's contact points come from in a cell with several polygons: each point goes
