@@ -1,7 +1,6 @@
 #include "sdfcontour/contact_points/lattice_contact_points.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -57,10 +56,10 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
   // First where each sample's gradient puts its point, as its box; then, box by box over the
   // whole band, the spheres that meet the box are gathered once for the points there (pieces of
   // the band in its own order gathered a box once per piece that reached it).
+  constexpr Eigen::Index kPiece = 16384;
   std::vector<Outcome> outcome(std::size_t(n), Outcome::Skipped);
   std::vector<std::pair<std::uint64_t, int>> order;
   {
-    constexpr Eigen::Index kPiece = 16384;
     std::vector<std::vector<std::pair<std::uint64_t, int>>> pieces(
         std::size_t((n + kPiece - 1) / kPiece));
     tbb::parallel_for(std::size_t(0), pieces.size(), [&](std::size_t q) {
@@ -87,15 +86,21 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
   for (std::size_t a = 0; a < order.size(); ++a)
     if (a == 0 || order[a].first != order[a - 1].first) boxes.push_back(a);
   boxes.push_back(order.size());
-  // Each box's kept points with their samples, joined in band order below (a point and normal
-  // per band sample were 0.3 GB of a 1024^3 grid's bricks).
+  // Runs of whole boxes of about kPiece samples, each with its kept points and their samples
+  // (a point and normal per band sample were 0.3 GB of a 1024^3 grid's bricks), joined in band
+  // order below.
+  std::vector<std::size_t> runs{0};  // where each run's boxes start in `boxes`, then the end
+  for (std::size_t box = 1; box + 1 < boxes.size(); ++box)
+    if (boxes[box] - boxes[runs.back()] >= std::size_t(kPiece)) runs.push_back(box);
+  runs.push_back(boxes.size() - 1);
   using Found = std::pair<int, std::array<double, 6>>;
-  tbb::enumerable_thread_specific<std::vector<Found>> found;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, boxes.size() - 1), [&](const auto& range) {
-    std::vector<Found>& mine = found.local();
+  std::vector<std::vector<Found>> found(runs.size() - 1);
+  tbb::parallel_for(std::size_t(0), runs.size() - 1, [&](std::size_t run) {
+    std::vector<Found>& mine = found[run];
+    mine.reserve(boxes[runs[run + 1]] - boxes[runs[run]]);
     thread_local std::vector<SamplePoint> samples;
     thread_local detail::SphereList spheres;
-    for (std::size_t box = range.begin(); box < range.end(); ++box) {
+    for (std::size_t box = runs[run]; box < runs[run + 1]; ++box) {
       samples.clear();
       for (std::size_t a = boxes[box]; a < boxes[box + 1]; ++a) {
         samples.emplace_back(lattice, options, long(order[a].second));
@@ -133,15 +138,14 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
   }
   result.points.resize(Eigen::Index(result.samples.size()), 3);
   result.normals.resize(Eigen::Index(result.samples.size()), 3);
-  for (std::vector<Found>& mine : found) {
-    tbb::parallel_for(std::size_t(0), mine.size(), [&](std::size_t a) {
-      const Eigen::Index r = row[std::size_t(mine[a].first)];
-      const auto& x = mine[a].second;
-      result.points.row(r) << x[0], x[1], x[2];
-      result.normals.row(r) << x[3], x[4], x[5];
-    });
-    mine = {};
-  }
+  tbb::parallel_for(std::size_t(0), found.size(), [&](std::size_t run) {
+    for (const Found& f : found[run]) {
+      const Eigen::Index r = row[std::size_t(f.first)];
+      result.points.row(r) << f.second[0], f.second[1], f.second[2];
+      result.normals.row(r) << f.second[3], f.second[4], f.second[5];
+    }
+    found[run] = {};
+  });
   return result;
 }
 
