@@ -53,9 +53,8 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
     }
     return key;
   };
-  // First where each sample's gradient puts its point, as its box; then, box by box over the
-  // whole band, the spheres that meet the box are gathered once for the points there (pieces of
-  // the band in its own order gathered a box once per piece that reached it).
+  // First where each sample's gradient puts its point, as its box; then the whole band, sorted by
+  // box, gathers the spheres that meet each box once for all the points there.
   constexpr Eigen::Index kPiece = 16384;
   std::vector<Outcome> outcome(std::size_t(n), Outcome::Skipped);
   std::vector<std::pair<std::uint64_t, int>> order;
