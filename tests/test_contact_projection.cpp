@@ -330,3 +330,69 @@ TEST(ContactProjection, ParallelVertexNormalsAreTheSweepsBitForBit) {
   EXPECT_GT(sweep.rows(), 1000);
   EXPECT_TRUE(parallel == sweep);
 }
+
+namespace {
+
+// Exact contact points of the crease z = slope |x| (a valley, slope > 0) or -slope |x| (a ridge)
+// over [-extent, extent]^2, each with its facet's unit normal.
+void crease_points(PointMatrix& P, PointMatrix& N, int count, double extent, double slope) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-extent, extent);
+  P.resize(count, 3);
+  N.resize(count, 3);
+  for (int q = 0; q < count; ++q) {
+    const double x = u(rng), y = u(rng), side = x < 0 ? -1.0 : 1.0;
+    P.row(q) << x, y, slope * std::abs(x);
+    N.row(q) = Eigen::RowVector3d(-slope * side, 0, 1).normalized();
+  }
+}
+
+// The largest vertical miss of the crease among `m`'s vertices within `reach` of its middle.
+double crease_miss(const Mesh& m, double slope, double reach) {
+  double worst = 0;
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    if (m.vertices.row(v).head(2).cwiseAbs().maxCoeff() <= reach)
+      worst = std::max(worst, std::abs(m.vertices(v, 2) - slope * std::abs(m.vertices(v, 0))));
+  return worst;
+}
+
+}  // namespace
+
+TEST(ContactProjection, CreasePlanesPutVerticesOnACreaseThatTheQuadricRounds) {
+  // Two facets meeting at 20 degrees, as a polyhedral mesh's SDF has them everywhere at fine
+  // grids: the quadric rounds the crease off by hundredths of a spacing, the two planes follow
+  // it, on a ridge and in a valley alike.
+  for (const double slope : {-std::tan(10 * M_PI / 180), std::tan(10 * M_PI / 180)}) {
+    PointMatrix P, N;
+    crease_points(P, N, 6000, 6 * kSpacing, slope);
+    ContactProjectionOptions o = local_projection_options();
+    o.chord_offset = false;
+    o.crease_planes = false;
+    Mesh quadric = flat_patch(17, kSpacing / 4, 0.02 * kSpacing), planes = quadric;
+    project_to_contact_points(quadric, P, N, {}, kSpacing, o);
+    o.crease_planes = true;
+    project_to_contact_points(planes, P, N, {}, kSpacing, o);
+    const double reach = kSpacing;
+    EXPECT_GT(crease_miss(quadric, slope, reach), 5e-3 * kSpacing) << slope;
+    // (Exact where both facets have points in a vertex's fit; a spacing from the crease the few
+    // points beyond it leave the quadric's fit, 4e-6 spacings off.)
+    EXPECT_LT(crease_miss(planes, slope, reach), 1e-5 * kSpacing) << slope;
+    EXPECT_LT(crease_miss(planes, slope, reach / 2), 1e-9 * kSpacing) << slope;
+  }
+}
+
+TEST(ContactProjection, CreasePlanesLeaveASmoothSurfaceToTheQuadric) {
+  // On the sphere the quadric leaves its points nearly exact, so no vertex takes two planes:
+  // the same mesh to the last bit.
+  const double h = 2.0 / 31;
+  const Mesh mc = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 32, Bounds{}));
+  PointMatrix P, N;
+  sphere_points(P, N, int(40 * 4 * M_PI * 0.36 / (h * h)));
+  ContactProjectionOptions o = local_projection_options();
+  o.crease_planes = false;
+  Mesh quadric = mc, planes = mc;
+  project_to_contact_points(quadric, P, N, {}, h, o);
+  o.crease_planes = true;
+  project_to_contact_points(planes, P, N, {}, h, o);
+  EXPECT_EQ(quadric.vertices, planes.vertices);
+}

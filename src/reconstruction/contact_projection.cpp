@@ -147,6 +147,118 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
   return true;
 }
 
+// A crease's two sides: a plane z = q . (1, x, y) per side, fitted to the rows whose `side` it is,
+// row i weighing weight(i); false where a side's rows fix no plane.
+template <class Weight>
+bool fit_side_planes(const std::vector<FitRow>& fit, const std::vector<char>& side, Weight weight,
+                     Eigen::Vector3d plane[2]) {
+  // Both sides' moments in locals, each row adding to one side by a 0/1 factor: indexing the
+  // side's sums put every row's adds through memory.
+  double m[2][9] = {};  // w, wx, wy, wxx, wxy, wyy, wz, wxz, wyz
+  for (std::size_t i = 0; i < fit.size(); ++i) {
+    const FitRow& f = fit[i];
+    const double x = f.row[1], y = f.row[2], w = weight(i);
+    const double w1 = side[i] ? w : 0.0, w0 = w - w1;
+    const double t[9] = {1, x, y, x * x, x * y, y * y, f.z, x * f.z, y * f.z};
+    for (int k = 0; k < 9; ++k) {
+      m[0][k] += w0 * t[k];
+      m[1][k] += w1 * t[k];
+    }
+  }
+  for (int s = 0; s < 2; ++s) {
+    const double* q = m[s];
+    Eigen::Matrix3d M;
+    M << q[0], q[1], q[2], q[1], q[3], q[4], q[2], q[4], q[5];
+    const Eigen::LLT<Eigen::Matrix3d> llt(M);
+    if (llt.info() != Eigen::Success) return false;
+    plane[s] = llt.solve(Eigen::Vector3d(q[6], q[7], q[8]));
+    if (!plane[s].allFinite()) return false;
+  }
+  return true;
+}
+
+// Where the fitted points lie on two planes that meet in a crease (between a polyhedron's facets,
+// which a quadric rounds off; at fine grids most of a mesh's error lies within a spacing of its
+// creases), the crease's height at the vertex: the lower plane's on a ridge, the higher's in a
+// valley. The points go to the nearer in normal of the two normals furthest apart; each side's
+// plane is the least-squares one through its points' heights (points on the crease line lie on
+// both), each point weighing less by its normal's turn from its side's, as in the quadric's fit
+// (blended normals next to an edge lie off both facets). Taken only where the
+// quadric misses the points by more than kFlatMiss RMS, both sides have kMinSide points, the
+// planes' weighted squared misses are under kBetter times the quadric's, and each side lies under
+// the other's plane (a ridge) or over it (a valley). False otherwise.
+bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
+                   double inv_chord_scale2, double& z0) {
+  constexpr int kMinSide = 4;
+  constexpr double kBetter = 0.25;
+  constexpr double kFlatMiss = 1e-3;                   // spacings
+  constexpr double kMinTurnChord2 = 2 * (1 - 0.9995);  // the sides' normals 1.8 degrees apart
+  const std::size_t n = fit.size();
+  if (n < 2 * kMinSide) return false;
+  double quadric_miss = 0, weights = 0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const FitRow& f : fit) {
+    const double miss = f.z - f.row.dot(quadric);
+    quadric_miss += f.w * miss * miss;
+    weights += f.w;
+    mean += f.normal;
+  }
+  if (!(quadric_miss > kFlatMiss * kFlatMiss * weights)) return false;
+  mean /= double(n);
+  auto farthest = [&](const Eigen::Vector3d& from, double& distance2) {
+    std::size_t best = 0;
+    distance2 = -1;
+    for (std::size_t i = 0; i < n; ++i)
+      if ((fit[i].normal - from).squaredNorm() > distance2)
+        distance2 = (fit[i].normal - from).squaredNorm(), best = i;
+    return best;
+  };
+  double apart2;
+  const Eigen::Vector3d na = fit[farthest(mean, apart2)].normal;
+  const Eigen::Vector3d nb = fit[farthest(na, apart2)].normal;
+  if (!(apart2 > kMinTurnChord2)) return false;
+  thread_local std::vector<char> side;
+  side.resize(n);
+  int count[2] = {0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    const int s = fit[i].normal.dot(nb) > fit[i].normal.dot(na);
+    side[i] = char(s);
+    ++count[s];
+  }
+  if (count[0] < kMinSide || count[1] < kMinSide) return false;
+  Eigen::Vector3d plane[2];
+  // A point whose normal turns from its side's (blended normals next to an edge, which lie off
+  // both facets) weighs less, as in the quadric's fit.
+  const Eigen::Vector3d seed[2] = {na, nb};
+  auto turned = [&](std::size_t i) {
+    const double turn2 = 2 * (1 - std::min(1.0, fit[i].normal.dot(seed[int(side[i])])));
+    return fit[i].w / (1 + turn2 * inv_chord_scale2);
+  };
+  if (!fit_side_planes(fit, side, turned, plane)) return false;
+  // Each row's miss of its own side's plane, and how far it lies below the other's (> 0 on a
+  // ridge), in scalars: vectors made on the stack per row stalled the loop.
+  double planes_miss = 0, under[2] = {0, 0};
+  const double a0 = plane[0][0], a1 = plane[0][1], a2 = plane[0][2];
+  const double b0 = plane[1][0], b1 = plane[1][1], b2 = plane[1][2];
+  for (std::size_t i = 0; i < n; ++i) {
+    const FitRow& f = fit[i];
+    const double x = f.row[1], y = f.row[2];
+    const double za = a0 + a1 * x + a2 * y, zb = b0 + b1 * x + b2 * y;
+    const bool on_b = side[i];
+    const double miss = f.z - (on_b ? zb : za);
+    planes_miss += f.w * miss * miss;
+    under[on_b] += f.w * ((on_b ? za : zb) - f.z);
+  }
+  if (!(planes_miss < kBetter * quadric_miss)) return false;
+  if (under[0] > 0 && under[1] > 0)
+    z0 = std::min(plane[0][0], plane[1][0]);
+  else if (under[0] < 0 && under[1] < 0)
+    z0 = std::max(plane[0][0], plane[1][0]);
+  else
+    return false;
+  return true;
+}
+
 // Per vertex, the sum over its triangles of e e^T over their three edges e (in spacings), and
 // the number of triangles: a flat triangle with its corners on z(x, y) lies
 // sum_e Q(e) / 12 above it on average, Q the quadric's quadratic part, so the vertex's chord
@@ -213,6 +325,8 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
   const detail::PointCubes cubes(points, radii[0]);
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
+  const double turn_chord = 2 * std::sin(o.normal_turn_scale * std::acos(-1.0) / 360);
+  const double inv_chord_scale2 = o.normal_turn_scale > 0 ? 1 / (turn_chord * turn_chord) : 0;
   detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     fitted.add();
@@ -267,6 +381,10 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       if (!fit_quadric(fit, o, c)) return;
     }
     double z0 = c[0];
+    if (o.crease_planes && crease_height(fit, c, inv_chord_scale2, z0)) {
+      if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
+      return;
+    }
     const int slot = o.chord_offset ? chords.slot[std::size_t(v)] : -1;
     if (slot >= 0 && chords.triangles[std::size_t(slot)] > 0) {
       const Eigen::Matrix3d& m = chords.sum[std::size_t(slot)];

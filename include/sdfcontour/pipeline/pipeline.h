@@ -198,6 +198,8 @@ struct ContourOptions {
   /// second fit within 2 spacings where the first has no height (with the local contact points'
   /// near misses): 0.305x -> 0.300x at 32^3, 0.278x -> 0.267x at 64^3; the analytic torus at
   /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (bench/smooth_shapes.py).
+  /// Crease planes (a vertex whose points lie on two facets goes onto their crease): bunny at
+  /// 256^3 / 512^3 0.81x / 0.86x the L1, the shared meshes at 64^3 0.97x (docs/projection.md).
   /// Its robust_rounds is kAutoRobustRounds here: two, and one for edge fans on the grid itself
   /// (local_stage.cpp says why); any other value is taken as given.
   ContactProjectionOptions local_projection = auto_local_projection();

@@ -63,6 +63,11 @@ struct ContactProjectionOptions {
   /// triangle with its corners on the fitted surface lies below it on average. The mesh then
   /// straddles a curved surface instead of lying under it on the convex side.
   bool chord_offset = false;
+  /// Where the points lie on two planes far closer than on the quadric (a crease between two
+  /// facets, which the quadric rounds off: a polyhedral mesh's SDF has them everywhere, and at
+  /// fine grids most of the error lies next to them), the vertex goes onto the crease instead:
+  /// the lower plane on a ridge, the higher in a valley, without a chord offset.
+  bool crease_planes = false;
   /// Called with (vertices done, vertices) as the fit goes, from any thread, one call at a time.
   std::function<void(long, long)> progress;
 };
@@ -74,7 +79,7 @@ struct ContactProjectionStats {
 
 /// The local reconstruction's projection options: radius 1.25 spacings (2 where that gives no
 /// height), no residual limit, two robust rounds at 0.03 spacings (each also weighing the points
-/// by their normals' turn from the fit's, as every fit does), chord offsets
+/// by their normals' turn from the fit's, as every fit does), chord offsets, crease planes
 /// (pipeline.h, ContourOptions::local_projection, says why).
 inline ContactProjectionOptions local_projection_options() {
   ContactProjectionOptions p;
@@ -84,6 +89,7 @@ inline ContactProjectionOptions local_projection_options() {
   p.robust_rounds = 2;
   p.robust_scale = 0.03;
   p.chord_offset = true;
+  p.crease_planes = true;
   return p;
 }
 
