@@ -147,36 +147,6 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
   return true;
 }
 
-// A crease's two sides: a plane z = q . (1, x, y) per side, fitted to the rows whose `side` it is,
-// row i weighing weight(i); false where a side's rows fix no plane.
-template <class Weight>
-bool fit_side_planes(const std::vector<FitRow>& fit, const std::vector<char>& side, Weight weight,
-                     Eigen::Vector3d plane[2]) {
-  // Both sides' moments in locals, each row adding to one side by a 0/1 factor: indexing the
-  // side's sums put every row's adds through memory.
-  double m[2][9] = {};  // w, wx, wy, wxx, wxy, wyy, wz, wxz, wyz
-  for (std::size_t i = 0; i < fit.size(); ++i) {
-    const FitRow& f = fit[i];
-    const double x = f.row[1], y = f.row[2], w = weight(i);
-    const double w1 = side[i] ? w : 0.0, w0 = w - w1;
-    const double t[9] = {1, x, y, x * x, x * y, y * y, f.z, x * f.z, y * f.z};
-    for (int k = 0; k < 9; ++k) {
-      m[0][k] += w0 * t[k];
-      m[1][k] += w1 * t[k];
-    }
-  }
-  for (int s = 0; s < 2; ++s) {
-    const double* q = m[s];
-    Eigen::Matrix3d M;
-    M << q[0], q[1], q[2], q[1], q[3], q[4], q[2], q[4], q[5];
-    const Eigen::LLT<Eigen::Matrix3d> llt(M);
-    if (llt.info() != Eigen::Success) return false;
-    plane[s] = llt.solve(Eigen::Vector3d(q[6], q[7], q[8]));
-    if (!plane[s].allFinite()) return false;
-  }
-  return true;
-}
-
 // Where the fitted points lie on two planes that meet in a crease (between a polyhedron's facets,
 // which a quadric rounds off; at fine grids most of a mesh's error lies within a spacing of its
 // creases), the crease's height at the vertex: the lower plane's on a ridge, the higher's in a
@@ -217,24 +187,41 @@ bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
   const Eigen::Vector3d na = fit[farthest(mean, apart2)].normal;
   const Eigen::Vector3d nb = fit[farthest(na, apart2)].normal;
   if (!(apart2 > kMinTurnChord2)) return false;
+  // Each point to the side of the nearer seed, weighing less by its normal's turn from that
+  // seed (blended normals next to an edge lie off both facets), as in the quadric's fit; both
+  // sides' moments (w, wx, wy, wxx, wxy, wyy, wz, wxz, wyz) in locals, each row adding to one
+  // by a 0/1 factor: indexing the side's sums put every row's adds through memory.
   thread_local std::vector<char> side;
   side.resize(n);
   int count[2] = {0, 0};
+  double m[2][9] = {};
   for (std::size_t i = 0; i < n; ++i) {
-    const int s = fit[i].normal.dot(nb) > fit[i].normal.dot(na);
-    side[i] = char(s);
-    ++count[s];
+    const FitRow& f = fit[i];
+    const double to_a = f.normal.dot(na), to_b = f.normal.dot(nb);
+    const bool on_b = to_b > to_a;
+    side[i] = char(on_b);
+    ++count[on_b];
+    const double turn2 = 2 * (1 - std::min(1.0, on_b ? to_b : to_a));
+    const double w = f.w / (1 + turn2 * inv_chord_scale2);
+    const double w1 = on_b ? w : 0.0, w0 = w - w1;
+    const double x = f.row[1], y = f.row[2];
+    const double t[9] = {1, x, y, x * x, x * y, y * y, f.z, x * f.z, y * f.z};
+    for (int k = 0; k < 9; ++k) {
+      m[0][k] += w0 * t[k];
+      m[1][k] += w1 * t[k];
+    }
   }
   if (count[0] < kMinSide || count[1] < kMinSide) return false;
   Eigen::Vector3d plane[2];
-  // A point whose normal turns from its side's (blended normals next to an edge, which lie off
-  // both facets) weighs less, as in the quadric's fit.
-  const Eigen::Vector3d seed[2] = {na, nb};
-  auto turned = [&](std::size_t i) {
-    const double turn2 = 2 * (1 - std::min(1.0, fit[i].normal.dot(seed[int(side[i])])));
-    return fit[i].w / (1 + turn2 * inv_chord_scale2);
-  };
-  if (!fit_side_planes(fit, side, turned, plane)) return false;
+  for (int s = 0; s < 2; ++s) {
+    const double* q = m[s];
+    Eigen::Matrix3d M;
+    M << q[0], q[1], q[2], q[1], q[3], q[4], q[2], q[4], q[5];
+    const Eigen::LLT<Eigen::Matrix3d> llt(M);
+    if (llt.info() != Eigen::Success) return false;
+    plane[s] = llt.solve(Eigen::Vector3d(q[6], q[7], q[8]));
+    if (!plane[s].allFinite()) return false;
+  }
   // Each row's miss of its own side's plane, and how far it lies below the other's (> 0 on a
   // ridge), in scalars: vectors made on the stack per row stalled the loop.
   double planes_miss = 0, under[2] = {0, 0};
