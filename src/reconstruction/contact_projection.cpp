@@ -92,6 +92,13 @@ double inverse_00(const Eigen::LLT<Matrix6>& llt) {
   return llt.solve(Coefficients::Unit(0))[0];
 }
 
+// 1 / (2 sin(normal_turn_scale / 2))^2, so that a turn's squared chord times it is about
+// (turn / normal_turn_scale)^2; 0 where the turns weigh nothing.
+double inverse_turn_chord2(const ContactProjectionOptions& o) {
+  const double chord_scale = 2 * std::sin(o.normal_turn_scale * std::acos(-1.0) / 360);
+  return o.normal_turn_scale > 0 ? 1 / (chord_scale * chord_scale) : 0;
+}
+
 // Weighted least squares, then robust_rounds refits with each row's weight divided by
 // 1 + (its miss / robust_scale)^2; with normal_turn_scale, every fit also divides it by
 // 1 + (its normal's turn from the fit's / normal_turn_scale)^2, the turn measured by its chord,
@@ -101,12 +108,10 @@ double inverse_00(const Eigen::LLT<Matrix6>& llt) {
 // (max_variance_factor), or points too far from any quadric (max_residual). The first fit's
 // spread is judged without the turns: where the surface curves within the radius, its points
 // turn from the vertex's normal for good reason (a cylinder of radius 4 h: 19 degrees 1.4 h
-// away), and the next fit gives them their weight back.
+// away), and the next fit gives them their weight back. `inv_chord_scale2`: inverse_turn_chord2(o).
 bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions& o,
-                 Coefficients& c) {
+                 double inv_chord_scale2, Coefficients& c) {
   if (int(fit.size()) < o.min_points) return false;
-  const double chord_scale = 2 * std::sin(o.normal_turn_scale * std::acos(-1.0) / 360);
-  const double inv_chord_scale2 = o.normal_turn_scale > 0 ? 1 / (chord_scale * chord_scale) : 0;
   Eigen::LLT<Matrix6> llt;
   for (int round = 0; round <= o.robust_rounds; ++round) {
     Matrix6 M = Matrix6::Zero(), spread = Matrix6::Zero();
@@ -312,8 +317,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
   const detail::PointCubes cubes(points, radii[0]);
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
-  const double turn_chord = 2 * std::sin(o.normal_turn_scale * std::acos(-1.0) / 360);
-  const double inv_chord_scale2 = o.normal_turn_scale > 0 ? 1 / (turn_chord * turn_chord) : 0;
+  const double inv_chord_scale2 = inverse_turn_chord2(o);
   detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     fitted.add();
@@ -357,7 +361,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
     };
     Coefficients c;
     gather(radii[0], reaches[0]);
-    if (!fit_quadric(fit, o, c)) {
+    if (!fit_quadric(fit, o, inv_chord_scale2, c)) {
       // Points on lines further apart than the radius (contact points of grid-aligned flats)
       // leave a quadric undetermined: a wider neighbourhood holds the next line. Too few points
       // that agree (an edge's vertex, whose normal neither face shares) would take the few
@@ -365,7 +369,7 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       // 0.001 h without).
       if (!(o.wide_radius > 0) || int(fit.size()) < o.min_points) return;
       gather(radii[1], reaches[1]);
-      if (!fit_quadric(fit, o, c)) return;
+      if (!fit_quadric(fit, o, inv_chord_scale2, c)) return;
     }
     double z0 = c[0];
     if (o.crease_planes && crease_height(fit, c, inv_chord_scale2, z0)) {
