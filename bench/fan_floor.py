@@ -21,18 +21,7 @@ import numpy as np
 
 from common import CLI, geomean, keep, l1, report, scale_grid
 from local import read_ply
-
-
-def write_ply(path, V, F):
-    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(V)}\n"
-              "property double x\nproperty double y\nproperty double z\n"
-              f"element face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
-    faces = np.zeros(len(F), dtype=[("n", "u1"), ("i", "<i4", 3)])
-    faces["n"], faces["i"] = 3, F
-    with open(path, "wb") as f:
-        f.write(header.encode())
-        f.write(np.ascontiguousarray(V, dtype="<f8").tobytes())
-        f.write(faces.tobytes())
+from scale import write_ply
 
 
 def closest_on_triangles(P, A, B, C):
