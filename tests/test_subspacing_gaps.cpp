@@ -180,8 +180,11 @@ TEST(SubspacingGaps, FineGridsLookForThinPartsWhereTheyHaveThem) {
 
 TEST(SubspacingGaps, ChooseThinPartsFrom192To256SamplesPerAxis) {
   EXPECT_TRUE(auto_thin_parts(191, SubspacingGaps{0, 1000}));  // below 192: always
-  EXPECT_TRUE(auto_thin_parts(256, SubspacingGaps{10, 1000}));
-  EXPECT_FALSE(auto_thin_parts(256, SubspacingGaps{9, 1000}));  // under 1% of the crossings
+  EXPECT_TRUE(auto_thin_parts(256, SubspacingGaps{25, 10000}));
+  EXPECT_FALSE(auto_thin_parts(256, SubspacingGaps{24, 10000}));  // under 0.25% of the crossings
+  // The shared meshes at 256^3: the boot's tread (0.38%) on, the plane (0.13%) off.
+  EXPECT_TRUE(auto_thin_parts(256, SubspacingGaps{439, 114168}));
+  EXPECT_FALSE(auto_thin_parts(256, SubspacingGaps{51, 39352}));
   EXPECT_FALSE(auto_thin_parts(200, SubspacingGaps{0, 0}));
   EXPECT_FALSE(auto_thin_parts(257, SubspacingGaps{1000, 1000}));  // the finer grid's memory
   // Beyond 256 contour() counts no gaps: a fin on a grid 257 samples long stays out.

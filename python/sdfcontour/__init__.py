@@ -154,7 +154,7 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Local reconstruction on grids: find the parts thinner than a spacing that the samples
         straddle without a sign change (a wing, a blade) from the contact points on their two
         sides, on a grid of twice the resolution with one subdivision fewer ("auto": for arrays
-        and files below 192 samples per axis, and from 192 to 256 where at least 1% of the edges
+        and files below 192 samples per axis, and from 192 to 256 where at least 0.25% of the edges
         that the surface crosses have a gap beside them, two samples on one side closer together
         than their values allow; off for callables, which may be neural SDFs whose values are no
         distances; the shared meshes' L1 over marching cubes' at 64^3 0.253x -> 0.199x,

@@ -106,11 +106,15 @@ double auto_split_sag(double samples_per_axis);
 bool auto_thin_parts(double samples_per_axis);
 /// The same, knowing the grid's `gaps` (count_subspacing_gaps): on below 192 samples per axis,
 /// and from 192 up to kThinPartGridLimit where at least kThinPartGapShare of the edges that the
-/// surface crosses are subspacing gaps (at 256^3 the sword 23%, no other shared mesh over 0.4%:
-/// its blade appears, 0.81x -> 0.08x MC's L1, for 5x the time and 12x the memory).
+/// surface crosses are subspacing gaps. At 256^3 the sword has 23% (its blade appears, 0.81x ->
+/// 0.08x MC's L1, for 5x the time and 12x the memory) and the boot 0.38% (its tread's slots: L1
+/// 0.72x, L-infinity 0.58x, for 1.6x the time and 2.4x the memory; on the lattice's contact points
+/// it was otherwise 1.12x the L1 of the default that issue 64 was filed against). The plane has
+/// 0.13% and stays off (0.78x the L1 for 2x the time and 4.4x the memory); every other shared mesh
+/// is under 0.1% (docs/results/issue64_accuracy.md).
 bool auto_thin_parts(double samples_per_axis, const SubspacingGaps& gaps);
 /// auto_thin_parts's share of subspacing gaps among the edges that the surface crosses.
-constexpr double kThinPartGapShare = 0.01;
+constexpr double kThinPartGapShare = 0.0025;
 /// The largest grid (samples per axis) on which auto_thin_parts may turn thin parts on: the finer
 /// grid's values are dense doubles, (2n - 1)^3 of them in a brick whose halo spans ~70 samples
 /// (1.2 GB peak for the sword at 256^3; 9 GB and 57 s at 512^3, against 0.6 GB and 6.6 s without).
