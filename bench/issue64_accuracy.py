@@ -8,7 +8,8 @@ bench/local.py's JSON lines on the same grids (exact up to 128^3, `--truncate 8`
 the method to read given by its label and marching cubes from the same run:
 
     /usr/bin/python3 bench/local.py --res 32,64,128 --methods mc --variant def:"" > now.jsonl
-    /usr/bin/python3 bench/local.py --res 256 --truncate 8 --methods mc --variant def:"" >> now.jsonl
+    /usr/bin/python3 bench/local.py --res 256 --truncate 8 --methods mc \
+        --variant def:"" >> now.jsonl
     /usr/bin/python3 bench/issue64_accuracy.py now.jsonl --method def --out docs/results/x.md
 """
 import argparse
@@ -44,7 +45,8 @@ def main():
     lines = ["| grid | mesh | L1 / the filing's | L1 / MC's (the filing's) | L∞ / MC's | "
              "triangles / MC's | seconds (the filing's) |", "|---|---|---|---|---|---|---|"]
     summary = ["| grid | meshes | geometric mean of L1 / the filing's (without the cube) | "
-               "worst (mesh) | more than 10% worse | L∞ above MC's |", "|---|---|---|---|---|---|"]
+               "worst (mesh) | more than 10% worse | L∞ above MC's |",
+               "|---|---|---|---|---|---|"]
     for res in sorted({k[1] for k in now if k[2] == args.method}):
         ratios, worse, linf = {}, [], []
         for mesh in sorted({k[0] for k in now if k[1] == res and k[2] == args.method}):
@@ -70,7 +72,11 @@ def main():
         summary.append(f"| {res}³ | {len(ratios)} | {geomean(list(ratios.values())):.3f} "
                        f"({geomean(without_cube):.3f}) | {ratios[worst]:.3f} ({worst}) | "
                        f"{', '.join(worse) or 'none'} | {', '.join(linf) or 'none'} |")
-    report("\n".join(summary + [""] + lines) + "\n", args.out)
+    runs = ", ".join(os.path.basename(r) for r in args.runs)
+    head = [f"Issue 64's accuracy targets: `{args.method}` in {runs} against the default the "
+            "issue was filed against (docs/results/targets/accuracy.jsonl), marching cubes from "
+            "the same runs (`bench/issue64_accuracy.py`).", ""]
+    report("\n".join(head + summary + [""] + lines) + "\n", args.out)
 
 
 if __name__ == "__main__":
