@@ -378,9 +378,9 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
            "points on their two sides, on a grid of twice the resolution with one "
            "subdivision fewer (on, off; auto: on below 192 samples per axis, and from 192 to 256 "
            "where at least 0.25% of the edges that the surface crosses have such a gap next to "
-           "them: "
-           "two samples on one side, closer together than their values allow; with --edge-fans "
-           "on: only when on, the fans then on the finer grid with about 4x their triangles)")
+           "them: two samples on one side, closer together than their values allow; with "
+           "--edge-fans on: only when on, the fans then on the finer grid with about 4x their "
+           "triangles)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option("--edge-fans", a.edge_fans,

@@ -68,8 +68,8 @@ class SamplePoint {
   // Then, reading `list` for the points in its box, the slope test, the candidate, then the
   // rescues: a slide, and a vertex of the sample's power cell on its sphere (the triangulation's
   // rescue). A sample across a crease has the latter, then the slide only if it misses the slope
-  // by no more than kSlideSlopeMiss. (A near miss's rescue stays off: on the
-  // lattice it kept points 0.016 h off a box's medial planes where the filter alone keeps none.)
+  // by no more than kSlideSlopeMiss. (A near miss's rescue stays off: on the lattice it kept
+  // points 0.016 h off a box's medial planes where the filter alone keeps none.)
   Outcome solve(const detail::SphereList* list) {
     list_ = list;
     if (o_.max_slope_miss > 0 && misses_linear_prediction(g_, o_.max_slope_miss)) {
