@@ -56,6 +56,12 @@ def keep(rows, row):
     print(json.dumps(row), flush=True)
 
 
+def read_jsonl(path):
+    """The JSON objects of a benchmark's lines (other lines skipped)."""
+    with open(path) as f:
+        return [json.loads(line) for line in f if line.strip().startswith("{")]
+
+
 def geomean(values):
     v = [x for x in values if x]
     return math.exp(sum(math.log(x) for x in v) / len(v)) if v else float("nan")

@@ -13,20 +13,14 @@ the method to read given by its label and marching cubes from the same run:
     /usr/bin/python3 bench/issue64_accuracy.py now.jsonl --method def --out docs/results/x.md
 """
 import argparse
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import geomean, report  # noqa: E402
+from common import geomean, read_jsonl, report  # noqa: E402
 
 BASELINE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs", "results",
                         "targets", "accuracy.jsonl")
-
-
-def rows_of(path):
-    with open(path) as f:
-        return [json.loads(line) for line in f if line.strip().startswith("{")]
 
 
 def main():
@@ -36,10 +30,11 @@ def main():
     ap.add_argument("--baseline", default=BASELINE)
     ap.add_argument("--out")
     args = ap.parse_args()
-    base = {(r["mesh"], r["res"], r["method"]): r for r in rows_of(args.baseline) if "method" in r}
+    base = {(r["mesh"], r["res"], r["method"]): r
+            for r in read_jsonl(args.baseline) if "method" in r}
     now = {}
     for path in args.runs:
-        for r in rows_of(path):
+        for r in read_jsonl(path):
             if "method" in r:
                 now[(r["mesh"], r["res"], r["method"])] = r
     lines = ["| grid | mesh | L1 / the filing's | L1 / MC's (the filing's) | L∞ / MC's | "

@@ -17,7 +17,6 @@ What each results file holds, and the command --run gives it:
 (with the sdfcontour package importable for smooth_shapes and neural: installed, or on PYTHONPATH)
 """
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -26,16 +25,13 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from common import geomean  # noqa: E402
+from common import geomean, read_jsonl as read_lines  # noqa: E402
 
 SHARP = ("cube", "wingnut", "hammer", "sword", "boot")  # the issue's sharp meshes
 
 
 def read_jsonl(path):
-    if not os.path.exists(path):
-        return []
-    with open(path) as f:
-        return [json.loads(line) for line in f if line.strip().startswith("{")]
+    return read_lines(path) if os.path.exists(path) else []
 
 
 def run_all(results):
