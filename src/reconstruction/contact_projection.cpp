@@ -192,10 +192,8 @@ bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
   const Eigen::Vector3d na = fit[farthest(mean, apart2)].normal;
   const Eigen::Vector3d nb = fit[farthest(na, apart2)].normal;
   if (!(apart2 > kMinTurnChord2)) return false;
-  // Each point to the side of the nearer seed, weighing less by its normal's turn from that
-  // seed (blended normals next to an edge lie off both facets), as in the quadric's fit; both
-  // sides' moments (w, wx, wy, wxx, wxy, wyy, wz, wxz, wyz) in locals, each row adding to one
-  // by a 0/1 factor: indexing the side's sums put every row's adds through memory.
+  // Both sides' moments (w, wx, wy, wxx, wxy, wyy, wz, wxz, wyz) in locals, each row adding to
+  // one by a 0/1 factor: indexing the side's sums put every row's adds through memory.
   thread_local std::vector<char> side;
   side.resize(n);
   int count[2] = {0, 0};
@@ -372,11 +370,8 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
       if (!fit_quadric(fit, o, inv_chord_scale2, c)) return;
     }
     double z0 = c[0];
-    if (o.crease_planes && crease_height(fit, c, inv_chord_scale2, z0)) {
-      if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
-      return;
-    }
-    const int slot = o.chord_offset ? chords.slot[std::size_t(v)] : -1;
+    const bool crease = o.crease_planes && crease_height(fit, c, inv_chord_scale2, z0);
+    const int slot = o.chord_offset && !crease ? chords.slot[std::size_t(v)] : -1;
     if (slot >= 0 && chords.triangles[std::size_t(slot)] > 0) {
       const Eigen::Matrix3d& m = chords.sum[std::size_t(slot)];
       const double q = c[3] * a.dot(m * a) + c[4] * a.dot(m * b) + c[5] * b.dot(m * b);
