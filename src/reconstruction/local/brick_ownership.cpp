@@ -42,21 +42,36 @@ std::vector<char> triangles_in_range(Eigen::Index count, EdgeOf edge_of, const I
 detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, const Index3& n,
                                           const Index3& lo, const Index3& hi,
                                           PointMatrix& crossing_means) {
+  const Eigen::Index count = keyed.mesh.triangles.rows();
   const std::vector<char> inside = triangles_in_range(
-      keyed.mesh.triangles.rows(),
-      [&](Eigen::Index t) { return keyed.triangle_edge[std::size_t(t)]; }, n, lo, hi);
-  std::vector<std::pair<std::uint64_t, Eigen::Index>> kept;
-  for (Eigen::Index t = 0; t < keyed.mesh.triangles.rows(); ++t)
-    if (inside[std::size_t(t)])
-      kept.push_back(
-          {keyed.triangle_edge[std::size_t(t)] * 8 + keyed.triangle_rank[std::size_t(t)], t});
+      count, [&](Eigen::Index t) { return keyed.triangle_edge[std::size_t(t)]; }, n, lo, hi);
+  // The kept triangles by name, each chunk of triangles packed at its place in parallel.
+  constexpr Eigen::Index kChunk = 1 << 14;
+  const std::size_t chunks = std::size_t((count + kChunk - 1) / kChunk);
+  std::vector<std::size_t> start(chunks + 1, 0);
+  for (std::size_t q = 0; q < chunks; ++q)
+    start[q + 1] =
+        start[q] +
+        std::size_t(std::count(inside.begin() + Eigen::Index(q) * kChunk,
+                               inside.begin() + std::min(count, Eigen::Index(q + 1) * kChunk), 1));
+  std::vector<std::pair<std::uint64_t, Eigen::Index>> kept(start.back());
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t q) {
+    std::size_t at = start[q];
+    for (Eigen::Index t = Eigen::Index(q) * kChunk;
+         t < std::min(count, Eigen::Index(q + 1) * kChunk); ++t)
+      if (inside[std::size_t(t)])
+        kept[at++] = {keyed.triangle_edge[std::size_t(t)] * 8 + keyed.triangle_rank[std::size_t(t)],
+                      t};
+  });
   tbb::parallel_sort(kept.begin(), kept.end());  // (distinct names: the same order)
+  // Vertices numbered in the order the sorted triangles first name them.
   std::vector<int> id(std::size_t(keyed.mesh.vertices.rows()), -1);
   detail::KeyedTriangles out;
   out.triangles.resize(Eigen::Index(kept.size()), 3);
+  out.triangle_name.resize(kept.size());
   std::vector<int> used;
   for (std::size_t r = 0; r < kept.size(); ++r) {
-    out.triangle_name.push_back(kept[r].first);
+    out.triangle_name[r] = kept[r].first;
     for (int c = 0; c < 3; ++c) {
       const int v = keyed.mesh.triangles(kept[r].second, c);
       if (id[std::size_t(v)] < 0) {
@@ -68,15 +83,16 @@ detail::KeyedTriangles triangles_of_edges(const detail::KeyedLocalMesh& keyed, c
   }
   out.vertices.resize(Eigen::Index(used.size()), 3);
   crossing_means.resize(Eigen::Index(used.size()), 3);
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(used[v]);
-    crossing_means.row(Eigen::Index(v)) = used[v] < keyed.crossing_means.rows()
-                                              ? keyed.crossing_means.row(used[v])
-                                              : keyed.mesh.vertices.row(used[v]);
-    out.vertex_key.push_back(keyed.vertex_key[std::size_t(used[v])]);
-    const std::size_t u = std::size_t(used[v]);
-    out.on_feature.push_back(u < keyed.flags.size() ? keyed.flags[u][1] : 0);
-  }
+  out.vertex_key.resize(used.size());
+  out.on_feature.resize(used.size());
+  tbb::parallel_for(std::size_t(0), used.size(), [&](std::size_t v) {
+    const Eigen::Index u = used[v];
+    out.vertices.row(Eigen::Index(v)) = keyed.mesh.vertices.row(u);
+    crossing_means.row(Eigen::Index(v)) =
+        u < keyed.crossing_means.rows() ? keyed.crossing_means.row(u) : keyed.mesh.vertices.row(u);
+    out.vertex_key[v] = keyed.vertex_key[std::size_t(u)];
+    out.on_feature[v] = std::size_t(u) < keyed.flags.size() ? keyed.flags[std::size_t(u)][1] : 0;
+  });
   return out;
 }
 

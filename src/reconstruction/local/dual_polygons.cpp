@@ -169,9 +169,22 @@ DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
     out.extra_keys.push_back(std::uint64_t(s.first));
     out.extra_positions.push_back(s.second);
   }
+  // Each part's polygons at its place in the output (the parts' order), written in parallel.
+  std::vector<std::size_t> start(parts.size() + 1, 0);
+  for (std::size_t part = 0; part < parts.size(); ++part) {
+    std::size_t count = 0;
+    for (const auto& s3 : parts[part])
+      for (const PolygonSlot& s : s3) count += s.size > 0;
+    start[part + 1] = start[part] + count;
+  }
+  out.vertices.resize(start.back());
+  out.size.resize(start.back());
+  out.edge.resize(start.back());
+  out.edge_point.resize(start.back());
   const int first_extra = vertex_count();
-  for (const auto& slots : parts)
-    for (const auto& s3 : slots)
+  tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t part) {
+    std::size_t at = start[part];
+    for (const auto& s3 : parts[part])
       for (const PolygonSlot& s : s3) {
         if (s.size == 0) continue;
         std::array<int, 8> ids = s.vertices;
@@ -183,11 +196,14 @@ DualPolygons SurfaceCells::dual_polygons(bool every_ambiguous_face) const {
                                [](const auto& x, std::int64_t k) { return x.first < k; });
           ids[std::size_t(i)] = first_extra + int(it - segments.begin());
         }
-        out.vertices.push_back(ids);
-        out.size.push_back(std::int8_t(s.size));
-        out.edge.push_back(s.edge);
-        out.edge_point.push_back(s.edge_point);
+        out.vertices[at] = ids;
+        out.size[at] = std::int8_t(s.size);
+        out.edge[at] = s.edge;
+        out.edge_point[at] = s.edge_point;
+        ++at;
       }
+    parts[part] = {};  // (freed by the thread that made it)
+  });
   return out;
 }
 
