@@ -41,13 +41,11 @@ double squared_distance(const Mesh& mesh, int t, const Eigen::Vector3d& p) {
                                 K::Triangle_3(point(0), point(1), point(2)));
 }
 
-}  // namespace
-
-TEST(NearestTriangles, AgreesWithABruteForceScan) {
-  const Mesh mesh = random_triangles(100000, 3);  // 4 chunks
+// Every query's nearest triangle and ball tests against a brute-force scan, over all of the
+// mesh's triangles and over a third of them.
+void expect_brute_force_answers(const Mesh& mesh, const PointMatrix& queries) {
   std::vector<int> among;
   for (int t = 0; t < mesh.triangles.rows(); t += 3) among.push_back(t);
-  const PointMatrix queries = test::random_points(150, 11) * 1.2;  // some outside the triangles
   const std::vector<int>* subsets[] = {nullptr, &among};
   for (const std::vector<int>* subset : subsets) {
     const detail::NearestTriangles tree(mesh, subset, true);
@@ -68,6 +66,42 @@ TEST(NearestTriangles, AgreesWithABruteForceScan) {
       EXPECT_FALSE(tree.meets_ball(p, std::sqrt(best) * 0.999));
     }
   }
+}
+
+}  // namespace
+
+// Triangles of alike sizes: the uniform grid.
+TEST(NearestTriangles, AgreesWithABruteForceScan) {
+  const Mesh mesh = random_triangles(100000, 3);
+  expect_brute_force_answers(mesh, test::random_points(150, 11) * 1.2);  // some outside
+}
+
+// One triangle 100 times the others' size: CGAL's trees (4 chunks).
+TEST(NearestTriangles, AgreesWithABruteForceScanOverUnlikeSizes) {
+  Mesh mesh = random_triangles(100000, 3);
+  mesh.vertices.row(3) << -1, -1, 0.3;
+  mesh.vertices.row(4) << 1, -1, 0.3;
+  mesh.vertices.row(5) << 0, 1, 0.35;
+  expect_brute_force_answers(mesh, test::random_points(150, 11) * 1.2);
+}
+
+// Degenerate triangles (a segment, a point) among the others: their nearest points are on
+// their edges.
+TEST(NearestTriangles, DegenerateTrianglesAsTheirEdges) {
+  Mesh mesh = random_triangles(2000, 9);
+  mesh.vertices.row(0) << 0, 0, 0;
+  mesh.vertices.row(1) << 0.01, 0.01, 0;
+  mesh.vertices.row(2) << 0.02, 0.02, 0;  // collinear
+  mesh.vertices.row(3) << 0.5, 0.5, 0.5;
+  mesh.vertices.row(4) << 0.5, 0.5, 0.5;
+  mesh.vertices.row(5) << 0.5, 0.5, 0.5;  // one point
+  const detail::NearestTriangles tree(mesh, nullptr, false);
+  const auto hit = tree.closest(Eigen::Vector3d(0.02, 0.005, 0.001));
+  ASSERT_EQ(hit.triangle, 0);
+  EXPECT_NEAR((hit.point - Eigen::Vector3d(0.0125, 0.0125, 0)).norm(), 0, 1e-15);
+  const auto at_point = tree.closest(Eigen::Vector3d(0.5, 0.5, 0.5001));
+  ASSERT_EQ(at_point.triangle, 1);
+  EXPECT_NEAR((at_point.point - Eigen::Vector3d(0.5, 0.5, 0.5)).norm(), 0, 1e-15);
 }
 
 TEST(NearestTriangles, TheSameAnswerForAnyThreadCount) {

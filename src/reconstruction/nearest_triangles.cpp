@@ -9,6 +9,8 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numeric>
@@ -65,11 +67,110 @@ std::uint32_t morton(const Eigen::Vector3d& p, const Eigen::AlignedBox3d& box) {
   return code;
 }
 
+// The point of triangle abc nearest p, by the region of the triangle's plane that p projects
+// into (a vertex's, an edge's or the face's), from the dot products of p's offsets with the edges.
+Eigen::Vector3d nearest_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                   const Eigen::Vector3d& p) {
+  const Eigen::Vector3d ab = b - a;
+  const double length2 = ab.squaredNorm();
+  if (!(length2 > 0)) return a;
+  return a + std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) * ab;
+}
+
+Eigen::Vector3d nearest_on_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                    const Eigen::Vector3d& c, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double sum = va + vb + vc;
+  if (sum > 0 && std::isfinite(sum)) return a + (vb / sum) * ab + (vc / sum) * ac;
+  // A degenerate triangle: its nearest edge.
+  Eigen::Vector3d best = nearest_on_segment(a, b, p);
+  for (const Eigen::Vector3d& q : {nearest_on_segment(b, c, p), nearest_on_segment(c, a, p)})
+    if ((q - p).squaredNorm() < (best - p).squaredNorm()) best = q;
+  return best;
+}
+
+// The uniform grid is taken where the triangles' sizes are alike (the local reconstruction's
+// meshes): its cells are the largest triangle's box, so a triangle meets at most 8; where the
+// largest is more than this many times the mean, CGAL's trees.
+constexpr double kAlikeSizes = 8;
+// At most this many columns of cells (else the trees).
+constexpr double kMostColumns = double(1 << 22);
+
 }  // namespace
 
 struct NearestTriangles::Chunk {
   Eigen::AlignedBox3d box;
   std::unique_ptr<Tree> tree;
+};
+
+// The triangles listed per cell of side `cell` (each in every cell its box meets), cells in
+// columns (i, j) of entries sorted by (k, triangle).
+struct NearestTriangles::Grid {
+  // The grid over `which`, or null where their sizes are not alike (or too many columns).
+  static std::unique_ptr<Grid> make(const Mesh& mesh, const std::vector<int>& which);
+
+  const Mesh* mesh = nullptr;
+  Eigen::Vector3d origin;
+  double cell = 0;
+  std::array<int, 3> n{};
+  std::vector<int> triangles;                // the triangles searched
+  std::vector<std::array<int, 3>> lowest;    // per triangle searched: its lowest cell
+  std::vector<std::size_t> column_start;     // per column i * n[1] + j, and one past the last
+  std::vector<std::pair<int, int>> entries;  // (k, place in `triangles`)
+
+  // The cell along axis a that holds x (clamped to the grid; NaN: the first).
+  int index(double x, int a) const {
+    const double u = std::floor((x - origin[a]) / cell);
+    return !(u > 0) ? 0 : (u >= n[std::size_t(a)] - 1 ? n[std::size_t(a)] - 1 : int(u));
+  }
+  Eigen::Vector3d corner(int t, int c) const {
+    return mesh->vertices.row(mesh->triangles(t, c)).transpose();
+  }
+  // Calls f(t) once for each triangle t listed in the cells [lo, hi] (at its lowest cell there).
+  template <class F>
+  void for_each_in(const std::array<int, 3>& lo, const std::array<int, 3>& hi, F&& f) const {
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j) {
+        const std::size_t column = std::size_t(i) * std::size_t(n[1]) + std::size_t(j);
+        auto it = std::lower_bound(entries.begin() + std::ptrdiff_t(column_start[column]),
+                                   entries.begin() + std::ptrdiff_t(column_start[column + 1]),
+                                   std::pair<int, int>(lo[2], -1));
+        const auto end = entries.begin() + std::ptrdiff_t(column_start[column + 1]);
+        for (; it != end && it->first <= hi[2]; ++it) {
+          const std::array<int, 3>& first = lowest[std::size_t(it->second)];
+          if (std::max(first[0], lo[0]) == i && std::max(first[1], lo[1]) == j &&
+              std::max(first[2], lo[2]) == it->first)
+            f(triangles[std::size_t(it->second)]);
+        }
+      }
+  }
+  // The distance from p to the nearest cell outside [lo, hi] (infinite if it is the grid).
+  double beyond(const Eigen::Vector3d& p, const std::array<int, 3>& lo,
+                const std::array<int, 3>& hi) const {
+    double d = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+      if (lo[std::size_t(a)] > 0)
+        d = std::min(d, std::max(0.0, p[a] - (origin[a] + lo[std::size_t(a)] * cell)));
+      if (hi[std::size_t(a)] < n[std::size_t(a)] - 1)
+        d = std::min(d, std::max(0.0, origin[a] + (hi[std::size_t(a)] + 1) * cell - p[a]));
+    }
+    return d;
+  }
 };
 
 NearestTriangles::NearestTriangles(const Mesh& mesh, const std::vector<int>* among,
@@ -81,6 +182,8 @@ NearestTriangles::NearestTriangles(const Mesh& mesh, const std::vector<int>* amo
   }
   const std::vector<int>& which = among ? *among : all;
   if (which.empty()) return;
+  grid_ = Grid::make(mesh, which);
+  if (grid_) return;
   const PointMatrix& V = mesh.vertices;
   const TriangleMatrix& F = mesh.triangles;
   auto centroid = [&](int t) {
@@ -119,6 +222,31 @@ NearestTriangles::~NearestTriangles() = default;
 
 NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const {
   Hit hit;
+  if (grid_) {
+    const Grid& g = *grid_;
+    const std::array<int, 3> at{g.index(p[0], 0), g.index(p[1], 1), g.index(p[2], 2)};
+    double best = INFINITY;
+    for (int reach = 1;; reach *= 2) {
+      std::array<int, 3> lo, hi;
+      for (std::size_t a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, at[a] - reach);
+        hi[a] = std::min(g.n[a] - 1, at[a] + reach);
+      }
+      g.for_each_in(lo, hi, [&](int t) {
+        const Eigen::Vector3d q =
+            nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), p);
+        const double d = (q - p).squaredNorm();
+        if (d < best || (d == best && t < hit.triangle)) {
+          best = d;
+          hit.triangle = t;
+          hit.point = q;
+        }
+      });
+      const double outside = g.beyond(p, lo, hi);
+      if (!std::isfinite(outside) || best <= outside * outside) break;
+    }
+    return hit;
+  }
   if (chunks_.empty()) return hit;
   // Chunks by the distance to their boxes (ties: the lower chunk).
   std::vector<std::pair<double, std::size_t>> near(chunks_.size());
@@ -142,11 +270,102 @@ NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const 
 }
 
 bool NearestTriangles::meets_ball(const Eigen::Vector3d& c, double radius) const {
+  if (grid_) {
+    const Grid& g = *grid_;
+    std::array<int, 3> lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[std::size_t(a)] = g.index(c[a] - radius, a);
+      hi[std::size_t(a)] = g.index(c[a] + radius, a);
+    }
+    bool met = false;
+    g.for_each_in(lo, hi, [&](int t) {
+      met = met || (nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), c) - c)
+                           .squaredNorm() <= radius * radius;
+    });
+    return met;
+  }
   const K::Sphere_3 ball(K::Point_3(c[0], c[1], c[2]), radius * radius);
   for (const auto& chunk : chunks_)
     if (chunk->box.squaredExteriorDistance(c) <= radius * radius && chunk->tree->do_intersect(ball))
       return true;
   return false;
+}
+
+std::unique_ptr<NearestTriangles::Grid> NearestTriangles::Grid::make(
+    const Mesh& mesh, const std::vector<int>& which) {
+  const PointMatrix& V = mesh.vertices;
+  const TriangleMatrix& F = mesh.triangles;
+  auto box = [&](int t) {
+    Eigen::AlignedBox3d b;
+    for (int c = 0; c < 3; ++c) b.extend(V.row(F(t, c)).transpose());
+    return b;
+  };
+  // The largest and the mean of the triangles' largest box sides, and their box.
+  struct Sizes {
+    double largest = 0, sum = 0;
+    Eigen::AlignedBox3d box;
+  };
+  Sizes sizes;
+  for (int t : which) {
+    const Eigen::AlignedBox3d b = box(t);
+    const double side = b.sizes().maxCoeff();
+    sizes.largest = std::max(sizes.largest, side);
+    sizes.sum += side;
+    sizes.box.extend(b);
+  }
+  const double mean = sizes.sum / double(which.size());
+  if (!(sizes.largest > 0) || !(sizes.largest <= kAlikeSizes * mean) ||
+      !sizes.box.sizes().allFinite())
+    return nullptr;
+  auto g = std::make_unique<Grid>();
+  g->mesh = &mesh;
+  g->triangles = which;
+  g->origin = sizes.box.min();
+  g->cell = sizes.largest;
+  double columns = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double count = std::floor(sizes.box.sizes()[a] / g->cell) + 1;
+    if (!(count < 1e9)) return nullptr;
+    g->n[std::size_t(a)] = int(count);
+    if (a < 2) columns *= count;
+  }
+  if (!(columns <= kMostColumns)) return nullptr;
+  // Per triangle its cells' range; the entries counted per column, then placed.
+  g->lowest.resize(which.size());
+  std::vector<std::array<int, 3>> highest(which.size());
+  tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t w) {
+    const Eigen::AlignedBox3d b = box(which[w]);
+    for (int a = 0; a < 3; ++a) {
+      g->lowest[w][std::size_t(a)] = g->index(b.min()[a], a);
+      highest[w][std::size_t(a)] = g->index(b.max()[a], a);
+    }
+  });
+  const std::size_t column_count = std::size_t(columns);
+  std::vector<std::size_t> count(column_count + 1, 0);
+  for (std::size_t w = 0; w < which.size(); ++w) {
+    const auto &lo = g->lowest[w], &hi = highest[w];
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        count[std::size_t(i) * std::size_t(g->n[1]) + std::size_t(j) + 1] +=
+            std::size_t(hi[2] - lo[2] + 1);
+  }
+  for (std::size_t c = 0; c < column_count; ++c) count[c + 1] += count[c];
+  g->column_start = count;
+  g->entries.resize(count.back());
+  for (std::size_t w = 0; w < which.size(); ++w) {
+    const auto &lo = g->lowest[w], &hi = highest[w];
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j) {
+        std::size_t& at = count[std::size_t(i) * std::size_t(g->n[1]) + std::size_t(j)];
+        for (int k = lo[2]; k <= hi[2]; ++k) g->entries[at++] = {k, int(w)};
+      }
+  }
+  // (Each column by k, for the searches.)
+  tbb::parallel_for(std::size_t(0), column_count, [&](std::size_t c) {
+    std::sort(g->entries.begin() + std::ptrdiff_t(g->column_start[c]),
+              g->entries.begin() + std::ptrdiff_t(g->column_start[c + 1]));
+  });
+  return g;
 }
 
 }  // namespace sdfcontour::detail
