@@ -113,23 +113,35 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
                  double inv_chord_scale2, Coefficients& c) {
   if (int(fit.size()) < o.min_points) return false;
   Eigen::LLT<Matrix6> llt;
+  // Per row: its weight after the robust division, then after the turn's; the divisions go
+  // first, row by row, apart from the sums (where each waited on the last: most of a fit's time).
+  thread_local std::vector<double> robust, turned;
+  robust.resize(fit.size());
+  turned.resize(fit.size());
   for (int round = 0; round <= o.robust_rounds; ++round) {
-    Matrix6 M = Matrix6::Zero(), spread = Matrix6::Zero();
-    Coefficients rhs = Coefficients::Zero();
-    double weight_sum = 0, weighted_z2 = 0, spread_sum = 0;
-    const bool spread_apart = round == 0 && inv_chord_scale2 > 0;
-    for (const FitRow& f : fit) {
+    for (std::size_t i = 0; i < fit.size(); ++i) {
+      const FitRow& f = fit[i];
       double w = f.w;
       if (round > 0) {
         const double miss = (f.z - f.row.dot(c)) / o.robust_scale;
         w /= 1 + miss * miss;
       }
-      if (spread_apart) {
-        spread_sum += w;
-        add_outer(spread, f.row, w);
-      }
+      robust[i] = w;
       if (inv_chord_scale2 > 0)
         w /= 1 + squared_turn_chord(f, round > 0 ? &c : nullptr) * inv_chord_scale2;
+      turned[i] = w;
+    }
+    Matrix6 M = Matrix6::Zero(), spread = Matrix6::Zero();
+    Coefficients rhs = Coefficients::Zero();
+    double weight_sum = 0, weighted_z2 = 0, spread_sum = 0;
+    const bool spread_apart = round == 0 && inv_chord_scale2 > 0;
+    for (std::size_t i = 0; i < fit.size(); ++i) {
+      const FitRow& f = fit[i];
+      if (spread_apart) {
+        spread_sum += robust[i];
+        add_outer(spread, f.row, robust[i]);
+      }
+      const double w = turned[i];
       weight_sum += w;
       add_outer(M, f.row, w);
       rhs += w * f.z * f.row;
