@@ -115,7 +115,10 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
   Eigen::LLT<Matrix6> llt;
   // Per row: its weight after the robust division, then after the turn's; the divisions go
   // first, row by row, apart from the sums (where each waited on the last: most of a fit's time).
-  thread_local std::vector<double> robust, turned;
+  thread_local std::vector<double> robust_buffer, turned_buffer;
+  // (References, so that the loops do not look the thread's copies up again.)
+  std::vector<double>& robust = robust_buffer;
+  std::vector<double>& turned = turned_buffer;
   robust.resize(fit.size());
   turned.resize(fit.size());
   for (int round = 0; round <= o.robust_rounds; ++round) {
@@ -342,8 +345,10 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
     // The agreeing points within radius r, Gaussian weights exp(-d^2 / (2 sigma^2)) with sigma =
     // r / sqrt(8), d in the tangent plane; summed in row order: the same bits whatever the cubes
     // (a brick's points start elsewhere).
-    thread_local std::vector<int> near;
-    thread_local std::vector<FitRow> fit;
+    thread_local std::vector<int> near_buffer;
+    thread_local std::vector<FitRow> fit_buffer;
+    std::vector<int>& near = near_buffer;
+    std::vector<FitRow>& fit = fit_buffer;
     auto gather = [&](double r, long reach) {
       near.clear();
       cubes.for_each_near(
