@@ -250,12 +250,19 @@ class CrossingSearch {
                                         detail::WorkCounter* counter = nullptr) const {
     auto watched = [&](int t) { return !watch || (*watch)[std::size_t(t)]; };
     tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>> found;
-    if (!watch) {
+    // Where a quarter or more of the triangles are watched (all, after a projection), the sweep
+    // over the cubes' pairs finds the same pairs without a search for each triangle's cubes.
+    const auto count = std::size_t(mesh.triangles.rows());
+    const auto watched_count =
+        watch ? std::size_t(std::count_if(watch->begin(), watch->end(), [](char w) { return w; }))
+              : count;
+    if (4 * watched_count >= count) {
       cubes_.for_each_pair(bucketed_, current_, [&](int t, int u) {
-        if (!flat_[std::size_t(t)] && !flat_[std::size_t(u)] && cross(mesh, t, u))
+        if ((watched(t) || watched(u)) && !flat_[std::size_t(t)] && !flat_[std::size_t(u)] &&
+            cross(mesh, t, u))
           found.local().emplace_back(t, u);
       });
-      if (counter) counter->add(long(mesh.triangles.rows()));
+      if (counter) counter->add(long(count));
       return sorted_pairs(found);
     }
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index ti) {
