@@ -88,14 +88,20 @@ std::vector<int> triangles_near_samples(const Mesh& mesh, const PointMatrix& poi
 
 void put_samples_on_their_sides(Mesh& mesh, const BandSamples& band, double h, int rounds,
                                 const std::vector<char>* near_vertices) {
-  std::vector<char> nearby;
-  if (near_vertices)
-    nearby = samples_near(band.samples.points, mesh.vertices, *near_vertices, 2 * h);
   std::vector<int> near;
   for (Eigen::Index i = 0; i < band.samples.values.size(); ++i)
-    if (band.core[std::size_t(i)] && std::abs(band.samples.values[i]) <= h &&
-        (!near_vertices || nearby[std::size_t(i)]))
-      near.push_back(int(i));
+    if (band.core[std::size_t(i)] && std::abs(band.samples.values[i]) <= h) near.push_back(int(i));
+  if (near_vertices) {
+    // (Asked of these samples alone: the band holds many times more.)
+    PointMatrix at(Eigen::Index(near.size()), 3);
+    for (std::size_t q = 0; q < near.size(); ++q)
+      at.row(Eigen::Index(q)) = band.samples.points.row(near[q]);
+    const std::vector<char> nearby = samples_near(at, mesh.vertices, *near_vertices, 2 * h);
+    std::size_t kept = 0;
+    for (std::size_t q = 0; q < near.size(); ++q)
+      if (nearby[q]) near[kept++] = near[q];
+    near.resize(kept);
+  }
   if (near.empty() || mesh.triangles.rows() == 0) return;
   const detail::VertexTriangles around(mesh);
   // The feature moves until the sample is just on its side (kSideMargin of its |value| beyond),
