@@ -113,26 +113,24 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
                  double inv_chord_scale2, Coefficients& c) {
   if (int(fit.size()) < o.min_points) return false;
   Eigen::LLT<Matrix6> llt;
-  // Per row: its weight after the robust division, then after the turn's; the divisions go
-  // first, row by row, apart from the sums (where each waited on the last: most of a fit's time).
-  thread_local std::vector<double> robust_buffer, turned_buffer;
-  // (References, so that the loops do not look the thread's copies up again.)
-  std::vector<double>& robust = robust_buffer;
-  std::vector<double>& turned = turned_buffer;
-  robust.resize(fit.size());
+  // Per row: its weight after the robust and the turn's divisions; the divisions go first, row
+  // by row, apart from the sums (where each waited on the last: most of a fit's time).
+  thread_local std::vector<double> turned_buffer;
+  std::vector<double>& turned = turned_buffer;  // (looked up once, not in the loops)
   turned.resize(fit.size());
+  const double inv_robust_scale = 1 / o.robust_scale;
   for (int round = 0; round <= o.robust_rounds; ++round) {
+    // (One division a row: the robust and the turn's divisors multiplied.)
     for (std::size_t i = 0; i < fit.size(); ++i) {
       const FitRow& f = fit[i];
-      double w = f.w;
+      double divisor = 1;
       if (round > 0) {
-        const double miss = (f.z - f.row.dot(c)) / o.robust_scale;
-        w /= 1 + miss * miss;
+        const double miss = (f.z - f.row.dot(c)) * inv_robust_scale;
+        divisor = 1 + miss * miss;
       }
-      robust[i] = w;
       if (inv_chord_scale2 > 0)
-        w /= 1 + squared_turn_chord(f, round > 0 ? &c : nullptr) * inv_chord_scale2;
-      turned[i] = w;
+        divisor *= 1 + squared_turn_chord(f, round > 0 ? &c : nullptr) * inv_chord_scale2;
+      turned[i] = f.w / divisor;
     }
     Matrix6 M = Matrix6::Zero(), spread = Matrix6::Zero();
     Coefficients rhs = Coefficients::Zero();
@@ -140,9 +138,9 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
     const bool spread_apart = round == 0 && inv_chord_scale2 > 0;
     for (std::size_t i = 0; i < fit.size(); ++i) {
       const FitRow& f = fit[i];
-      if (spread_apart) {
-        spread_sum += robust[i];
-        add_outer(spread, f.row, robust[i]);
+      if (spread_apart) {  // (the first round's: no robust division)
+        spread_sum += f.w;
+        add_outer(spread, f.row, f.w);
       }
       const double w = turned[i];
       weight_sum += w;
