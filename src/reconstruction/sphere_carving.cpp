@@ -288,7 +288,10 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
       const int v = keyed[q].second;
       const Eigen::Vector3d x = V.row(v).transpose();
       Push& found = best[std::size_t(v)];
-      for (std::size_t t = 0; t < list.r.size(); ++t) {
+      // (The spheres that may hold x found by the list's vectorised scan: a superset of those
+      // that the test below takes.)
+      for (std::size_t t = list.next_near(x, 0.0, 0); t < list.r.size();
+           t = list.next_near(x, 0.0, t + 1)) {
         const double r = list.r[t];
         if (!(r > 0)) continue;
         // The list's centres are the lattice's, which may differ from the samples' own points in
