@@ -129,6 +129,7 @@ struct NearestTriangles::Grid {
   double cell = 0;
   std::array<int, 3> n{};
   std::vector<int> triangles;                // the triangles searched
+  std::vector<Eigen::Vector4d> balls;        // per triangle searched: a ball holding it
   std::vector<std::array<int, 3>> lowest;    // per triangle searched: its lowest cell
   std::vector<std::size_t> column_start;     // per column i * n[1] + j, and one past the last
   std::vector<std::pair<int, int>> entries;  // (k, place in `triangles`)
@@ -141,7 +142,8 @@ struct NearestTriangles::Grid {
   Eigen::Vector3d corner(int t, int c) const {
     return mesh->vertices.row(mesh->triangles(t, c)).transpose();
   }
-  // Calls f(t) once for each triangle t listed in the cells [lo, hi] (at its lowest cell there).
+  // Calls f(w) once for each triangle triangles[w] listed in the cells [lo, hi] (at its lowest
+  // cell there).
   template <class F>
   void for_each_in(const std::array<int, 3>& lo, const std::array<int, 3>& hi, F&& f) const {
     for (int i = lo[0]; i <= hi[0]; ++i)
@@ -155,7 +157,7 @@ struct NearestTriangles::Grid {
           const std::array<int, 3>& first = lowest[std::size_t(it->second)];
           if (std::max(first[0], lo[0]) == i && std::max(first[1], lo[1]) == j &&
               std::max(first[2], lo[2]) == it->first)
-            f(triangles[std::size_t(it->second)]);
+            f(it->second);
         }
       }
   }
@@ -226,22 +228,32 @@ NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const 
     const Grid& g = *grid_;
     const std::array<int, 3> at{g.index(p[0], 0), g.index(p[1], 1), g.index(p[2], 2)};
     double best = INFINITY;
+    // A triangle whose ball lies farther than the best cannot be nearer (a hair's slack for the
+    // rounding: ties are still compared).
+    auto visit = [&](int w) {
+      const int t = g.triangles[std::size_t(w)];
+      const Eigen::Vector4d& ball = g.balls[std::size_t(w)];
+      if (best < INFINITY) {
+        const double reach = (std::sqrt(best) + ball[3]) * (1 + 1e-9);
+        if ((p - ball.head<3>()).squaredNorm() > reach * reach) return;
+      }
+      const Eigen::Vector3d q =
+          nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), p);
+      const double d = (q - p).squaredNorm();
+      if (d < best || (d == best && t < hit.triangle)) {
+        best = d;
+        hit.triangle = t;
+        hit.point = q;
+      }
+    };
+    g.for_each_in(at, at, visit);  // (its own cell first: a near best bounds the rest)
     for (int reach = 1;; reach *= 2) {
       std::array<int, 3> lo, hi;
       for (std::size_t a = 0; a < 3; ++a) {
         lo[a] = std::max(0, at[a] - reach);
         hi[a] = std::min(g.n[a] - 1, at[a] + reach);
       }
-      g.for_each_in(lo, hi, [&](int t) {
-        const Eigen::Vector3d q =
-            nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), p);
-        const double d = (q - p).squaredNorm();
-        if (d < best || (d == best && t < hit.triangle)) {
-          best = d;
-          hit.triangle = t;
-          hit.point = q;
-        }
-      });
+      g.for_each_in(lo, hi, visit);
       const double outside = g.beyond(p, lo, hi);
       if (!std::isfinite(outside) || best <= outside * outside) break;
     }
@@ -278,9 +290,14 @@ bool NearestTriangles::meets_ball(const Eigen::Vector3d& c, double radius) const
       hi[std::size_t(a)] = g.index(c[a] + radius, a);
     }
     bool met = false;
-    g.for_each_in(lo, hi, [&](int t) {
-      met = met || (nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), c) - c)
-                           .squaredNorm() <= radius * radius;
+    const double slack = 1 + 1e-9;
+    g.for_each_in(lo, hi, [&](int w) {
+      const Eigen::Vector4d& ball = g.balls[std::size_t(w)];
+      const double apart = (radius + ball[3]) * slack;
+      if (met || (c - ball.head<3>()).squaredNorm() > apart * apart) return;
+      const int t = g.triangles[std::size_t(w)];
+      met = (nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), c) - c)
+                .squaredNorm() <= radius * radius;
     });
     return met;
   }
@@ -332,9 +349,15 @@ std::unique_ptr<NearestTriangles::Grid> NearestTriangles::Grid::make(
   if (!(columns <= kMostColumns)) return nullptr;
   // Per triangle its cells' range; the entries counted per column, then placed.
   g->lowest.resize(which.size());
+  g->balls.resize(which.size());
   std::vector<std::array<int, 3>> highest(which.size());
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t w) {
     const Eigen::AlignedBox3d b = box(which[w]);
+    const Eigen::Vector3d centre = b.center();
+    double radius = 0;
+    for (int c = 0; c < 3; ++c)
+      radius = std::max(radius, (V.row(F(which[w], c)).transpose() - centre).norm());
+    g->balls[w] << centre, radius;
     for (int a = 0; a < 3; ++a) {
       g->lowest[w][std::size_t(a)] = g->index(b.min()[a], a);
       highest[w][std::size_t(a)] = g->index(b.max()[a], a);
