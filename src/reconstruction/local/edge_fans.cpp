@@ -231,13 +231,13 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
   const Eigen::Index count = split_mesh.sub.mesh.vertices.rows();
   PointMatrix start(count, 3), placed(count, 3);
   std::vector<char> stay(std::size_t(count), 0);
-  for (Eigen::Index v = 0; v < count; ++v) {
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index v) {
     const auto [x, y] = split_mesh.source[std::size_t(v)];
     stay[std::size_t(v)] = x == y;
     if (x == y) {
       start.row(v) = reconstructed.row(x);
       placed.row(v) = sub.mesh.vertices.row(x);
-      continue;
+      return;
     }
     // Where the chord crosses the face between the two cells (split's test found that it does).
     const VertexKey& key = split_mesh.sub.keys[std::size_t(v)];
@@ -246,7 +246,7 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
     if (!chord_crossing(sub, x, y, key[0], far_end_key(key), cells, grid, axis, low, at))
       at = 0.5 * (sub.mesh.vertices.row(x) + sub.mesh.vertices.row(y)).transpose();
     start.row(v) = placed.row(v) = at.transpose();
-  }
+  });
   split_mesh.sub.mesh.vertices = placed;
   sub = std::move(split_mesh.sub);
   reconstructed = start;
