@@ -1,5 +1,5 @@
-// Nearest-triangle queries over chunks of a mesh, each chunk one CGAL AABB tree
-// (nearest_triangles.h).
+// Nearest-triangle queries over a uniform grid of a mesh's triangles, or over chunks of it, each
+// chunk one CGAL AABB tree (nearest_triangles.h).
 #include "reconstruction/nearest_triangles.h"
 
 #include <CGAL/AABB_traits.h>
@@ -67,8 +67,7 @@ std::uint32_t morton(const Eigen::Vector3d& p, const Eigen::AlignedBox3d& box) {
   return code;
 }
 
-// The point of triangle abc nearest p, by the region of the triangle's plane that p projects
-// into (a vertex's, an edge's or the face's), from the dot products of p's offsets with the edges.
+// The point of segment ab nearest p.
 Eigen::Vector3d nearest_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                    const Eigen::Vector3d& p) {
   const Eigen::Vector3d ab = b - a;
@@ -77,6 +76,8 @@ Eigen::Vector3d nearest_on_segment(const Eigen::Vector3d& a, const Eigen::Vector
   return a + std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) * ab;
 }
 
+// The point of triangle abc nearest p, by the region of the triangle's plane that p projects
+// into (a vertex's, an edge's or the face's), from the dot products of p's offsets with the edges.
 Eigen::Vector3d nearest_on_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                     const Eigen::Vector3d& c, const Eigen::Vector3d& p) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
@@ -161,6 +162,9 @@ struct NearestTriangles::Grid {
         }
       }
   }
+  Hit closest(const Eigen::Vector3d& p) const;
+  bool meets_ball(const Eigen::Vector3d& c, double radius) const;
+
   // The distance from p to the nearest cell outside [lo, hi] (infinite if it is the grid).
   double beyond(const Eigen::Vector3d& p, const std::array<int, 3>& lo,
                 const std::array<int, 3>& hi) const {
@@ -174,6 +178,60 @@ struct NearestTriangles::Grid {
     return d;
   }
 };
+
+NearestTriangles::Hit NearestTriangles::Grid::closest(const Eigen::Vector3d& p) const {
+  Hit hit;
+  const std::array<int, 3> at{index(p[0], 0), index(p[1], 1), index(p[2], 2)};
+  double best = INFINITY;
+  // A triangle whose ball lies farther than the best cannot be nearer (a hair's slack for the
+  // rounding: ties are still compared).
+  auto visit = [&](int w) {
+    const int t = triangles[std::size_t(w)];
+    const Eigen::Vector4d& ball = balls[std::size_t(w)];
+    if (best < INFINITY) {
+      const double reach = (std::sqrt(best) + ball[3]) * (1 + 1e-9);
+      if ((p - ball.head<3>()).squaredNorm() > reach * reach) return;
+    }
+    const Eigen::Vector3d q = nearest_on_triangle(corner(t, 0), corner(t, 1), corner(t, 2), p);
+    const double d = (q - p).squaredNorm();
+    if (d < best || (d == best && t < hit.triangle)) {
+      best = d;
+      hit.triangle = t;
+      hit.point = q;
+    }
+  };
+  for_each_in(at, at, visit);  // (its own cell first: a near best bounds the rest)
+  for (int reach = 1;; reach *= 2) {
+    std::array<int, 3> lo, hi;
+    for (std::size_t a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, at[a] - reach);
+      hi[a] = std::min(n[a] - 1, at[a] + reach);
+    }
+    for_each_in(lo, hi, visit);
+    const double outside = beyond(p, lo, hi);
+    if (!std::isfinite(outside) || best <= outside * outside) break;
+  }
+  return hit;
+}
+
+bool NearestTriangles::Grid::meets_ball(const Eigen::Vector3d& c, double radius) const {
+  std::array<int, 3> lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[std::size_t(a)] = index(c[a] - radius, a);
+    hi[std::size_t(a)] = index(c[a] + radius, a);
+  }
+  bool met = false;
+  const double slack = 1 + 1e-9;
+  for_each_in(lo, hi, [&](int w) {
+    const Eigen::Vector4d& ball = balls[std::size_t(w)];
+    const double apart = (radius + ball[3]) * slack;
+    if (met || (c - ball.head<3>()).squaredNorm() > apart * apart) return;
+    const int t = triangles[std::size_t(w)];
+    met = (nearest_on_triangle(corner(t, 0), corner(t, 1), corner(t, 2), c) - c).squaredNorm() <=
+          radius * radius;
+  });
+  return met;
+}
 
 NearestTriangles::NearestTriangles(const Mesh& mesh, const std::vector<int>* among,
                                    bool many_queries) {
@@ -224,41 +282,7 @@ NearestTriangles::~NearestTriangles() = default;
 
 NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const {
   Hit hit;
-  if (grid_) {
-    const Grid& g = *grid_;
-    const std::array<int, 3> at{g.index(p[0], 0), g.index(p[1], 1), g.index(p[2], 2)};
-    double best = INFINITY;
-    // A triangle whose ball lies farther than the best cannot be nearer (a hair's slack for the
-    // rounding: ties are still compared).
-    auto visit = [&](int w) {
-      const int t = g.triangles[std::size_t(w)];
-      const Eigen::Vector4d& ball = g.balls[std::size_t(w)];
-      if (best < INFINITY) {
-        const double reach = (std::sqrt(best) + ball[3]) * (1 + 1e-9);
-        if ((p - ball.head<3>()).squaredNorm() > reach * reach) return;
-      }
-      const Eigen::Vector3d q =
-          nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), p);
-      const double d = (q - p).squaredNorm();
-      if (d < best || (d == best && t < hit.triangle)) {
-        best = d;
-        hit.triangle = t;
-        hit.point = q;
-      }
-    };
-    g.for_each_in(at, at, visit);  // (its own cell first: a near best bounds the rest)
-    for (int reach = 1;; reach *= 2) {
-      std::array<int, 3> lo, hi;
-      for (std::size_t a = 0; a < 3; ++a) {
-        lo[a] = std::max(0, at[a] - reach);
-        hi[a] = std::min(g.n[a] - 1, at[a] + reach);
-      }
-      g.for_each_in(lo, hi, visit);
-      const double outside = g.beyond(p, lo, hi);
-      if (!std::isfinite(outside) || best <= outside * outside) break;
-    }
-    return hit;
-  }
+  if (grid_) return grid_->closest(p);
   if (chunks_.empty()) return hit;
   // Chunks by the distance to their boxes (ties: the lower chunk).
   std::vector<std::pair<double, std::size_t>> near(chunks_.size());
@@ -282,25 +306,7 @@ NearestTriangles::Hit NearestTriangles::closest(const Eigen::Vector3d& p) const 
 }
 
 bool NearestTriangles::meets_ball(const Eigen::Vector3d& c, double radius) const {
-  if (grid_) {
-    const Grid& g = *grid_;
-    std::array<int, 3> lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      lo[std::size_t(a)] = g.index(c[a] - radius, a);
-      hi[std::size_t(a)] = g.index(c[a] + radius, a);
-    }
-    bool met = false;
-    const double slack = 1 + 1e-9;
-    g.for_each_in(lo, hi, [&](int w) {
-      const Eigen::Vector4d& ball = g.balls[std::size_t(w)];
-      const double apart = (radius + ball[3]) * slack;
-      if (met || (c - ball.head<3>()).squaredNorm() > apart * apart) return;
-      const int t = g.triangles[std::size_t(w)];
-      met = (nearest_on_triangle(g.corner(t, 0), g.corner(t, 1), g.corner(t, 2), c) - c)
-                .squaredNorm() <= radius * radius;
-    });
-    return met;
-  }
+  if (grid_) return grid_->meets_ball(c, radius);
   const K::Sphere_3 ball(K::Point_3(c[0], c[1], c[2]), radius * radius);
   for (const auto& chunk : chunks_)
     if (chunk->box.squaredExteriorDistance(c) <= radius * radius && chunk->tree->do_intersect(ball))
