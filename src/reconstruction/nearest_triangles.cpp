@@ -67,42 +67,14 @@ std::uint32_t morton(const Eigen::Vector3d& p, const Eigen::AlignedBox3d& box) {
   return code;
 }
 
-// The point of segment ab nearest p.
-Eigen::Vector3d nearest_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                   const Eigen::Vector3d& p) {
-  const Eigen::Vector3d ab = b - a;
-  const double length2 = ab.squaredNorm();
-  if (!(length2 > 0)) return a;
-  return a + std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) * ab;
-}
-
-// The point of triangle abc nearest p, by the region of the triangle's plane that p projects
-// into (a vertex's, an edge's or the face's), from the dot products of p's offsets with the edges.
+// The point of triangle abc nearest p: CGAL's projection onto a triangle (the trees' own; a
+// degenerate triangle as its longest side).
 Eigen::Vector3d nearest_on_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                     const Eigen::Vector3d& c, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
-    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
-  const double sum = va + vb + vc;
-  if (sum > 0 && std::isfinite(sum)) return a + (vb / sum) * ab + (vc / sum) * ac;
-  // A degenerate triangle: its nearest edge.
-  Eigen::Vector3d best = nearest_on_segment(a, b, p);
-  for (const Eigen::Vector3d& q : {nearest_on_segment(b, c, p), nearest_on_segment(c, a, p)})
-    if ((q - p).squaredNorm() < (best - p).squaredNorm()) best = q;
-  return best;
+  auto point = [](const Eigen::Vector3d& x) { return K::Point_3(x[0], x[1], x[2]); };
+  const K::Point_3 q = K().construct_projected_point_3_object()(
+      K::Triangle_3(point(a), point(b), point(c)), point(p));
+  return {q.x(), q.y(), q.z()};
 }
 
 // The uniform grid is taken where the triangles' sizes are alike (the local reconstruction's
