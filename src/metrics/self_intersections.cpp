@@ -18,10 +18,14 @@
 #include "pipeline/float_bounds.h"
 #include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
+#include "reconstruction/triangle_cells.h"
 
 namespace sdfcontour {
 
 namespace {
+
+using detail::CellGrid;
+using detail::TriangleCells;
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
@@ -55,140 +59,50 @@ struct Box {
 template <class T>
 using Unwritten = std::vector<T, detail::UninitialisedAllocator<T>>;
 
-// Triangles bucketed by the cubes of side `cell` that their bounding boxes meet, sorted by cube
-// (x fastest). The cubes are about twice a typical triangle's extent, so most triangles sit in one
-// to eight of them.
-class TriangleCubes {
- public:
-  explicit TriangleCubes(const Unwritten<Box>& boxes) {
-    const std::size_t count = boxes.size();
-    const Box all = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, count), Box::empty(),
-        [&](const tbb::blocked_range<std::size_t>& r, Box b) {
-          for (std::size_t t = r.begin(); t < r.end(); ++t) b.extend(boxes[t]);
-          return b;
+// The triangles listed per cube that their boxes (`boxes`) meet. The cubes are about twice a
+// typical triangle's extent, so most triangles sit in one to eight of them.
+TriangleCells bucketed_by_cube(const Unwritten<Box>& boxes) {
+  const std::size_t count = boxes.size();
+  const Box all = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, count), Box::empty(),
+      [&](const tbb::blocked_range<std::size_t>& r, Box b) {
+        for (std::size_t t = r.begin(); t < r.end(); ++t) b.extend(boxes[t]);
+        return b;
+      },
+      [](Box a, const Box& b) {
+        a.extend(b);
+        return a;
+      });
+  if (count == 0) return TriangleCells(CellGrid(), {});
+  std::vector<double> extents(count);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
+    extents[t] = (boxes[t].high() - boxes[t].low()).maxCoeff();
+  });
+  auto middle = extents.begin() + long(count / 2);
+  std::nth_element(extents.begin(), middle, extents.end());
+  const Eigen::Vector3d extent = all.high() - all.low();
+  double cell = std::max(2 * *middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
+  // The triangles may not sit in too many cubes in all (a few huge ones would): coarser cubes
+  // only cost more tests. (Sums of whole numbers: the same in any order.)
+  auto entries = [&] {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, count), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double sum) {
+          for (std::size_t t = r.begin(); t < r.end(); ++t)
+            sum += (((boxes[t].high() - boxes[t].low()).array() / cell).floor() + 2).prod();
+          return sum;
         },
-        [](Box a, const Box& b) {
-          a.extend(b);
-          return a;
-        });
-    std::vector<double> extents(count);
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
-      extents[t] = (boxes[t].high() - boxes[t].low()).maxCoeff();
-    });
-    auto middle = extents.begin() + long(count / 2);
-    std::nth_element(extents.begin(), middle, extents.end());
-    origin_ = all.low();
-    const Eigen::Vector3d extent = all.high() - all.low();
-    cell_ = std::max(2 * *middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
-    // Only occupied cubes are stored, so empty space between far-apart parts costs nothing; but
-    // the triangles may not sit in too many cubes in all (a few huge ones would): coarser cubes
-    // only cost more tests. (Sums of whole numbers: the same in any order.)
-    auto entries = [&] {
-      return tbb::parallel_reduce(
-          tbb::blocked_range<std::size_t>(0, count), 0.0,
-          [&](const tbb::blocked_range<std::size_t>& r, double sum) {
-            for (std::size_t t = r.begin(); t < r.end(); ++t)
-              sum += (((boxes[t].high() - boxes[t].low()).array() / cell_).floor() + 2).prod();
-            return sum;
-          },
-          std::plus<double>());
-    };
-    while (entries() > 64.0 * double(count) + 1e6) cell_ *= 2;
-    // One 64-bit key per cube: coarser cubes where the parts spread over more than 2^62 of them.
-    for (;; cell_ *= 2) {
-      for (int a = 0; a < 3; ++a) size_[a] = std::uint64_t(std::min(extent[a] / cell_, 1e15)) + 1;
-      if (double(size_[0]) * double(size_[1]) * double(size_[2]) < 0x1p62) break;
-    }
-    std::vector<long> offsets(count + 1, 0);
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
-      const auto lo = cube_of(boxes[t].low()), hi = cube_of(boxes[t].high());
-      offsets[t + 1] = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
-    });
-    for (std::size_t t = 0; t < count; ++t) offsets[t + 1] += offsets[t];
-    keyed_.resize(std::size_t(offsets.back()));
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
-      const auto lo = cube_of(boxes[t].low()), hi = cube_of(boxes[t].high());
-      long at = offsets[t];
-      for (long k = lo[2]; k <= hi[2]; ++k)
-        for (long j = lo[1]; j <= hi[1]; ++j)
-          for (long i = lo[0]; i <= hi[0]; ++i) keyed_[std::size_t(at++)] = {key(i, j, k), int(t)};
-    });
-    tbb::parallel_sort(keyed_.begin(), keyed_.end());
-  }
-
-  // Calls f(u) once for every triangle u whose current box (`current`) meets `box`, found in the
-  // cube holding the lower corner of `box`'s overlap with u's bucketed box (`bucketed`, as given
-  // to the constructor, which holds u's current box).
-  template <class F>
-  void for_each_near(const Box& box, const Unwritten<Box>& bucketed, const Unwritten<Box>& current,
-                     F&& f) const {
-    const auto lo = cube_of(box.low()), hi = cube_of(box.high());
-    for (long k = lo[2]; k <= hi[2]; ++k)
-      for (long j = lo[1]; j <= hi[1]; ++j)
-        for (long i = lo[0]; i <= hi[0]; ++i) {
-          const Key here = key(i, j, k);
-          auto it = std::lower_bound(keyed_.begin(), keyed_.end(), Entry{here, -1});
-          for (; it != keyed_.end() && it->key == here; ++it) {
-            const std::size_t u = std::size_t(it->triangle);
-            if (!box.meets(current[u])) continue;
-            const auto corner = cube_of(box.lo.cwiseMax(bucketed[u].lo).cast<double>());
-            if (key(corner[0], corner[1], corner[2]) == here) f(it->triangle);
-          }
-        }
-  }
-
-  // Calls f(t, u), t < u, once for every pair of triangles whose current boxes meet, from the
-  // cube holding the lower corner of their bucketed boxes' overlap (both are bucketed there):
-  // cube by cube, with no search for the cubes, where every triangle is asked about.
-  template <class F>
-  void for_each_pair(const Unwritten<Box>& bucketed, const Unwritten<Box>& current, F&& f) const {
-    const std::size_t n = keyed_.size();
-    // Each range of entries takes the cubes that begin in it, whole.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
-      std::size_t begin = range.begin();
-      while (begin > 0 && begin < n && keyed_[begin].key == keyed_[begin - 1].key) ++begin;
-      for (std::size_t start = begin, end; start < range.end(); start = end) {
-        const Key here = keyed_[start].key;
-        for (end = start + 1; end < n && keyed_[end].key == here;) ++end;
-        for (std::size_t a = start; a < end; ++a) {
-          const std::size_t t = std::size_t(keyed_[a].triangle);
-          for (std::size_t b = a + 1; b < end; ++b) {
-            const std::size_t u = std::size_t(keyed_[b].triangle);
-            if (!current[t].meets(current[u])) continue;
-            const auto corner = cube_of(bucketed[t].lo.cwiseMax(bucketed[u].lo).cast<double>());
-            if (key(corner[0], corner[1], corner[2]) == here) f(int(t), int(u));
-          }
-        }
-      }
-    });
-  }
-
- private:
-  std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
-    std::array<long, 3> c;
-    for (int a = 0; a < 3; ++a)
-      c[std::size_t(a)] =
-          std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), 0L, long(size_[a]) - 1);
-    return c;
-  }
-  // z slowest, x fastest: half the bytes of three longs to sort and search.
-  using Key = std::uint64_t;
-  Key key(long i, long j, long k) const { return (Key(k) * size_[1] + Key(j)) * size_[0] + Key(i); }
-
-  struct Entry {
-    Key key;
-    int triangle;
-    bool operator<(const Entry& e) const {
-      return key < e.key || (key == e.key && triangle < e.triangle);
-    }
+        std::plus<double>());
   };
-
-  double cell_ = 1;
-  Eigen::Vector3d origin_;
-  std::uint64_t size_[3] = {1, 1, 1};
-  Unwritten<Entry> keyed_;  // (cube key, triangle), sorted
-};
+  while (entries() > 64.0 * double(count) + 1e6) cell *= 2;
+  const CellGrid grid =
+      CellGrid::over(all.low(), all.high(), cell, std::max(double(1 << 22), 4.0 * double(count)));
+  std::vector<TriangleCells::Range> ranges(count);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
+    ranges[t] = {grid.cube_of(boxes[t].low()), grid.cube_of(boxes[t].high())};
+  });
+  return TriangleCells(grid, ranges);
+}
 
 Point point(const Eigen::Vector3d& x) {
   return Point(x[0], x[1], x[2]);
@@ -231,7 +145,7 @@ class CrossingSearch {
       : bucketed_(bucketed_boxes(mesh, before)),
         current_(bucketed_.size()),
         flat_(bucketed_.size()),
-        cubes_(bucketed_) {
+        cubes_(bucketed_by_cube(bucketed_)) {
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(),
                       [&](Eigen::Index t) { refresh(mesh, int(t)); });
   }
@@ -257,8 +171,9 @@ class CrossingSearch {
         watch ? std::size_t(std::count_if(watch->begin(), watch->end(), [](char w) { return w; }))
               : count;
     if (4 * watched_count >= count) {
-      cubes_.for_each_pair(bucketed_, current_, [&](int t, int u) {
-        if ((watched(t) || watched(u)) && !flat_[std::size_t(t)] && !flat_[std::size_t(u)] &&
+      cubes_.for_each_pair([&](int t, int u) {
+        if (current_[std::size_t(t)].meets(current_[std::size_t(u)]) &&
+            (watched(t) || watched(u)) && !flat_[std::size_t(t)] && !flat_[std::size_t(u)] &&
             cross(mesh, t, u))
           found.local().emplace_back(t, u);
       });
@@ -270,9 +185,12 @@ class CrossingSearch {
       if (!watched(t)) return;
       if (counter) counter->add();
       if (flat_[std::size_t(t)]) return;
-      cubes_.for_each_near(current_[std::size_t(t)], bucketed_, current_, [&](int u) {
+      const Box& box = current_[std::size_t(t)];
+      cubes_.for_each_in(cubes_.range(box.low(), box.high()), [&](int u) {
         // Each pair once: from its lower triangle when both are watched.
-        if (u == t || (watched(u) && u < t) || flat_[std::size_t(u)]) return;
+        if (!box.meets(current_[std::size_t(u)]) || u == t || (watched(u) && u < t) ||
+            flat_[std::size_t(u)])
+          return;
         if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
       });
     });
@@ -304,7 +222,7 @@ class CrossingSearch {
 
   Unwritten<Box> bucketed_, current_;
   Unwritten<char> flat_;
-  TriangleCubes cubes_;
+  TriangleCells cubes_;
 };
 
 }  // namespace

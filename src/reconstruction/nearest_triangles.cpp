@@ -15,6 +15,8 @@
 #include <limits>
 #include <numeric>
 
+#include "reconstruction/triangle_cells.h"
+
 namespace sdfcontour::detail {
 
 namespace {
@@ -91,61 +93,35 @@ struct NearestTriangles::Chunk {
   std::unique_ptr<Tree> tree;
 };
 
-// The triangles listed per cell of side `cell` (each in every cell its box meets), cells in
-// columns (i, j) of entries sorted by (k, triangle).
+// The triangles listed per cell (each in every cell its box meets), with a ball around each.
 struct NearestTriangles::Grid {
   // The grid over `which`, or null where their sizes are not alike (or too many columns).
   static std::unique_ptr<Grid> make(const Mesh& mesh, const std::vector<int>& which);
 
-  const Mesh* mesh = nullptr;
-  Eigen::Vector3d origin;
-  double cell = 0;
-  std::array<int, 3> n{};
-  std::vector<int> triangles;                // the triangles searched
-  std::vector<Eigen::Vector4d> balls;        // per triangle searched: a ball holding it
-  std::vector<std::array<int, 3>> lowest;    // per triangle searched: its lowest cell
-  std::vector<std::size_t> column_start;     // per column i * n[1] + j, and one past the last
-  std::vector<std::pair<int, int>> entries;  // (k, place in `triangles`)
+  Grid(const Mesh& m, const std::vector<int>& which, const CellGrid& grid,
+       const std::vector<TriangleCells::Range>& ranges, std::vector<Eigen::Vector4d> b)
+      : mesh(&m), triangles(which), balls(std::move(b)), cells(grid, ranges) {}
 
-  // The cell along axis a that holds x (clamped to the grid; NaN: the first).
-  int index(double x, int a) const {
-    const double u = std::floor((x - origin[a]) / cell);
-    return !(u > 0) ? 0 : (u >= n[std::size_t(a)] - 1 ? n[std::size_t(a)] - 1 : int(u));
-  }
+  const Mesh* mesh = nullptr;
+  std::vector<int> triangles;          // the triangles searched
+  std::vector<Eigen::Vector4d> balls;  // per triangle searched: a ball holding it
+  TriangleCells cells;                 // listing places in `triangles`
+
   Eigen::Vector3d corner(int t, int c) const {
     return mesh->vertices.row(mesh->triangles(t, c)).transpose();
-  }
-  // Calls f(w) once for each triangle triangles[w] listed in the cells [lo, hi] (at its lowest
-  // cell there).
-  template <class F>
-  void for_each_in(const std::array<int, 3>& lo, const std::array<int, 3>& hi, F&& f) const {
-    for (int i = lo[0]; i <= hi[0]; ++i)
-      for (int j = lo[1]; j <= hi[1]; ++j) {
-        const std::size_t column = std::size_t(i) * std::size_t(n[1]) + std::size_t(j);
-        auto it = std::lower_bound(entries.begin() + std::ptrdiff_t(column_start[column]),
-                                   entries.begin() + std::ptrdiff_t(column_start[column + 1]),
-                                   std::pair<int, int>(lo[2], -1));
-        const auto end = entries.begin() + std::ptrdiff_t(column_start[column + 1]);
-        for (; it != end && it->first <= hi[2]; ++it) {
-          const std::array<int, 3>& first = lowest[std::size_t(it->second)];
-          if (std::max(first[0], lo[0]) == i && std::max(first[1], lo[1]) == j &&
-              std::max(first[2], lo[2]) == it->first)
-            f(it->second);
-        }
-      }
   }
   Hit closest(const Eigen::Vector3d& p) const;
   bool meets_ball(const Eigen::Vector3d& c, double radius) const;
 
-  // The distance from p to the nearest cell outside [lo, hi] (infinite if it is the grid).
-  double beyond(const Eigen::Vector3d& p, const std::array<int, 3>& lo,
-                const std::array<int, 3>& hi) const {
+  // The distance from p to the nearest cell outside r (infinite if it is the grid).
+  double beyond(const Eigen::Vector3d& p, const TriangleCells::Range& r) const {
+    const CellGrid& g = cells.grid();
     double d = INFINITY;
     for (int a = 0; a < 3; ++a) {
-      if (lo[std::size_t(a)] > 0)
-        d = std::min(d, std::max(0.0, p[a] - (origin[a] + lo[std::size_t(a)] * cell)));
-      if (hi[std::size_t(a)] < n[std::size_t(a)] - 1)
-        d = std::min(d, std::max(0.0, origin[a] + (hi[std::size_t(a)] + 1) * cell - p[a]));
+      if (r.lo[std::size_t(a)] > 0)
+        d = std::min(d, std::max(0.0, p[a] - (g.origin[a] + r.lo[std::size_t(a)] * g.cell)));
+      if (r.hi[std::size_t(a)] < g.n[std::size_t(a)] - 1)
+        d = std::min(d, std::max(0.0, g.origin[a] + (r.hi[std::size_t(a)] + 1) * g.cell - p[a]));
     }
     return d;
   }
@@ -153,7 +129,8 @@ struct NearestTriangles::Grid {
 
 NearestTriangles::Hit NearestTriangles::Grid::closest(const Eigen::Vector3d& p) const {
   Hit hit;
-  const std::array<int, 3> at{index(p[0], 0), index(p[1], 1), index(p[2], 2)};
+  const CellGrid& g = cells.grid();
+  const std::array<int, 3> at = g.cube_of(p);
   double best = INFINITY;
   // A triangle whose ball lies farther than the best cannot be nearer (a hair's slack for the
   // rounding: ties are still compared).
@@ -172,29 +149,25 @@ NearestTriangles::Hit NearestTriangles::Grid::closest(const Eigen::Vector3d& p) 
       hit.point = q;
     }
   };
-  for_each_in(at, at, visit);  // (its own cell first: a near best bounds the rest)
+  cells.for_each_in({at, at}, visit);  // (its own cell first: a near best bounds the rest)
   for (int reach = 1;; reach *= 2) {
-    std::array<int, 3> lo, hi;
+    TriangleCells::Range r;
     for (std::size_t a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, at[a] - reach);
-      hi[a] = std::min(n[a] - 1, at[a] + reach);
+      r.lo[a] = std::max(0, at[a] - reach);
+      r.hi[a] = std::min(g.n[a] - 1, at[a] + reach);
     }
-    for_each_in(lo, hi, visit);
-    const double outside = beyond(p, lo, hi);
+    cells.for_each_in(r, visit);
+    const double outside = beyond(p, r);
     if (!std::isfinite(outside) || best <= outside * outside) break;
   }
   return hit;
 }
 
 bool NearestTriangles::Grid::meets_ball(const Eigen::Vector3d& c, double radius) const {
-  std::array<int, 3> lo, hi;
-  for (int a = 0; a < 3; ++a) {
-    lo[std::size_t(a)] = index(c[a] - radius, a);
-    hi[std::size_t(a)] = index(c[a] + radius, a);
-  }
   bool met = false;
   const double slack = 1 + 1e-9;
-  for_each_in(lo, hi, [&](int w) {
+  const Eigen::Vector3d reach = Eigen::Vector3d::Constant(radius);
+  cells.for_each_in(cells.range(c - reach, c + reach), [&](int w) {
     const Eigen::Vector4d& ball = balls[std::size_t(w)];
     const double apart = (radius + ball[3]) * slack;
     if (met || (c - ball.head<3>()).squaredNorm() > apart * apart) return;
@@ -312,61 +285,21 @@ std::unique_ptr<NearestTriangles::Grid> NearestTriangles::Grid::make(
   if (!(sizes.largest > 0) || !(sizes.largest <= kAlikeSizes * mean) ||
       !sizes.box.sizes().allFinite())
     return nullptr;
-  auto g = std::make_unique<Grid>();
-  g->mesh = &mesh;
-  g->triangles = which;
-  g->origin = sizes.box.min();
-  g->cell = sizes.largest;
-  double columns = 1;
-  for (int a = 0; a < 3; ++a) {
-    const double count = std::floor(sizes.box.sizes()[a] / g->cell) + 1;
-    if (!(count < 1e9)) return nullptr;
-    g->n[std::size_t(a)] = int(count);
-    if (a < 2) columns *= count;
-  }
-  if (!(columns <= kMostColumns)) return nullptr;
-  // Per triangle its cells' range; the entries counted per column, then placed.
-  g->lowest.resize(which.size());
-  g->balls.resize(which.size());
-  std::vector<std::array<int, 3>> highest(which.size());
+  const CellGrid grid =
+      CellGrid::over(sizes.box.min(), sizes.box.max(), sizes.largest, kMostColumns);
+  if (grid.cell != sizes.largest) return nullptr;
+  std::vector<TriangleCells::Range> ranges(which.size());
+  std::vector<Eigen::Vector4d> balls(which.size());
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t w) {
     const Eigen::AlignedBox3d b = box(which[w]);
     const Eigen::Vector3d centre = b.center();
     double radius = 0;
     for (int c = 0; c < 3; ++c)
       radius = std::max(radius, (V.row(F(which[w], c)).transpose() - centre).norm());
-    g->balls[w] << centre, radius;
-    for (int a = 0; a < 3; ++a) {
-      g->lowest[w][std::size_t(a)] = g->index(b.min()[a], a);
-      highest[w][std::size_t(a)] = g->index(b.max()[a], a);
-    }
+    balls[w] << centre, radius;
+    ranges[w] = {grid.cube_of(b.min()), grid.cube_of(b.max())};
   });
-  const std::size_t column_count = std::size_t(columns);
-  std::vector<std::size_t> count(column_count + 1, 0);
-  for (std::size_t w = 0; w < which.size(); ++w) {
-    const auto &lo = g->lowest[w], &hi = highest[w];
-    for (int i = lo[0]; i <= hi[0]; ++i)
-      for (int j = lo[1]; j <= hi[1]; ++j)
-        count[std::size_t(i) * std::size_t(g->n[1]) + std::size_t(j) + 1] +=
-            std::size_t(hi[2] - lo[2] + 1);
-  }
-  for (std::size_t c = 0; c < column_count; ++c) count[c + 1] += count[c];
-  g->column_start = count;
-  g->entries.resize(count.back());
-  for (std::size_t w = 0; w < which.size(); ++w) {
-    const auto &lo = g->lowest[w], &hi = highest[w];
-    for (int i = lo[0]; i <= hi[0]; ++i)
-      for (int j = lo[1]; j <= hi[1]; ++j) {
-        std::size_t& at = count[std::size_t(i) * std::size_t(g->n[1]) + std::size_t(j)];
-        for (int k = lo[2]; k <= hi[2]; ++k) g->entries[at++] = {k, int(w)};
-      }
-  }
-  // (Each column by k, for the searches.)
-  tbb::parallel_for(std::size_t(0), column_count, [&](std::size_t c) {
-    std::sort(g->entries.begin() + std::ptrdiff_t(g->column_start[c]),
-              g->entries.begin() + std::ptrdiff_t(g->column_start[c + 1]));
-  });
-  return g;
+  return std::make_unique<Grid>(mesh, which, grid, ranges, std::move(balls));
 }
 
 }  // namespace sdfcontour::detail
