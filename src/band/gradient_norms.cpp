@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "input/parallel_select.h"
 #include "input/value_scans.h"
 #include "input/windowed_passes.h"
 #include "sdfcontour/band/band.h"
@@ -85,10 +86,8 @@ CrossingNorms crossing_norms(const GridView& grid, const Truncation& truncation,
   return norms;
 }
 
-double median_of(std::vector<double>& v) {
-  const auto at = v.begin() + long(v.size() / 2);
-  std::nth_element(v.begin(), at, v.end());
-  return *at;
+double median_of(const std::vector<double>& v) {
+  return detail::kth_smallest(v, v.size() / 2);
 }
 
 }  // namespace
@@ -104,9 +103,7 @@ GradientNormSummary summarize_gradient_norms(CrossingNorms crossing) {
   summary.count = long(norms.size());
   if (norms.size() < 16) return summary;
   auto percentile = [&](std::size_t q) {
-    const auto at = norms.begin() + long(norms.size() * q / 100);
-    std::nth_element(norms.begin(), at, norms.end());
-    return *at;
+    return detail::kth_smallest(norms, norms.size() * q / 100);
   };
   summary.low = percentile(10);
   summary.median = percentile(50);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "input/parallel_select.h"
 #include "input/value_scans.h"
 #include "input/windowed_passes.h"
 
@@ -49,11 +50,16 @@ double noise_level(const GridView& grid, const Truncation& truncation) {
       }
     });
   });
-  std::vector<double> d4 = detail::concatenate(per_slab, &Slab::d4);
-  if (d4.size() < 16) return NAN;
-  const auto mid = d4.begin() + long(d4.size() / 2);
-  std::nth_element(d4.begin(), mid, d4.end());
-  return 1.4826 * *mid / std::sqrt(70.0);
+  // (The median from the slabs as they are: a copy of them, zeroed first, and a serial selection
+  // over it were a tenth of a second on one thread at 512^3.)
+  std::vector<detail::ValueRun> runs;
+  std::size_t count = 0;
+  for (const Slab& slab : per_slab) {
+    runs.push_back({slab.d4.data(), slab.d4.size()});
+    count += slab.d4.size();
+  }
+  if (count < 16) return NAN;
+  return 1.4826 * detail::kth_smallest(runs, count / 2) / std::sqrt(70.0);
 }
 
 namespace {
