@@ -258,6 +258,39 @@ TEST(ContactProjection, SameResultWhateverTheThreadCount) {
   EXPECT_NE(one.vertices, mc.vertices);
 }
 
+TEST(ContactProjection, AProjectorMadeOnceProjectsAsTheCallEachTime) {
+  // The points indexed once, then two meshes (the second with fixed vertices) and the first
+  // again: each the same bits as its own call, with the local reconstruction's options.
+  const double h = 2.0 / 31;
+  const Mesh mc = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 32, Bounds{}));
+  const Mesh coarse = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 20, Bounds{}));
+  PointMatrix P, N;
+  sphere_points(P, N, 20000);
+  const ContactProjectionOptions o = local_projection_options();
+  std::vector<char> fixed(std::size_t(coarse.vertices.rows()), 0);
+  for (std::size_t v = 0; v < fixed.size(); v += 3) fixed[v] = 1;
+  const ContactProjector projector(P, N, {}, h, o);
+  Mesh a = mc, b = coarse, again = mc;
+  projector.project(a);
+  projector.project(b, &fixed);
+  projector.project(again);
+  Mesh a_call = mc, b_call = coarse;
+  project_to_contact_points(a_call, P, N, {}, h, o);
+  project_to_contact_points(b_call, P, N, {}, h, o, &fixed);
+  EXPECT_EQ(a.vertices, a_call.vertices);
+  EXPECT_EQ(b.vertices, b_call.vertices);
+  EXPECT_EQ(again.vertices, a_call.vertices);
+  EXPECT_NE(a.vertices, mc.vertices);
+  for (std::size_t v = 0; v < fixed.size(); ++v) {
+    if (fixed[v]) {
+      EXPECT_EQ(b.vertices.row(Eigen::Index(v)), coarse.vertices.row(Eigen::Index(v)));
+    }
+  }
+  EXPECT_THROW(ContactProjector(P, N.topRows(5), {}, h, o), Error);
+  const std::vector<char> short_flags(3, 0);
+  EXPECT_THROW(projector.project(a, &short_flags), Error);
+}
+
 TEST(ContactProjection, RejectsBadInput) {
   Mesh m = flat_patch(3, kSpacing, 0);
   PointMatrix P, N;

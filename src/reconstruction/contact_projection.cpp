@@ -20,12 +20,12 @@ namespace sdfcontour {
 
 namespace {
 
-void validate(const Mesh& mesh, const PointMatrix& points, const PointMatrix& normals,
-              double spacing, const ContactProjectionOptions& o) {
+void validate(const PointMatrix& points, const PointMatrix& normals, double spacing,
+              const ContactProjectionOptions& o) {
   if (points.rows() != normals.rows())
     throw Error("projection: " + std::to_string(points.rows()) + " points but " +
                 std::to_string(normals.rows()) + " normals");
-  if (!points.allFinite() || !normals.allFinite() || !mesh.vertices.allFinite())
+  if (!points.allFinite() || !normals.allFinite())
     throw Error("projection: the points, normals and mesh must be finite");
   if (!(spacing > 0) || !std::isfinite(spacing))
     throw Error("projection: the spacing must be positive and finite");
@@ -308,24 +308,44 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
                                                  const Eigen::VectorXd& depths, double spacing,
                                                  const ContactProjectionOptions& o,
                                                  const std::vector<char>* fixed) {
-  validate(mesh, points, normals, spacing, o);
+  return ContactProjector(points, normals, depths, spacing, o).project(mesh, fixed);
+}
+
+ContactProjector::ContactProjector(const PointMatrix& points, const PointMatrix& normals,
+                                   const Eigen::VectorXd& depths, double spacing,
+                                   const ContactProjectionOptions& o)
+    : points_(points), normals_(normals), depths_(depths), spacing_(spacing), options_(o) {
+  validate(points, normals, spacing, o);
   if (depths.size() != 0 && depths.size() != points.rows())
     throw Error("projection: " + std::to_string(points.rows()) + " points but " +
                 std::to_string(depths.size()) + " depths");
+  // Points within each radius, in cubes of the narrower (the wider reads more of them).
+  if (points.rows() > 0) cubes_ = std::make_unique<detail::PointCubes>(points, o.radius * spacing);
+}
+
+ContactProjector::~ContactProjector() = default;
+
+ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed) const {
+  if (!mesh.vertices.allFinite())
+    throw Error("projection: the points, normals and mesh must be finite");
   if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
     throw Error("projection: one fixed flag per vertex is needed");
+  const PointMatrix& points = points_;
+  const PointMatrix& normals = normals_;
+  const Eigen::VectorXd& depths = depths_;
+  const double spacing = spacing_;
+  const ContactProjectionOptions& o = options_;
   const double inv_depth_scale2 = depths.size() && o.depth_scale > 0
                                       ? 1 / (o.depth_scale * o.depth_scale * spacing * spacing)
                                       : 0;
   ContactProjectionStats stats;
-  if (points.rows() == 0 || mesh.vertices.rows() == 0) return stats;
+  if (!cubes_ || mesh.vertices.rows() == 0) return stats;
+  const detail::PointCubes& cubes = *cubes_;
   const detail::VertexTriangles around(mesh);
   const PointMatrix N = detail::vertex_normals(mesh, around);
   const EdgeMoments chords =
       o.chord_offset ? edge_moments(mesh, around, spacing, fixed) : EdgeMoments{};
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
-  // Points within each radius, in cubes of the narrower (the wider reads more of them).
-  const detail::PointCubes cubes(points, radii[0]);
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
   const double inv_chord_scale2 = inverse_turn_chord2(o);

@@ -12,11 +12,16 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "sdfcontour/types.h"
 
 namespace sdfcontour {
+
+namespace detail {
+class PointCubes;
+}
 
 struct ContactProjectionOptions {
   /// Radius of the neighbourhood fitted around each vertex, in spacings (Gaussian weights of
@@ -106,5 +111,30 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
                                                  const Eigen::VectorXd& depths, double spacing,
                                                  const ContactProjectionOptions& options = {},
                                                  const std::vector<char>* fixed = nullptr);
+
+/// project_to_contact_points with the points indexed once, for several meshes (or a mesh again
+/// after a split adds vertices): the same results, without indexing the points again. The points,
+/// normals and depths are read by project() and must outlive it, unchanged. Throws as that
+/// function does, when made.
+class ContactProjector {
+ public:
+  ContactProjector(const PointMatrix& points, const PointMatrix& normals,
+                   const Eigen::VectorXd& depths, double spacing,
+                   const ContactProjectionOptions& options = {});
+  ~ContactProjector();
+  ContactProjector(const ContactProjector&) = delete;
+  ContactProjector& operator=(const ContactProjector&) = delete;
+
+  /// project_to_contact_points(mesh, points, normals, depths, spacing, options, fixed).
+  ContactProjectionStats project(Mesh& mesh, const std::vector<char>* fixed = nullptr) const;
+
+ private:
+  const PointMatrix& points_;
+  const PointMatrix& normals_;
+  const Eigen::VectorXd& depths_;
+  double spacing_;
+  ContactProjectionOptions options_;
+  std::unique_ptr<detail::PointCubes> cubes_;  // null without points
+};
 
 }  // namespace sdfcontour

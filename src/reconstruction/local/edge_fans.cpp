@@ -203,8 +203,7 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
       std::plus<long>());
 }
 
-void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoints& cp,
-                     const Eigen::VectorXd& depths, double h, const LocalBrickOptions& options,
+void split_fan_faces(const KeyedTriangles& near, double limit, const ContactProjector& projector,
                      const GridGeometry& grid, SubdividedMesh& sub, PointMatrix& reconstructed) {
   const std::array<int, 3> n = grid.whole_dims();
   const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
@@ -250,7 +249,7 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoin
   split_mesh.sub.mesh.vertices = placed;
   sub = std::move(split_mesh.sub);
   reconstructed = start;
-  project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection, &stay);
+  projector.project(sub.mesh, &stay);
 }
 
 }  // namespace sdfcontour::detail

@@ -62,11 +62,10 @@ std::vector<std::uint64_t> split_cells(const std::vector<std::uint64_t>& keys,
 /// Refinement where it pays, inside the regions: each edge of `sub` (an edge-fanned mesh at
 /// level 0, projected) between two cells' vertices, whose chord sags by more than `limit` (its
 /// length times its ends' normals' turn / 8) gets a vertex where it crosses the face between the
-/// two cells, projected onto the contact points `cp` and kept on that face; each of its two
-/// triangles is cut in two, each half in one cell. `reconstructed` follows the new numbering
+/// two cells, projected by `projector` (onto the contact points) and kept on that face; each of its
+/// two triangles is cut in two, each half in one cell. `reconstructed` follows the new numbering
 /// (the new vertices at their faces' crossings).
-void split_fan_faces(const KeyedTriangles& near, double limit, const ContactPoints& cp,
-                     const Eigen::VectorXd& depths, double h, const LocalBrickOptions& options,
+void split_fan_faces(const KeyedTriangles& near, double limit, const ContactProjector& projector,
                      const GridGeometry& grid, SubdividedMesh& sub, PointMatrix& reconstructed);
 
 }  // namespace sdfcontour::detail

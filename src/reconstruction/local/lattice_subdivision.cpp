@@ -358,9 +358,9 @@ bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, in
 // (lattice_subdivision.h) An edge whose ends' normals turn by t radians over its length L sags by
 // about L t / 8.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
-                         const ContactPoints& cp, const Eigen::VectorXd& depths, double h,
-                         const LocalBrickOptions& options, SubdividedMesh& sub,
-                         PointMatrix& reconstructed, std::vector<char>& corners) {
+                         const ContactProjector& projector, const LocalBrickOptions& options,
+                         SubdividedMesh& sub, PointMatrix& reconstructed,
+                         std::vector<char>& corners) {
   const PointMatrix normals = vertex_normals(sub.mesh);
   auto split = [&](int x, int y) { return chord_sags(sub, normals, x, y, limit); };
   SplitMesh split_mesh = split_curved_edges(near, sub, levels, split);
@@ -374,7 +374,7 @@ void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
   sub = std::move(split_mesh.sub);
   reconstructed = std::move(start);
   corners = shared_corners(sub);
-  project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection, &stay);
+  projector.project(sub.mesh, &stay);
 }
 
 }  // namespace sdfcontour::detail

@@ -67,14 +67,14 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
                              const std::function<bool(int, int)>& split);
 
 /// The local reconstruction's use of it (LocalBrickOptions::split_sag): after `sub`
-/// (lattice_subdivision(near, levels)) was projected onto the contact points `cp` (`depths` their
-/// samples' |value|s, `h` the spacing), each edge whose chord sags by more than `limit` (its
-/// length times its ends' normals' turn / 8, a circular arc's sag) is split and the new vertices
-/// projected; `reconstructed` (the positions the untangling returns vertices to: the new ones at
-/// their edges' midpoints) and `corners` (per vertex: a shared corner) follow the new numbering.
+/// (lattice_subdivision(near, levels)) was projected by `projector`, each edge whose chord sags
+/// by more than `limit` (its length times its ends' normals' turn / 8, a circular arc's sag) is
+/// split and the new vertices projected by it; `reconstructed` (the positions the untangling
+/// returns vertices to: the new ones at their edges' midpoints) and `corners` (per vertex: a shared
+/// corner) follow the new numbering.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
-                         const ContactPoints& cp, const Eigen::VectorXd& depths, double h,
-                         const LocalBrickOptions& options, SubdividedMesh& sub,
-                         PointMatrix& reconstructed, std::vector<char>& corners);
+                         const ContactProjector& projector, const LocalBrickOptions& options,
+                         SubdividedMesh& sub, PointMatrix& reconstructed,
+                         std::vector<char>& corners);
 
 }  // namespace sdfcontour::detail

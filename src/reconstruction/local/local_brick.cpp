@@ -423,22 +423,24 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // Corners that the samples around them share (exact, as a box's) stay always.
   std::vector<char> corners = detail::shared_corners(sub);
   const std::vector<char>* fixed = options.keep_features ? &sub.on_feature : &corners;
-  if (options.project && cp.size() > 0)
-    project_to_contact_points(sub.mesh, cp.points, cp.normals, depths, h, options.projection,
-                              fixed);
+  // (The points indexed once, for the split's vertices too.)
+  std::optional<ContactProjector> projector;
+  if (options.project && cp.size() > 0) {
+    projector.emplace(cp.points, cp.normals, depths, h, options.projection);
+    projector->project(sub.mesh, fixed);
+  }
   const double sag = options.split_sag >= 0 ? options.split_sag
                                             : auto_split_sag(*std::max_element(n.begin(), n.end()));
   // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
   // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
   // vertices 0.002 h off it.)
-  if (fans && sag > 0 && options.project && !options.refine_zero_set && cp.size() > 0) {
-    detail::split_fan_faces(near, sag * h, cp, depths, h, options, cells_geometry, sub,
-                            reconstructed);
+  if (fans && sag > 0 && projector && !options.refine_zero_set) {
+    detail::split_fan_faces(near, sag * h, *projector, cells_geometry, sub, reconstructed);
     corners = detail::shared_corners(sub);  // in the new numbering
   }
-  if (!fans && sag > 0 && levels <= 3 && options.project && !options.refine_zero_set &&
-      cp.size() > 0)
-    split_sagging_edges(near, levels, sag * h, cp, depths, h, options, sub, reconstructed, corners);
+  if (!fans && sag > 0 && levels <= 3 && projector && !options.refine_zero_set)
+    split_sagging_edges(near, levels, sag * h, *projector, options, sub, reconstructed, corners);
+  projector.reset();
   near = detail::KeyedTriangles();
   cp = ContactPoints();
   depths = Eigen::VectorXd();
