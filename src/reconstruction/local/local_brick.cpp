@@ -248,11 +248,11 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
                   own_end[2] + reach - block.first[2]);
   const Eigen::Index count = band.samples.points.rows();
   std::vector<char> flagged(std::size_t(count), 0);
-  for (Eigen::Index i = 0; i < count; ++i) {
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index i) {
     const Eigen::Vector3d p = band.samples.points.row(i).transpose();
     flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
                               (p.array() <= flag_hi.array()).all();
-  }
+  });
   if (local_lattice_points(options, n)) {
     require_lattice_reach(block, band, flagged, options.lattice_contact, largest);
     return with_depths(lattice_contact_points(block, band, options.lattice_contact, &flagged));
