@@ -1,6 +1,7 @@
 // Boxes listed per cube (triangle_cells.h): every query and pair sweep against a brute-force scan
 // over the boxes' cube ranges.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <map>
@@ -89,4 +90,20 @@ TEST(TriangleCells, CoarserCubesWhereTooManyColumns) {
   EXPECT_EQ(grid.index(-5, 0), 0);
   EXPECT_EQ(grid.index(5, 0), 62);
   EXPECT_EQ(grid.index(std::nan(""), 1), 0);
+}
+
+TEST(TriangleCells, TheSameListsForAnyThreadCount) {
+  const CellGrid grid = CellGrid::over(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 0.05, 1e9);
+  const auto ranges = random_ranges(grid, 3000, 9);
+  auto visits = [&](int threads) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    const TriangleCells cells(grid, ranges);
+    std::vector<int> order;
+    cells.for_each_in({{0, 0, 0}, {grid.n[0] - 1, grid.n[1] - 1, grid.n[2] - 1}},
+                      [&](int b) { order.push_back(b); });
+    return order;
+  };
+  const std::vector<int> one = visits(1);
+  EXPECT_EQ(one.size(), ranges.size());
+  EXPECT_EQ(one, visits(2));
 }

@@ -2,7 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
-#include <numeric>
+#include <algorithm>
+#include <atomic>
 
 namespace sdfcontour::detail {
 
@@ -24,26 +25,39 @@ CellGrid CellGrid::over(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, do
 TriangleCells::TriangleCells(const CellGrid& grid, const std::vector<Range>& ranges)
     : grid_(grid), lowest_(ranges.size()) {
   const std::size_t count = ranges.size();
-  tbb::parallel_for(std::size_t(0), count, [&](std::size_t b) { lowest_[b] = ranges[b].lo; });
-  // The entries counted per column, then placed box by box (a counting sort: each column's boxes
-  // ascending), then each column sorted by k.
+  // The entries counted per column, then placed box by box at their column's next place (a
+  // counting sort, in parallel), then each column sorted by (k, box): the same lists in any order
+  // of placing.
   const std::size_t columns = std::size_t(grid_.n[0]) * std::size_t(grid_.n[1]);
   auto for_each_column = [&](const Range& r, auto&& f) {
     for (int i = r.lo[0]; i <= r.hi[0]; ++i)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j)
         f(std::size_t(i) * std::size_t(grid_.n[1]) + std::size_t(j));
   };
-  column_start_.assign(columns + 1, 0);
-  for (const Range& r : ranges)
-    for_each_column(
-        r, [&](std::size_t c) { column_start_[c + 1] += std::size_t(r.hi[2] - r.lo[2] + 1); });
-  std::partial_sum(column_start_.begin(), column_start_.end(), column_start_.begin());
+  std::vector<std::atomic<std::size_t>> next(columns);
+  tbb::parallel_for(std::size_t(0), columns,
+                    [&](std::size_t c) { next[c].store(0, std::memory_order_relaxed); });
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t b) {
+    const Range& r = ranges[b];
+    lowest_[b] = r.lo;
+    const std::size_t along = std::size_t(r.hi[2] - r.lo[2] + 1);
+    for_each_column(r, [&](std::size_t c) { next[c].fetch_add(along, std::memory_order_relaxed); });
+  });
+  column_start_.resize(columns + 1);
+  column_start_[0] = 0;
+  for (std::size_t c = 0; c < columns; ++c) {
+    column_start_[c + 1] = column_start_[c] + next[c].load(std::memory_order_relaxed);
+    next[c].store(column_start_[c], std::memory_order_relaxed);
+  }
   entries_.resize(column_start_.back());
-  std::vector<std::size_t> at(column_start_.begin(), column_start_.end() - 1);
-  for (std::size_t b = 0; b < count; ++b)
-    for_each_column(ranges[b], [&](std::size_t c) {
-      for (int k = ranges[b].lo[2]; k <= ranges[b].hi[2]; ++k) entries_[at[c]++] = {k, int(b)};
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t b) {
+    const Range& r = ranges[b];
+    const std::size_t along = std::size_t(r.hi[2] - r.lo[2] + 1);
+    for_each_column(r, [&](std::size_t c) {
+      std::size_t at = next[c].fetch_add(along, std::memory_order_relaxed);
+      for (int k = r.lo[2]; k <= r.hi[2]; ++k) entries_[at++] = {k, int(b)};
     });
+  });
   tbb::parallel_for(std::size_t(0), columns, [&](std::size_t c) {
     std::sort(entries_.begin() + std::ptrdiff_t(column_start_[c]),
               entries_.begin() + std::ptrdiff_t(column_start_[c + 1]));
