@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -96,14 +97,30 @@ VertexTriangles::VertexTriangles(const Mesh& mesh) {
       3 * mesh.triangles.rows() >= std::numeric_limits<int>::max())
     throw Error("too many vertices or triangles for one mesh piece (2^31 corners)");
   const TriangleMatrix& F = mesh.triangles;
-  offsets.assign(std::size_t(mesh.vertices.rows()) + 1, 0);
-  for (Eigen::Index t = 0; t < F.rows(); ++t)
-    for (int c = 0; c < 3; ++c) ++offsets[std::size_t(F(t, c)) + 1];
-  for (std::size_t v = 1; v < offsets.size(); ++v) offsets[v] += offsets[v - 1];
+  const std::size_t count = std::size_t(mesh.vertices.rows());
+  // A counting sort in parallel: the corners counted per vertex, each placed at its vertex's next
+  // place, then each vertex's triangles in ascending order (whatever the order of placing).
+  std::vector<std::atomic<int>> next(count);
+  tbb::parallel_for(std::size_t(0), count,
+                    [&](std::size_t v) { next[v].store(0, std::memory_order_relaxed); });
+  tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index t) {
+    for (int c = 0; c < 3; ++c) next[std::size_t(F(t, c))].fetch_add(1, std::memory_order_relaxed);
+  });
+  offsets.resize(count + 1);
+  offsets[0] = 0;
+  for (std::size_t v = 0; v < count; ++v) {
+    offsets[v + 1] = offsets[v] + next[v].load(std::memory_order_relaxed);
+    next[v].store(offsets[v], std::memory_order_relaxed);
+  }
   triangles.resize(std::size_t(offsets.back()));
-  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-  for (Eigen::Index t = 0; t < F.rows(); ++t)
-    for (int c = 0; c < 3; ++c) triangles[std::size_t(fill[std::size_t(F(t, c))]++)] = int(t);
+  tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index t) {
+    for (int c = 0; c < 3; ++c)
+      triangles[std::size_t(next[std::size_t(F(t, c))].fetch_add(1, std::memory_order_relaxed))] =
+          int(t);
+  });
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t v) {
+    std::sort(triangles.begin() + offsets[v], triangles.begin() + offsets[v + 1]);
+  });
 }
 
 std::vector<int> triangles_around(const Mesh& mesh, const VertexTriangles& around,

@@ -10,6 +10,7 @@
 #include <functional>
 
 #include "reconstruction/local/brick_ownership.h"
+#include "reconstruction/carving_internal.h"
 #include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 
@@ -208,7 +209,7 @@ void split_fan_faces(const KeyedTriangles& near, double limit, const ContactProj
   const std::array<int, 3> n = grid.whole_dims();
   const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
   const VertexKeyBases bases = vertex_key_bases(n);
-  const PointMatrix normals = vertex_normals(sub.mesh);
+  const PointMatrix normals = vertex_normals(sub.mesh, VertexTriangles(sub.mesh));
   auto split = [&](int x, int y) {
     const VertexKey &kx = sub.keys[std::size_t(x)], &ky = sub.keys[std::size_t(y)];
     if (kx[1] != 0 || ky[1] != 0 || kx[0] >= bases.segments || ky[0] >= bases.segments)

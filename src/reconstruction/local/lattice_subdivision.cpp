@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "pipeline/uninitialised_allocator.h"
+#include "reconstruction/carving_internal.h"
 #include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 
@@ -364,7 +365,7 @@ void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const ContactProjector& projector, const LocalBrickOptions& options,
                          SubdividedMesh& sub, PointMatrix& reconstructed,
                          std::vector<char>& corners) {
-  const PointMatrix normals = vertex_normals(sub.mesh);
+  const PointMatrix normals = vertex_normals(sub.mesh, VertexTriangles(sub.mesh));
   auto split = [&](int x, int y) { return chord_sags(sub, normals, x, y, limit); };
   SplitMesh split_mesh = split_curved_edges(near, sub, levels, split);
   PointMatrix start(split_mesh.sub.mesh.vertices.rows(), 3);
