@@ -15,6 +15,7 @@
 #include <functional>
 #include <string>
 
+#include "input/parallel_select.h"
 #include "pipeline/float_bounds.h"
 #include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
@@ -78,10 +79,9 @@ TriangleCells bucketed_by_cube(const Unwritten<Box>& boxes) {
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
     extents[t] = (boxes[t].high() - boxes[t].low()).maxCoeff();
   });
-  auto middle = extents.begin() + long(count / 2);
-  std::nth_element(extents.begin(), middle, extents.end());
+  const double middle = detail::kth_smallest(extents, count / 2);
   const Eigen::Vector3d extent = all.high() - all.low();
-  double cell = std::max(2 * *middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
+  double cell = std::max(2 * middle, 1e-12 * std::max(extent.maxCoeff(), 1e-300));
   // The triangles may not sit in too many cubes in all (a few huge ones would): coarser cubes
   // only cost more tests. (Sums of whole numbers: the same in any order.)
   auto entries = [&] {
