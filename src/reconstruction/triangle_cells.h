@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "pipeline/uninitialised_allocator.h"
+
 namespace sdfcontour::detail {
 
 /// Cubes of side `cell` from `origin`, `n` of them per axis.
@@ -102,7 +104,8 @@ class TriangleCells {
   CellGrid grid_;
   std::vector<std::array<int, 3>> lowest_;  // per box: its range's lowest cube
   std::vector<std::size_t> column_start_;   // per column i n[1] + j, then the end
-  std::vector<Entry> entries_;              // per column, sorted
+  // (Left unwritten when sized: placed in parallel.)
+  std::vector<Entry, UninitialisedAllocator<Entry>> entries_;  // per column, sorted
 };
 
 }  // namespace sdfcontour::detail

@@ -80,13 +80,19 @@ std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
 
 // Points made once per triangle that holds them, merged by name: the distinct keys ascending, per
 // key its first point, and per point its vertex.
+// Left unwritten when sized: the parallel loops that fill these fault their pages in (zeroed
+// first, millions of entries at 256^3 were zeroed on one thread).
+template <class T>
+using Unwritten = std::vector<T, UninitialisedAllocator<T>>;
+using KeyedIndices = Unwritten<std::pair<VertexKey, std::size_t>>;
+
 struct KeyOrder {
   std::vector<VertexKey> keys;
-  std::vector<std::size_t> first_of;
-  std::vector<int> id;
+  Unwritten<std::size_t> first_of;
+  Unwritten<int> id;
 };
 
-KeyOrder order_by_key(std::vector<std::pair<VertexKey, std::size_t>> order) {
+KeyOrder order_by_key(KeyedIndices order) {
   tbb::parallel_sort(order.begin(), order.end());
   // Each distinct key's rank, counted in blocks of the sorted list (in parallel), then the blocks'
   // counts summed in order.
@@ -124,7 +130,7 @@ std::optional<SubdividedMesh> unsubdivided(const KeyedTriangles& in) {
   for (Eigen::Index t = 0; t < in.triangles.rows(); ++t)
     for (int c = 0; c < 3; ++c) is_used[std::size_t(in.triangles(t, c))] = 1;
   std::vector<int> used;
-  std::vector<std::pair<VertexKey, std::size_t>> order;
+  KeyedIndices order;
   for (std::size_t v = 0; v < count; ++v)
     if (is_used[v]) {
       order.push_back({{in.vertex_key[v], 0}, used.size()});
@@ -170,11 +176,11 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
     for (int u = 0, i = 0; u <= n; ++u)
       for (int v = 0; u + v <= n; ++v, ++i) out[i] = lattice_point(in, t, u, v, n);
   });
-  std::vector<std::pair<VertexKey, std::size_t>> order(all.size());
+  KeyedIndices order(all.size());
   tbb::parallel_for(std::size_t(0), all.size(), [&](std::size_t i) { order[i] = {all[i].key, i}; });
   KeyOrder named = order_by_key(std::move(order));
-  const std::vector<std::size_t>& first_of = named.first_of;
-  const std::vector<int>& id = named.id;
+  const Unwritten<std::size_t>& first_of = named.first_of;
+  const Unwritten<int>& id = named.id;
   SubdividedMesh out;
   out.keys = std::move(named.keys);
   out.mesh.vertices.resize(Eigen::Index(first_of.size()), 3);
@@ -294,14 +300,14 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
   });
   // Every vertex, old and new, named; new points shared by two triangles are made twice alike.
   const std::size_t old = std::size_t(fine.mesh.vertices.rows());
-  std::vector<std::pair<VertexKey, std::size_t>> order(old + points.size());
+  KeyedIndices order(old + points.size());
   tbb::parallel_for(std::size_t(0), old, [&](std::size_t v) { order[v] = {fine.keys[v], v}; });
   tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t q) {
     order[old + q] = {points[q].key, old + q};
   });
   KeyOrder named = order_by_key(std::move(order));
-  const std::vector<std::size_t>& first_of = named.first_of;
-  const std::vector<int>& id = named.id;
+  const Unwritten<std::size_t>& first_of = named.first_of;
+  const Unwritten<int>& id = named.id;
   SplitMesh out;
   out.sub.keys = std::move(named.keys);
   const std::size_t count = first_of.size();
@@ -370,11 +376,11 @@ void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
   SplitMesh split_mesh = split_curved_edges(near, sub, levels, split);
   PointMatrix start(split_mesh.sub.mesh.vertices.rows(), 3);
   std::vector<char> stay(split_mesh.source.size(), 0);
-  for (std::size_t v = 0; v < stay.size(); ++v) {
+  tbb::parallel_for(std::size_t(0), stay.size(), [&](std::size_t v) {
     const auto [x, y] = split_mesh.source[v];
     start.row(Eigen::Index(v)) = 0.5 * (reconstructed.row(x) + reconstructed.row(y));
     stay[v] = x == y || (options.keep_features && split_mesh.sub.on_feature[v]);
-  }
+  });
   sub = std::move(split_mesh.sub);
   reconstructed = std::move(start);
   corners = shared_corners(sub);
