@@ -26,7 +26,7 @@ void validate(const PointMatrix& points, const PointMatrix& normals, double spac
     throw Error("projection: " + std::to_string(points.rows()) + " points but " +
                 std::to_string(normals.rows()) + " normals");
   if (!points.allFinite() || !normals.allFinite())
-    throw Error("projection: the points, normals and mesh must be finite");
+    throw Error("projection: the points and normals must be finite");
   if (!(spacing > 0) || !std::isfinite(spacing))
     throw Error("projection: the spacing must be positive and finite");
   if (!(o.radius > 0) || !std::isfinite(o.radius) || !(o.max_move >= 0) ||
@@ -326,8 +326,7 @@ ContactProjector::ContactProjector(const PointMatrix& points, const PointMatrix&
 ContactProjector::~ContactProjector() = default;
 
 ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed) const {
-  if (!mesh.vertices.allFinite())
-    throw Error("projection: the points, normals and mesh must be finite");
+  if (!mesh.vertices.allFinite()) throw Error("projection: the mesh's vertices must be finite");
   if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
     throw Error("projection: one fixed flag per vertex is needed");
   const PointMatrix& points = points_;
