@@ -90,6 +90,12 @@ TEST(TriangleCells, CoarserCubesWhereTooManyColumns) {
   EXPECT_EQ(grid.index(-5, 0), 0);
   EXPECT_EQ(grid.index(5, 0), 62);
   EXPECT_EQ(grid.index(std::nan(""), 1), 0);
+  // No finite length: one cube, which every box and query reads.
+  const CellGrid whole =
+      CellGrid::over(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, INFINITY, 1), 0.1, 1e4);
+  EXPECT_EQ(whole.n, (std::array<int, 3>{1, 1, 1}));
+  EXPECT_EQ(whole.index(1e300, 0), 0);
+  EXPECT_EQ(CellGrid::over(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 0.0, 1e4).n[2], 1);
 }
 
 TEST(TriangleCells, TheSameListsForAnyThreadCount) {

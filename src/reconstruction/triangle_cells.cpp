@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 
 namespace sdfcontour::detail {
 
@@ -13,6 +14,12 @@ CellGrid CellGrid::over(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, do
   g.origin = lo;
   g.cell = cell;
   const Eigen::Vector3d extent = (hi - lo).cwiseMax(0.0);
+  // (One cube where the extent or the cube is no finite length: every query reads it all.)
+  if (!extent.allFinite() || !lo.allFinite() || !(cell > 0) || !std::isfinite(cell)) {
+    g.origin = lo.allFinite() ? lo : Eigen::Vector3d::Zero();
+    g.cell = INFINITY;
+    return g;
+  }
   for (;; g.cell *= 2) {
     const Eigen::Vector3d count = (extent / g.cell).array().floor() + 1;
     if (count.maxCoeff() < 0x1p30 && count[0] * count[1] <= most_columns) {

@@ -24,7 +24,7 @@ struct CellGrid {
 
   /// The grid over [lo, hi] with cubes of side `cell` or, where that would make more than
   /// `most_columns` columns (i, j) or 2^30 cubes along an axis, the least power of two times it
-  /// that does not.
+  /// that does not; one cube of infinite side where the box or `cell` is not finite.
   static CellGrid over(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double cell,
                        double most_columns);
 
