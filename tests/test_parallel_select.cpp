@@ -44,6 +44,20 @@ TEST(ParallelSelect, AgreesWithNthElementOverRuns) {
   EXPECT_EQ(detail::kth_smallest(all, all.size() / 2), detail::kth_smallest(view, all.size() / 2));
 }
 
+TEST(ParallelSelect, FewValuesAsManyValues) {
+  // Below and above the count where the radix passes begin (65,536 values).
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0, 1);
+  for (std::size_t n : {std::size_t(5), std::size_t(65536), std::size_t(65537)}) {
+    std::vector<double> v(n);
+    for (double& x : v) x = normal(rng);
+    std::vector<double> sorted = v;
+    std::sort(sorted.begin(), sorted.end());
+    for (std::size_t k : {std::size_t(0), n / 3, n - 1})
+      EXPECT_EQ(detail::kth_smallest(v, k), sorted[k]) << n << " values, rank " << k;
+  }
+}
+
 TEST(ParallelSelect, ARankBeyondTheValuesIsABug) {
   const std::vector<double> v{1, 2, 3};
   EXPECT_THROW(detail::kth_smallest(v, 3), InternalError);

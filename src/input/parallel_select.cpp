@@ -3,6 +3,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 
@@ -42,6 +43,13 @@ double kth_smallest(const std::vector<ValueRun>& runs, std::size_t k) {
       chunks.push_back({r.data + at, std::min(kChunk, r.size - at)});
   }
   if (k >= total) throw InternalError("kth_smallest: a rank beyond the values");
+  if (total <= kChunk) {  // (few values: one copy and a selection cost less than the passes)
+    std::vector<double> all;
+    all.reserve(total);
+    for (const ValueRun& r : runs) all.insert(all.end(), r.data, r.data + r.size);
+    std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(k), all.end());
+    return all[k];
+  }
   std::uint64_t prefix = 0;  // the selected value's bits above `shift + kDigit`
   for (int shift = 64 - kDigit; shift >= 0; shift -= kDigit) {
     const std::uint64_t fixed = shift + kDigit >= 64 ? 0 : ~std::uint64_t(0) << (shift + kDigit);
