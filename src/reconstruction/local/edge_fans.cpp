@@ -9,8 +9,8 @@
 #include <cmath>
 #include <functional>
 
-#include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/carving_internal.h"
+#include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
 
