@@ -113,3 +113,43 @@ TEST(TriangleCells, TheSameListsForAnyThreadCount) {
   EXPECT_EQ(one.size(), ranges.size());
   EXPECT_EQ(one, visits(2));
 }
+
+TEST(TriangleCells, FarApartPartsKeepOnlyTheirColumns) {
+  // Two clusters of small boxes 10^6 cubes apart along x and y: 10^12 columns, of which the boxes
+  // occupy a few hundred; queries and pairs as over a dense grid.
+  const CellGrid grid =
+      CellGrid::over(Eigen::Vector3d::Zero(), Eigen::Vector3d(1e6, 1e6, 1), 1.0, INFINITY);
+  ASSERT_GT(double(grid.n[0]) * grid.n[1], 1e12);
+  std::mt19937 rng(13);
+  std::uniform_int_distribution<int> near(0, 9), size(0, 1);
+  std::vector<TriangleCells::Range> ranges;
+  for (int b = 0; b < 400; ++b) {
+    const int base = b % 2 ? 999990 : 0;
+    TriangleCells::Range r;
+    for (std::size_t d = 0; d < 3; ++d) {
+      r.lo[d] = d == 2 ? near(rng) % 2 : base + near(rng);
+      r.hi[d] = std::min(r.lo[d] + size(rng), grid.n[d] - 1);
+    }
+    ranges.push_back(r);
+  }
+  const TriangleCells cells(grid, ranges);
+  std::size_t pairs = 0, expected = 0;
+  std::mutex lock;
+  cells.for_each_pair([&](int a, int b) {
+    const std::lock_guard<std::mutex> hold(lock);
+    EXPECT_TRUE(overlap(ranges[std::size_t(a)], ranges[std::size_t(b)]));
+    ++pairs;
+  });
+  for (std::size_t a = 0; a < ranges.size(); ++a)
+    for (std::size_t b = a + 1; b < ranges.size(); ++b) expected += overlap(ranges[a], ranges[b]);
+  EXPECT_EQ(pairs, expected);
+  for (const TriangleCells::Range& q :
+       {TriangleCells::Range{{0, 0, 0}, {5, 5, 1}},
+        TriangleCells::Range{{999995, 999992, 0}, {999999, 999999, 0}},
+        TriangleCells::Range{{500000, 0, 0}, {500001, 1, 1}}}) {
+    std::map<int, int> seen;
+    cells.for_each_in(q, [&](int b) { ++seen[b]; });
+    for (int b = 0; b < int(ranges.size()); ++b)
+      EXPECT_EQ(seen.count(b) ? seen[b] : 0, overlap(ranges[std::size_t(b)], q) ? 1 : 0);
+  }
+}

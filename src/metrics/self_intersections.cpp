@@ -95,8 +95,8 @@ TriangleCells bucketed_by_cube(const Unwritten<Box>& boxes) {
         std::plus<double>());
   };
   while (entries() > 64.0 * double(count) + 1e6) cell *= 2;
-  const CellGrid grid =
-      CellGrid::over(all.low(), all.high(), cell, std::max(double(1 << 22), 4.0 * double(count)));
+  // (Any number of columns: far-apart parts keep only their occupied ones.)
+  const CellGrid grid = CellGrid::over(all.low(), all.high(), cell, INFINITY);
   std::vector<TriangleCells::Range> ranges(count);
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t t) {
     ranges[t] = {grid.cube_of(boxes[t].low()), grid.cube_of(boxes[t].high())};

@@ -41,6 +41,8 @@ struct CellGrid {
 /// Boxes 0..count-1 listed in every cube of a CellGrid that they meet (given as ranges of cubes),
 /// in columns (i, j) of entries sorted by (k, box). A query visits each box once: at the lowest
 /// cube of its range within the cubes read (the maximum of the two ranges' lowest corners).
+/// Where the grid has many more columns than boxes (parts far apart), only the occupied columns
+/// are kept, found by a binary search.
 class TriangleCells {
  public:
   struct Range {
@@ -60,10 +62,11 @@ class TriangleCells {
   void for_each_in(const Range& r, F&& f) const {
     for (int i = r.lo[0]; i <= r.hi[0]; ++i)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
-        const std::size_t column = std::size_t(i) * std::size_t(grid_.n[1]) + std::size_t(j);
-        const auto last = entries_.begin() + std::ptrdiff_t(column_start_[column + 1]);
-        auto it = std::lower_bound(entries_.begin() + std::ptrdiff_t(column_start_[column]), last,
-                                   Entry{r.lo[2], -1});
+        const auto [from, to] =
+            column_entries(std::size_t(i) * std::size_t(grid_.n[1]) + std::size_t(j));
+        const auto last = entries_.begin() + std::ptrdiff_t(to);
+        auto it =
+            std::lower_bound(entries_.begin() + std::ptrdiff_t(from), last, Entry{r.lo[2], -1});
         for (; it != last && it->first <= r.hi[2]; ++it) {
           const std::array<int, 3>& first = lowest_[std::size_t(it->second)];
           if (std::max(first[0], r.lo[0]) == i && std::max(first[1], r.lo[1]) == j &&
@@ -77,12 +80,13 @@ class TriangleCells {
   /// cube they share), in parallel: cube by cube, with no search for the cubes.
   template <class F>
   void for_each_pair(F&& f) const {
-    const std::size_t columns = column_start_.size() - 1;
-    tbb::parallel_for(std::size_t(0), columns, [&](std::size_t column) {
+    const std::size_t slots = column_start_.size() - 1;
+    tbb::parallel_for(std::size_t(0), slots, [&](std::size_t slot) {
+      const std::size_t column = sparse_ ? occupied_[slot] : slot;
       const int i = int(column / std::size_t(grid_.n[1])),
                 j = int(column % std::size_t(grid_.n[1]));
-      const std::size_t last = column_start_[column + 1];
-      for (std::size_t start = column_start_[column], end; start < last; start = end) {
+      const std::size_t last = column_start_[slot + 1];
+      for (std::size_t start = column_start_[slot], end; start < last; start = end) {
         const int k = entries_[start].first;
         for (end = start + 1; end < last && entries_[end].first == k;) ++end;
         for (std::size_t a = start; a < end; ++a) {
@@ -101,9 +105,24 @@ class TriangleCells {
  private:
   using Entry = std::pair<int, int>;  // (k, box)
 
+  // The entries [from, to) of column i n[1] + j.
+  std::pair<std::size_t, std::size_t> column_entries(std::size_t column) const {
+    std::size_t slot = column;
+    if (sparse_) {
+      const auto at = std::lower_bound(occupied_.begin(), occupied_.end(), column);
+      if (at == occupied_.end() || *at != column) return {0, 0};
+      slot = std::size_t(at - occupied_.begin());
+    }
+    return {column_start_[slot], column_start_[slot + 1]};
+  }
+  void place_dense(const std::vector<Range>& ranges);
+  void place_sparse(const std::vector<Range>& ranges);
+
   CellGrid grid_;
   std::vector<std::array<int, 3>> lowest_;  // per box: its range's lowest cube
-  std::vector<std::size_t> column_start_;   // per column i n[1] + j, then the end
+  bool sparse_ = false;
+  std::vector<std::size_t> occupied_;      // sparse: the occupied columns, ascending
+  std::vector<std::size_t> column_start_;  // per column (sparse: occupied column), then the end
   // (Left unwritten when sized: placed in parallel.)
   std::vector<Entry, UninitialisedAllocator<Entry>> entries_;  // per column, sorted
 };
