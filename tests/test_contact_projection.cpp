@@ -286,7 +286,8 @@ TEST(ContactProjection, AProjectorMadeOnceProjectsAsTheCallEachTime) {
       EXPECT_EQ(b.vertices.row(Eigen::Index(v)), coarse.vertices.row(Eigen::Index(v)));
     }
   }
-  EXPECT_THROW(ContactProjector(P, N.topRows(5), {}, h, o), Error);
+  const PointMatrix fewer = N.topRows(5);
+  EXPECT_THROW(ContactProjector(P, fewer, {}, h, o), Error);
   const std::vector<char> short_flags(3, 0);
   EXPECT_THROW(projector.project(a, &short_flags), Error);
 }

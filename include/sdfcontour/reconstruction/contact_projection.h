@@ -113,14 +113,18 @@ ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& 
                                                  const std::vector<char>* fixed = nullptr);
 
 /// project_to_contact_points with the points indexed once, for several meshes (or a mesh again
-/// after a split adds vertices): the same results, without indexing the points again. The points,
-/// normals and depths are read by project() and must outlive it, unchanged. Throws as that
-/// function does, when made.
+/// after a split adds vertices): the same results, without indexing the points again. The points
+/// and normals are read by project() and must outlive the projector, unchanged (temporaries are
+/// refused); the depths are copied. Throws as that function does, when made.
 class ContactProjector {
  public:
   ContactProjector(const PointMatrix& points, const PointMatrix& normals,
                    const Eigen::VectorXd& depths, double spacing,
                    const ContactProjectionOptions& options = {});
+  ContactProjector(PointMatrix&&, const PointMatrix&, const Eigen::VectorXd&, double,
+                   const ContactProjectionOptions& = {}) = delete;
+  ContactProjector(const PointMatrix&, PointMatrix&&, const Eigen::VectorXd&, double,
+                   const ContactProjectionOptions& = {}) = delete;
   ~ContactProjector();
   ContactProjector(const ContactProjector&) = delete;
   ContactProjector& operator=(const ContactProjector&) = delete;
@@ -131,7 +135,7 @@ class ContactProjector {
  private:
   const PointMatrix& points_;
   const PointMatrix& normals_;
-  const Eigen::VectorXd& depths_;
+  Eigen::VectorXd depths_;
   double spacing_;
   ContactProjectionOptions options_;
   std::unique_ptr<detail::PointCubes> cubes_;  // null without points
