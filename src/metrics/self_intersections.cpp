@@ -57,8 +57,7 @@ struct Box {
   Eigen::Vector3d high() const { return hi.cast<double>(); }
 };
 
-template <class T>
-using Unwritten = std::vector<T, detail::UninitialisedAllocator<T>>;
+using detail::Unwritten;
 
 // The triangles listed per cube that their boxes (`boxes`) meet. The cubes are about twice a
 // typical triangle's extent, so most triangles sit in one to eight of them.

@@ -4,6 +4,7 @@
 #include <memory>
 #include <new>
 #include <utility>
+#include <vector>
 
 namespace sdfcontour::detail {
 
@@ -27,5 +28,9 @@ struct UninitialisedAllocator : std::allocator<T> {
     ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
 };
+
+/// A vector whose size is set before a parallel loop fills it.
+template <class T>
+using Unwritten = std::vector<T, UninitialisedAllocator<T>>;
 
 }  // namespace sdfcontour::detail

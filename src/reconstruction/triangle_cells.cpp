@@ -103,7 +103,7 @@ void TriangleCells::place_sparse(const std::vector<Range>& ranges) {
                      std::size_t(r.hi[2] - r.lo[2] + 1);
   });
   for (std::size_t b = 0; b < ranges.size(); ++b) offsets[b + 1] += offsets[b];
-  std::vector<Keyed, UninitialisedAllocator<Keyed>> keyed(offsets.back());
+  Unwritten<Keyed> keyed(offsets.back());
   tbb::parallel_for(std::size_t(0), ranges.size(), [&](std::size_t b) {
     std::size_t at = offsets[b];
     const Range& r = ranges[b];

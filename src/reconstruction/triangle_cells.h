@@ -124,7 +124,7 @@ class TriangleCells {
   std::vector<std::size_t> occupied_;      // sparse: the occupied columns, ascending
   std::vector<std::size_t> column_start_;  // per column (sparse: occupied column), then the end
   // (Left unwritten when sized: placed in parallel.)
-  std::vector<Entry, UninitialisedAllocator<Entry>> entries_;  // per column, sorted
+  Unwritten<Entry> entries_;  // per column, sorted
 };
 
 }  // namespace sdfcontour::detail

@@ -82,8 +82,6 @@ std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
 // key its first point, and per point its vertex.
 // Left unwritten when sized: the parallel loops that fill these fault their pages in (zeroed
 // first, millions of entries at 256^3 were zeroed on one thread).
-template <class T>
-using Unwritten = std::vector<T, UninitialisedAllocator<T>>;
 using KeyedIndices = Unwritten<std::pair<VertexKey, std::size_t>>;
 
 struct KeyOrder {
@@ -169,8 +167,7 @@ SubdividedMesh lattice_subdivision(const KeyedTriangles& in, int levels) {
   const Eigen::Index f = in.triangles.rows();
   // Lattice point (u, v): u steps towards the triangle's 2nd vertex, v towards its 3rd.
   const int points = (n + 1) * (n + 2) / 2;
-  std::vector<KeyedPosition, UninitialisedAllocator<KeyedPosition>> all(std::size_t(f) *
-                                                                        std::size_t(points));
+  Unwritten<KeyedPosition> all(std::size_t(f) * std::size_t(points));
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
     KeyedPosition* out = all.data() + std::size_t(t) * std::size_t(points);
     for (int u = 0, i = 0; u <= n; ++u)

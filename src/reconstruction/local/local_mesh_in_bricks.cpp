@@ -27,8 +27,7 @@ using Index3 = std::array<int, 3>;
 
 // Left unwritten when sized: the parallel copy into it faults its pages in (zeroed first, a
 // brick's block of 308^3 floats took a fortieth of a second on one thread).
-template <class T>
-using Unwritten = std::vector<T, detail::UninitialisedAllocator<T>>;
+using detail::Unwritten;
 
 // The block of `grid` with global samples [lo, hi), copied out in the grid's own type (`values`
 // keeps them; float32 grids stay float32, half the memory of a brick of doubles).
