@@ -116,8 +116,9 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
   // Per row: its weight after the robust and the turn's divisions; the divisions go first, row
   // by row, apart from the sums (where each waited on the last: most of a fit's time).
   thread_local std::vector<double> turned_buffer;
-  std::vector<double>& turned = turned_buffer;  // (looked up once, not in the loops)
-  turned.resize(fit.size());
+  turned_buffer.resize(fit.size());
+  // (A plain pointer: through the vector, each row's store reloaded it from thread storage.)
+  double* const turned = turned_buffer.data();
   const double inv_robust_scale = 1 / o.robust_scale;
   for (int round = 0; round <= o.robust_rounds; ++round) {
     // (One division a row: the robust and the turn's divisors multiplied.)
@@ -367,17 +368,12 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
     std::vector<int>& near = near_buffer;
     std::vector<FitRow>& fit = fit_buffer;
     auto gather = [&](double r, long reach) {
-      near.clear();
-      cubes.for_each_near(
-          p,
-          [&](int i) {
-            if ((points.row(i).transpose() - p).squaredNorm() <= r * r) near.push_back(i);
-          },
-          reach);
-      std::sort(near.begin(), near.end());
+      const int count = cubes.collect_within(points, p, r * r, reach, near);
+      std::sort(near.begin(), near.begin() + count);
       const double inv_two_sigma2 = 4.0 / (r * r);
       fit.clear();
-      for (const int i : near) {
+      for (int e = 0; e < count; ++e) {
+        const int i = near[std::size_t(e)];
         const Eigen::Vector3d d = points.row(i).transpose() - p;
         if (normals.row(i).dot(n.transpose()) <= o.normal_agreement) continue;
         const double xa = d.dot(a), ya = d.dot(b);

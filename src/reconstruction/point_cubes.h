@@ -67,6 +67,39 @@ class PointCubes {
       }
   }
 
+  // The points of P (the rows these cubes were built from) within squared distance r2 of p, among
+  // for_each_near's cubes, written to buffer[0, count) in cube order; returns count and grows
+  // buffer as needed. Branch-free per candidate: about half of them are kept, unpredictably.
+  int collect_within(const PointMatrix& P, const Eigen::Vector3d& p, double r2, long reach,
+                     std::vector<int>& buffer) const {
+    const auto c = cube_of(p);
+    const long x0 = std::max(0L, c[0] - reach), x1 = std::min(size_[0] - 1, c[0] + reach);
+    int count = 0;
+    for (long k = std::max(0L, c[2] - reach); k <= std::min(size_[2] - 1, c[2] + reach); ++k)
+      for (long j = std::max(0L, c[1] - reach); j <= std::min(size_[1] - 1, c[1] + reach); ++j) {
+        auto first = keyed_.begin(), last = keyed_.end();
+        if (!row_start_.empty()) {
+          const std::size_t row = std::size_t(k * size_[1] + j);
+          first += row_start_[row];
+          last = keyed_.begin() + row_start_[row + 1];
+        }
+        const auto from = std::lower_bound(first, last, std::pair<long, int>{key(x0, j, k), -1});
+        const auto to = std::lower_bound(from, last, std::pair<long, int>{key(x1 + 1, j, k), -1});
+        const std::size_t need = std::size_t(count) + std::size_t(to - from);
+        if (buffer.size() < need) buffer.resize(std::max(need, 2 * buffer.size()));
+        int* out = buffer.data();
+        const double* rows = P.data();
+        for (auto it = from; it != to; ++it) {
+          const int i = it->second;
+          const double dx = rows[3 * i] - p[0], dy = rows[3 * i + 1] - p[1],
+                       dz = rows[3 * i + 2] - p[2];
+          out[count] = i;
+          count += (dx * dx + dy * dy) + dz * dz <= r2;
+        }
+      }
+    return count;
+  }
+
  private:
   std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
     std::array<long, 3> c;
