@@ -14,6 +14,7 @@
 
 #include "contact_points/lattice_sample_point.h"
 #include "contact_points/lattice_spheres.h"
+#include "pipeline/uninitialised_allocator.h"
 
 namespace sdfcontour {
 namespace {
@@ -56,34 +57,43 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
   // First where each sample's gradient puts its point, as its box; then the whole band, sorted by
   // box, gathers the spheres that meet each box once for all the points there.
   constexpr Eigen::Index kPiece = 16384;
-  std::vector<Outcome> outcome(std::size_t(n), Outcome::Skipped);
-  std::vector<std::pair<std::uint64_t, int>> order;
+  const std::size_t pieces_count = std::size_t((n + kPiece - 1) / kPiece);
+  detail::Unwritten<Outcome> outcome(static_cast<std::size_t>(n));
+  // (A struct, not a std::pair, whose constructor would zero the list on one thread.)
+  struct BoxSample {
+    std::uint64_t box;
+    int sample;
+    bool operator<(const BoxSample& o) const {
+      return box < o.box || (box == o.box && sample < o.sample);
+    }
+  };
+  detail::Unwritten<BoxSample> order;
   {
-    std::vector<std::vector<std::pair<std::uint64_t, int>>> pieces(
-        std::size_t((n + kPiece - 1) / kPiece));
+    std::vector<std::vector<BoxSample>> pieces(pieces_count);
     tbb::parallel_for(std::size_t(0), pieces.size(), [&](std::size_t q) {
       const Eigen::Index begin = Eigen::Index(q) * kPiece, end = std::min(n, begin + kPiece);
       for (Eigen::Index i = begin; i < end; ++i) {
+        outcome[std::size_t(i)] = Outcome::Skipped;
         if (!band.core[std::size_t(i)] || (only && !(*only)[std::size_t(i)])) continue;
         SamplePoint sample(lattice, options, long(i));
         if (sample.prepare())
-          pieces[q].emplace_back(box_key(sample.start()), int(i));
+          pieces[q].push_back({box_key(sample.start()), int(i)});
         else
           outcome[std::size_t(i)] = Outcome::ZeroGradient;
       }
     });
-    std::size_t total = 0;
-    for (const auto& piece : pieces) total += piece.size();
-    order.reserve(total);
-    for (auto& piece : pieces) {
-      order.insert(order.end(), piece.begin(), piece.end());
-      piece = {};
-    }
+    std::vector<std::size_t> at(pieces.size() + 1, 0);
+    for (std::size_t q = 0; q < pieces.size(); ++q) at[q + 1] = at[q] + pieces[q].size();
+    order.resize(at.back());
+    tbb::parallel_for(std::size_t(0), pieces.size(), [&](std::size_t q) {
+      std::copy(pieces[q].begin(), pieces[q].end(), order.begin() + std::ptrdiff_t(at[q]));
+      pieces[q] = {};
+    });
   }
   tbb::parallel_sort(order.begin(), order.end());
   std::vector<std::size_t> boxes;  // where each box's samples start in `order`, then the end
   for (std::size_t a = 0; a < order.size(); ++a)
-    if (a == 0 || order[a].first != order[a - 1].first) boxes.push_back(a);
+    if (a == 0 || order[a].box != order[a - 1].box) boxes.push_back(a);
   boxes.push_back(order.size());
   // Runs of whole boxes of about kPiece samples, each with its kept points and their samples
   // (a point and normal per band sample were 0.3 GB of a 1024^3 grid's bricks), joined in band
@@ -102,7 +112,7 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
     for (std::size_t box = runs[run]; box < runs[run + 1]; ++box) {
       samples.clear();
       for (std::size_t a = boxes[box]; a < boxes[box + 1]; ++a) {
-        samples.emplace_back(lattice, options, long(order[a].second));
+        samples.emplace_back(lattice, options, long(order[a].sample));
         samples.back().prepare();
       }
       Eigen::Vector3d lo = samples.front().start(), hi = lo;
@@ -123,18 +133,39 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
     }
   });
   order = {};
+  // Each kept sample's row, in band order: counted per piece, then numbered (in parallel).
   ContactPoints result;
-  std::vector<int> row(std::size_t(n), -1);
-  for (Eigen::Index i = 0; i < n; ++i) {
+  auto kept = [&](Eigen::Index i) {
     const Outcome out = outcome[std::size_t(i)];
-    result.zero_gradient += out == Outcome::ZeroGradient;
-    result.discarded += out == Outcome::Discarded;
-    result.rescued += out == Outcome::Rescued;
-    if (out == Outcome::Kept || out == Outcome::Rescued) {
-      row[std::size_t(i)] = int(result.samples.size());
-      result.samples.push_back(int(i));
+    return out == Outcome::Kept || out == Outcome::Rescued;
+  };
+  std::vector<std::array<long, 4>> counts(pieces_count + 1, {0, 0, 0, 0});
+  tbb::parallel_for(std::size_t(0), pieces_count, [&](std::size_t q) {
+    const Eigen::Index begin = Eigen::Index(q) * kPiece, end = std::min(n, begin + kPiece);
+    std::array<long, 4>& c = counts[q + 1];
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const Outcome out = outcome[std::size_t(i)];
+      c[0] += kept(i);
+      c[1] += out == Outcome::ZeroGradient;
+      c[2] += out == Outcome::Discarded;
+      c[3] += out == Outcome::Rescued;
     }
-  }
+  });
+  for (std::size_t q = 0; q < pieces_count; ++q)
+    for (std::size_t k = 0; k < 4; ++k) counts[q + 1][k] += counts[q][k];
+  result.zero_gradient = int(counts.back()[1]);
+  result.discarded = int(counts.back()[2]);
+  result.rescued = int(counts.back()[3]);
+  result.samples.resize(std::size_t(counts.back()[0]));
+  detail::Unwritten<int> row(static_cast<std::size_t>(n));
+  tbb::parallel_for(std::size_t(0), pieces_count, [&](std::size_t q) {
+    const Eigen::Index begin = Eigen::Index(q) * kPiece, end = std::min(n, begin + kPiece);
+    long next = counts[q][0];
+    for (Eigen::Index i = begin; i < end; ++i) {
+      row[std::size_t(i)] = kept(i) ? int(next) : -1;
+      if (kept(i)) result.samples[std::size_t(next++)] = int(i);
+    }
+  });
   result.points.resize(Eigen::Index(result.samples.size()), 3);
   result.normals.resize(Eigen::Index(result.samples.size()), 3);
   tbb::parallel_for(std::size_t(0), found.size(), [&](std::size_t run) {

@@ -57,6 +57,13 @@ struct Box {
   Eigen::Vector3d high() const { return hi.cast<double>(); }
 };
 
+}  // namespace
+
+template <>
+struct detail::LeftUnwritten<Box> : std::true_type {};  // (Eigen's vectors write nothing)
+
+namespace {
+
 using detail::Unwritten;
 
 // The triangles listed per cube that their boxes (`boxes`) meet. The cubes are about twice a

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
 #include "reconstruction/carving_internal.h"
 #include "reconstruction/mesh_geometry.h"
@@ -270,8 +271,8 @@ bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
 // `fixed`): a split's second projection moves a fifth of them.
 struct EdgeMoments {
   std::vector<int> slot;  // per vertex: its place in sum and triangles, -1 where fixed
-  std::vector<Eigen::Matrix3d> sum;
-  std::vector<int> triangles;
+  detail::Unwritten<Eigen::Matrix3d> sum;
+  detail::Unwritten<int> triangles;
 };
 EdgeMoments edge_moments(const Mesh& mesh, const detail::VertexTriangles& around, double spacing,
                          const std::vector<char>* fixed) {
@@ -279,12 +280,13 @@ EdgeMoments edge_moments(const Mesh& mesh, const detail::VertexTriangles& around
   m.slot.resize(std::size_t(mesh.vertices.rows()));
   int moving = 0;
   for (std::size_t v = 0; v < m.slot.size(); ++v) m.slot[v] = fixed && (*fixed)[v] ? -1 : moving++;
-  m.sum.assign(std::size_t(moving), Eigen::Matrix3d::Zero());
-  m.triangles.assign(std::size_t(moving), 0);
+  m.sum.resize(std::size_t(moving));
+  m.triangles.resize(std::size_t(moving));
   // Each vertex sums its triangles in ascending order (the same bits as a sweep over them).
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     const int s = m.slot[std::size_t(v)];
     if (s < 0) return;
+    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
     for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
       const int t = around.triangles[std::size_t(o)];
       Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
@@ -295,9 +297,11 @@ EdgeMoments edge_moments(const Mesh& mesh, const detail::VertexTriangles& around
                                   spacing;
         e2 += e * e.transpose();
       }
-      m.sum[std::size_t(s)] += e2;
-      ++m.triangles[std::size_t(s)];
+      sum += e2;
     }
+    m.sum[std::size_t(s)] = sum;
+    m.triangles[std::size_t(s)] =
+        around.offsets[std::size_t(v) + 1] - around.offsets[std::size_t(v)];
   });
   return m;
 }

@@ -67,11 +67,11 @@ class TriangleCells {
         const auto last = entries_.begin() + std::ptrdiff_t(to);
         auto it =
             std::lower_bound(entries_.begin() + std::ptrdiff_t(from), last, Entry{r.lo[2], -1});
-        for (; it != last && it->first <= r.hi[2]; ++it) {
-          const std::array<int, 3>& first = lowest_[std::size_t(it->second)];
+        for (; it != last && it->k <= r.hi[2]; ++it) {
+          const std::array<int, 3>& first = lowest_[std::size_t(it->box)];
           if (std::max(first[0], r.lo[0]) == i && std::max(first[1], r.lo[1]) == j &&
-              std::max(first[2], r.lo[2]) == it->first)
-            f(it->second);
+              std::max(first[2], r.lo[2]) == it->k)
+            f(it->box);
         }
       }
   }
@@ -87,15 +87,15 @@ class TriangleCells {
                 j = int(column % std::size_t(grid_.n[1]));
       const std::size_t last = column_start_[slot + 1];
       for (std::size_t start = column_start_[slot], end; start < last; start = end) {
-        const int k = entries_[start].first;
-        for (end = start + 1; end < last && entries_[end].first == k;) ++end;
+        const int k = entries_[start].k;
+        for (end = start + 1; end < last && entries_[end].k == k;) ++end;
         for (std::size_t a = start; a < end; ++a) {
-          const std::array<int, 3>& la = lowest_[std::size_t(entries_[a].second)];
+          const std::array<int, 3>& la = lowest_[std::size_t(entries_[a].box)];
           for (std::size_t b = a + 1; b < end; ++b) {
-            const std::array<int, 3>& lb = lowest_[std::size_t(entries_[b].second)];
+            const std::array<int, 3>& lb = lowest_[std::size_t(entries_[b].box)];
             if (std::max(la[0], lb[0]) == i && std::max(la[1], lb[1]) == j &&
                 std::max(la[2], lb[2]) == k)
-              f(entries_[a].second, entries_[b].second);
+              f(entries_[a].box, entries_[b].box);
           }
         }
       }
@@ -103,7 +103,11 @@ class TriangleCells {
   }
 
  private:
-  using Entry = std::pair<int, int>;  // (k, box)
+  // (k, box); a struct, not a std::pair, whose constructor would zero the lists serially.
+  struct Entry {
+    int k, box;
+    bool operator<(const Entry& o) const { return k < o.k || (k == o.k && box < o.box); }
+  };
 
   // The entries [from, to) of column i n[1] + j.
   std::pair<std::size_t, std::size_t> column_entries(std::size_t column) const {

@@ -38,6 +38,13 @@ struct KeyedPosition {
   char on_feature;
 };
 
+}  // namespace
+
+template <>
+struct LeftUnwritten<KeyedPosition> : std::true_type {};  // (Eigen's vector writes nothing)
+
+namespace {
+
 // The vertex at j / n of the way from level-0 vertex x to y, named and placed from the end with
 // the smaller key.
 KeyedPosition on_edge(const KeyedTriangles& in, int x, int y, int j, int n) {
@@ -82,7 +89,15 @@ std::vector<std::array<std::array<int, 2>, 3>> child_corners(int n) {
 // key its first point, and per point its vertex.
 // Left unwritten when sized: the parallel loops that fill these fault their pages in (zeroed
 // first, millions of entries at 256^3 were zeroed on one thread).
-using KeyedIndices = Unwritten<std::pair<VertexKey, std::size_t>>;
+// (A struct, not a std::pair: a pair's constructor zeroes it.)
+struct KeyedIndex {
+  VertexKey key;
+  std::size_t index;
+  bool operator<(const KeyedIndex& o) const {
+    return key < o.key || (key == o.key && index < o.index);
+  }
+};
+using KeyedIndices = Unwritten<KeyedIndex>;
 
 struct KeyOrder {
   std::vector<VertexKey> keys;
@@ -95,7 +110,7 @@ KeyOrder order_by_key(KeyedIndices order) {
   // Each distinct key's rank, counted in blocks of the sorted list (in parallel), then the blocks'
   // counts summed in order.
   const std::size_t count = order.size(), block = 1 << 16, blocks = (count + block - 1) / block;
-  auto starts_key = [&](std::size_t i) { return i == 0 || order[i].first != order[i - 1].first; };
+  auto starts_key = [&](std::size_t i) { return i == 0 || order[i].key != order[i - 1].key; };
   std::vector<std::size_t> before(blocks + 1, 0);
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
     for (std::size_t i = b * block; i < std::min(count, (b + 1) * block); ++i)
@@ -110,10 +125,10 @@ KeyOrder order_by_key(KeyedIndices order) {
     std::size_t rank = before[b];
     for (std::size_t i = b * block; i < std::min(count, (b + 1) * block); ++i) {
       if (starts_key(i)) {
-        out.keys[rank] = order[i].first;
-        out.first_of[rank++] = order[i].second;
+        out.keys[rank] = order[i].key;
+        out.first_of[rank++] = order[i].index;
       }
-      out.id[order[i].second] = int(rank) - 1;
+      out.id[order[i].index] = int(rank) - 1;
     }
   });
   return out;
@@ -231,8 +246,9 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
   auto ids = [&](Eigen::Index t, int k, int id[3]) {
     for (int c = 0; c < 3; ++c) id[c] = fine.mesh.triangles(t * children + k, c);
   };
-  std::vector<unsigned char> masks(std::size_t(f) * std::size_t(children), 0);
-  std::vector<std::size_t> first_new(std::size_t(f) + 1, 0), first_piece(std::size_t(f) + 1, 0);
+  Unwritten<unsigned char> masks(std::size_t(f) * std::size_t(children));
+  Unwritten<std::size_t> first_new(std::size_t(f) + 1), first_piece(std::size_t(f) + 1);
+  first_new[0] = first_piece[0] = 0;
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
     std::size_t made = 0;
     for (int k = 0; k < children; ++k) {
@@ -252,8 +268,8 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
     first_new[std::size_t(t) + 1] += first_new[std::size_t(t)];
     first_piece[std::size_t(t) + 1] += first_piece[std::size_t(t)];
   }
-  std::vector<NewPoint> points(first_new.back());
-  std::vector<std::array<int, 3>> pieces(first_piece.back());
+  Unwritten<NewPoint> points(first_new.back());
+  Unwritten<std::array<int, 3>> pieces(first_piece.back());
   tbb::parallel_for(Eigen::Index(0), f, [&](Eigen::Index t) {
     NewPoint* made = points.data() + first_new[std::size_t(t)];
     std::array<int, 3>* out = pieces.data() + first_piece[std::size_t(t)];
