@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "contact_points/lattice_spheres.h"
+#include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
 #include "reconstruction/carving_internal.h"
 
@@ -204,12 +205,21 @@ std::vector<int> carve_triangles(Mesh& mesh, const detail::VertexTriangles& arou
   return set_indices(moved);
 }
 
+// (Filled in parallel, as are the moves: these arrays are a vertex's size, 15-22 MB at 256^3.)
+using Pushes = detail::Unwritten<Push>;
+Pushes no_pushes(Eigen::Index vertices) {
+  Pushes best(static_cast<std::size_t>(vertices));
+  tbb::parallel_for(std::size_t(0), best.size(), [&](std::size_t v) { best[v] = {-1, -1, 0.0}; });
+  return best;
+}
+
 // Per vertex with a push (best[v].vertex >= 0), the move onto its ball's sphere; zero elsewhere.
-PointMatrix pushes_onto_spheres(const PointMatrix& V, const std::vector<Push>& best,
-                                const PointMatrix& points, const Eigen::VectorXd& values) {
-  PointMatrix moves = PointMatrix::Zero(V.rows(), 3);
+PointMatrix pushes_onto_spheres(const PointMatrix& V, const Pushes& best, const PointMatrix& points,
+                                const Eigen::VectorXd& values) {
+  PointMatrix moves(V.rows(), 3);
   tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) {
     const Push& b = best[std::size_t(v)];
+    moves.row(v).setZero();
     if (b.vertex < 0) return;
     const Eigen::Vector3d p = points.row(b.sample).transpose();
     const Eigen::Vector3d from = V.row(v).transpose() - p;
@@ -246,7 +256,7 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
       });
     }
   });
-  std::vector<Push> best(std::size_t(V.rows()), Push{-1, -1, 0.0});
+  Pushes best = no_pushes(V.rows());
   for (const auto& block : found)
     for (const Push& q : block) {
       Push& b = best[std::size_t(q.vertex)];
@@ -262,7 +272,14 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
                                    const Lattice& balls, const std::vector<char>* use,
                                    double spacing) {
   const double inside = kInside * spacing, cell = kBallListBox * spacing;
-  std::vector<std::pair<std::array<long, 3>, int>> keyed(which.size());
+  struct Keyed {  // (not a std::pair, whose constructor would zero the list on one thread)
+    std::array<long, 3> first;
+    int second;
+    bool operator<(const Keyed& o) const {
+      return first < o.first || (first == o.first && second < o.second);
+    }
+  };
+  detail::Unwritten<Keyed> keyed(which.size());
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t q) {
     std::array<long, 3> key;
     for (int a = 0; a < 3; ++a) key[std::size_t(a)] = long(std::floor(V(which[q], a) / cell));
@@ -273,7 +290,7 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
   for (std::size_t q = 0; q < keyed.size(); ++q)
     if (q == 0 || keyed[q].first != keyed[q - 1].first) starts.push_back(q);
   starts.push_back(keyed.size());
-  std::vector<Push> best(std::size_t(V.rows()), Push{-1, -1, 0.0});
+  Pushes best = no_pushes(V.rows());
   const PointMatrix& points = balls.points();
   tbb::parallel_for(std::size_t(0), starts.size() - 1, [&](std::size_t b) {
     thread_local SphereList list;
@@ -316,7 +333,8 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
 void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls,
                                   const std::vector<char>* use, double spacing, int passes,
                                   double max_move, const std::vector<char>* fixed) {
-  const PointMatrix start = V;
+  PointMatrix start(V.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) { start.row(v) = V.row(v); });
   std::vector<int> candidates;
   for (Eigen::Index v = 0; v < V.rows(); ++v)
     if (!fixed || !(*fixed)[std::size_t(v)]) candidates.push_back(int(v));
