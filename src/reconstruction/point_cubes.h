@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "pipeline/uninitialised_allocator.h"
 #include "sdfcontour/types.h"
 
 namespace sdfcontour::detail {
@@ -37,7 +38,7 @@ class PointCubes {
     if (rows <= std::max(long(1) << 20, 4 * long(P.rows()))) {
       row_start_.assign(std::size_t(rows) + 1, int(keyed_.size()));
       for (std::size_t e = keyed_.size(); e-- > 0;)
-        row_start_[std::size_t(keyed_[e].first / size_[0])] = int(e);
+        row_start_[std::size_t(keyed_[e].key / size_[0])] = int(e);
       for (long r = rows - 1; r >= 0; --r)
         row_start_[std::size_t(r)] =
             std::min(row_start_[std::size_t(r)], row_start_[std::size_t(r) + 1]);
@@ -51,20 +52,9 @@ class PointCubes {
   // (2 reach + 1)^3 cubes: the points within reach sides of p).
   template <class F>
   void for_each_near(const Eigen::Vector3d& p, F&& f, long reach = 1) const {
-    const auto c = cube_of(p);
-    const long x0 = std::max(0L, c[0] - reach), x1 = std::min(size_[0] - 1, c[0] + reach);
-    for (long k = std::max(0L, c[2] - reach); k <= std::min(size_[2] - 1, c[2] + reach); ++k)
-      for (long j = std::max(0L, c[1] - reach); j <= std::min(size_[1] - 1, c[1] + reach); ++j) {
-        auto first = keyed_.begin(), last = keyed_.end();
-        if (!row_start_.empty()) {
-          const std::size_t row = std::size_t(k * size_[1] + j);
-          first += row_start_[row];
-          last = keyed_.begin() + row_start_[row + 1];
-        }
-        auto it = std::lower_bound(first, last, std::pair<long, int>{key(x0, j, k), -1});
-        const long end = key(x1, j, k);
-        for (; it != last && it->first <= end; ++it) f(it->second);
-      }
+    for_each_row(p, reach, [&](const Keyed* from, const Keyed* to) {
+      for (const Keyed* e = from; e != to; ++e) f(e->point);
+    });
   }
 
   // The points of P (the rows these cubes were built from) within squared distance r2 of p, among
@@ -72,35 +62,52 @@ class PointCubes {
   // buffer as needed. Branch-free per candidate: about half of them are kept, unpredictably.
   int collect_within(const PointMatrix& P, const Eigen::Vector3d& p, double r2, long reach,
                      std::vector<int>& buffer) const {
-    const auto c = cube_of(p);
-    const long x0 = std::max(0L, c[0] - reach), x1 = std::min(size_[0] - 1, c[0] + reach);
     int count = 0;
-    for (long k = std::max(0L, c[2] - reach); k <= std::min(size_[2] - 1, c[2] + reach); ++k)
-      for (long j = std::max(0L, c[1] - reach); j <= std::min(size_[1] - 1, c[1] + reach); ++j) {
-        auto first = keyed_.begin(), last = keyed_.end();
-        if (!row_start_.empty()) {
-          const std::size_t row = std::size_t(k * size_[1] + j);
-          first += row_start_[row];
-          last = keyed_.begin() + row_start_[row + 1];
-        }
-        const auto from = std::lower_bound(first, last, std::pair<long, int>{key(x0, j, k), -1});
-        const auto to = std::lower_bound(from, last, std::pair<long, int>{key(x1 + 1, j, k), -1});
-        const std::size_t need = std::size_t(count) + std::size_t(to - from);
-        if (buffer.size() < need) buffer.resize(std::max(need, 2 * buffer.size()));
-        int* out = buffer.data();
-        const double* rows = P.data();
-        for (auto it = from; it != to; ++it) {
-          const int i = it->second;
-          const double dx = rows[3 * i] - p[0], dy = rows[3 * i + 1] - p[1],
-                       dz = rows[3 * i + 2] - p[2];
-          out[count] = i;
-          count += (dx * dx + dy * dy) + dz * dz <= r2;
-        }
+    for_each_row(p, reach, [&](const Keyed* from, const Keyed* to) {
+      const std::size_t need = std::size_t(count) + std::size_t(to - from);
+      if (buffer.size() < need) buffer.resize(std::max(need, 2 * buffer.size()));
+      int* out = buffer.data();
+      const double* rows = P.data();
+      for (const Keyed* e = from; e != to; ++e) {
+        const int i = e->point;
+        const double dx = rows[3 * i] - p[0], dy = rows[3 * i + 1] - p[1],
+                     dz = rows[3 * i + 2] - p[2];
+        out[count] = i;
+        count += (dx * dx + dy * dy) + dz * dz <= r2;
       }
+    });
     return count;
   }
 
  private:
+  // (A struct, not a std::pair, whose constructor would zero the list on one thread.)
+  struct Keyed {
+    long key;
+    int point;
+    bool operator<(const Keyed& o) const {
+      return key < o.key || (key == o.key && point < o.point);
+    }
+  };
+
+  // Calls f(from, to) with the entries of each row of cubes (j, k) within reach of p's cube, from
+  // cube x0 to x1 of the row: the rows' start where it is kept, then binary searches.
+  template <class F>
+  void for_each_row(const Eigen::Vector3d& p, long reach, F&& f) const {
+    const auto c = cube_of(p);
+    const long x0 = std::max(0L, c[0] - reach), x1 = std::min(size_[0] - 1, c[0] + reach);
+    for (long k = std::max(0L, c[2] - reach); k <= std::min(size_[2] - 1, c[2] + reach); ++k)
+      for (long j = std::max(0L, c[1] - reach); j <= std::min(size_[1] - 1, c[1] + reach); ++j) {
+        const Keyed *first = keyed_.data(), *last = keyed_.data() + keyed_.size();
+        if (!row_start_.empty()) {
+          const std::size_t row = std::size_t(k * size_[1] + j);
+          first = keyed_.data() + row_start_[row];
+          last = keyed_.data() + row_start_[row + 1];
+        }
+        const Keyed* from = std::lower_bound(first, last, Keyed{key(x0, j, k), -1});
+        f(from, std::lower_bound(from, last, Keyed{key(x1 + 1, j, k), -1}));
+      }
+  }
+
   std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
     std::array<long, 3> c;
     for (int a = 0; a < 3; ++a)
@@ -112,8 +119,8 @@ class PointCubes {
   double cell_;
   Eigen::Vector3d origin_;
   long size_[3];
-  std::vector<std::pair<long, int>> keyed_;  // (cube key, point), sorted
-  std::vector<int> row_start_;               // per row j + k * size_[1], then the end; or empty
+  Unwritten<Keyed> keyed_;      // (cube key, point), sorted
+  std::vector<int> row_start_;  // per row j + k * size_[1], then the end; or empty
 };
 
 }  // namespace sdfcontour::detail
