@@ -25,6 +25,41 @@ using detail::lattice_points::near_start_reach;
 using detail::lattice_points::Outcome;
 using detail::lattice_points::SamplePoint;
 
+// Each kept sample's row in `result` (-1 where none), in band order, with the outcomes' counts:
+// counted per piece of `piece` samples, then numbered, both in parallel.
+detail::Unwritten<int> number_kept(const detail::Unwritten<Outcome>& outcome, std::size_t piece,
+                                   ContactPoints& result) {
+  const std::size_t n = outcome.size(), pieces = (n + piece - 1) / piece;
+  auto kept = [&](std::size_t i) {
+    return outcome[i] == Outcome::Kept || outcome[i] == Outcome::Rescued;
+  };
+  std::vector<std::array<long, 4>> counts(pieces + 1, {0, 0, 0, 0});
+  tbb::parallel_for(std::size_t(0), pieces, [&](std::size_t q) {
+    std::array<long, 4>& c = counts[q + 1];
+    for (std::size_t i = q * piece; i < std::min(n, (q + 1) * piece); ++i) {
+      c[0] += kept(i);
+      c[1] += outcome[i] == Outcome::ZeroGradient;
+      c[2] += outcome[i] == Outcome::Discarded;
+      c[3] += outcome[i] == Outcome::Rescued;
+    }
+  });
+  for (std::size_t q = 0; q < pieces; ++q)
+    for (std::size_t k = 0; k < 4; ++k) counts[q + 1][k] += counts[q][k];
+  result.zero_gradient = int(counts.back()[1]);
+  result.discarded = int(counts.back()[2]);
+  result.rescued = int(counts.back()[3]);
+  result.samples.resize(std::size_t(counts.back()[0]));
+  detail::Unwritten<int> row(n);
+  tbb::parallel_for(std::size_t(0), pieces, [&](std::size_t q) {
+    long next = counts[q][0];
+    for (std::size_t i = q * piece; i < std::min(n, (q + 1) * piece); ++i) {
+      row[i] = kept(i) ? int(next) : -1;
+      if (kept(i)) result.samples[std::size_t(next++)] = int(i);
+    }
+  });
+  return row;
+}
+
 }  // namespace
 
 int lattice_contact_reach(const GridGeometry& grid, double largest,
@@ -133,39 +168,8 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
     }
   });
   order = {};
-  // Each kept sample's row, in band order: counted per piece, then numbered (in parallel).
   ContactPoints result;
-  auto kept = [&](Eigen::Index i) {
-    const Outcome out = outcome[std::size_t(i)];
-    return out == Outcome::Kept || out == Outcome::Rescued;
-  };
-  std::vector<std::array<long, 4>> counts(pieces_count + 1, {0, 0, 0, 0});
-  tbb::parallel_for(std::size_t(0), pieces_count, [&](std::size_t q) {
-    const Eigen::Index begin = Eigen::Index(q) * kPiece, end = std::min(n, begin + kPiece);
-    std::array<long, 4>& c = counts[q + 1];
-    for (Eigen::Index i = begin; i < end; ++i) {
-      const Outcome out = outcome[std::size_t(i)];
-      c[0] += kept(i);
-      c[1] += out == Outcome::ZeroGradient;
-      c[2] += out == Outcome::Discarded;
-      c[3] += out == Outcome::Rescued;
-    }
-  });
-  for (std::size_t q = 0; q < pieces_count; ++q)
-    for (std::size_t k = 0; k < 4; ++k) counts[q + 1][k] += counts[q][k];
-  result.zero_gradient = int(counts.back()[1]);
-  result.discarded = int(counts.back()[2]);
-  result.rescued = int(counts.back()[3]);
-  result.samples.resize(std::size_t(counts.back()[0]));
-  detail::Unwritten<int> row(static_cast<std::size_t>(n));
-  tbb::parallel_for(std::size_t(0), pieces_count, [&](std::size_t q) {
-    const Eigen::Index begin = Eigen::Index(q) * kPiece, end = std::min(n, begin + kPiece);
-    long next = counts[q][0];
-    for (Eigen::Index i = begin; i < end; ++i) {
-      row[std::size_t(i)] = kept(i) ? int(next) : -1;
-      if (kept(i)) result.samples[std::size_t(next++)] = int(i);
-    }
-  });
+  const detail::Unwritten<int> row = number_kept(outcome, std::size_t(kPiece), result);
   result.points.resize(Eigen::Index(result.samples.size()), 3);
   result.normals.resize(Eigen::Index(result.samples.size()), 3);
   tbb::parallel_for(std::size_t(0), found.size(), [&](std::size_t run) {
