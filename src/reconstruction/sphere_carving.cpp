@@ -273,10 +273,10 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
                                    double spacing) {
   const double inside = kInside * spacing, cell = kBallListBox * spacing;
   struct Keyed {  // (not a std::pair, whose constructor would zero the list on one thread)
-    std::array<long, 3> first;
-    int second;
+    std::array<long, 3> box;
+    int vertex;
     bool operator<(const Keyed& o) const {
-      return first < o.first || (first == o.first && second < o.second);
+      return box < o.box || (box == o.box && vertex < o.vertex);
     }
   };
   detail::Unwritten<Keyed> keyed(which.size());
@@ -288,21 +288,21 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
   tbb::parallel_sort(keyed.begin(), keyed.end());
   std::vector<std::size_t> starts;  // where each box's vertices begin in keyed
   for (std::size_t q = 0; q < keyed.size(); ++q)
-    if (q == 0 || keyed[q].first != keyed[q - 1].first) starts.push_back(q);
+    if (q == 0 || keyed[q].box != keyed[q - 1].box) starts.push_back(q);
   starts.push_back(keyed.size());
   Pushes best = no_pushes(V.rows());
   const PointMatrix& points = balls.points();
   tbb::parallel_for(std::size_t(0), starts.size() - 1, [&](std::size_t b) {
     thread_local SphereList list;
-    Eigen::Vector3d lo = V.row(keyed[starts[b]].second).transpose(), hi = lo;
+    Eigen::Vector3d lo = V.row(keyed[starts[b]].vertex).transpose(), hi = lo;
     for (std::size_t q = starts[b]; q < starts[b + 1]; ++q) {
-      lo = lo.cwiseMin(V.row(keyed[q].second).transpose());
-      hi = hi.cwiseMax(V.row(keyed[q].second).transpose());
+      lo = lo.cwiseMin(V.row(keyed[q].vertex).transpose());
+      hi = hi.cwiseMax(V.row(keyed[q].vertex).transpose());
     }
     if (!(lo.allFinite() && hi.allFinite())) return;
     balls.gather(lo, hi, 0.0, list);
     for (std::size_t q = starts[b]; q < starts[b + 1]; ++q) {
-      const int v = keyed[q].second;
+      const int v = keyed[q].vertex;
       const Eigen::Vector3d x = V.row(v).transpose();
       Push& found = best[std::size_t(v)];
       // (The spheres that may hold x found by the list's vectorised scan: a superset of those
