@@ -35,7 +35,9 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
     ata.noalias() += weight[i] * n * n.transpose();
     atb += weight[i] * n * n.dot(planes[i].point - centroid);
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(ata);
+  // (The closed form for a 3 x 3: the iterative solver was most of a cell's vertex.)
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(ata);
   const Eigen::Vector3d& lambda = eigen.eigenvalues();  // ascending
   QuadricSolution out;
   out.position = centroid;
