@@ -73,8 +73,10 @@ TEST(Adaptivity, BoxFacesCollapseToFewTriangles) {
   // Planar faces: their contact points agree on one plane each, so the faces merge; the corners,
   // where samples on different sides share a contact point, stay exactly where those put them
   // (pinned: measured 2e-14 h off); the mesh stays closed, 2-manifold, free of self-intersections
-  // and on the box. Measured: 72 triangles at TOL 0.25 (96 before corners were pinned), 24 at
-  // TOL 1 (12 is a box's fewest).
+  // and on the box. Measured: 84 triangles at TOL 0.25 (96 before corners were pinned; 72 with
+  // the iterative eigensolver in the cell quadrics, whose rounding put a few flat cells' vertices
+  // 0.025-0.05 h elsewhere along their face, which the greedy merge follows), 24 at TOL 1 (12 is
+  // a box's fewest).
   const auto box = make_builtin_shape("box");
   const Grid g = sample_grid(*box, 32, Bounds{});
   const double h = g.spacing().maxCoeff();
@@ -87,7 +89,7 @@ TEST(Adaptivity, BoxFacesCollapseToFewTriangles) {
   ASSERT_TRUE(coarse.adaptivity);
   EXPECT_EQ(coarse.adaptivity->triangles_before, fine.mesh->triangles.rows());
   EXPECT_EQ(coarse.adaptivity->triangles_after, coarse.mesh->triangles.rows());
-  EXPECT_LE(coarse.mesh->triangles.rows(), 80);
+  EXPECT_LE(coarse.mesh->triangles.rows(), 90);
   EXPECT_LE(coarsest.mesh->triangles.rows(), 36);
   for (const ContourResult* r : {&fine, &coarse, &coarsest}) {
     EXPECT_LT(farthest_corner(*r->mesh), 1e-9 * h);
