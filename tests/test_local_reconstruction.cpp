@@ -2,6 +2,7 @@
 // on every corner configuration, independent of row order, thread count and bricks.
 #include <tbb/global_control.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -233,6 +234,35 @@ TEST(CellQuadric, BoxConstrainedMinimumLiesOnTheEdgeThatCrossesTheBox) {
         const Eigen::Vector3d p = lo + (hi - lo).cwiseProduct(Eigen::Vector3d(i, j, k) / 10);
         EXPECT_GE(value(p), value(x) - 1e-12);
       }
+}
+
+TEST(CellQuadric, PlanesThroughOnePointAreSolvedExactlyWhenTheirEigenvaluesRepeat) {
+  // The closed-form eigensolver where its eigenvalues repeat: one face (two zero eigenvalues), an
+  // edge of two perpendicular faces with equal weights (two equal ones), a corner of three (all
+  // equal), each rotated at random. Every plane passes through x: the solve lies on all of them,
+  // solves as many directions as there are faces, and leaves the faces' normals out of `free`.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 300; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    const Eigen::Matrix3d R =
+        Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+    const Eigen::Vector3d x(u(rng), u(rng), u(rng));
+    const int faces = 1 + trial % 3;
+    std::vector<detail::TangentPlane> planes;
+    for (int f = 0; f < faces; ++f)
+      for (int k = 0; k < 4; ++k) {
+        Eigen::Vector3d offset(u(rng), u(rng), u(rng));
+        offset[f] = 0;
+        planes.push_back({x + R * offset * 0.03, R.col(f)});
+      }
+    const detail::QuadricSolution s = detail::minimise_quadric(planes, 0.02, 2, 1e-3);
+    EXPECT_EQ(s.rank, faces);
+    for (const detail::TangentPlane& t : planes)
+      EXPECT_LT(std::abs(t.normal.dot(s.position - t.point)), 1e-12);
+    for (int f = 0; f < faces; ++f) EXPECT_LT((s.free * R.col(f)).norm(), 1e-12);
+    EXPECT_NEAR(s.free.trace(), 3 - faces, 1e-12);
+  }
 }
 
 TEST(CellQuadric, AFaceOfAnEdgeIsNotJudgedAnOutlier) {

@@ -17,6 +17,33 @@ namespace {
 // side of the mesh.
 constexpr double kKeptRankFraction = 0.1;
 
+// Where an eigenpair misses A by more than this fraction of A's largest eigenvalue, the closed form
+// is not trusted: the iterative solver's pairs miss by a few roundings.
+constexpr double kDirectMiss = 1e-13;
+
+// A's eigensystem: the closed form (Eigen's computeDirect; the iterative solver was most of a
+// cell's vertex), unless one of the pairs that a solve may take (eigenvalue above
+// kKeptRankFraction * feature_ratio of the largest) misses A by more than kDirectMiss. Where two
+// eigenvalues repeat (an edge whose faces weigh alike), the closed form's vectors leave their
+// space by about 1e-9, which put a solve 1e-10 off its planes
+// (CellQuadric.PlanesThroughOnePointAreSolvedExactlyWhenTheirEigenvaluesRepeat).
+Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen_3x3(const Eigen::Matrix3d& A,
+                                                         double feature_ratio) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(A);
+  const Eigen::Vector3d& lambda = eigen.eigenvalues();
+  const double largest = std::abs(lambda[2]);
+  for (int j = 2; j >= 0; --j) {
+    if (!(lambda[j] > kKeptRankFraction * feature_ratio * largest)) break;
+    const Eigen::Vector3d v = eigen.eigenvectors().col(j);
+    if (!((A * v - lambda[j] * v).cwiseAbs().maxCoeff() <= kDirectMiss * largest)) {
+      eigen.compute(A);
+      break;
+    }
+  }
+  return eigen;
+}
+
 QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
                                const std::vector<double>& weight, double feature_ratio,
                                int keep_rank = 0) {
@@ -35,9 +62,7 @@ QuadricSolution solve_weighted(const std::vector<TangentPlane>& planes,
     ata.noalias() += weight[i] * n * n.transpose();
     atb += weight[i] * n * n.dot(planes[i].point - centroid);
   }
-  // (The closed form for a 3 x 3: the iterative solver was most of a cell's vertex.)
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-  eigen.computeDirect(ata);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen = eigen_3x3(ata, feature_ratio);
   const Eigen::Vector3d& lambda = eigen.eigenvalues();  // ascending
   QuadricSolution out;
   out.position = centroid;
