@@ -74,9 +74,9 @@ TEST(Adaptivity, BoxFacesCollapseToFewTriangles) {
   // where samples on different sides share a contact point, stay exactly where those put them
   // (pinned: measured 2e-14 h off); the mesh stays closed, 2-manifold, free of self-intersections
   // and on the box. Measured: 84 triangles at TOL 0.25 (96 before corners were pinned; 72 with
-  // the iterative eigensolver in the cell quadrics, whose rounding put a few flat cells' vertices
-  // 0.025-0.05 h elsewhere along their face, which the greedy merge follows), 24 at TOL 1 (12 is
-  // a box's fewest).
+  // the iterative eigensolver alone in the cell quadrics: the closed form puts a few flat cells'
+  // vertices 0.025-0.05 h elsewhere along their face, and the greedy merge follows them), 24 at
+  // TOL 1 (12 is a box's fewest).
   const auto box = make_builtin_shape("box");
   const Grid g = sample_grid(*box, 32, Bounds{});
   const double h = g.spacing().maxCoeff();
