@@ -240,6 +240,34 @@ TEST(ContactProjection, AWiderFitReachesBetweenLinesOfPoints) {
   }
 }
 
+TEST(ContactProjection, AnExactGridAlignedFlatNeedsNoWiderFit) {
+  // A flat face aligned with the grid gives points on lines 1.1 h apart (z = 0, normals up) and,
+  // 2 h away, a step up of 0.3 h (an edge of the part). The lines leave the quadric undetermined;
+  // the wider fit would reach the step. The points within the radius lie on their plane with its
+  // normal, so each vertex lands on z = 0, exactly.
+  const double h = kSpacing, gap = 1.1 * h;
+  PointMatrix P(0, 3), N(0, 3);
+  for (int k = -4; k <= 4; ++k)
+    for (int i = -40; i <= 40; ++i) {
+      const double x = 0.1 * i * h, y = k * gap;
+      P.conservativeResize(P.rows() + 1, 3);
+      N.conservativeResize(N.rows() + 1, 3);
+      P.row(P.rows() - 1) << x, y, y > 1.5 * h ? 0.3 * h : 0.0;
+      N.row(N.rows() - 1) << 0, 0, 1;
+    }
+  Mesh patch = flat_patch(3, h / 20, 0);
+  patch.vertices.col(1).array() += 0.5 * h;
+  patch.vertices.col(2).array() += 0.05 * h;
+  Mesh local = patch;
+  EXPECT_EQ(
+      project_to_contact_points(local, P, N, {}, h, local_projection_options()).vertices_moved,
+      patch.vertices.rows());
+  for (Eigen::Index v = 0; v < local.vertices.rows(); ++v)
+    EXPECT_LT(std::abs(local.vertices(v, 2)), 1e-12 * h) << "vertex " << v;
+  // Two lines of a curved surface lie on a plane too, but their normals differ from it: those
+  // still take the wider fit (AWiderFitReachesBetweenLinesOfPoints).
+}
+
 TEST(ContactProjection, SameResultWhateverTheThreadCount) {
   const double h = 2.0 / 31;
   const Mesh mc = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 32, Bounds{}));

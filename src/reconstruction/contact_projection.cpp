@@ -167,6 +167,35 @@ bool fit_quadric(const std::vector<FitRow>& fit, const ContactProjectionOptions&
   return true;
 }
 
+// Where the fitted points lie on one plane and their normals are its normal, both to within
+// rounding (a flat face aligned with the grid: its points lie on lines, which leave the quadric
+// undetermined), that plane's height at the vertex. Two lines always lie on a plane; their normals
+// tell a flat from a curved surface or a step. False otherwise.
+bool exact_plane_height(const std::vector<FitRow>& fit, double& z0) {
+  constexpr double kFlatMiss = 1e-5;    // spacings: a float32 grid's rounding, far below any sag
+  constexpr double kSameNormal = 1e-8;  // 1 - cosine: 0.008 degrees
+  if (fit.size() < 3) return false;
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const FitRow& f : fit) {
+    const Eigen::Vector3d r(1, f.row[1], f.row[2]);
+    M += f.w * r * r.transpose();
+    rhs += f.w * f.z * r;
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(M);
+  if (ldlt.info() != Eigen::Success ||
+      !(ldlt.vectorD().minCoeff() > 1e-9 * M.diagonal().maxCoeff()))
+    return false;  // the points on one line
+  const Eigen::Vector3d p = ldlt.solve(rhs);
+  const Eigen::Vector3d up = Eigen::Vector3d(-p[1], -p[2], 1).normalized();
+  for (const FitRow& f : fit)
+    if (!(std::abs(f.z - p[0] - p[1] * f.row[1] - p[2] * f.row[2]) <= kFlatMiss) ||
+        !(f.normal.dot(up) >= 1 - kSameNormal))
+      return false;
+  z0 = p[0];
+  return std::isfinite(z0);
+}
+
 // Where the fitted points lie on two planes that meet in a crease (between a polyhedron's facets,
 // which a quadric rounds off; at fine grids most of a mesh's error lies within a spacing of its
 // creases), the crease's height at the vertex: the lower plane's on a ridge, the higher's in a
@@ -400,6 +429,13 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
       // points between the faces wider (the box at 32^3: its vertices 0.012 h off on average,
       // 0.001 h without).
       if (!(o.wide_radius > 0) || int(fit.size()) < o.min_points) return;
+      // An exact plane needs no wider fit, which would read what lies beyond the flat (the cube
+      // at 64^3: the projection 1.91 -> 1.03 s).
+      double flat = 0;
+      if (exact_plane_height(fit, flat)) {
+        if (std::abs(flat) <= o.max_move) height[std::size_t(v)] = flat * spacing;
+        return;
+      }
       gather(radii[1], reaches[1]);
       if (!fit_quadric(fit, o, inv_chord_scale2, c)) return;
     }
