@@ -210,20 +210,32 @@ TEST(ContactProjection, ChordOffsetsCentreTheMeshOnACurvedSurface) {
   EXPECT_LT(chord_abs, 0.5 * plain_abs);
 }
 
+// Points on the lines y = k gap (|k| <= lines), x along them every tenth of a spacing from -4 to
+// 4 spacings, at height z(y) with normal n(y): the contact points of a surface aligned with the
+// grid along x.
+template <class Height, class Normal>
+void add_lines(PointMatrix& P, PointMatrix& N, int lines, double gap, Height z, Normal n) {
+  const int per_line = 81, count = (2 * lines + 1) * per_line;
+  P.resize(count, 3);
+  N.resize(count, 3);
+  int row = 0;
+  for (int k = -lines; k <= lines; ++k)
+    for (int i = -40; i <= 40; ++i, ++row) {
+      const double y = k * gap;
+      P.row(row) << 0.1 * i * kSpacing, y, z(y);
+      N.row(row) = n(y);
+    }
+}
+
 TEST(ContactProjection, AWiderFitReachesBetweenLinesOfPoints) {
   // Grid-aligned flats give contact points on lines further apart than the radius: two lines
   // leave a quadric undetermined (the vertex stays); the wider radius holds a third line and the
   // vertex lands on the cylinder z = y^2 / (2 R) the lines lie on.
-  const double h = kSpacing, R = 4 * h, gap = 1.4 * h;
-  PointMatrix P(0, 3), N(0, 3);
-  for (int k = -3; k <= 3; ++k)
-    for (int i = -40; i <= 40; ++i) {
-      const double x = 0.1 * i * h, y = k * gap;
-      P.conservativeResize(P.rows() + 1, 3);
-      N.conservativeResize(N.rows() + 1, 3);
-      P.row(P.rows() - 1) << x, y, y * y / (2 * R);
-      N.row(N.rows() - 1) = Eigen::RowVector3d(0, -y / R, 1).normalized();
-    }
+  const double h = kSpacing, R = 4 * h;
+  PointMatrix P, N;
+  add_lines(
+      P, N, 3, 1.4 * h, [&](double y) { return y * y / (2 * R); },
+      [&](double y) { return Eigen::RowVector3d(0, -y / R, 1).normalized(); });
   Mesh patch = flat_patch(3, h / 20, 0);
   patch.vertices.col(1).array() += 0.5 * h;
   patch.vertices.col(2).array() += 0.5 * h * 0.5 * h / (2 * R) + 0.05 * h;
@@ -245,16 +257,11 @@ TEST(ContactProjection, AnExactGridAlignedFlatNeedsNoWiderFit) {
   // 2 h away, a step up of 0.3 h (an edge of the part). The lines leave the quadric undetermined;
   // the wider fit would reach the step. The points within the radius lie on their plane with its
   // normal, so each vertex lands on z = 0, exactly.
-  const double h = kSpacing, gap = 1.1 * h;
-  PointMatrix P(0, 3), N(0, 3);
-  for (int k = -4; k <= 4; ++k)
-    for (int i = -40; i <= 40; ++i) {
-      const double x = 0.1 * i * h, y = k * gap;
-      P.conservativeResize(P.rows() + 1, 3);
-      N.conservativeResize(N.rows() + 1, 3);
-      P.row(P.rows() - 1) << x, y, y > 1.5 * h ? 0.3 * h : 0.0;
-      N.row(N.rows() - 1) << 0, 0, 1;
-    }
+  const double h = kSpacing;
+  PointMatrix P, N;
+  add_lines(
+      P, N, 4, 1.1 * h, [&](double y) { return y > 1.5 * h ? 0.3 * h : 0.0; },
+      [](double) { return Eigen::RowVector3d(0, 0, 1); });
   Mesh patch = flat_patch(3, h / 20, 0);
   patch.vertices.col(1).array() += 0.5 * h;
   patch.vertices.col(2).array() += 0.05 * h;
