@@ -86,6 +86,41 @@ TEST(SelfIntersections, TheSamePairsAsCgal) {
   EXPECT_THROW(self_intersecting_triangles(mesh, &watch), Error);
 }
 
+// A flat patch whose vertices moved within its plane (coplanar to the last bit, as a face aligned
+// with the grid is, where no floating-point filter decides): folded fans overlap. The same pairs
+// as CGAL's, on a plane of constant z and on a tilted one; none while every move is small.
+TEST(SelfIntersections, AFlatPatchFoldedInItsPlaneFindsTheSamePairsAsCgal) {
+  const int n = 24;
+  const double step = 0.1;
+  auto patch = [&](double noise, bool tilted, unsigned seed) {
+    Mesh m;
+    m.vertices.resize(n * n, 3);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double x = (i + noise * u(rng)) * step, y = (j + noise * u(rng)) * step;
+        m.vertices.row(j * n + i) << x, y, tilted ? 0.5 * x - 0.25 * y : 0.25;
+      }
+    m.triangles.resize(2 * (n - 1) * (n - 1), 3);
+    int t = 0;
+    for (int j = 0; j + 1 < n; ++j)
+      for (int i = 0; i + 1 < n; ++i) {
+        const int a = j * n + i;
+        m.triangles.row(t++) << a, a + 1, a + n + 1;
+        m.triangles.row(t++) << a, a + n + 1, a + n;
+      }
+    return m;
+  };
+  for (const bool tilted : {false, true}) {
+    EXPECT_TRUE(self_intersecting_triangles(patch(0.2, tilted, 3)).empty());
+    const Mesh folded = patch(0.7, tilted, 5);
+    const auto ours = self_intersecting_triangles(folded);
+    EXPECT_GT(ours.size(), 20u) << "tilted " << tilted;
+    EXPECT_EQ(ours, cgal_pairs(folded)) << "tilted " << tilted;
+  }
+}
+
 // Parts far apart against their triangles' size (more cubes than a 64-bit key holds at the
 // triangles' scale): the same pairs as CGAL's, in each of three copies of the noisy torus.
 TEST(SelfIntersections, PartsFarApartFindTheSamePairs) {

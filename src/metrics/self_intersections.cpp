@@ -233,6 +233,71 @@ class CrossingSearch {
 
 }  // namespace
 
+namespace {
+
+// Whether two triangles that share the vertex s[os] = t[ot] clearly meet there alone: seen along
+// their mean normal, both keep their orientation and their corners' sectors around the vertex
+// lie apart with room to spare. A triangle's points then project one to one, so the two meet in
+// the shared vertex only. False where it is not clear (exact predicates decide those): a flat
+// region's pairs, coplanar to the last bit, need no exact arithmetic when their sectors are apart.
+bool clearly_apart_around(const std::array<Eigen::Vector3d, 3>& s, int os,
+                          const std::array<Eigen::Vector3d, 3>& t, int ot) {
+  constexpr double kClear = 1e-9;
+  const Eigen::Vector3d o = s[std::size_t(os)];
+  const Eigen::Vector3d a1 = s[std::size_t(os + 1) % 3] - o, a2 = s[std::size_t(os + 2) % 3] - o;
+  const Eigen::Vector3d b1 = t[std::size_t(ot + 1) % 3] - o, b2 = t[std::size_t(ot + 2) % 3] - o;
+  const Eigen::Vector3d ns = a1.cross(a2), nt = b1.cross(b2);
+  const double ls = ns.norm(), lt = nt.norm();
+  if (!(ls > 0) || !(lt > 0)) return false;
+  const Eigen::Vector3d m = ns / ls + nt / lt;
+  const double lm = m.norm();
+  if (!(lm > 1)) return false;  // the normals more than 120 degrees apart
+  const Eigen::Vector3d n = m / lm;
+  // 2D cross products in the plane normal to n: n . (x cross y).
+  auto cross = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    return n.dot(x.cross(y));
+  };
+  auto clearly = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    return cross(x, y) > kClear * x.norm() * y.norm();
+  };
+  // Both counter-clockwise about n, and going round: a1, a2, b1, b2, each turn under half.
+  return clearly(a1, a2) && clearly(b1, b2) && clearly(a2, b1) && clearly(b2, a1);
+}
+
+// Whether two triangles are clearly apart: along one of their normals, or one of the directions
+// in a triangle's plane across an edge, their corners' spans leave a gap well beyond rounding (a
+// separating axis is proof for convex sets). Coplanar neighbours, which no floating-point filter
+// decides, are mostly settled so.
+bool clearly_separated(const std::array<Eigen::Vector3d, 3>& s,
+                       const std::array<Eigen::Vector3d, 3>& t) {
+  constexpr double kClear = 1e-9;
+  const Eigen::Vector3d ns = (s[1] - s[0]).cross(s[2] - s[0]);
+  const Eigen::Vector3d nt = (t[1] - t[0]).cross(t[2] - t[0]);
+  double scale = 0;
+  for (const auto* x : {&s, &t})
+    for (const Eigen::Vector3d& p : *x) scale = std::max(scale, (p - s[0]).norm());
+  auto apart_along = [&](const Eigen::Vector3d& axis) {
+    const double length = axis.norm();
+    if (!(length > 0)) return false;
+    double lo_s = INFINITY, hi_s = -INFINITY, lo_t = INFINITY, hi_t = -INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      const double ds = axis.dot(s[std::size_t(k)] - s[0]), dt = axis.dot(t[std::size_t(k)] - s[0]);
+      lo_s = std::min(lo_s, ds), hi_s = std::max(hi_s, ds);
+      lo_t = std::min(lo_t, dt), hi_t = std::max(hi_t, dt);
+    }
+    const double gap = kClear * length * scale;
+    return lo_t > hi_s + gap || lo_s > hi_t + gap;
+  };
+  if (apart_along(ns) || apart_along(nt)) return true;
+  for (int k = 0; k < 3; ++k)
+    if (apart_along(ns.cross(s[std::size_t(k + 1) % 3] - s[std::size_t(k)])) ||
+        apart_along(nt.cross(t[std::size_t(k + 1) % 3] - t[std::size_t(k)])))
+      return true;
+  return false;
+}
+
+}  // namespace
+
 namespace detail {
 
 bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s_at, const std::array<int, 3>& S,
@@ -257,8 +322,9 @@ bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s_at, const std::arra
   }
   const K::Triangle_3 a(point(s_at[0]), point(s_at[1]), point(s_at[2])),
       b(point(t_at[0]), point(t_at[1]), point(t_at[2]));
-  if (shared == 0) return CGAL::do_intersect(a, b);
+  if (shared == 0) return !clearly_separated(s_at, t_at) && CGAL::do_intersect(a, b);
   // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.
+  if (clearly_apart_around(s_at, shared_s, t_at, shared_t)) return false;
   const K::Segment_3 opposite_s(point(s_at[std::size_t(shared_s + 1) % 3]),
                                 point(s_at[std::size_t(shared_s + 2) % 3])),
       opposite_t(point(t_at[std::size_t(shared_t + 1) % 3]),
