@@ -12,6 +12,7 @@
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/metrics/metrics.h"
 #include "sdfcontour/reconstruction/contact_projection.h"
+#include "test_patches.h"
 
 using namespace sdfcontour;
 
@@ -19,23 +20,7 @@ namespace {
 
 constexpr double kSpacing = 0.05;
 
-// A flat square of (n x n) vertices `step` apart at height z, facing +z.
-Mesh flat_patch(int n, double step, double z) {
-  Mesh m;
-  m.vertices.resize(n * n, 3);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      m.vertices.row(j * n + i) << (i - (n - 1) / 2.0) * step, (j - (n - 1) / 2.0) * step, z;
-  m.triangles.resize(2 * (n - 1) * (n - 1), 3);
-  int t = 0;
-  for (int j = 0; j + 1 < n; ++j)
-    for (int i = 0; i + 1 < n; ++i) {
-      const int a = j * n + i;
-      m.triangles.row(t++) << a, a + 1, a + n + 1;
-      m.triangles.row(t++) << a, a + n + 1, a + n;
-    }
-  return m;
-}
+using test::flat_patch;
 
 // `count` random points on the plane z = height over [-extent, extent]^2 with normal (0, 0, nz).
 void add_plane_points(PointMatrix& P, PointMatrix& N, int count, double extent, double height,

@@ -14,6 +14,7 @@
 #include "sdfcontour/io/io.h"
 #include "sdfcontour/metrics/self_intersections.h"
 #include "sdfcontour/pipeline/pipeline.h"
+#include "test_patches.h"
 #include "test_support.h"
 
 using namespace sdfcontour;
@@ -93,23 +94,14 @@ TEST(SelfIntersections, AFlatPatchFoldedInItsPlaneFindsTheSamePairsAsCgal) {
   const int n = 24;
   const double step = 0.1;
   auto patch = [&](double noise, bool tilted, unsigned seed) {
-    Mesh m;
-    m.vertices.resize(n * n, 3);
+    Mesh m = test::flat_patch(n, step, 0.25);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-1, 1);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const double x = (i + noise * u(rng)) * step, y = (j + noise * u(rng)) * step;
-        m.vertices.row(j * n + i) << x, y, tilted ? 0.5 * x - 0.25 * y : 0.25;
-      }
-    m.triangles.resize(2 * (n - 1) * (n - 1), 3);
-    int t = 0;
-    for (int j = 0; j + 1 < n; ++j)
-      for (int i = 0; i + 1 < n; ++i) {
-        const int a = j * n + i;
-        m.triangles.row(t++) << a, a + 1, a + n + 1;
-        m.triangles.row(t++) << a, a + n + 1, a + n;
-      }
+    for (Eigen::Index v = 0; v < m.vertices.rows(); ++v) {
+      const double x = m.vertices(v, 0) + noise * step * u(rng);
+      const double y = m.vertices(v, 1) + noise * step * u(rng);
+      m.vertices.row(v) << x, y, tilted ? 0.5 * x - 0.25 * y : 0.25;
+    }
     return m;
   };
   for (const bool tilted : {false, true}) {
