@@ -231,9 +231,8 @@ class CrossingSearch {
   TriangleCells cubes_;
 };
 
-}  // namespace
-
-namespace {
+// A certificate below holds only with this much to spare (relative), far beyond rounding.
+constexpr double kClear = 1e-9;
 
 // Whether two triangles that share the vertex s[os] = t[ot] clearly meet there alone: seen along
 // their mean normal, both keep their orientation and their corners' sectors around the vertex
@@ -242,7 +241,6 @@ namespace {
 // region's pairs, coplanar to the last bit, need no exact arithmetic when their sectors are apart.
 bool clearly_apart_around(const std::array<Eigen::Vector3d, 3>& s, int os,
                           const std::array<Eigen::Vector3d, 3>& t, int ot) {
-  constexpr double kClear = 1e-9;
   const Eigen::Vector3d o = s[std::size_t(os)];
   const Eigen::Vector3d a1 = s[std::size_t(os + 1) % 3] - o, a2 = s[std::size_t(os + 2) % 3] - o;
   const Eigen::Vector3d b1 = t[std::size_t(ot + 1) % 3] - o, b2 = t[std::size_t(ot + 2) % 3] - o;
@@ -270,7 +268,6 @@ bool clearly_apart_around(const std::array<Eigen::Vector3d, 3>& s, int os,
 // decides, are mostly settled so.
 bool clearly_separated(const std::array<Eigen::Vector3d, 3>& s,
                        const std::array<Eigen::Vector3d, 3>& t) {
-  constexpr double kClear = 1e-9;
   const Eigen::Vector3d ns = (s[1] - s[0]).cross(s[2] - s[0]);
   const Eigen::Vector3d nt = (t[1] - t[0]).cross(t[2] - t[0]);
   double scale = 0;
@@ -320,11 +317,13 @@ bool triangles_cross(const std::array<Eigen::Vector3d, 3>& s_at, const std::arra
     return !CGAL::collinear(u, v, p) && CGAL::coplanar(u, v, p, q) &&
            CGAL::coplanar_orientation(u, v, p, q) == CGAL::POSITIVE;
   }
+  if (shared == 0 ? clearly_separated(s_at, t_at)
+                  : clearly_apart_around(s_at, shared_s, t_at, shared_t))
+    return false;
   const K::Triangle_3 a(point(s_at[0]), point(s_at[1]), point(s_at[2])),
       b(point(t_at[0]), point(t_at[1]), point(t_at[2]));
-  if (shared == 0) return !clearly_separated(s_at, t_at) && CGAL::do_intersect(a, b);
+  if (shared == 0) return CGAL::do_intersect(a, b);
   // One shared vertex: they cross elsewhere iff an edge opposite it cuts the other triangle.
-  if (clearly_apart_around(s_at, shared_s, t_at, shared_t)) return false;
   const K::Segment_3 opposite_s(point(s_at[std::size_t(shared_s + 1) % 3]),
                                 point(s_at[std::size_t(shared_s + 2) % 3])),
       opposite_t(point(t_at[std::size_t(shared_t + 1) % 3]),
