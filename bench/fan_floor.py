@@ -27,7 +27,7 @@ import sys
 import numpy as np
 
 from common import CLI, geomean, keep, l1, read_jsonl, report, scale_grid
-from local import read_ply
+from local import area_samples, read_ply
 from scale import write_ply
 
 
@@ -63,35 +63,6 @@ def closest_on_triangles(P, A, B, C):
     return out
 
 
-def onto_surface(V, gt_V, gt_F, k=24):
-    """Each of V moved to its closest point on the mesh (gt_V, gt_F): the closest among the
-    k triangles whose centroids lie nearest (the ground truths' triangles span several spacings,
-    and the vertices lie within a few hundredths of one from them)."""
-    from scipy.spatial import cKDTree
-    tri = gt_V[gt_F]
-    _, near = cKDTree(tri.mean(1)).query(V, k=k)
-    best = V.copy()
-    best_d = np.full(len(V), np.inf)
-    for j in range(k):
-        t = tri[near[:, j]]
-        q = closest_on_triangles(V, t[:, 0], t[:, 1], t[:, 2])
-        d = ((q - V) ** 2).sum(1)
-        better = d < best_d
-        best[better], best_d[better] = q[better], d[better]
-    return best
-
-
-def area_samples(V, F, count, rng):
-    """`count` points uniform over the area of the mesh (V, F)."""
-    T = V[F]
-    area = np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
-    t = rng.choice(len(F), count, p=area / area.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1
-    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
-    return T[t, 0] + u[:, None] * (T[t, 1] - T[t, 0]) + v[:, None] * (T[t, 2] - T[t, 0])
-
-
 def closest_triangles(P, V, F, k=12):
     """Each of P's closest point on the mesh (V, F) among the k triangles whose centroids lie
     nearest, and that triangle."""
@@ -110,6 +81,13 @@ def closest_triangles(P, V, F, k=12):
     return Q, tri
 
 
+def onto_surface(V, gt_V, gt_F, k=24):
+    """Each of V moved to its closest point on the mesh (gt_V, gt_F): the closest among the
+    k triangles whose centroids lie nearest (the ground truths' triangles span several spacings,
+    and the vertices lie within a few hundredths of one from them)."""
+    return closest_triangles(V, gt_V, gt_F, k)[0]
+
+
 def best_offsets(V, F, gt_V, gt_F, h, rounds=3, per_vertex=30):
     """V moved along its vertex normals by the offsets that fit the true surface (gt_V, gt_F) best
     in least squares: the signed gaps between surface points and their closest mesh points, along
@@ -117,7 +95,7 @@ def best_offsets(V, F, gt_V, gt_F, h, rounds=3, per_vertex=30):
     solved with a little damping and each offset kept within 0.05 h."""
     from scipy.sparse import csr_matrix
     from scipy.sparse.linalg import lsqr
-    X = area_samples(gt_V, gt_F, per_vertex * len(V), np.random.default_rng(1))
+    X = area_samples(gt_V, gt_F, per_vertex * len(V))
     W = V.copy()
     for _ in range(rounds):
         fn = np.cross(W[F[:, 1]] - W[F[:, 0]], W[F[:, 2]] - W[F[:, 0]])
