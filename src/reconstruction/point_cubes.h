@@ -19,12 +19,23 @@ namespace sdfcontour::detail {
 // cell's reach of a position lie in nine runs of three consecutive cubes.
 class PointCubes {
  public:
-  PointCubes(const PointMatrix& P, double cell) : cell_(cell) {
+  // `anchored`: the cubes are those of the whole space's lattice of side `cell` (cube floor(p /
+  // cell)), whatever the points' extent, so that any subset of the points (a brick's) meets the
+  // same cubes and for_each_near's order (cube by cube, then point by point) is the same for it.
+  PointCubes(const PointMatrix& P, double cell, bool anchored = false) : cell_(cell) {
     origin_ = P.colwise().minCoeff().transpose();
     const Eigen::Vector3d extent = P.colwise().maxCoeff().transpose() - origin_;
     // Keys must fit in 63 bits whatever the spread: coarser cubes only cost more tests.
     while ((extent / cell_).prod() > 1e17) cell_ *= 2;
-    for (int a = 0; a < 3; ++a) size_[a] = long(extent[a] / cell_) + 1;
+    anchored_ = anchored && cell_ == cell;
+    for (int a = 0; a < 3; ++a) {
+      if (anchored_) {
+        first_[a] = long(std::floor(origin_[a] / cell_));
+        size_[a] = long(std::floor((origin_[a] + extent[a]) / cell_)) - first_[a] + 1;
+      } else {
+        size_[a] = long(extent[a] / cell_) + 1;
+      }
+    }
     keyed_.resize(std::size_t(P.rows()));
     tbb::parallel_for(Eigen::Index(0), P.rows(), [&](Eigen::Index i) {
       const auto c = cube_of(P.row(i).transpose());
@@ -47,6 +58,8 @@ class PointCubes {
 
   // The cubes' side (at least the one asked for).
   double cell() const { return cell_; }
+  // Whether the cubes are the space's lattice's (asked for, and the points' spread allowed it).
+  bool anchored() const { return anchored_; }
 
   // Calls f(point index) for every point in the 27 cubes around p (with `reach`, the
   // (2 reach + 1)^3 cubes: the points within reach sides of p).
@@ -110,14 +123,20 @@ class PointCubes {
 
   std::array<long, 3> cube_of(const Eigen::Vector3d& p) const {
     std::array<long, 3> c;
-    for (int a = 0; a < 3; ++a)
-      c[std::size_t(a)] = std::clamp(long(std::floor((p[a] - origin_[a]) / cell_)), -1L, size_[a]);
+    for (int a = 0; a < 3; ++a) {
+      const double at = anchored_ ? std::floor(p[a] / cell_) - double(first_[a])
+                                  : std::floor((p[a] - origin_[a]) / cell_);
+      c[std::size_t(a)] =
+          std::clamp(long(std::clamp(at, -2.0, double(size_[a]) + 1)), -1L, size_[a]);
+    }
     return c;
   }
   long key(long i, long j, long k) const { return (k * size_[1] + j) * size_[0] + i; }
 
   double cell_;
   Eigen::Vector3d origin_;
+  bool anchored_ = false;
+  long first_[3] = {0, 0, 0};  // anchored: the first cube's lattice index
   long size_[3];
   Unwritten<Keyed> keyed_;      // (cube key, point), sorted
   std::vector<int> row_start_;  // per row j + k * size_[1], then the end; or empty
