@@ -24,14 +24,16 @@ class PointCubes {
   // same cubes and for_each_near's order (cube by cube, then point by point) is the same for it.
   PointCubes(const PointMatrix& P, double cell, bool anchored = false) : cell_(cell) {
     origin_ = P.colwise().minCoeff().transpose();
-    const Eigen::Vector3d extent = P.colwise().maxCoeff().transpose() - origin_;
+    const Eigen::Vector3d top = P.colwise().maxCoeff().transpose(), extent = top - origin_;
     // Keys must fit in 63 bits whatever the spread: coarser cubes only cost more tests.
     while ((extent / cell_).prod() > 1e17) cell_ *= 2;
-    anchored_ = anchored && cell_ == cell;
+    // (The space's cube indices must be exact integers in a double and fit a long.)
+    anchored_ = anchored && cell_ == cell && (origin_.array().abs() / cell_ < 0x1p52).all() &&
+                (top.array().abs() / cell_ < 0x1p52).all();
     for (int a = 0; a < 3; ++a) {
       if (anchored_) {
         first_[a] = long(std::floor(origin_[a] / cell_));
-        size_[a] = long(std::floor((origin_[a] + extent[a]) / cell_)) - first_[a] + 1;
+        size_[a] = long(std::floor(top[a] / cell_)) - first_[a] + 1;
       } else {
         size_[a] = long(extent[a] / cell_) + 1;
       }
