@@ -128,8 +128,7 @@ class PointCubes {
     for (int a = 0; a < 3; ++a) {
       const double at = anchored_ ? std::floor(p[a] / cell_) - double(first_[a])
                                   : std::floor((p[a] - origin_[a]) / cell_);
-      c[std::size_t(a)] =
-          std::clamp(long(std::clamp(at, -2.0, double(size_[a]) + 1)), -1L, size_[a]);
+      c[std::size_t(a)] = long(std::clamp(at, -1.0, double(size_[a])));
     }
     return c;
   }
