@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <map>
 #include <random>
 
 #include "contact_points/lattice_spheres.h"
@@ -164,6 +165,35 @@ TEST(LatticeContactPoints, NoKeptPointLiesInAnotherSamplesSphere) {
       }
     }
   }
+}
+
+TEST(LatticeContactPoints, RescuesStopAtTheirReach) {
+  // Each sample's point depends on the lattice alone, not on the other samples' outcomes: beyond
+  // the reach the slide and the power vertex go, and nothing else changes.
+  const Grid g = sample_grid(*make_builtin_shape("csg"), 40, Bounds{});
+  const BandSamples band = band_of(g, 8);
+  const double h = g.spacing().maxCoeff(), reach = 3;
+  ContactPointOptions o = default_lattice_contact();
+  o.rescue_reach = 0;
+  const ContactPoints all = lattice_contact_points(g, band, o);
+  o.rescue_reach = reach;
+  const ContactPoints near = lattice_contact_points(g, band, o);
+  std::map<long, int> row_of;
+  for (int a = 0; a < all.size(); ++a) row_of[all.samples[std::size_t(a)]] = a;
+  for (int a = 0; a < near.size(); ++a) {
+    const auto it = row_of.find(near.samples[std::size_t(a)]);
+    ASSERT_NE(it, row_of.end()) << near.samples[std::size_t(a)];
+    EXPECT_EQ(near.points.row(a), all.points.row(it->second));
+    EXPECT_EQ(near.normals.row(a), all.normals.row(it->second));
+    row_of.erase(it);
+  }
+  // What is left: the rescues of samples beyond the reach.
+  ASSERT_GT(row_of.size(), 20u);
+  EXPECT_EQ(long(row_of.size()), long(all.rescued) - near.rescued);
+  for (const auto& [sample, row] : row_of)
+    EXPECT_GT(std::abs(band.samples.values[sample]), reach * h) << sample;
+  o.rescue_reach = -1;
+  EXPECT_THROW(lattice_contact_points(g, band, o), Error);
 }
 
 TEST(LatticeContactPoints, LocalBricksEqualOneBrick) {

@@ -73,8 +73,10 @@ int lattice_contact_reach(const GridGeometry& grid, double largest,
 ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples& band,
                                      const ContactPointOptions& options,
                                      const std::vector<char>* only) {
-  if (!(options.tie_tolerance >= 0) || options.sphere_slide_rounds < 0)
-    throw Error("contact points need a tie tolerance >= 0 and slide rounds >= 0");
+  if (!(options.tie_tolerance >= 0) || options.sphere_slide_rounds < 0 ||
+      !(options.rescue_reach >= 0))
+    throw Error(
+        "contact points need a tie tolerance >= 0, slide rounds >= 0 and a rescue reach >= 0");
   const Eigen::Index n = band.samples.values.size();
   const Lattice lattice(grid, band);
   const double h = grid.spacing().maxCoeff();

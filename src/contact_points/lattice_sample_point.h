@@ -66,19 +66,23 @@ class SamplePoint {
   }
 
   // Then, reading `list` for the points in its box, the slope test, the candidate, then the
-  // rescues: a slide, and a vertex of the sample's power cell on its sphere (the triangulation's
-  // rescue). A sample across a crease has the latter, then the slide only if it misses the slope
-  // by no more than kSlideSlopeMiss. (A near miss's rescue stays off: on the lattice it kept
-  // points 0.016 h off a box's medial planes where the filter alone keeps none.)
+  // rescues (within the options' rescue_reach): a slide, and a vertex of the sample's power cell
+  // on its sphere (the triangulation's rescue). A sample across a crease has the latter, then the
+  // slide only if it misses the slope by no more than kSlideSlopeMiss. (A near miss's rescue stays
+  // off: on the lattice it kept points 0.016 h off a box's medial planes where the filter alone
+  // keeps none.)
   Outcome solve(const detail::SphereList* list) {
     list_ = list;
+    const bool rescue =
+        !(o_.rescue_reach > 0) || std::abs(v_) <= o_.rescue_reach * l_.spacing().maxCoeff();
     if (o_.max_slope_miss > 0 && misses_linear_prediction(g_, o_.max_slope_miss)) {
+      if (!rescue) return Outcome::Discarded;
       if (power_vertex()) return Outcome::Rescued;
       const bool slight = !misses_linear_prediction(g_, kSlideSlopeMiss);
       return slight && v_ != 0 && slide(start_) ? Outcome::Rescued : Outcome::Discarded;
     }
     if (candidate(g_)) return Outcome::Kept;
-    if (v_ != 0 && (slide(start_) || power_vertex())) return Outcome::Rescued;
+    if (rescue && v_ != 0 && (slide(start_) || power_vertex())) return Outcome::Rescued;
     return Outcome::Discarded;
   }
 

@@ -46,6 +46,10 @@ struct ContactPointOptions {
   /// few thousandths of a spacing off, where the gap's power vertex lies farther (torus 64^3:
   /// 0.003 h against 0.016 h at the median). 0: the power vertex (the paper: no point).
   double near_miss_tolerance = 0;
+  /// The lattice's points only: a sample farther from the surface than this many spacings
+  /// (|value| > rescue_reach * h) keeps its candidate or none, without the slide and the power
+  /// vertex, which read hundreds of spheres there. 0: every sample.
+  double rescue_reach = 0;
 };
 
 /// Oriented contact points and where they came from.

@@ -33,6 +33,12 @@ constexpr double kLocalNearMiss = 3e-3;
 // (the triangulation's, its neighbours only). Bunny 32^3: 10 rounds rescue 1,480 points in 0.49 s,
 // 50 rounds 2,733 in 1.49 s, at the same median distance (bench/lattice_points.py --res 32).
 constexpr int kLatticeSlideRounds = 10;
+// The lattice's rescues only for samples within 5 spacings of the surface: beyond, each slide
+// and power cell reads 200-270 spheres (band 8), 59% of the rescues' time at bunny 64^3 for 9% of
+// its points. Against rescues at every depth, the shared meshes' L1 is 1.006x / 1.003x / 1.012x
+// at 64^3 / 128^3 / 256^3 (worst 1.027x, 1.010x, 1.019x; 4 spacings: 1.009x, 1.008x, 1.019x) and
+// bunny's contact points take 0.52x / 0.84x / 0.92x the time (docs/results/speed_s53.md).
+constexpr double kLatticeRescueReach = 5;
 // Edge fans on the grid itself refit their projection once, not twice, unless asked otherwise:
 // the second refit moved the shared meshes' L1 at 32^3 and 64^3 by 0.1-0.2% on average (at most
 // 1% on any mesh, either way) for a fifth of the projection's time at bunny 256^3. On the finer
@@ -54,6 +60,7 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.contact.near_miss_tolerance = kLocalNearMiss;
   lb.lattice_contact = lb.contact;
   lb.lattice_contact.sphere_slide_rounds = kLatticeSlideRounds;
+  lb.lattice_contact.rescue_reach = kLatticeRescueReach;
   lb.lattice_contact.tie_tolerance = options.lattice_tie_tolerance;
   lb.local = options.local;
   lb.subdivisions = options.subdivisions;
