@@ -127,17 +127,19 @@ void Lattice::gather(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, doubl
   const Eigen::Vector3d a = lo - slop, b = hi + slop;
   auto take = [&](const Run& run, int i, int j, int ka, int kb, double across) {
     const double x = origin_[0] + i * h_[0], y = origin_[1] + j * h_[1];
-    for (int k = ka; k <= kb; ++k) {
-      const long t = run.begin + k - run.first;
-      const double z = origin_[2] + k * h_[2];
-      const double dz = z < a[2] ? a[2] - z : (z > b[2] ? z - b[2] : 0.0);
-      const double bound = double(radius_up_[std::size_t(t)]) + widen;
-      if (!(across + dz * dz < bound * bound)) continue;
-      out.x.push_back(x), out.y.push_back(y), out.z.push_back(z);
-      out.r.push_back(std::abs(value(t)));
-      out.sample.push_back(t);
-    }
-    return false;
+    return for_each_chunk_near(run, ka, kb, a[2], b[2], across, widen, [&](int first, int last) {
+      for (int k = first; k <= last; ++k) {
+        const long t = run.begin + k - run.first;
+        const double z = origin_[2] + k * h_[2];
+        const double dz = z < a[2] ? a[2] - z : (z > b[2] ? z - b[2] : 0.0);
+        const double bound = double(radius_up_[std::size_t(t)]) + widen;
+        if (!(across + dz * dz < bound * bound)) continue;
+        out.x.push_back(x), out.y.push_back(y), out.z.push_back(z);
+        out.r.push_back(std::abs(value(t)));
+        out.sample.push_back(t);
+      }
+      return false;
+    });
   };
   for_each_column_near(a, b, widen, take);
 }

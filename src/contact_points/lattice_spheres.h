@@ -100,14 +100,7 @@ class Lattice {
   template <class F>
   bool any_sphere_near(const Eigen::Vector3d& c, double extra, long self, F&& f) const {
     auto search = [&](const Run& run, int, int, int ka, int kb, double across) {
-      const float* chunk_max = &chunk_max_[std::size_t(run.chunks - run.first / kChunk)];
-      // Chunk by chunk, each skipped where its largest sphere cannot reach c.
-      for (int q = ka / kChunk; q * kChunk <= kb; ++q) {
-        const int a = std::max(ka, q * kChunk), b = std::min(kb, q * kChunk + kChunk - 1);
-        const double below = origin_[2] + a * h_[2] - c[2], above = origin_[2] + b * h_[2] - c[2];
-        const double dz = below > 0 ? below : (above < 0 ? -above : 0.0),
-                     m = double(chunk_max[q]) + extra;
-        if (across + dz * dz >= m * m) continue;
+      return for_each_chunk_near(run, ka, kb, c[2], c[2], across, extra, [&](int a, int b) {
         for (int k = a; k <= b; ++k) {
           const int t = run.begin + k - run.first;
           const double z = origin_[2] + k * h_[2] - c[2], d2 = across + z * z;
@@ -117,8 +110,8 @@ class Lattice {
           const double exact = std::abs(value(t)) + extra;
           if (d2 < exact * exact && f(long(t), d2)) return true;
         }
-      }
-      return false;
+        return false;
+      });
     };
     return for_each_column_near(c, c, extra, search);
   }
@@ -130,6 +123,25 @@ class Lattice {
     int first;   // its first sample's k
     int chunks;  // where its chunks' maxima start in chunk_max_
   };
+
+  // Calls f(first, last) for each chunk's places of ka..kb along `run` (chunks of kChunk places
+  // from k = 0) whose largest sphere, grown by `widen`, can reach the heights [z0, z1] from a
+  // column `across` away (squared): a column through a wide band holds far more samples in reach
+  // of its largest sphere than spheres that reach. Stops where f returns true, and returns whether
+  // it did.
+  template <class F>
+  bool for_each_chunk_near(const Run& run, int ka, int kb, double z0, double z1, double across,
+                           double widen, F&& f) const {
+    const float* chunk_max = &chunk_max_[std::size_t(run.chunks - run.first / kChunk)];
+    for (int q = ka / kChunk; q * kChunk <= kb; ++q) {
+      const int first = std::max(ka, q * kChunk), last = std::min(kb, q * kChunk + kChunk - 1);
+      const double below = origin_[2] + first * h_[2], above = origin_[2] + last * h_[2];
+      const double gap = below > z1 ? below - z1 : (above < z0 ? z0 - above : 0.0),
+                   most = double(chunk_max[q]) + widen;
+      if (across + gap * gap < most * most && f(first, last)) return true;
+    }
+    return false;
+  }
 
   // Calls f(run, i, j, ka, kb, across) for the places ka..kb of each run along column (i, j) whose
   // spheres, grown by `widen`, can reach the box [lo, hi] (by the column's largest): `across`
