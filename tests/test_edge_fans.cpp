@@ -175,6 +175,11 @@ TEST(EdgeFans, RobustRoundsAreChosenOnlyWhenLeftToTheReconstruction) {
   c.thin_parts = Switch::Auto;
   c.local_projection.robust_rounds = 2;
   EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+  // The fans run no carving round (their regions need no repair); the repaired mesh runs three.
+  EXPECT_EQ(local_brick_options(c).carve_passes, 0);
+  EXPECT_TRUE(local_brick_options(c).carve);  // (the spheres still bound the edges' vertices)
+  c.local.edge_fans = false;
+  EXPECT_EQ(local_brick_options(c).carve_passes, 3);
 }
 
 // A vertex whose projection lands just beyond its cell's side slides along that side back to the

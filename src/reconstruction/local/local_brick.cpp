@@ -481,7 +481,7 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
     // On the grid itself, where the values are distances (as the carving takes them), the
     // samples' spheres bound the edges' vertices too.
     const bool distances =
-        carve && scale == 1 && !options.refine_zero_set && band.samples.points.rows() > 0;
+        options.carve && scale == 1 && !options.refine_zero_set && band.samples.points.rows() > 0;
     std::optional<detail::SampleSpheres> spheres;
     if (distances) {
       if (!band_lattice) band_lattice.emplace(block_geometry, band);
