@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -104,4 +105,31 @@ TEST(WindowedPasses, FindsTheFirstBadValueAndTheSignChangeAlike) {
   for (float& v : outside.values) v = std::abs(v) + 0.5f;
   EXPECT_THROW(require_sign_change(outside.view), Error);
   EXPECT_TRUE(outside.all_dropped());
+}
+
+// The first bad value of a float32 and a float64 grid, found block by block: every finite float
+// passes (the largest one too), an infinity or NaN of either sign does, and so does a double
+// beyond 1e100; the first one in the grid's order wins, across and within blocks.
+TEST(WindowedPasses, FirstNonFiniteTakesEveryFiniteFloatAndTheFirstBadValue) {
+  const Grid g = sample_grid(*make_builtin_shape("sphere"), 24, Bounds{});
+  RecordingView f(g, false);
+  f.values[7] = std::numeric_limits<float>::max();
+  f.values[2000] = -std::numeric_limits<float>::max();
+  f.values[5000] = std::numeric_limits<float>::denorm_min();
+  EXPECT_FALSE(first_non_finite(f.view).has_value());
+  f.values[4100] = NAN;
+  f.values[4099] = -INFINITY;
+  f.values[9000] = INFINITY;
+  auto bad = first_non_finite(f.view);
+  ASSERT_TRUE(bad.has_value());
+  EXPECT_EQ(g.index((*bad)[0], (*bad)[1], (*bad)[2]), std::size_t(4099));
+
+  Grid d = g;
+  d.values[11] = 1e99;
+  EXPECT_FALSE(first_non_finite(view_of(d)).has_value());
+  d.values[3333] = -1e101;
+  d.values[3334] = NAN;
+  bad = first_non_finite(view_of(d));
+  ASSERT_TRUE(bad.has_value());
+  EXPECT_EQ(g.index((*bad)[0], (*bad)[1], (*bad)[2]), std::size_t(3333));
 }

@@ -3,8 +3,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "input/windowed_passes.h"
@@ -66,8 +69,19 @@ std::size_t first_non_finite(const T* f, std::size_t n,
   return detail::windowed_reduce(
       drop_pages, f, n, n,
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
-        for (std::size_t i = r.begin(); i < r.end() && i < found; ++i)
-          if (!(std::abs(double(f[i])) <= kLargestValue)) return i;
+        // Blocks tested branch-free in the values' own type (vectorised; every finite float is
+        // within the limit), and only a block with a bad value searched.
+        constexpr std::size_t kBlock = 1024;
+        const T limit =
+            std::is_same_v<T, float> ? std::numeric_limits<float>::max() : T(kLargestValue);
+        for (std::size_t b = r.begin(); b < r.end() && b < found; b += kBlock) {
+          const std::size_t e = std::min(r.end(), b + kBlock);
+          int bad = 0;
+          for (std::size_t i = b; i < e; ++i) bad |= !(std::abs(f[i]) <= limit);
+          if (bad == 0) continue;
+          for (std::size_t i = b; i < e && i < found; ++i)
+            if (!(std::abs(double(f[i])) <= kLargestValue)) return i;
+        }
         return found;
       },
       [](std::size_t a, std::size_t b) { return std::min(a, b); },
