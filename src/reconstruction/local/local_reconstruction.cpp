@@ -47,6 +47,9 @@ using detail::VertexResult;
 struct BinnedPoints {
   std::vector<std::int64_t> cell;  // ascending
   std::vector<int> row;            // the point's row in the input
+  // Per column of cells (i, j): where its keys start in `cell`, then the end: a search then reads
+  // one column's few points, not every point (each step of which missed the cache).
+  std::vector<int> column_start;
 };
 
 BinnedPoints bin_points(const SurfaceCells& cells, const PointMatrix& points) {
@@ -69,6 +72,13 @@ BinnedPoints bin_points(const SurfaceCells& cells, const PointMatrix& points) {
     out.cell.push_back(key);
     out.row.push_back(r);
   }
+  const std::size_t columns = std::size_t(cells.cell_dims[0]) * std::size_t(cells.cell_dims[1]);
+  out.column_start.resize(columns + 1);
+  tbb::parallel_for(std::size_t(0), columns + 1, [&](std::size_t column) {
+    out.column_start[column] = int(std::lower_bound(out.cell.begin(), out.cell.end(),
+                                                    std::int64_t(column) * cells.cell_dims[2]) -
+                                   out.cell.begin());
+  });
   return out;
 }
 
@@ -91,7 +101,11 @@ void gather_points(const SurfaceCells& cells, const BinnedPoints& bins, const Po
       const std::array<int, 3> first_cell{at[0] + di, at[1] + dj, k0};
       if (!cells.contains_cell(first_cell)) continue;
       const std::int64_t last_key = cells.key({at[0] + di, at[1] + dj, k1});
-      auto it = std::lower_bound(bins.cell.begin(), bins.cell.end(), cells.key(first_cell));
+      const std::size_t column =
+          std::size_t(first_cell[0]) * std::size_t(cells.cell_dims[1]) + std::size_t(first_cell[1]);
+      auto it = std::lower_bound(bins.cell.begin() + bins.column_start[column],
+                                 bins.cell.begin() + bins.column_start[column + 1],
+                                 cells.key(first_cell));
       for (; it != bins.cell.end() && *it <= last_key; ++it) {
         const int r = bins.row[std::size_t(it - bins.cell.begin())];
         const Eigen::Vector3d p = points.row(r).transpose();
