@@ -268,6 +268,39 @@ TEST(LocalBrick, ABrickReadThroughItsSourceEqualsTheGridInMemory) {
   EXPECT_GE(released, with_surface);  // (a brick without surface only reads its block)
 }
 
+TEST(LocalBrick, ANonFiniteValueInTheGridOrABlockIsAnError) {
+  // The whole grid is checked once, before its bricks copy their blocks; a block read through a
+  // BlockSource (the Python module's and Dask's bricks) is checked as it is read.
+  Grid g = sample_grid(*make_builtin_shape("torus"), 32, Bounds{});
+  g.values[Eigen::Index(g.index(20, 16, 9))] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(local_mesh_in_bricks(view_of(g), LocalBrickOptions(), 12), Error);
+  LocalBrickOptions o;
+  o.band.truncation_mode = TruncationMode::Resolved;
+  std::vector<double> values;
+  BlockSource source;
+  source.dims = g.dims;
+  source.read = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    GridView block = view_of(g);
+    block.first = lo;
+    block.whole = g.dims;
+    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+    values.clear();
+    for (int i = lo[0]; i < hi[0]; ++i)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        for (int k = lo[2]; k < hi[2]; ++k)
+          values.push_back(g.values[Eigen::Index(g.index(i, j, k))]);
+    block.data = values.data();
+    return block;
+  };
+  try {
+    local_brick_piece(source, {16, 12, 4}, {24, 20, 12}, o);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("non-finite value at [20, 16, 9]"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(LocalBrick, NothingReadsTheGridAfterABrickSaysItIsDone) {
   // Values spoilt (NaN) from the first grid_read on change nothing: the bricks free their
   // copied blocks there. Default options, so the carving reads the grid before it.

@@ -146,7 +146,8 @@ void validate(const GridView& block, const Index3& own_first, const Index3& own_
               const LocalBrickOptions& o) {
   validate_grid_geometry(block);
   // Named by its global [i, j, k], in the words of the marching cubes bricks.
-  if (const auto at = first_non_finite(block))
+  const auto at = block.values_checked ? std::nullopt : first_non_finite(block);
+  if (at)
     throw Error("the grid has a non-finite value at [" + std::to_string((*at)[0]) + ", " +
                 std::to_string((*at)[1]) + ", " + std::to_string((*at)[2]) + "]");
   const Index3 n = block.whole_dims();

@@ -57,6 +57,7 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
   });
   block.data = values.data();
   block.type = std::is_same_v<T, float> ? ScalarType::Float32 : ScalarType::Float64;
+  block.values_checked = true;  // (local_mesh_in_bricks validated the whole grid's values)
   return block;
 }
 
