@@ -15,7 +15,6 @@
 #include <utility>
 
 #include "pipeline/uninitialised_allocator.h"
-#include "reconstruction/free_memory.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/reconstruction/local_brick.h"
 
@@ -306,7 +305,9 @@ Mesh mesh_in_bricks(const BlockSource& source,
           local_brick_piece(source, first, end, options, &wider[std::size_t(b)]);
       if (source.release) source.release();  // (a brick without surface keeps its block)
       if (options.grid_read) options.grid_read();
-      detail::return_free_memory();
+      // (The freed memory stays for the next brick, of the same size: handed back to the system
+      // after each brick, it came back as new pages the kernel zeroed. Bunny 1024^3 0.88x the
+      // time at a peak of 1.04 GB instead of 0.86 GB; 512^3 0.90x at the same peak.)
     }
     if (options.progress) options.progress(int(b) + 1, total);
   });
