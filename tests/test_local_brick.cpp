@@ -33,6 +33,23 @@ Mesh bricked(const Grid& g, const LocalBrickOptions& o, int brick, int threads) 
 
 constexpr double kTestSag = 0.01;
 
+// The samples [lo, hi) of `whole` copied into `values`, viewed as a block of it (what a
+// BlockSource's reader returns).
+GridView copied_block(const GridView& whole, const std::array<int, 3>& lo,
+                      const std::array<int, 3>& hi, std::vector<double>& values) {
+  GridView block = whole;
+  block.first = lo;
+  block.whole = whole.dims;
+  for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+  values.clear();
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int k = lo[2]; k < hi[2]; ++k) values.push_back(whole.value(whole.index(i, j, k)));
+  block.data = values.data();
+  block.type = ScalarType::Float64;
+  return block;
+}
+
 }  // namespace
 
 TEST(LocalBrick, BricksEqualOneBrickBitForBit) {
@@ -233,16 +250,7 @@ TEST(LocalBrick, ABrickReadThroughItsSourceEqualsTheGridInMemory) {
   source.dims = g.dims;
   source.read = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
     reads.push_back({lo, hi});
-    GridView block = whole;
-    block.first = lo;
-    block.whole = g.dims;
-    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
-    values.clear();
-    for (int i = lo[0]; i < hi[0]; ++i)
-      for (int j = lo[1]; j < hi[1]; ++j)
-        for (int k = lo[2]; k < hi[2]; ++k) values.push_back(whole.value(whole.index(i, j, k)));
-    block.data = values.data();
-    return block;
+    return copied_block(whole, lo, hi, values);
   };
   source.release = [&] { ++released; };
   const int halo = local_brick_halo(o, g.dims);
@@ -279,18 +287,9 @@ TEST(LocalBrick, ANonFiniteValueInTheGridOrABlockIsAnError) {
   std::vector<double> values;
   BlockSource source;
   source.dims = g.dims;
+  const GridView whole = view_of(g);
   source.read = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
-    GridView block = view_of(g);
-    block.first = lo;
-    block.whole = g.dims;
-    for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
-    values.clear();
-    for (int i = lo[0]; i < hi[0]; ++i)
-      for (int j = lo[1]; j < hi[1]; ++j)
-        for (int k = lo[2]; k < hi[2]; ++k)
-          values.push_back(g.values[Eigen::Index(g.index(i, j, k))]);
-    block.data = values.data();
-    return block;
+    return copied_block(whole, lo, hi, values);
   };
   try {
     local_brick_piece(source, {16, 12, 4}, {24, 20, 12}, o);
