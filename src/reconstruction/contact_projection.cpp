@@ -97,11 +97,11 @@ RowMoments weighted_moments(const RowMoments* m, const double* w, std::size_t ro
   return sum;
 }
 
-// The normal equations' matrix (its lower triangle) from the summed moments.
+// The normal equations' (symmetric) matrix from the summed moments.
 Matrix6 moment_matrix(const RowMoments& s) {
   Matrix6 M;
   for (int j = 0; j < 6; ++j)
-    for (int i = j; i < 6; ++i) M(i, j) = s[std::size_t(kPairMonomial[i][j])];
+    for (int i = 0; i < 6; ++i) M(i, j) = s[std::size_t(kPairMonomial[i][j])];
   return M;
 }
 
