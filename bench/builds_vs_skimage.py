@@ -1,5 +1,6 @@
 """Two builds of `sdfcontour` against scikit-image's marching cubes, alternating per grid:
-scikit-image (`np.load` + `marching_cubes`, in its own process), build A, build B, REPEATS times;
+scikit-image (bench/scale.py's peer: `np.load` + `marching_cubes`, in its own process), build A,
+build B, REPEATS times;
 prints a JSON line per grid (each run's seconds, the medians' ratios) and, with --png, draws the
 geometric means over the meshes per grid size against issue 64's targets. Ours is the whole CLI
 run (reading, contouring, writing the PLY) with default options.
@@ -21,9 +22,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import geomean, read_jsonl  # noqa: E402
 
-SKIMAGE = ("import sys, time\nimport numpy as np\nfrom skimage import measure\n"
-           "t = time.perf_counter()\nmeasure.marching_cubes(np.load(sys.argv[1]), 0.0)\n"
-           "print(time.perf_counter() - t)")
+SCALE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scale.py")
 TARGETS = {64: 20, 256: 5, 512: 3}  # issue 64's, 2 cores
 
 
@@ -74,9 +73,11 @@ def main():
         for grid in [] if args.from_jsonl else args.grids:
             runs = {"A": [], "B": [], "skimage": []}
             for _ in range(args.repeats):
-                r = subprocess.run([sys.executable, "-c", SKIMAGE, grid], capture_output=True,
-                                   text=True, check=True)
-                runs["skimage"].append(float(r.stdout))
+                # (bench/scale.py's peer: np.load and marching_cubes in their own process)
+                r = subprocess.run([sys.executable, SCALE, "--peer", "skimage", grid,
+                                    os.path.join(tmp, "skimage.ply")],
+                                   capture_output=True, text=True, check=True)
+                runs["skimage"].append(json.loads(r.stdout)["seconds"])
                 runs["A"].append(ours(args.a, grid, out))
                 runs["B"].append(ours(args.b, grid, out))
             m = {k: statistics.median(v) for k, v in runs.items()}

@@ -74,13 +74,14 @@ std::size_t first_non_finite(const T* f, std::size_t n,
         constexpr std::size_t kBlock = 1024;
         const T limit =
             std::is_same_v<T, float> ? std::numeric_limits<float>::max() : T(kLargestValue);
+        auto bad = [limit](T x) { return !(std::abs(x) <= limit); };
         for (std::size_t b = r.begin(); b < r.end() && b < found; b += kBlock) {
           const std::size_t e = std::min(r.end(), b + kBlock);
-          int bad = 0;
-          for (std::size_t i = b; i < e; ++i) bad |= !(std::abs(f[i]) <= limit);
-          if (bad == 0) continue;
+          int any = 0;
+          for (std::size_t i = b; i < e; ++i) any |= bad(f[i]);
+          if (any == 0) continue;
           for (std::size_t i = b; i < e && i < found; ++i)
-            if (!(std::abs(double(f[i])) <= kLargestValue)) return i;
+            if (bad(f[i])) return i;
         }
         return found;
       },
