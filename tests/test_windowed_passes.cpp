@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <utility>
 #include <vector>
 
 #include "input/windowed_passes.h"
+#include "pipeline/grid_measures.h"
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/input/noise.h"
@@ -132,4 +134,59 @@ TEST(WindowedPasses, FirstNonFiniteTakesEveryFiniteFloatAndTheFirstBadValue) {
   bad = first_non_finite(view_of(d));
   ASSERT_TRUE(bad.has_value());
   EXPECT_EQ(g.index((*bad)[0], (*bad)[1], (*bad)[2]), std::size_t(3333));
+}
+
+// measure_grid reads the gradient norms and the noise in one pass: the same numbers as their own
+// passes, and the noise as a brute-force median of the fourth differences finds it, on a
+// truncated, noisy torus (stencils that touch a clamped value left out).
+TEST(WindowedPasses, OnePassMeasuresEqualTheirOwnPassesAndABruteForceNoise) {
+  const int n = 48;
+  const double h = 2.0 / (n - 1);
+  Grid g = sample_grid_truncated(*make_builtin_shape("torus"), n, Bounds{}, 3 * h);
+  std::uint32_t state = 12345;  // a fixed LCG: noise of about 0.02 h on the unclamped values
+  const double t0 = g.values.maxCoeff();
+  for (Eigen::Index i = 0; i < g.values.size(); ++i) {
+    state = state * 1664525u + 1013904223u;
+    if (std::abs(g.values[i]) < 0.9 * t0)
+      g.values[i] += 0.04 * h * (double(state >> 8) / 16777216.0 - 0.5);
+  }
+  for (bool dropping : {false, true}) {
+    RecordingView grid(g, dropping);
+    ContourOptions options;
+    const detail::GridMeasures m = detail::measure_grid(grid.view, options);
+    ASSERT_TRUE(m.truncation.detected());
+    const GradientNormSummary s = gradient_norm_summary(grid.view, m.truncation);
+    EXPECT_GT(s.count, 500);
+    EXPECT_EQ(m.gradient_norms.count, s.count);
+    EXPECT_EQ(m.gradient_norms.median, s.median);
+    EXPECT_EQ(m.gradient_norms.low, s.low);
+    EXPECT_EQ(m.gradient_norms.high, s.high);
+    EXPECT_EQ(m.gradient_norms.smooth_fraction, s.smooth_fraction);
+    EXPECT_EQ(m.gradient_norms.smooth_spread, s.smooth_spread);
+    const double noise = noise_level(grid.view, m.truncation);
+    EXPECT_EQ(m.noise, noise / h);  // (a slope near 1: no rescaling)
+
+    std::vector<double> d4;
+    const long stride[3] = {long(n) * n, long(n), 1};
+    for (int i = 2; i < n - 2; ++i)
+      for (int j = 2; j < n - 2; ++j)
+        for (int k = 2; k < n - 2; ++k) {
+          const long p = long(g.index(i, j, k));
+          if (!(std::abs(double(grid.values[std::size_t(p)])) < 3 * h)) continue;
+          for (int a = 0; a < 3; ++a) {
+            double sum = 0;
+            bool clamped = false;
+            for (int o = -2; o <= 2; ++o) {
+              const double v = grid.values[std::size_t(p + o * stride[a])];
+              clamped |= m.truncation.truncated(v);
+              sum += (o == 0 ? 6.0 : std::abs(o) == 1 ? -4.0 : 1.0) * v;
+            }
+            if (!clamped) d4.push_back(std::abs(sum));
+          }
+        }
+    ASSERT_GT(d4.size(), std::size_t(1000));
+    std::nth_element(d4.begin(), d4.begin() + long(d4.size() / 2), d4.end());
+    EXPECT_DOUBLE_EQ(noise, 1.4826 * d4[d4.size() / 2] / std::sqrt(70.0));
+    EXPECT_NEAR(noise / h, 0.04 / std::sqrt(12.0), 0.01);  // the uniform noise's deviation
+  }
 }

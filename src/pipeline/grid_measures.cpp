@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "band/near_surface.h"
 #include "sdfcontour/input/noise.h"
 
 namespace sdfcontour::detail {
@@ -13,10 +14,21 @@ GridMeasures measure_grid(const GridView& grid, const ContourOptions& options) {
   validate_grid(grid);
   GridMeasures m;
   const Truncation truncation = m.truncation = resolve_truncation(grid, options.band);
-  m.gradient_norms = gradient_norm_summary(grid, truncation);
+  // The gradient norms and the noise from one read of the grid where it is whole (their samples
+  // are then the same: 2 or more from its sides).
+  double noise = 0;
+  if (grid.first == std::array<int, 3>{0, 0, 0} && grid.dims == grid.whole_dims()) {
+    const std::vector<NearSurfaceValues> slabs =
+        whole_grid_near_surface(grid, truncation, true, true);
+    m.gradient_norms = norm_summary_of(slabs);
+    noise = noise_of(slabs);
+  } else {
+    m.gradient_norms = gradient_norm_summary(grid, truncation);
+    noise = noise_level(grid, truncation);
+  }
   const double slope = m.gradient_norms.median;
   const double scale = std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.5 ? slope : 1;
-  m.noise = noise_level(grid, truncation) / scale / grid.spacing().maxCoeff();
+  m.noise = noise / scale / grid.spacing().maxCoeff();
   return m;
 }
 
