@@ -355,3 +355,32 @@ TEST(LatticeContactPoints, TheLatticesBallsPushAsTheBallsAlone) {
     }
   }
 }
+
+// A box's face samples next to its edges: their central stencils reach across the face's region
+// into the edge's, where the distance curves, but one side of each stencil is exactly linear and
+// gives the face's exact slope, so their points lie on the faces to rounding (the central
+// stencils put them 1e-4-4e-3 h off). Samples whose nearest feature is an edge or a corner keep
+// points near their feature.
+TEST(LatticeContactPoints, FaceSamplesNextToAnEdgeTakeTheExactlyLinearSide) {
+  const Vector3d half(0.6, 0.45, 0.35);
+  const auto shape = make_builtin_shape("box");
+  const Grid g = sample_grid(*shape, 48, Bounds{});
+  const double h = g.spacing().maxCoeff();
+  const BandSamples band = band_of(g, 4);
+  const ContactPoints cp = lattice_contact_points(g, band, default_lattice_contact());
+  int face_samples = 0, next_to_an_edge = 0;
+  for (Eigen::Index r = 0; r < cp.points.rows(); ++r) {
+    const Vector3d p = band.samples.points.row(cp.samples[std::size_t(r)]).transpose();
+    const Vector3d q = p.cwiseAbs() - half;
+    // Outside, beyond exactly one face's plane: the face is its nearest feature.
+    if ((q.array() > 0).count() != 1) continue;
+    ++face_samples;
+    // Within two spacings of another face's plane: its stencil along that axis meets the edge's
+    // region.
+    next_to_an_edge += ((q.array() > -2.01 * h) && (q.array() <= 0)).any();
+    EXPECT_LT(std::abs(shape->distance(cp.points.row(r).transpose())), 1e-12 * h)
+        << "sample at " << p.transpose();
+  }
+  EXPECT_GT(face_samples, 2000);
+  EXPECT_GT(next_to_an_edge, 200);
+}
