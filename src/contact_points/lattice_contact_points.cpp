@@ -67,7 +67,7 @@ int lattice_contact_reach(const GridGeometry& grid, double largest,
   // The candidate lies |value| <= largest from its sample, a slid point |value| farther; a sphere
   // holding either has its centre within `largest` of it.
   const double spheres = (options.sphere_slide_rounds > 0 ? 3 : 2) * largest;
-  return int(std::ceil(spheres / grid.spacing().minCoeff())) + 2;
+  return int(std::ceil(spheres / grid.spacing().minCoeff())) + 3;
 }
 
 ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples& band,

@@ -10,17 +10,12 @@
 #include <vector>
 
 #include "contact_points/convex_cell.h"
+#include "contact_points/lattice_gradient.h"
 #include "contact_points/lattice_spheres.h"
 #include "contact_points/orthocentre.h"
 #include "sdfcontour/contact_points/contact_points.h"
 
 namespace sdfcontour::detail::lattice_points {
-
-// A second difference over this many spacings (|v+ - 2 v + v-| > kKink * h) marks a crease or a
-// medial axis between the samples: the gradient then takes the one-sided difference on the side
-// whose own second difference is smaller (ENO). Smooth exact distances stay far below it: a
-// sphere of radius r gives h / r at most.
-constexpr double kKink = 0.5;
 
 // A sample whose neighbours miss its gradient's prediction by more than the options'
 // max_slope_miss but by no more than this still slides onto its sphere out of the others' (after
@@ -28,10 +23,6 @@ constexpr double kKink = 0.5;
 // the only points. Farther misses lie across creases and medial axes, where the slide ends off the
 // surface (with any miss: the cube at 64^3 0.6 h off, armadillo 128^3 1.4x MC's L-infinity).
 constexpr double kSlideSlopeMiss = 0.55;
-
-// Second differences within this fraction of the values (and the spacing) count as exactly
-// linear: the rounding of float64 values, far under a float32 grid's.
-constexpr double kLinear = 1e-13;
 
 // Gradients shorter than this have no usable direction.
 constexpr double kTinyGradient = 1e-300;
@@ -111,7 +102,7 @@ class SamplePoint {
   // The band samples around this one, read column by column once: its 3x3x3 block, and two
   // steps along each axis.
   void gather_neighbours() {
-    const std::array<int, 3> at = l_.index(s_);
+    const std::array<int, 3>& at = at_ = l_.index(s_);
     long centre[5];
     l_.along(at[0], at[1], at[2] - 2, at[2] + 2, centre);
     for (int di = -1; di <= 1; ++di)
@@ -137,6 +128,10 @@ class SamplePoint {
 
   // The value of the band sample `offset` (-2..2) steps along `axis`, if there is one.
   bool value_at(int axis, int offset, double& out) const {
+    if (offset == 0) {
+      out = v_;
+      return true;
+    }
     long t;
     if (offset == 2 || offset == -2) {
       t = two_steps_[std::size_t(axis)][offset > 0];
@@ -150,42 +145,22 @@ class SamplePoint {
     return true;
   }
 
-  // ENO: central where smooth, else the smoother side's one-sided difference.
+  // Per axis, axis_slope()'s rules (lattice_gradient.h).
   bool gradient(Eigen::Vector3d& g) const {
     for (int a = 0; a < 3; ++a) {
-      const double h = l_.spacing()[a];
-      double minus = 0, plus = 0, minus2 = 0, plus2 = 0;
-      const bool has_minus = value_at(a, -1, minus), has_plus = value_at(a, 1, plus);
-      if (has_minus && has_plus) {
-        g[a] = (plus - minus) / (2 * h);
-        const double central = std::abs(plus - 2 * v_ + minus);
-        const bool smooth = central <= kKink * h;
-        const double left = value_at(a, -2, minus2) ? std::abs(v_ - 2 * minus + minus2) : INFINITY;
-        const double right = value_at(a, 2, plus2) ? std::abs(plus2 - 2 * plus + v_) : INFINITY;
-        // Three samples whose values are exactly linear (a plane's distance) give the exact slope
-        // where the wider stencil reaches across the plane's region into a curved one (a face's
-        // samples next to a cube's edge: 1e-4-4e-3 h off it with the wider stencils).
-        const double linear = kLinear * (std::abs(v_) + std::abs(minus) + std::abs(plus) + h);
-        if (central <= linear && std::max(left, right) > linear) {
-          // (g[a] is the central difference.)
-        } else if (central > linear && std::min(left, right) <= linear) {
-          g[a] = left <= right ? (v_ - minus) / h : (plus - v_) / h;
-        } else if (smooth && left <= kKink * h && right <= kKink * h) {
-          // Smooth over five samples: fourth order (bunny 64^3, contact points' median distance
-          // 0.00140 h -> 0.00116 h, p95 0.0147 h -> 0.0128 h; the regular triangulation's 0.00108
-          // and 0.0191).
-          g[a] = (minus2 - 8 * minus + 8 * plus - plus2) / (12 * h);
-        } else if (!smooth) {
-          if (left < right) g[a] = (v_ - minus) / h;
-          if (right < left) g[a] = (plus - v_) / h;
-        }
-      } else if (has_plus) {
-        g[a] = (plus - v_) / h;
-      } else if (has_minus) {
-        g[a] = (v_ - minus) / h;
-      } else {
-        return false;
-      }
+      AxisStencil stencil;
+      for (int k = -2; k <= 2; ++k)
+        stencil.has[std::size_t(k + 2)] = value_at(a, k, stencil.v[std::size_t(k + 2)]);
+      auto far = [&](int offset, double& out) {
+        std::array<int, 3> at = at_;
+        at[std::size_t(a)] += offset;
+        long t;
+        l_.along(at[0], at[1], at[2], at[2], &t);
+        if (t < 0) return false;
+        out = l_.value(t);
+        return true;
+      };
+      if (!axis_slope(stencil, l_.spacing()[a], far, g[a])) return false;
     }
     return g.norm() > kTinyGradient && g.allFinite();
   }
@@ -384,6 +359,7 @@ class SamplePoint {
 
   const Lattice& l_;
   const ContactPointOptions& o_;
+  std::array<int, 3> at_;                         // the sample's place (gather_neighbours())
   std::array<long, 27> block_;                    // gather_neighbours()
   std::array<std::array<long, 2>, 3> two_steps_;  // per axis: the samples 2 steps before, after
   long s_;

@@ -45,7 +45,7 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
 
 /// How far (in samples, along each axis) a sample's contact point reads the band when no band
 /// sample's |value| exceeds `largest` (distance units; the whole grid's bound, not a block's): the
-/// sphere filter's reach (three times `largest` with a slide, twice without) and the stencils' 2.
+/// sphere filter's reach (three times `largest` with a slide, twice without) and the stencils' 3.
 int lattice_contact_reach(const GridGeometry& grid, double largest,
                           const ContactPointOptions& options);
 
