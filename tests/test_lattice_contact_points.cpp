@@ -421,6 +421,28 @@ TEST(LatticeContactPoints, AxisSlopeIsExactOnALinesDistanceBesideAPlanes) {
   EXPECT_GT(curved, 500);
 }
 
+// Four values that mirror each other about their middle lie on a parabola whatever the field:
+// they give no exact slope. A smooth field symmetric about the point between two samples (a
+// torus's mirror plane on an even grid) keeps the fourth-order slope, exact on a parabola (the
+// squares' rule gave -0.140 for -0.125 here).
+TEST(LatticeContactPoints, AxisSlopeIgnoresMirroredSquares) {
+  using detail::lattice_points::AxisStencil;
+  const double h = 0.01, m = 0.5 * h;
+  auto f = [&](double x) { return h + (x - m) * (x - m) / (8 * h); };
+  AxisStencil s;
+  for (int k = -2; k <= 2; ++k) {
+    s.has[std::size_t(k + 2)] = true;
+    s.v[std::size_t(k + 2)] = f(k * h);
+  }
+  auto far = [&](int offset, double& out) {
+    out = f(offset * h);
+    return true;
+  };
+  double slope = NAN;
+  ASSERT_TRUE(detail::lattice_points::axis_slope(s, h, far, slope));
+  EXPECT_NEAR(slope, -m / (4 * h), 1e-12);
+}
+
 // A box's samples whose nearest feature is an edge or a corner: their distances are a line's or a
 // point's, whose squares are exactly quadratic along each axis, so their points lie on the box to
 // rounding (with the fourth-order stencils 7% of them were 1e-4-2e-3 h off, the cube at 256^3).

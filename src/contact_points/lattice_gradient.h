@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 namespace sdfcontour::detail::lattice_points {
 
@@ -28,17 +29,73 @@ namespace detail_axis {
 
 // Whether four consecutive values' squares lie on one parabola (their third difference vanishes
 // to rounding): a distance to a line or a point along the axis, as in a polyhedron's edge and
-// corner wedges, where no three values are linear.
-inline bool squares_quadratic(double a, double b, double c, double d, double h) {
-  a *= a, b *= b, c *= c, d *= d;
-  return std::abs(d - 3 * c + 3 * b - a) <= kLinear * (a + 3 * b + 3 * c + d + h * h);
+// corner wedges, where no three values are linear. Not where they mirror each other about their
+// middle (a torus's across its mirror plane between two samples): any such four pass.
+inline bool squares_quadratic(const double* v, double h) {
+  double q[4], scale = h * h;
+  for (int k = 0; k < 4; ++k) scale += 4 * (q[k] = v[k] * v[k]);
+  const double tolerance = kLinear * scale;
+  if (std::abs(q[3] - q[0]) <= tolerance && std::abs(q[2] - q[1]) <= tolerance) return false;
+  return std::abs(q[3] - 3 * q[2] + 3 * q[1] - q[0]) <= tolerance;
+}
+
+// The values at offsets -3..3 along the axis: the stencil's, and the farther ones read once when
+// asked for.
+template <class Far>
+class AxisLine {
+ public:
+  AxisLine(const AxisStencil& s, Far& far) : s_(s), far_(far) {}
+  // The four values from `first` on into out; false if the band lacks one.
+  bool window(int first, double* out) {
+    for (int k = 0; k < 4; ++k)
+      if (!get(first + k, out[k])) return false;
+    return true;
+  }
+
+ private:
+  bool get(int offset, double& out) {
+    if (offset >= -2 && offset <= 2) {
+      out = s_.v[std::size_t(offset + 2)];
+      return s_.has[std::size_t(offset + 2)];
+    }
+    const std::size_t slot = offset < 0 ? 0 : 1;
+    if (state_[slot] == 0) state_[slot] = far_(offset, far_values_[slot]) ? 1 : 2;
+    out = far_values_[slot];
+    return state_[slot] == 1;
+  }
+  const AxisStencil& s_;
+  Far& far_;
+  std::array<char, 2> state_{};  // offsets -3, 3: unread, read, absent
+  std::array<double, 2> far_values_{};
+};
+
+// The exact slope from four values around the sample whose squares are quadratic: centred
+// (windows holding offsets -1..1) where `centred`, else one-sided toward `side` (offsets 0..3
+// times side). False if no window passes.
+template <class Far>
+bool squares_slope(AxisLine<Far>& line, double v, double h, bool centred, int side, double& slope) {
+  double w[4];
+  if (centred) {
+    for (const int first : {-2, -1})
+      if (line.window(first, w) && squares_quadratic(w, h)) {
+        const int at = -first;  // the sample's place in w
+        slope = (w[at + 1] * w[at + 1] - w[at - 1] * w[at - 1]) / (4 * h * v);
+        return true;
+      }
+    return false;
+  }
+  if (!line.window(side > 0 ? 0 : -3, w) || !squares_quadratic(w, h)) return false;
+  const int at = side > 0 ? 0 : 3, d = side;
+  const double f0 = w[at] * w[at], f1 = w[at + d] * w[at + d], f2 = w[at + 2 * d] * w[at + 2 * d];
+  slope = d * (4 * f1 - 3 * f0 - f2) / (4 * h * v);
+  return true;
 }
 
 }  // namespace detail_axis
 
 // The derivative along the axis at the stencil's sample, with spacing h; `far(offset, value)`
-// reads the sample at offset -3 or 3 (false if the band has none), only where needed. Rules, in
-// order:
+// reads the sample at offset -3 or 3 (false if the band has none), only where needed.
+// Rules, in order:
 // - three exactly linear values (a plane's distance) give the exact slope, central or one-sided,
 //   where the wider stencil reaches into a curved region (a face's samples next to a cube's edge);
 // - four values whose squares are exactly quadratic (a distance to a line or a point) give the
@@ -48,7 +105,8 @@ inline bool squares_quadratic(double a, double b, double c, double d, double h) 
 // False if neither neighbour is in the band.
 template <class Far>
 bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope) {
-  using detail_axis::squares_quadratic;
+  using detail_axis::squares_slope;
+  detail_axis::AxisLine<std::remove_reference_t<Far>> line(s, far);
   const auto& v = s.v;
   const bool has_minus = s.has[1], has_plus = s.has[3];
   if (!has_minus || !has_plus) {
@@ -60,11 +118,9 @@ bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope) {
     slope = d * (v1 - v[2]) / h;
     if (!s.has[std::size_t(2 + 2 * d)]) return true;
     const double v2 = v[std::size_t(2 + 2 * d)];
-    double v3 = 0;
     const double linear = kLinear * (std::abs(v[2]) + std::abs(v1) + std::abs(v2) + h);
-    if (std::abs(v2 - 2 * v1 + v[2]) <= linear) return true;
-    if (v[2] != 0 && far(3 * d, v3) && squares_quadratic(v[2], v1, v2, v3, h))
-      slope = d * (4 * v1 * v1 - 3 * v[2] * v[2] - v2 * v2) / (2 * h) / (2 * v[2]);
+    if (std::abs(v2 - 2 * v1 + v[2]) > linear && v[2] != 0)
+      squares_slope(line, v[2], h, false, d, slope);
     return true;
   }
   slope = (v[3] - v[1]) / (2 * h);
@@ -78,23 +134,11 @@ bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope) {
     slope = left <= right ? (v[2] - v[1]) / h : (v[3] - v[2]) / h;
     return true;
   }
-  if (v[2] != 0 && central > linear) {
-    const double twice = 2 * v[2], own = v[2] * v[2];
-    if ((s.has[0] && squares_quadratic(v[0], v[1], v[2], v[3], h)) ||
-        (s.has[4] && squares_quadratic(v[1], v[2], v[3], v[4], h))) {
-      slope = (v[3] * v[3] - v[1] * v[1]) / (2 * h) / twice;
-      return true;
-    }
-    double out = 0;
-    if (s.has[4] && far(3, out) && squares_quadratic(v[2], v[3], v[4], out, h)) {
-      slope = (4 * v[3] * v[3] - 3 * own - v[4] * v[4]) / (2 * h) / twice;
-      return true;
-    }
-    if (s.has[0] && far(-3, out) && squares_quadratic(out, v[0], v[1], v[2], h)) {
-      slope = (3 * own - 4 * v[1] * v[1] + v[0] * v[0]) / (2 * h) / twice;
-      return true;
-    }
-  }
+  if (v[2] != 0 && central > linear &&
+      (squares_slope(line, v[2], h, true, 0, slope) ||
+       squares_slope(line, v[2], h, false, 1, slope) ||
+       squares_slope(line, v[2], h, false, -1, slope)))
+    return true;
   if (smooth && left <= kKink * h && right <= kKink * h) {
     // Smooth over five samples: fourth order (bunny 64^3, contact points' median distance
     // 0.00140 h -> 0.00116 h, p95 0.0147 h -> 0.0128 h; the regular triangulation's 0.00108 and
