@@ -62,12 +62,16 @@ detail::Unwritten<int> number_kept(const detail::Unwritten<Outcome>& outcome, st
 
 }  // namespace
 
-int lattice_contact_reach(const GridGeometry& grid, double largest,
-                          const ContactPointOptions& options) {
+int lattice_contact_reach(double largest_in_spacings, const ContactPointOptions& options) {
   // The candidate lies |value| <= largest from its sample, a slid point |value| farther; a sphere
   // holding either has its centre within `largest` of it.
-  const double spheres = (options.sphere_slide_rounds > 0 ? 3 : 2) * largest;
-  return int(std::ceil(spheres / grid.spacing().minCoeff())) + 3;
+  const double spheres = (options.sphere_slide_rounds > 0 ? 3 : 2) * largest_in_spacings;
+  return int(std::ceil(spheres)) + 3;
+}
+
+int lattice_contact_reach(const GridGeometry& grid, double largest,
+                          const ContactPointOptions& options) {
+  return lattice_contact_reach(largest / grid.spacing().minCoeff(), options);
 }
 
 ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples& band,

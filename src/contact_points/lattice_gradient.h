@@ -103,8 +103,9 @@ bool squares_slope(AxisLine<Far>& line, double v, double h, bool centred, int si
 // - smooth over five samples: fourth order;
 // - across a crease or medial axis: the smoother side's one-sided difference (ENO).
 // False if neither neighbour is in the band.
+// Without `squares`, the second rule is skipped (and `far` never called).
 template <class Far>
-bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope) {
+bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope, bool squares = true) {
   using detail_axis::squares_slope;
   detail_axis::AxisLine<std::remove_reference_t<Far>> line(s, far);
   const auto& v = s.v;
@@ -119,7 +120,7 @@ bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope) {
     if (!s.has[std::size_t(2 + 2 * d)]) return true;
     const double v2 = v[std::size_t(2 + 2 * d)];
     const double linear = kLinear * (std::abs(v[2]) + std::abs(v1) + std::abs(v2) + h);
-    if (std::abs(v2 - 2 * v1 + v[2]) > linear && v[2] != 0)
+    if (squares && std::abs(v2 - 2 * v1 + v[2]) > linear && v[2] != 0)
       squares_slope(line, v[2], h, false, d, slope);
     return true;
   }
@@ -134,7 +135,7 @@ bool axis_slope(const AxisStencil& s, double h, Far&& far, double& slope) {
     slope = left <= right ? (v[2] - v[1]) / h : (v[3] - v[2]) / h;
     return true;
   }
-  if (v[2] != 0 && central > linear &&
+  if (squares && v[2] != 0 && central > linear &&
       (squares_slope(line, v[2], h, true, 0, slope) ||
        squares_slope(line, v[2], h, false, 1, slope) ||
        squares_slope(line, v[2], h, false, -1, slope)))

@@ -160,7 +160,7 @@ class SamplePoint {
         out = l_.value(t);
         return true;
       };
-      if (!axis_slope(stencil, l_.spacing()[a], far, g[a])) return false;
+      if (!axis_slope(stencil, l_.spacing()[a], far, g[a], o_.exact_wedge_slopes)) return false;
     }
     return g.norm() > kTinyGradient && g.allFinite();
   }

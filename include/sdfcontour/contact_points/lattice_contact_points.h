@@ -48,5 +48,7 @@ ContactPoints lattice_contact_points(const GridGeometry& grid, const BandSamples
 /// sphere filter's reach (three times `largest` with a slide, twice without) and the stencils' 3.
 int lattice_contact_reach(const GridGeometry& grid, double largest,
                           const ContactPointOptions& options);
+/// The same with `largest` in (the smallest) spacings.
+int lattice_contact_reach(double largest_in_spacings, const ContactPointOptions& options);
 
 }  // namespace sdfcontour

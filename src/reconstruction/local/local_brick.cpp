@@ -256,7 +256,9 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
   });
   if (local_lattice_points(options, n)) {
     require_lattice_reach(block, band, flagged, options.lattice_contact, largest);
-    return with_depths(lattice_contact_points(block, band, options.lattice_contact, &flagged));
+    ContactPointOptions contact = options.lattice_contact;
+    contact.exact_wedge_slopes = contact.exact_wedge_slopes && block.type == ScalarType::Float64;
+    return with_depths(lattice_contact_points(block, band, contact, &flagged));
   }
   const Bounds within = certain_box(block);
   BrickOptions bricks;
@@ -306,10 +308,14 @@ bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>
 
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
   const double largest = largest_in_spacings(options, dims);
-  const int stars = flag_reach(options, largest, dims) + int(auto_brick_halo(largest, 1.0)) +
-                    int(std::ceil(2 * largest)) + 1;
+  const int reach = flag_reach(options, largest, dims);
+  const int stars = reach + int(auto_brick_halo(largest, 1.0)) + int(std::ceil(2 * largest)) + 1;
+  // The lattice's points read lattice_contact_reach beyond the samples flagged for them, which
+  // reach `reach` beyond the owned end (exclusive) inclusively.
+  const int lattice = reach + lattice_contact_reach(largest, options.lattice_contact) + 1;
   // Carving: the balls around the owned edges' vertices (within 2 cells of the owned samples).
-  return std::max(stars, int(std::ceil(detail::carving_band(options, dims))) + 2 + ring(options));
+  return std::max(
+      {stars, lattice, int(std::ceil(detail::carving_band(options, dims))) + 2 + ring(options)});
 }
 
 double local_values_reach(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
