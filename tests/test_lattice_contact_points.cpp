@@ -218,6 +218,27 @@ TEST(LatticeContactPoints, LocalBricksEqualOneBrick) {
   }
 }
 
+TEST(LatticeContactPoints, EdgeFannedBricksReadTheirBlocksOnce) {
+  // With the edge fans (no repair ring) the halo is the lattice's reach: each brick's block holds
+  // what its points read, the first time (a halo one sample short made 7 of bunny 512^3's 8
+  // bricks read theirs again), and the bricks give the whole grid's mesh.
+  const Grid g = sample_grid(*make_builtin_shape("torus"), 64, Bounds{});
+  ContourOptions c;
+  c.local.edge_fans = true;
+  LocalBrickOptions o = local_brick_options(c);
+  o.lattice_points = true;
+  o.subdivisions = 0;
+  o.thin_parts = 0;
+  o.band.band = 2;  // (a whole number of spacings with the margin: the halo is the lattice's)
+  const Mesh whole = local_mesh_in_bricks(view_of(g), o, 0);
+  LocalBricksStats stats;
+  const Mesh m = local_mesh_in_bricks(view_of(g), o, 24, &stats);
+  EXPECT_GT(stats.bricks, 8);
+  EXPECT_EQ(stats.wider_halos, 0);
+  EXPECT_EQ(m.vertices, whole.vertices);
+  EXPECT_EQ(m.triangles, whole.triangles);
+}
+
 TEST(LatticeContactPoints, TheDefaultTakesTheLatticeFrom64SamplesPerAxis) {
   // --gradient auto: the lattice's points with their tie tolerance from 64 samples per axis (the
   // whole grid's longest), the triangulation's below; each is the explicit choice bit for bit.
