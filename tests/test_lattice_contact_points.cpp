@@ -75,6 +75,23 @@ double deepest_hold(const BandSamples& band, long s, const Vector3d& c, double t
   return deepest;
 }
 
+// axis_slope() at x = 0 of f sampled every h along an axis, with the samples before offset
+// -cut beyond the grid's side (cut 3: none).
+template <class F>
+bool slope_along(const F& f, double h, int cut, double& slope) {
+  detail::lattice_points::AxisStencil s;
+  for (int k = -2; k <= 2; ++k) {
+    s.has[std::size_t(k + 2)] = k >= -cut;
+    s.v[std::size_t(k + 2)] = f(k * h);
+  }
+  auto far = [&](int offset, double& out) {
+    if (offset < -cut) return false;
+    out = f(offset * h);
+    return true;
+  };
+  return detail::lattice_points::axis_slope(s, h, far, slope);
+}
+
 }  // namespace
 
 TEST(LatticeContactPoints, EqualTheRegularTriangulationsOnAPlane) {
@@ -412,7 +429,6 @@ TEST(LatticeContactPoints, FaceSamplesNextToAnEdgeTakeTheExactlyLinearSide) {
 // from the flat side's linear values or the curved side's quadratic squares, central or one-sided,
 // also where the grid's side cuts the stencil (a curved sample's forward window).
 TEST(LatticeContactPoints, AxisSlopeIsExactOnALinesDistanceBesideAPlanes) {
-  using detail::lattice_points::AxisStencil;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double h = 0.01;
@@ -421,20 +437,10 @@ TEST(LatticeContactPoints, AxisSlopeIsExactOnALinesDistanceBesideAPlanes) {
     const double x0 = (unit(rng) - 0.5) * 8 * h, c = (0.05 + 3 * unit(rng)) * h;
     auto f = [&](double x) { return std::hypot(std::max(x - x0, 0.0), c); };
     const int cut = trial % 3 == 0 ? int(unit(rng) * 3) : 3;  // samples before the grid's side
-    AxisStencil s;
-    for (int k = -2; k <= 2; ++k) {
-      s.has[std::size_t(k + 2)] = k >= -cut;
-      s.v[std::size_t(k + 2)] = f(k * h);
-    }
-    auto far = [&](int offset, double& out) {
-      if (offset < -cut) return false;
-      out = f(offset * h);
-      return true;
-    };
     // (Cut within a spacing, a flat sample whose only side reaches the kink has no exact window.)
     if (cut < 2 && x0 > 0 && x0 < 3 * h) continue;
     double slope = NAN;
-    ASSERT_TRUE(detail::lattice_points::axis_slope(s, h, far, slope));
+    ASSERT_TRUE(slope_along(f, h, cut, slope));
     const double exact = std::max(-x0, 0.0) / f(0);
     curved += x0 < 0;
     EXPECT_NEAR(slope, exact, 1e-11) << "x0 " << x0 / h << " h, c " << c / h << " h, cut " << cut;
@@ -447,20 +453,10 @@ TEST(LatticeContactPoints, AxisSlopeIsExactOnALinesDistanceBesideAPlanes) {
 // torus's mirror plane on an even grid) keeps the fourth-order slope, exact on a parabola (the
 // squares' rule gave -0.140 for -0.125 here).
 TEST(LatticeContactPoints, AxisSlopeIgnoresMirroredSquares) {
-  using detail::lattice_points::AxisStencil;
   const double h = 0.01, m = 0.5 * h;
   auto f = [&](double x) { return h + (x - m) * (x - m) / (8 * h); };
-  AxisStencil s;
-  for (int k = -2; k <= 2; ++k) {
-    s.has[std::size_t(k + 2)] = true;
-    s.v[std::size_t(k + 2)] = f(k * h);
-  }
-  auto far = [&](int offset, double& out) {
-    out = f(offset * h);
-    return true;
-  };
   double slope = NAN;
-  ASSERT_TRUE(detail::lattice_points::axis_slope(s, h, far, slope));
+  ASSERT_TRUE(slope_along(f, h, 3, slope));
   EXPECT_NEAR(slope, -m / (4 * h), 1e-12);
 }
 

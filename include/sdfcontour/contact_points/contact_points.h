@@ -52,9 +52,9 @@ struct ContactPointOptions {
   double rescue_reach = 0;
   /// The lattice's points only: look for four values along an axis whose squares are exactly
   /// quadratic (a distance to a line or a point, as next to a polyhedron's edges and corners),
-  /// which reads a third sample along the axis where the stencil has none. Off for float32
-  /// values, whose rounding (6e-8) never meets the test's 1e-13: the same points, without the
-  /// reads (bunny 512^3's contact points took 1.22x the time with them).
+  /// which reads a third sample along the axis where the stencil has none. The local bricks turn
+  /// it off for float32 values, whose rounding (6e-8) never meets the test's 1e-13: the same
+  /// points, without the reads (bunny 512^3's contact points took 1.22x the time with them).
   bool exact_wedge_slopes = true;
 };
 

@@ -33,9 +33,10 @@ struct RefinedGrid {
 ///     spacing of the surface the tricubic one (tricubic_value, where its stencil holds no value
 ///     at or beyond `truncation` in size), closer to a distance's zero set, and where the two
 ///     disagree on the side, the signed distance to the nearest contact point's tangent plane;
-///     behind every tangent plane of the contact points within a spacing (or in front of every
-///     one), the nearest plane's distance, where the interpolants said the other side (next to a
-///     box's edge, where the field kinks);
+///     at a crease (two of the contact points within a spacing with normals more than a radian
+///     apart), behind every one of their tangent planes (or in front of every one), the signed
+///     distance to the plane it lies closest to, where the interpolants said the other side
+///     (next to a box's edge, where the field kinks);
 ///  2. the side of a sample's ball (radius |value|, which holds no surface) that holds x;
 ///  3. the other side where the contact points within a spacing say that a thin part passes:
 ///     x within a quarter spacing of the slab between two tangent planes that face away from
