@@ -361,14 +361,15 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
       c->add_option(
            "--subdivisions", a.subdivisions,
            "GCP local reconstruction: midpoint subdivisions of its mesh before projection onto "
-           "the contact points (auto: 2 below 96 samples per axis, else 1)")
+           "the contact points (auto: 2 below 64 samples per axis, else 1)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option(
            "--split-sag", a.split_sag,
            "GCP local reconstruction, after the projection: split each edge once more where "
            "its chord sags by more than this many spacings (its length times its ends' "
-           "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.004)")
+           "normals' turn / 8) and project the new vertices; 0 or off: no split (auto: 0.002 "
+           "from 64 to 95 samples per axis, else 0.004)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option(

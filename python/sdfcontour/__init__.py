@@ -145,11 +145,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         for scattered samples. CLI ``--reconstruction``.
     subdivisions : int or "auto"
         Local reconstruction: midpoint subdivisions before projection onto the contact points
-        (0 to 4; "auto": 2 below 96 samples per axis, else 1).
+        (0 to 4; "auto": 2 below 64 samples per axis, else 1).
     split_sag : float, "auto" or "off"
         Local reconstruction on grids: after the projection, each edge whose chord sags by more
         than this many spacings (its length times its ends' normals' turn / 8) is split once
-        more and its midpoint projected (0 to 1; "auto": 0.004). CLI ``--split-sag``.
+        more and its midpoint projected (0 to 1; "auto": 0.002 from 64 to 95 samples per axis,
+        else 0.004). CLI ``--split-sag``.
     thin_parts : bool or "auto"
         Local reconstruction on grids: find the parts thinner than a spacing that the samples
         straddle without a sign change (a wing, a blade) from the contact points on their two

@@ -25,11 +25,12 @@ bool auto_lattice_points(double samples_per_axis) {
 }
 
 int auto_subdivisions(double samples_per_axis) {
-  return samples_per_axis < 96 ? 2 : 1;
+  return samples_per_axis < 64 ? 2 : 1;
 }
 
-double auto_split_sag(double /*samples_per_axis*/) {
-  return 0.004;
+double auto_split_sag(double samples_per_axis) {
+  // One uniform level where two were (64-95): a finer split keeps the sag it would leave.
+  return samples_per_axis >= 64 && samples_per_axis < 96 ? 0.002 : 0.004;
 }
 
 bool auto_thin_parts(double samples_per_axis) {

@@ -81,17 +81,22 @@ std::string reconstruction_name(Reconstruction reconstruction);
 bool auto_local_reconstruction(double samples_per_axis);
 
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
-/// dimension): 2 below 96, else 1, and then auto_split_sag's edges once more (64^3: bunny 4.00e-4
-/// with 2 against 4.57e-4 with 1; at 128^3 a second uniform level is 2% closer than one level and
-/// the split, for 2.5x the triangles and 1.7x the time: `bench/local.py --methods mc --variant
-/// s1:"--subdivisions 1" --variant s2:"--subdivisions 2 --split-sag 0"`).
+/// dimension): 2 below 64, else 1, and then auto_split_sag's edges once more. At 64^3 one level
+/// and a split at 0.002 h against two levels and a split at 0.004 h, over the 17 shared meshes:
+/// 0.72x the time and 0.53x the triangles for 1.05x the L1 (hammer 1.15x, blub 1.10x; every mesh
+/// within 1.08x of the L1 issue 64 was filed against); at 32^3 the hammer lost 1.17x, so two
+/// levels stay below 64 (`bench/local.py --res 32,64 --methods mc --variant def:"" --variant
+/// s1a:"--subdivisions 1 --split-sag 0.002"`, docs/results/one_level_64_s57.md). At 128^3 a
+/// second uniform level is 2% closer than one level and the split, for 2.5x the triangles and
+/// 1.7x the time; at 256^3 no uniform level is 1.29x-1.42x the L1.
 int auto_subdivisions(double samples_per_axis);
 
 /// The local reconstruction's split_sag (LocalBrickOptions) for a grid `samples_per_axis` across:
-/// 0.004 spacings at any size. The 17 shared meshes' L1 over MC's (geometric means,
-/// `bench/local.py --res 32,64,128 --methods mc,gcp-local --variant nosplit:"--split-sag 0"`):
-/// 128^3 0.390x -> 0.356x for 1.6x the triangles, 64^3 0.257x -> 0.253x, 32^3 0.295x -> 0.292x;
-/// the analytic torus at 256^3 splits no edge (its chords sag less).
+/// 0.002 spacings from 64 to 95 (one uniform level where 32^3 keeps two: 0.004 there left blub's
+/// L1 1.15x, spot's 1.08x the two levels'), else 0.004. The 17 shared meshes' L1 over MC's
+/// (geometric means, `bench/local.py --res 32,64,128 --methods mc,gcp-local --variant
+/// nosplit:"--split-sag 0"`): 128^3 0.390x -> 0.356x for 1.6x the triangles, 32^3 0.295x ->
+/// 0.292x; the analytic torus at 256^3 splits no edge (its chords sag less).
 double auto_split_sag(double samples_per_axis);
 /// Whether the local reconstruction looks for parts thinner than a spacing
 /// (LocalBrickOptions::thin_parts) on a grid `samples_per_axis` across: below 192, where the grid
