@@ -467,6 +467,43 @@ TEST(LocalReconstruction, SmoothShapeIsCloseToTheSurface) {
   EXPECT_LT(mean_error(local), 0.5 * mean_error(mc));
 }
 
+TEST(LocalReconstruction, OneUniformLevelFrom64SamplesSplitsWhereTheSurfaceCurves) {
+  // From 64 samples per axis the default subdivides once and splits the edges that sag. On the
+  // smooth torus at 64^3, where the chords' sag is all of the error (measured at the triangles'
+  // centroids), the split takes most of it away: 4.4e-4 h against 1.5e-3 h unsplit and 2.4e-4 h
+  // with two uniform levels, for 0.65x their triangles (marching cubes: 1.3e-2 h).
+  const auto torus = make_builtin_shape("torus");
+  const Grid g = grid_of(*torus, 64);
+  const double h = g.spacing().maxCoeff();
+  auto run = [&](int subdivisions, double split_sag) {
+    ContourOptions options;
+    options.reconstruction = Reconstruction::Local;
+    options.subdivisions = subdivisions;
+    options.split_sag = split_sag;
+    return *contour(grid_input(g), options).mesh;
+  };
+  auto centroid_error = [&](const Mesh& m) {
+    double sum = 0;
+    for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) c += m.vertices.row(m.triangles(t, k)).transpose() / 3;
+      sum += std::abs(torus->distance(c));
+    }
+    return sum / double(m.triangles.rows()) / h;
+  };
+  const Mesh automatic = run(-1, -1), one_level = run(1, 0.002);
+  EXPECT_EQ(automatic.vertices, one_level.vertices);
+  EXPECT_EQ(automatic.triangles, one_level.triangles);
+  expect_closed_manifold(automatic);
+  const Mesh two = run(2, 0.004), unsplit = run(1, 0);
+  EXPECT_LT(automatic.triangles.rows(), 0.7 * double(two.triangles.rows()));
+  EXPECT_GT(automatic.triangles.rows(), 2 * unsplit.triangles.rows());
+  const double error = centroid_error(automatic);
+  EXPECT_LT(error, 2 * centroid_error(two));
+  EXPECT_LT(error, 0.5 * centroid_error(unsplit));
+  EXPECT_LT(error, 0.05 * centroid_error(marching_cubes(g)));
+}
+
 TEST(LocalReconstruction, RejectsMismatchedInput) {
   const Grid g = grid_of(*make_builtin_shape("sphere"), 8);
   EXPECT_THROW(local_reconstruction(view_of(g), PointMatrix(3, 3), PointMatrix(2, 3)), Error);
