@@ -83,15 +83,15 @@ bool auto_local_reconstruction(double samples_per_axis);
 /// The local reconstruction's subdivisions for a grid `samples_per_axis` across (its largest
 /// dimension): 2 below 64, else 1, and then auto_split_sag's edges once more. At 64^3 one level
 /// and a split at 0.002 h against two levels and a split at 0.004 h, over the 17 shared meshes:
-/// 0.72x the time and 0.53x the triangles for 1.05x the L1 (hammer 1.15x, blub 1.10x; every mesh
-/// within 1.08x of the L1 issue 64 was filed against); at 32^3 the hammer lost 1.17x, so two
-/// levels stay below 64 (`bench/local.py --res 32,64 --methods mc --variant def:"" --variant
-/// s1a:"--subdivisions 1 --split-sag 0.002"`, docs/results/one_level_64_s57.md). On a smooth
-/// surface the sag is all of the error: the analytic torus at 64^3 is 4.4e-4 h from its
-/// triangles' centroids on average against two levels' 2.4e-4 h (marching cubes' 1.3e-2 h),
-/// for 0.65x their triangles. At 128^3 a
-/// second uniform level is 2% closer than one level and the split, for 2.5x the triangles and
-/// 1.7x the time; at 256^3 no uniform level is 1.29x-1.42x the L1.
+/// 0.72x the time and 0.49x the triangles for 1.03x the L1 (hammer 1.15x, blub 1.10x; every mesh
+/// within 1.08x of the L1 issue 64 was filed against); at 32^3 the hammer's went to 1.14x that,
+/// so two levels stay below 64 (`bench/local.py --res 32,64 --methods mc --variant def:""
+/// --variant s1a:"--subdivisions 1 --split-sag 0.002"`, docs/results/one_level_64_s57.md). On a
+/// smooth surface the sag is all of the error: the analytic torus at 64^3 is 4.4e-4 h from its
+/// triangles' centroids on average against two levels' 2.4e-4 h (marching cubes' 1.3e-2 h), for
+/// 0.65x their triangles. At 128^3 a second uniform level is 2% closer than one level and the
+/// split, for 2.5x the triangles and 1.7x the time; at 256^3 no uniform level is 1.29x-1.42x the
+/// L1.
 int auto_subdivisions(double samples_per_axis);
 
 /// The local reconstruction's split_sag (LocalBrickOptions) for a grid `samples_per_axis` across:
