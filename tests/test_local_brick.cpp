@@ -116,16 +116,7 @@ TEST(LocalBrick, SaggingEdgesSplitAlikeInBricksAndComeCloserToTheSurface) {
   const Mesh uniform = bricked(g, o, 0, 2);
   EXPECT_GT(whole.triangles.rows(), unsplit.triangles.rows() * 5 / 4);
   EXPECT_LT(whole.triangles.rows(), uniform.triangles.rows() * 3 / 4);
-  // Mean |distance| at the triangles' centroids (a chord's worst point, not its ends).
-  auto mean_error = [&](const Mesh& m) {
-    double sum = 0;
-    for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
-      Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) c += m.vertices.row(m.triangles(t, k)).transpose() / 3;
-      sum += std::abs(shape->distance(c));
-    }
-    return sum / double(m.triangles.rows());
-  };
+  auto mean_error = [&](const Mesh& m) { return test::mean_centroid_distance(m, *shape); };
   EXPECT_LT(mean_error(whole), 0.8 * mean_error(unsplit));
 }
 

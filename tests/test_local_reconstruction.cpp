@@ -482,15 +482,7 @@ TEST(LocalReconstruction, OneUniformLevelFrom64SamplesSplitsWhereTheSurfaceCurve
     options.split_sag = split_sag;
     return *contour(grid_input(g), options).mesh;
   };
-  auto centroid_error = [&](const Mesh& m) {
-    double sum = 0;
-    for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
-      Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) c += m.vertices.row(m.triangles(t, k)).transpose() / 3;
-      sum += std::abs(torus->distance(c));
-    }
-    return sum / double(m.triangles.rows()) / h;
-  };
+  auto centroid_error = [&](const Mesh& m) { return test::mean_centroid_distance(m, *torus) / h; };
   const Mesh automatic = run(-1, -1), one_level = run(1, 0.002);
   EXPECT_EQ(automatic.vertices, one_level.vertices);
   EXPECT_EQ(automatic.triangles, one_level.triangles);

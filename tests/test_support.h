@@ -130,6 +130,18 @@ inline Canonical canonical(const Mesh& m) {
   return c;
 }
 
+/// Mean |shape's distance| at the triangles' centroids of `m`: a chord's worst point, not its
+/// ends, so where a mesh of a smooth surface sags.
+inline double mean_centroid_distance(const Mesh& m, const AnalyticShape& shape) {
+  double sum = 0;
+  for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) c += m.vertices.row(m.triangles(t, k)).transpose() / 3;
+    sum += std::abs(shape.distance(c));
+  }
+  return sum / double(m.triangles.rows());
+}
+
 /// Closed (every edge has two triangles), consistently oriented, outward (positive volume).
 inline void expect_closed_and_outward(const Mesh& m) {
   const MeshTopology t = mesh_topology(m);
