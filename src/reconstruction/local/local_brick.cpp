@@ -309,16 +309,15 @@ bool local_thin_parts(const LocalBrickOptions& options, const std::array<int, 3>
 int local_brick_halo(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
   const double largest = largest_in_spacings(options, dims);
   const int reach = flag_reach(options, largest, dims);
-  const int stars = reach + int(auto_brick_halo(largest, 1.0)) + int(std::ceil(2 * largest)) + 1;
   // The lattice's points read lattice_contact_reach beyond the samples flagged for them, which
-  // reach `reach` beyond the owned end (exclusive) inclusively; the triangulation's need only
-  // the stars' reach.
-  const int lattice = local_lattice_points(options, dims)
-                          ? reach + lattice_contact_reach(largest, options.lattice_contact) + 1
-                          : 0;
+  // reach `reach` beyond the owned end (exclusive) inclusively; the triangulation's, the stars
+  // of those samples.
+  const int points =
+      local_lattice_points(options, dims)
+          ? reach + lattice_contact_reach(largest, options.lattice_contact) + 1
+          : reach + int(auto_brick_halo(largest, 1.0)) + int(std::ceil(2 * largest)) + 1;
   // Carving: the balls around the owned edges' vertices (within 2 cells of the owned samples).
-  return std::max(
-      {stars, lattice, int(std::ceil(detail::carving_band(options, dims))) + 2 + ring(options)});
+  return std::max(points, int(std::ceil(detail::carving_band(options, dims))) + 2 + ring(options));
 }
 
 double local_values_reach(const LocalBrickOptions& options, const std::array<int, 3>& dims) {
