@@ -11,6 +11,9 @@
 #include <set>
 #include <vector>
 
+#include "reconstruction/local/brick_reach.h"
+#include "reconstruction/local/brick_stages.h"
+#include "sdfcontour/contact_points/lattice_contact_points.h"
 #include "sdfcontour/extraction/marching.h"
 #include "sdfcontour/input/builtin_shapes.h"
 #include "sdfcontour/metrics/mesh_properties.h"
@@ -554,4 +557,55 @@ TEST(LocalBrick, AutoBandIsTheLocalReconstructionsOwn) {
   const Mesh six = local_mesh_in_bricks(view_of(g), o, 64);
   EXPECT_EQ(lattice.vertices, six.vertices);
   EXPECT_EQ(lattice.triangles, six.triangles);
+}
+
+TEST(LocalBrick, EachStageKeepsATiltedPlaneExact) {
+  // The brick's stages one at a time (brick_stages.h), on a tilted plane's exact distances with
+  // the defaults (thin parts' finer grid, two levels, projection, carving): the dual mesh's
+  // vertices, the fit's and the bounded moves' each lie on the plane, and the undoing finds
+  // nothing to undo. A stage that moved a vertex off a linear field would show here alone.
+  const Eigen::Vector3d normal = Eigen::Vector3d(1, 2, 3).normalized();
+  const int n = 24;
+  Grid g;
+  g.dims = {n, n, n};
+  g.values.resize(Eigen::Index(g.size()));
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+        g.values[Eigen::Index(g.index(i, j, k))] = g.point(i, j, k).dot(normal) - 0.1;
+  const GridView view = view_of(g);
+  LocalBrickOptions o = local_brick_options(ContourOptions{});
+  o.band.resolved = resolve_truncation(view, o.band);
+  o.band.truncation_mode = TruncationMode::Resolved;
+  ASSERT_TRUE(local_thin_parts(o, g.dims));
+  auto off_plane = [&](const PointMatrix& V) {
+    double worst = 0;
+    for (Eigen::Index v = 0; v < V.rows(); ++v)
+      worst = std::max(worst, std::abs(V.row(v).dot(normal) - 0.1));
+    return worst;
+  };
+  const BandSamples band = select_band(view, detail::resolved_band(o, g.dims));
+  const ContactPoints cp = lattice_contact_points(view, band, o.lattice_contact);
+  ASSERT_GT(cp.size(), 500);
+  EXPECT_LT(off_plane(cp.points), 1e-12);
+  const Eigen::VectorXd depths = contact_depths(cp, band.samples.values);
+  LocalPiece piece;
+  const std::array<int, 3> first{0, 0, 0};
+  detail::BrickDual dual = detail::brick_dual_mesh(view, band, cp, depths, first, g.dims, o, piece);
+  ASSERT_EQ(dual.scale, 2);
+  ASSERT_GT(dual.near.triangles.rows(), 500);
+  detail::settle_dual_vertices(view, band, o, dual);
+  EXPECT_LT(off_plane(dual.near.vertices), 1e-12);
+  const double h = view.spacing().maxCoeff();
+  detail::BrickSurface surface = detail::surface_on_contact_points(dual, cp, depths, h, g.dims, o);
+  ASSERT_GT(surface.sub.mesh.triangles.rows(), 4 * dual.near.triangles.rows() - 1);
+  EXPECT_LT(off_plane(surface.sub.mesh.vertices), 1e-12);
+  EXPECT_LT(off_plane(surface.reconstructed), 1e-12);
+  const std::vector<std::uint64_t> keys;
+  detail::settle_vertices(view, band, std::nullopt, o, keys, dual, surface);
+  EXPECT_LT(off_plane(surface.sub.mesh.vertices), 1e-12);
+  const PointMatrix settled = surface.sub.mesh.vertices;
+  detail::untangle_moves(band, h, o, surface);
+  EXPECT_EQ(surface.sub.mesh.vertices, settled);
+  EXPECT_TRUE(self_intersecting_triangles(surface.sub.mesh).empty());
 }

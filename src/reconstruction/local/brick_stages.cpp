@@ -33,10 +33,10 @@ LocalReconstructionOptions on_finer_grid(LocalReconstructionOptions o, int scale
 }
 
 // An edge-fanned mesh's vertices back into their fan regions (keep_in_fan_regions): per vertex of
-// `sub`, its crossings' mean where it is a dual vertex (`keys`, `means`: the dual mesh's).
-void keep_fans_in_regions(const std::vector<std::uint64_t>& keys, const PointMatrix& means,
-                          const BrickDual& dual, const SampleSpheres* spheres,
-                          BrickSurface& surface) {
+// `sub`, its crossings' mean where it is a dual vertex (`keys`: the dual mesh's vertices' names).
+void keep_fans_in_regions(const std::vector<std::uint64_t>& keys, const BrickDual& dual,
+                          const SampleSpheres* spheres, BrickSurface& surface) {
+  const PointMatrix& means = dual.crossing_means;
   SubdividedMesh& sub = surface.sub;
   PointMatrix sub_means = sub.mesh.vertices;
   std::vector<std::pair<std::uint64_t, Eigen::Index>> named(keys.size());
@@ -173,8 +173,7 @@ void settle_vertices(const GridGeometry& block_geometry, const BandSamples& band
       if (!band_lattice) band_lattice.emplace(block_geometry, band);
       spheres.emplace(*band_lattice, block_geometry.first);
     }
-    keep_fans_in_regions(dual_keys, dual.crossing_means, dual, spheres ? &*spheres : nullptr,
-                         surface);
+    keep_fans_in_regions(dual_keys, dual, spheres ? &*spheres : nullptr, surface);
   }
   // The grid's box holds the mesh: the projection can push a vertex by its side a hair beyond
   // (a sphere cut by the side x = 0.3 at 48^3: 0.001 h), and a clamp that makes a crossing is
