@@ -120,12 +120,11 @@ BrickSurface surface_on_contact_points(const BrickDual& dual, const ContactPoint
   // Sharp edges stay as the quadrics put them: the smooth fit and the balls would round them.
   // Corners that the samples around them share (exact, as a box's) stay always.
   surface.corners = shared_corners(sub);
-  auto fixed = [&] { return options.keep_features ? &sub.on_feature : &surface.corners; };
   // (The points indexed once, for the split's vertices too.)
   std::optional<ContactProjector> projector;
   if (options.project && cp.size() > 0) {
     projector.emplace(cp.points, cp.normals, depths, h, options.projection);
-    projector->project(sub.mesh, fixed());
+    projector->project(sub.mesh, &surface.fixed(options));
   }
   const double sag = options.split_sag >= 0 ? options.split_sag : auto_split_sag(largest);
   // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
@@ -138,7 +137,7 @@ BrickSurface surface_on_contact_points(const BrickDual& dual, const ContactPoint
   if (!fans && sag > 0 && levels <= 3 && projector && !options.refine_zero_set)
     split_sagging_edges(dual.near, levels, sag * h, *projector, options, sub, surface.reconstructed,
                         surface.corners);
-  surface.stay = *fixed();
+  surface.stay = surface.fixed(options);
   return surface;
 }
 

@@ -60,6 +60,12 @@ struct BrickSurface {
   PointMatrix reconstructed;  ///< per vertex: where the reconstruction put it (before any move)
   std::vector<char> corners;  ///< per vertex: a corner that the samples around it share
   std::vector<char> stay;     ///< per vertex: not carved (those the fit kept; empty: none)
+
+  /// Per vertex: left where the reconstruction put it by the fit (with keep_features every
+  /// feature vertex, else the shared corners).
+  const std::vector<char>& fixed(const LocalBrickOptions& options) const {
+    return options.keep_features ? sub.on_feature : corners;
+  }
 };
 
 /// The subdivided mesh (auto_subdivisions levels of `n`, the whole grid's size, or the options'),

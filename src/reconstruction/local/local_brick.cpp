@@ -267,9 +267,8 @@ LocalPiece local_brick_piece(const GridView& block, const std::array<int, 3>& ow
   // Where the values are no distances, their spheres are not empty either: those vertices go
   // onto the grid's own zero set and are not carved.
   if (options.refine_zero_set)
-    detail::refine_vertices_on_zero_set(
-        block, band, options, surface.sub.mesh,
-        options.keep_features ? &surface.sub.on_feature : &surface.corners, &surface.stay);
+    detail::refine_vertices_on_zero_set(block, band, options, surface.sub.mesh,
+                                        &surface.fixed(options), &surface.stay);
   clock.next(3);
   detail::settle_vertices(block_geometry, band, std::move(wider), options, dual_keys, dual,
                           surface);
