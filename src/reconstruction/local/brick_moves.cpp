@@ -1,7 +1,10 @@
 // A brick's moves of its mesh after the projection (brick_moves.h).
 #include "reconstruction/local/brick_moves.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -41,26 +44,34 @@ constexpr double kSideMargin = 0.1;
 // See put_samples_on_their_sides.
 constexpr double kNearbyTriangles = 2;
 
-// Flags, per sample, whether it lies within `reach` of a flagged vertex (cubes of side reach).
+// Flags, per sample, whether it lies within `reach` of a flagged vertex (cubes of side reach): its
+// cube is one of the flagged vertices' cubes or their neighbours, which are listed once, so that
+// each sample searches once.
 std::vector<char> samples_near(const PointMatrix& samples, const PointMatrix& V,
                                const std::vector<char>& flagged, double reach) {
-  std::vector<std::array<long, 3>> cubes;
+  using Cube = std::array<long, 3>;
   auto cube = [&](const Eigen::Vector3d& p) {
-    return std::array<long, 3>{long(std::floor(p[0] / reach)), long(std::floor(p[1] / reach)),
-                               long(std::floor(p[2] / reach))};
+    return Cube{long(std::floor(p[0] / reach)), long(std::floor(p[1] / reach)),
+                long(std::floor(p[2] / reach))};
   };
+  std::vector<Cube> cubes;
   for (Eigen::Index v = 0; v < V.rows(); ++v)
     if (flagged[std::size_t(v)]) cubes.push_back(cube(V.row(v).transpose()));
   std::sort(cubes.begin(), cubes.end());
   cubes.erase(std::unique(cubes.begin(), cubes.end()), cubes.end());
+  std::vector<Cube> around;
+  around.reserve(27 * cubes.size());
+  for (const Cube& c : cubes)
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) around.push_back({c[0] + dx, c[1] + dy, c[2] + dz});
+  tbb::parallel_sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
   std::vector<char> out(std::size_t(samples.rows()), 0);
+  if (around.empty()) return out;
   tbb::parallel_for(Eigen::Index(0), samples.rows(), [&](Eigen::Index i) {
-    const auto c = cube(samples.row(i).transpose());
-    for (long dx = -1; dx <= 1 && !out[std::size_t(i)]; ++dx)
-      for (long dy = -1; dy <= 1 && !out[std::size_t(i)]; ++dy)
-        for (long dz = -1; dz <= 1 && !out[std::size_t(i)]; ++dz)
-          out[std::size_t(i)] = std::binary_search(
-              cubes.begin(), cubes.end(), std::array<long, 3>{c[0] + dx, c[1] + dy, c[2] + dz});
+    out[std::size_t(i)] =
+        std::binary_search(around.begin(), around.end(), cube(samples.row(i).transpose()));
   });
   return out;
 }
@@ -71,10 +82,15 @@ std::vector<int> triangles_near_samples(const Mesh& mesh, const PointMatrix& poi
                                         const std::vector<int>& which, double reach) {
   const TriangleMatrix& F = mesh.triangles;
   const PointMatrix& V = mesh.vertices;
-  double longest = 0;
-  for (Eigen::Index t = 0; t < F.rows(); ++t)
-    for (int c = 0; c < 3; ++c)
-      longest = std::max(longest, (V.row(F(t, c)) - V.row(F(t, (c + 1) % 3))).squaredNorm());
+  const double longest = tbb::parallel_reduce(
+      tbb::blocked_range<Eigen::Index>(0, F.rows()), 0.0,
+      [&](const tbb::blocked_range<Eigen::Index>& r, double most) {
+        for (Eigen::Index t = r.begin(); t < r.end(); ++t)
+          for (int c = 0; c < 3; ++c)
+            most = std::max(most, (V.row(F(t, c)) - V.row(F(t, (c + 1) % 3))).squaredNorm());
+        return most;
+      },
+      [](double a, double b) { return std::max(a, b); });
   PointMatrix at(Eigen::Index(which.size()), 3);
   for (std::size_t q = 0; q < which.size(); ++q) at.row(Eigen::Index(q)) = points.row(which[q]);
   const std::vector<char> near =
