@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <cmath>
 #include <random>
 
 #include "reconstruction/nearest_triangles.h"
@@ -102,6 +103,63 @@ TEST(NearestTriangles, DegenerateTrianglesAsTheirEdges) {
   const auto at_point = tree.closest(Eigen::Vector3d(0.5, 0.5, 0.5001));
   ASSERT_EQ(at_point.triangle, 1);
   EXPECT_NEAR((at_point.point - Eigen::Vector3d(0.5, 0.5, 0.5)).norm(), 0, 1e-15);
+}
+
+// A surface of like triangles and queries near it, many straight over its vertices, whose nearest
+// point several triangles share: each answer is the least distance's least index, as the scan
+// finds it with the same projection (the rings read cell by cell, nearest first).
+TEST(NearestTriangles, NearASurfaceTheLeastIndexAmongTies) {
+  constexpr int n = 60;
+  Mesh mesh;
+  mesh.vertices.resize(n * n, 3);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = -1 + 2.0 * i / (n - 1), y = -1 + 2.0 * j / (n - 1);
+      mesh.vertices.row(i * n + j) << x, y, 0.2 * std::sin(3 * x) * std::cos(2 * y);
+    }
+  mesh.triangles.resize(2 * (n - 1) * (n - 1), 3);
+  int t = 0;
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < n; ++j) {
+      const int a = i * n + j, b = a + n, c = a + 1, d = b + 1;
+      mesh.triangles.row(t++) << a, b, d;
+      mesh.triangles.row(t++) << a, d, c;
+    }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::uniform_int_distribution<int> vertex(0, n * n - 1);
+  PointMatrix queries(600, 3);
+  for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+    const Eigen::RowVector3d up(0, 0, 0.02 * unit(rng));
+    queries.row(q) = q % 2 ? mesh.vertices.row(vertex(rng)) + up
+                           : Eigen::RowVector3d(unit(rng), unit(rng), 0.25 * unit(rng));
+  }
+  auto projected = [&](int f, const Eigen::Vector3d& p) {
+    auto point = [&](int c) {
+      const auto v = mesh.vertices.row(mesh.triangles(f, c));
+      return K::Point_3(v[0], v[1], v[2]);
+    };
+    const K::Point_3 x = K().construct_projected_point_3_object()(
+        K::Triangle_3(point(0), point(1), point(2)), K::Point_3(p[0], p[1], p[2]));
+    return (Eigen::Vector3d(x.x(), x.y(), x.z()) - p).squaredNorm();
+  };
+  const detail::NearestTriangles tree(mesh, nullptr, true);
+  int ties = 0;
+  for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+    const Eigen::Vector3d p = queries.row(q).transpose();
+    double best = INFINITY;
+    int first = -1, tied = 0;
+    for (int f = 0; f < mesh.triangles.rows(); ++f) {
+      const double d = projected(f, p);
+      if (d < best)
+        best = d, first = f, tied = 1;
+      else if (d == best)
+        ++tied;
+    }
+    ties += tied > 1;
+    ASSERT_EQ(tree.closest(p).triangle, first) << "query " << q;
+  }
+  EXPECT_GT(ties, 5);  // (exact ties: the projections round alike onto a shared vertex)
 }
 
 TEST(NearestTriangles, TheSameAnswerForAnyThreadCount) {

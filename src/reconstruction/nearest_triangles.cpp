@@ -79,6 +79,10 @@ Eigen::Vector3d nearest_on_triangle(const Eigen::Vector3d& a, const Eigen::Vecto
   return {q.x(), q.y(), q.z()};
 }
 
+// Rings of cells that a nearest-triangle query reads cell by cell, nearest first; beyond them,
+// whole blocks.
+constexpr int kRings = 2;
+
 // The uniform grid is taken where the triangles' sizes are alike (the local reconstruction's
 // meshes): its cells are the largest triangle's box, so a triangle meets at most 8; where the
 // largest is more than this many times the mean, CGAL's trees.
@@ -150,17 +154,62 @@ NearestTriangles::Hit NearestTriangles::Grid::closest(const Eigen::Vector3d& p) 
     }
   };
   cells.for_each_in({at, at}, visit);  // (its own cell first: a near best bounds the rest)
-  for (int reach = 1;; reach *= 2) {
+  // Then the rings of cells around it up to kRings: each cell nearest first, and only where it
+  // lies within the best distance (a hair more, for the rounding: a triangle listed there meets
+  // it, so none nearer, nor a tie, is left out). A near best reads a few of their 124 cells. The
+  // answer is the least distance and, among ties, the least index, whatever the order of visits.
+  const double magnitude = 1 + p.cwiseAbs().maxCoeff() + g.origin.cwiseAbs().maxCoeff() +
+                           g.cell * *std::max_element(g.n.begin(), g.n.end());
+  auto block = [&](int reach) {
     TriangleCells::Range r;
     for (std::size_t a = 0; a < 3; ++a) {
       r.lo[a] = std::max(0, at[a] - reach);
       r.hi[a] = std::min(g.n[a] - 1, at[a] + reach);
     }
-    cells.for_each_in(r, visit);
+    return r;
+  };
+  auto done = [&](const TriangleCells::Range& r) {
     const double outside = beyond(p, r);
-    if (!std::isfinite(outside) || best <= outside * outside) break;
+    return !std::isfinite(outside) || best <= outside * outside;
+  };
+  struct Near {
+    double d2;
+    std::array<int, 3> cube;
+  };
+  thread_local std::vector<Near> ring;
+  for (int reach = 1; reach <= kRings; ++reach) {
+    const TriangleCells::Range r = block(reach);
+    ring.clear();
+    for (int i = r.lo[0]; i <= r.hi[0]; ++i)
+      for (int j = r.lo[1]; j <= r.hi[1]; ++j)
+        for (int k = r.lo[2]; k <= r.hi[2]; ++k) {
+          if (std::max({std::abs(i - at[0]), std::abs(j - at[1]), std::abs(k - at[2])}) < reach)
+            continue;  // an inner ring's
+          const std::array<int, 3> c{i, j, k};
+          double d2 = 0;
+          for (std::size_t a = 0; a < 3; ++a) {
+            const double lo = g.origin[a] + c[a] * g.cell, hi = lo + g.cell;
+            const double out = p[a] < lo ? lo - p[a] : (p[a] > hi ? p[a] - hi : 0.0);
+            d2 += out * out;
+          }
+          ring.push_back({d2, c});
+        }
+    std::sort(ring.begin(), ring.end(), [](const Near& x, const Near& y) {
+      return x.d2 < y.d2 || (x.d2 == y.d2 && x.cube < y.cube);
+    });
+    for (const Near& c : ring) {
+      const double within = std::sqrt(best) * (1 + 1e-9) + 1e-12 * magnitude;
+      if (c.d2 > within * within) break;
+      cells.for_each_in({c.cube, c.cube}, visit);
+    }
+    if (done(r)) return hit;
   }
-  return hit;
+  // Farther (few triangles near the point): blocks twice as wide each time.
+  for (int reach = 2 * kRings;; reach *= 2) {
+    const TriangleCells::Range r = block(reach);
+    cells.for_each_in(r, visit);
+    if (done(r)) return hit;
+  }
 }
 
 bool NearestTriangles::Grid::meets_ball(const Eigen::Vector3d& c, double radius) const {
