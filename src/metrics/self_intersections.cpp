@@ -19,6 +19,7 @@
 #include "pipeline/float_bounds.h"
 #include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
+#include "reconstruction/carving_internal.h"
 #include "reconstruction/triangle_cells.h"
 
 namespace sdfcontour {
@@ -142,6 +143,67 @@ std::vector<char> triangles_with(const Mesh& mesh, const std::vector<char>& vert
   return out;
 }
 
+// A certificate below holds only with this much to spare (relative), far beyond rounding.
+constexpr double kClear = 1e-9;
+
+// Whether vertex v's triangles (`around`'s list), seen along their summed normal, form one closed
+// fan round it (each triangle's edge after v is the next one's edge before it), each turning the
+// same way by a clear angle, and together once round. Their projections then lie in sectors that
+// meet only along the shared edges' rays, so no two of them meet but in the vertex and the edges
+// they share: pairs that share the vertex need no test.
+bool embedded_star(const Mesh& mesh, const detail::VertexTriangles& around, int v) {
+  constexpr int kMostAround = 32;
+  const int from = around.offsets[std::size_t(v)], to = around.offsets[std::size_t(v) + 1];
+  const int count = to - from;
+  if (count < 3 || count > kMostAround) return false;
+  int after[kMostAround], before[kMostAround];  // per triangle: its corners after v, in order
+  for (int i = 0; i < count; ++i) {
+    const int t = around.triangles[std::size_t(from + i)];
+    int c = 0;
+    while (c < 3 && mesh.triangles(t, c) != v) ++c;
+    if (c == 3) return false;
+    after[i] = mesh.triangles(t, (c + 1) % 3);
+    before[i] = mesh.triangles(t, (c + 2) % 3);
+  }
+  // One cycle through all of them: from the first, each next one starts where the last ended.
+  for (int i = 0, at = 0; i < count; ++i) {
+    int next = -1;
+    for (int j = 0; j < count; ++j)
+      if (after[j] == before[at]) {
+        if (next >= 0) return false;  // two fans, or a fold
+        next = j;
+      }
+    if (next < 0 || (next == 0) != (i == count - 1)) return false;
+    at = next;
+  }
+  const Eigen::Vector3d o = mesh.vertices.row(v).transpose();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int i = 0; i < count; ++i)
+    sum += (mesh.vertices.row(after[i]).transpose() - o)
+               .cross(mesh.vertices.row(before[i]).transpose() - o);
+  const double length = sum.norm();
+  if (!(length > 0) || !std::isfinite(length)) return false;
+  const Eigen::Vector3d n = sum / length;
+  auto projected = [&](int w) {
+    const Eigen::Vector3d a = mesh.vertices.row(w).transpose() - o;
+    return (a - a.dot(n) * n).eval();
+  };
+  auto clearly = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    return n.dot(x.cross(y)) > kClear * x.norm() * y.norm();
+  };
+  // Each sector turns the same way by a clear angle (under a half turn), so the fan turns once
+  // round iff a ray from the vertex lies in one sector alone: the first edge's ray starts the
+  // first sector and ends the last; every other sector must clearly leave it out.
+  const Eigen::Vector3d ray = projected(after[0]);
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector3d a = projected(after[i]), b = projected(before[i]);
+    if (!clearly(a, b)) return false;
+    const bool first = after[i] == after[0], last = before[i] == after[0];
+    if (!first && !last && !(clearly(ray, a) || clearly(b, ray))) return false;
+  }
+  return true;
+}
+
 // The triangles' boxes and cube buckets, built once for rounds of tests while vertices move back
 // to `before`: each triangle is bucketed by the box of its current and earlier positions, which
 // holds every box it can have in between.
@@ -151,17 +213,28 @@ class CrossingSearch {
       : bucketed_(bucketed_boxes(mesh, before)),
         current_(bucketed_.size()),
         flat_(bucketed_.size()),
-        cubes_(bucketed_by_cube(bucketed_)) {
+        cubes_(bucketed_by_cube(bucketed_)),
+        around_(mesh),
+        embedded_(std::size_t(mesh.vertices.rows())) {
     tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(),
                       [&](Eigen::Index t) { refresh(mesh, int(t)); });
+    tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
+      embedded_[std::size_t(v)] = embedded_star(mesh, around_, int(v));
+    });
   }
 
-  // Triangle t's box and flatness from the mesh's current positions.
-  void refresh(const Mesh& mesh, int t) {
+  // Triangle t's box and flatness from the mesh's current positions; with `stars`, its vertices'
+  // stars too (after its vertices moved: call it for every triangle around them).
+  void refresh(const Mesh& mesh, int t, bool stars = false) {
     Box box = Box::empty();
     for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.row(mesh.triangles(t, c)).transpose());
     current_[std::size_t(t)] = box;
     flat_[std::size_t(t)] = degenerate(mesh, t);
+    if (stars)
+      for (int c = 0; c < 3; ++c) {
+        const int v = mesh.triangles(t, c);
+        embedded_[std::size_t(v)] = embedded_star(mesh, around_, v);
+      }
   }
 
   // The crossing pairs with a watched triangle (all if `watch` is null), ascending.
@@ -180,7 +253,7 @@ class CrossingSearch {
       cubes_.for_each_pair([&](int t, int u) {
         if (current_[std::size_t(t)].meets(current_[std::size_t(u)]) &&
             (watched(t) || watched(u)) && !flat_[std::size_t(t)] && !flat_[std::size_t(u)] &&
-            cross(mesh, t, u))
+            !share_embedded(mesh, t, u) && cross(mesh, t, u))
           found.local().emplace_back(t, u);
       });
       if (counter) counter->add(long(count));
@@ -195,7 +268,7 @@ class CrossingSearch {
       cubes_.for_each_in(cubes_.range(box.low(), box.high()), [&](int u) {
         // Each pair once: from its lower triangle when both are watched.
         if (!box.meets(current_[std::size_t(u)]) || u == t || (watched(u) && u < t) ||
-            flat_[std::size_t(u)])
+            flat_[std::size_t(u)] || share_embedded(mesh, t, u))
           return;
         if (cross(mesh, t, u)) found.local().emplace_back(std::min(t, u), std::max(t, u));
       });
@@ -204,6 +277,18 @@ class CrossingSearch {
   }
 
  private:
+  // Whether triangles t and u share a vertex whose star is embedded (they meet only in what they
+  // share).
+  bool share_embedded(const Mesh& mesh, int t, int u) const {
+    for (int a = 0; a < 3; ++a) {
+      const int v = mesh.triangles(t, a);
+      if (embedded_[std::size_t(v)] &&
+          (v == mesh.triangles(u, 0) || v == mesh.triangles(u, 1) || v == mesh.triangles(u, 2)))
+        return true;
+    }
+    return false;
+  }
+
   static std::vector<std::pair<int, int>> sorted_pairs(
       const tbb::enumerable_thread_specific<std::vector<std::pair<int, int>>>& found) {
     std::vector<std::pair<int, int>> pairs;
@@ -229,10 +314,9 @@ class CrossingSearch {
   Unwritten<Box> bucketed_, current_;
   Unwritten<char> flat_;
   TriangleCells cubes_;
+  detail::VertexTriangles around_;
+  std::vector<char> embedded_;  // per vertex: embedded_star
 };
-
-// A certificate below holds only with this much to spare (relative), far beyond rounding.
-constexpr double kClear = 1e-9;
 
 // Whether two triangles that share the vertex s[os] = t[ot] clearly meet there alone: seen along
 // their mean normal, both keep their orientation and their corners' sectors around the vertex
@@ -398,7 +482,7 @@ UntangleStats revert_self_intersections(Mesh& mesh, const PointMatrix& before, i
       }
     watch = triangles_with(mesh, back);
     for (Eigen::Index t = 0; t < m; ++t)
-      if (watch[std::size_t(t)]) search.refresh(mesh, int(t));
+      if (watch[std::size_t(t)]) search.refresh(mesh, int(t), true);
   }
   return stats;  // after max_rounds: the pairs left are not counted
 }
