@@ -198,8 +198,8 @@ bool embedded_star(const Mesh& mesh, const detail::VertexTriangles& around, int 
   for (int i = 0; i < count; ++i) {
     const Eigen::Vector3d a = projected(after[i]), b = projected(before[i]);
     if (!clearly(a, b)) return false;
-    const bool first = after[i] == after[0], last = before[i] == after[0];
-    if (!first && !last && !(clearly(ray, a) || clearly(b, ray))) return false;
+    const bool last = before[i] == after[0];
+    if (i > 0 && !last && !(clearly(ray, a) || clearly(b, ray))) return false;
   }
   return true;
 }
