@@ -23,6 +23,24 @@ BASELINE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs"
                         "targets", "accuracy.jsonl")
 
 
+def runs_at(now, base, method, res):
+    """(mesh, row, MC's row, the filing's row or None) per mesh that `method` ran at `res` with
+    marching cubes in the same run: `now` and `base` keyed by (mesh, res, method)."""
+    for mesh in sorted({k[0] for k in now if k[1] == res and k[2] == method}):
+        mc = now.get((mesh, res, "mc"))
+        if mc:
+            yield mesh, now[(mesh, res, method)], mc, base.get((mesh, res, "gcp-local"))
+
+
+def filing_summary(ratios):
+    """From {mesh: L1 over the filing's}: the geometric mean, the same without the cube, the worst
+    mesh, and the meshes more than 10% worse (as "mesh ratio")."""
+    worst = max(ratios, key=ratios.get)
+    return (geomean(list(ratios.values())),
+            geomean([v for m, v in ratios.items() if m != "cube"]), worst,
+            [f"{m} {v:.3f}" for m, v in sorted(ratios.items()) if v > 1.10])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs", nargs="+", help="bench/local.py JSON lines")
@@ -43,16 +61,12 @@ def main():
                "worst (mesh) | more than 10% worse | L∞ above MC's |",
                "|---|---|---|---|---|---|"]
     for res in sorted({k[1] for k in now if k[2] == args.method}):
-        ratios, worse, linf = {}, [], []
-        for mesh in sorted({k[0] for k in now if k[1] == res and k[2] == args.method}):
-            r, mc = now[(mesh, res, args.method)], now.get((mesh, res, "mc"))
-            b = base.get((mesh, res, "gcp-local"))
-            if not b or not mc:
+        ratios, linf = {}, []
+        for mesh, r, mc, b in runs_at(now, base, args.method, res):
+            if not b:
                 continue
             ratio = r["L1"] / b["L1"]
             ratios[mesh] = ratio
-            if ratio > 1.10:
-                worse.append(f"{mesh} {ratio:.3f}")
             linf_mc = r["Linf"] / mc["Linf"]
             if res >= 64 and linf_mc > 1:
                 linf.append(f"{mesh} {linf_mc:.3f}")
@@ -62,11 +76,10 @@ def main():
                          f"({b['seconds']:.2f}) |")
         if not ratios:
             continue
-        worst = max(ratios, key=ratios.get)
-        without_cube = [v for m, v in ratios.items() if m != "cube"]
-        summary.append(f"| {res}³ | {len(ratios)} | {geomean(list(ratios.values())):.3f} "
-                       f"({geomean(without_cube):.3f}) | {ratios[worst]:.3f} ({worst}) | "
-                       f"{', '.join(worse) or 'none'} | {', '.join(linf) or 'none'} |")
+        mean, without_cube, worst, worse = filing_summary(ratios)
+        summary.append(f"| {res}³ | {len(ratios)} | {mean:.3f} ({without_cube:.3f}) | "
+                       f"{ratios[worst]:.3f} ({worst}) | {', '.join(worse) or 'none'} | "
+                       f"{', '.join(linf) or 'none'} |")
     runs = ", ".join(os.path.basename(r) for r in args.runs)
     head = [f"Issue 64's accuracy targets: `{args.method}` in {runs} against the default the "
             "issue was filed against (docs/results/targets/accuracy.jsonl), marching cubes from "

@@ -25,7 +25,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import geomean, read_jsonl, report  # noqa: E402
-from issue64_accuracy import BASELINE  # noqa: E402
+from issue64_accuracy import BASELINE, filing_summary, runs_at  # noqa: E402
 
 SPEED = {64: 20.0, 256: 5.0, 512: 3.0}  # issue 64's, 2 cores, over scikit-image's
 
@@ -48,20 +48,14 @@ def read_accuracy(sources):
     return now
 
 
-def accuracy_rows(now, base, method="def"):
+def accuracy_rows(now, base):
     """The accuracy targets' rows: per grid the L1 over the filing's, then L-infinity, sharp
     edges, triangles and soundness over all grids."""
     rows = []
-    grids = sorted({k[1] for k in now if k[2] == method})
     linf_over, tri_ratio, unsound, sharp_worse, sharp_count = [], {}, [], [], 0
-    for res in grids:
-        meshes = sorted(m for (m, r, meth) in now if r == res and meth == method)
+    for res in sorted({k[1] for k in now if k[2] == "def"}):
         ratios = {}
-        for mesh in meshes:
-            r, mc = now[(mesh, res, method)], now.get((mesh, res, "mc"))
-            b = base.get((mesh, res, "gcp-local"))
-            if not mc:
-                continue
+        for mesh, r, mc, b in runs_at(now, base, "def", res):
             tri_ratio.setdefault(res, {})[mesh] = r["triangles"] / mc["triangles"]
             if not (r.get("closed") and r.get("manifold") and r.get("self_intersections") == 0):
                 unsound.append(f"{mesh} {res}³")
@@ -76,15 +70,13 @@ def accuracy_rows(now, base, method="def"):
                     sharp_worse.append(f"{mesh} {r['edge_distance_h'] / b['edge_distance_h']:.3f}×")
         if not ratios:
             continue
-        g = geomean(list(ratios.values()))
-        worst = max(ratios, key=ratios.get)
-        over = [f"{m} {v:.3f}×" for m, v in sorted(ratios.items()) if v > 1.10]
+        mean, without_cube, worst, over = filing_summary(ratios)
         rows.append((f"{res}³: geometric mean of L1 over the filing's ≤ 1.05 ({len(ratios)} meshes)",
-                     f"{g:.3f} (without the cube "
-                     f"{geomean([v for m, v in ratios.items() if m != 'cube']):.3f})",
-                     verdict(g <= 1.05), ""))
+                     f"{mean:.3f} (without the cube {without_cube:.3f})", verdict(mean <= 1.05),
+                     ""))
         rows.append((f"{res}³: no mesh more than 10% worse than the filing's",
-                     f"worst {worst} {ratios[worst]:.3f}×", verdict(not over), ", ".join(over)))
+                     f"worst {worst} {ratios[worst]:.3f}×", verdict(not over),
+                     ", ".join(f"{o}×" for o in over)))
     if sharp_count:
         rows.append(("64³: sharp-edge distances no worse than the filing's, per mesh",
                      f"{sharp_count - len(sharp_worse)} of {sharp_count} no worse",
