@@ -25,6 +25,8 @@ clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_options.cpp src/pipeline/option_rang
 # Meshes through sample's checks, union and signed distance (CGAL, TBB).
 clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_mesh_sample.cpp \
   src/input/mesh_sdf.cpp src/input/mesh_union.cpp src/metrics/mesh_properties.cpp src/metrics/self_intersections.cpp src/metrics/triangle_pairs.cpp \
+  src/reconstruction/carving_triangles.cpp src/reconstruction/triangle_cells.cpp src/input/parallel_select.cpp \
+  src/reconstruction/nearest_triangles.cpp src/reconstruction/mesh_geometry.cpp \
   src/input/coordinates.cpp src/input/signed_distance.cpp src/input/samples.cpp src/input/mesh_transform.cpp \
   -ltbb -lgmp -lmpfr -o "$out/fuzz_mesh_sample"
 # OpenVDB reads in a child process (src/io/isolated_call.h; its sanitizer reports on hostile files are
