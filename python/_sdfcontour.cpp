@@ -7,7 +7,6 @@
 #include <cstdint>
 
 #include "binding/common.h"
-#include "sdfcontour/contact_points/contact_point_errors.h"
 #include "sdfcontour/io/vdb.h"
 #include "sdfcontour/pipeline/option_ranges.h"
 

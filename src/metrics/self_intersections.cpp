@@ -14,6 +14,7 @@
 #include <string>
 
 #include "input/parallel_select.h"
+#include "metrics/clear_turns.h"
 #include "pipeline/float_bounds.h"
 #include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
@@ -134,9 +135,6 @@ std::vector<char> triangles_with(const Mesh& mesh, const std::vector<char>& vert
   return out;
 }
 
-// A star's certificate holds only with this much to spare (relative), far beyond rounding (as
-// triangle_pairs.cpp's).
-constexpr double kClear = 1e-9;
 // Whether vertex v's triangles (`around`'s list), seen along their summed normal, form one closed
 // fan round it (each triangle's edge after v is the next one's edge before it), each turning the
 // same way by a clear angle, and together once round. Their projections then lie in sectors that
@@ -180,7 +178,7 @@ bool embedded_star(const Mesh& mesh, const detail::VertexTriangles& around, int 
     return (a - a.dot(n) * n).eval();
   };
   auto clearly = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
-    return n.dot(x.cross(y)) > kClear * x.norm() * y.norm();
+    return detail::clearly_turns(n, x, y);
   };
   // Each sector turns the same way by a clear angle (under a half turn), so the fan turns once
   // round iff a ray from the vertex lies in one sector alone: the first edge's ray starts the

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 
+#include "metrics/clear_turns.h"
 #include "sdfcontour/metrics/self_intersections.h"
 
 namespace sdfcontour {
@@ -20,8 +21,7 @@ Point point(const Eigen::Vector3d& x) {
   return Point(x[0], x[1], x[2]);
 }
 
-// A certificate below holds only with this much to spare (relative), far beyond rounding.
-constexpr double kClear = 1e-9;
+using detail::kClear;
 
 // Whether two triangles that share the vertex s[os] = t[ot] clearly meet there alone: seen along
 // their mean normal, both keep their orientation and their corners' sectors around the vertex
@@ -40,12 +40,8 @@ bool clearly_apart_around(const std::array<Eigen::Vector3d, 3>& s, int os,
   const double lm = m.norm();
   if (!(lm > 1)) return false;  // the normals more than 120 degrees apart
   const Eigen::Vector3d n = m / lm;
-  // 2D cross products in the plane normal to n: n . (x cross y).
-  auto cross = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
-    return n.dot(x.cross(y));
-  };
   auto clearly = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
-    return cross(x, y) > kClear * x.norm() * y.norm();
+    return detail::clearly_turns(n, x, y);
   };
   // Both counter-clockwise about n, and going round: a1, a2, b1, b2, each turn under half.
   return clearly(a1, a2) && clearly(b1, b2) && clearly(a2, b1) && clearly(b2, a1);

@@ -5,10 +5,8 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
-#include <limits>
 #include <string>
 #include <vector>
 
