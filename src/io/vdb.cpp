@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <new>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "io/file_checks.h"
 #include "io/isolated_call.h"
 #include "io/openvdb_module.h"
+#include "io/vdb_replies.h"
 
 namespace sdfcontour {
 
@@ -72,19 +74,6 @@ detail::IsolationLimits read_limits(const std::string& path, std::size_t extra_b
   return limits;
 }
 
-template <class T>
-void put(std::string& out, const T* data, std::size_t count) {
-  out.append(reinterpret_cast<const char*>(data), sizeof(T) * count);
-}
-
-template <class T>
-void take(const std::string& bytes, std::size_t& at, T* data, std::size_t count) {
-  if (count > (bytes.size() - at) / sizeof(T))
-    throw InternalError("the .vdb reader's reply is cut short");
-  std::memcpy(data, bytes.data() + at, sizeof(T) * count);
-  at += sizeof(T) * count;
-}
-
 // Reads the level set with OpenVDB (in the isolated child: see read_vdb_level_set).
 VdbLevelSet read_with_openvdb(const std::string& path, const std::string& grid_name) {
   VdbLevelSet out;
@@ -92,49 +81,14 @@ VdbLevelSet read_with_openvdb(const std::string& path, const std::string& grid_n
   return out;
 }
 
-// The level set as bytes for the trip from the child: name length, name, voxel size, background,
-// count, then the points (row-major) and the values.
-std::string serialise(const VdbLevelSet& s) {
-  const std::uint64_t name_size = s.grid_name.size(), n = std::uint64_t(s.samples.values.size());
-  std::string out;
-  put(out, &name_size, 1);
-  put(out, s.grid_name.data(), name_size);
-  put(out, &s.voxel_size, 1);
-  put(out, &s.background, 1);
-  put(out, &n, 1);
-  put(out, s.samples.points.data(), 3 * n);
-  put(out, s.samples.values.data(), n);
-  return out;
-}
-
-VdbLevelSet deserialise(const std::string& bytes) {
-  std::size_t at = 0;
-  VdbLevelSet s;
-  std::uint64_t name_size = 0, n = 0;
-  take(bytes, at, &name_size, 1);
-  if (name_size > bytes.size()) throw InternalError("the .vdb reader's reply is cut short");
-  s.grid_name.resize(name_size);
-  take(bytes, at, s.grid_name.data(), name_size);
-  take(bytes, at, &s.voxel_size, 1);
-  take(bytes, at, &s.background, 1);
-  take(bytes, at, &n, 1);
-  if (n > (bytes.size() - at) / 32 || (bytes.size() - at) != 32 * n)
-    throw InternalError("the .vdb reader's reply has the wrong size");
-  s.samples.points.resize(Eigen::Index(n), 3);
-  s.samples.values.resize(Eigen::Index(n));
-  take(bytes, at, s.samples.points.data(), 3 * n);
-  take(bytes, at, s.samples.values.data(), n);
-  return s;
-}
-
 }  // namespace
 
 VdbLevelSet read_vdb_level_set(const std::string& path, const std::string& grid_name) {
   check_magic(path);
   detail::openvdb_functions();  // loaded here, so that the child only calls into it
-  VdbLevelSet out = deserialise(
-      detail::run_isolated([&] { return serialise(read_with_openvdb(path, grid_name)); },
-                           "cannot read '" + path + "' as OpenVDB", read_limits(path, 0)));
+  VdbLevelSet out = detail::parse_level_set_reply(detail::run_isolated(
+      [&] { return detail::level_set_reply(read_with_openvdb(path, grid_name)); },
+      "cannot read '" + path + "' as OpenVDB", read_limits(path, 0)));
   validate_samples(out.samples);
   return out;
 }
@@ -146,47 +100,10 @@ VdbLayout read_vdb_layout(const std::string& path, const std::string& grid_name)
       [&] {
         detail::OpenVdbLayout l;
         raise(detail::openvdb_functions().layout(path, grid_name, l));
-        std::string out;
-        const std::uint64_t name_size = l.grid_name.size(), leaves = l.leaf_origins.size();
-        put(out, &name_size, 1);
-        put(out, l.grid_name.data(), name_size);
-        put(out, l.min, 3);
-        put(out, l.max, 3);
-        put(out, &l.voxel, 1);
-        put(out, l.origin, 3);
-        put(out, l.rotation, 9);
-        put(out, &l.background, 1);
-        put(out, &leaves, 1);
-        put(out, l.leaf_origins.data(), leaves);
-        return out;
+        return detail::layout_reply(l);
       },
       "cannot read '" + path + "' as OpenVDB", read_limits(path, 0));
-  VdbLayout l;
-  std::size_t at = 0;
-  std::uint64_t name_size = 0, leaves = 0;
-  take(bytes, at, &name_size, 1);
-  if (name_size > bytes.size()) throw InternalError("the .vdb reader's reply is cut short");
-  l.grid_name.resize(name_size);
-  take(bytes, at, l.grid_name.data(), name_size);
-  take(bytes, at, l.min.data(), 3);
-  take(bytes, at, l.max.data(), 3);
-  take(bytes, at, &l.voxel_size, 1);
-  take(bytes, at, l.origin.data(), 3);
-  double rotation[9];
-  take(bytes, at, rotation, 9);
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) l.rotation(a, b) = rotation[3 * a + b];
-  take(bytes, at, &l.background, 1);
-  take(bytes, at, &leaves, 1);
-  if (leaves % 3 != 0 || leaves > bytes.size()) throw InternalError("the .vdb reply is malformed");
-  std::vector<int> origins(leaves);
-  take(bytes, at, origins.data(), leaves);
-  for (std::size_t i = 0; i < leaves; i += 3)
-    l.leaf_origins.push_back({origins[i], origins[i + 1], origins[i + 2]});
-  if (!(l.voxel_size > 0) || !std::isfinite(l.voxel_size) || !l.origin.allFinite() ||
-      !l.rotation.allFinite())
-    throw Error("grid '" + l.grid_name + "' in '" + path + "' has a degenerate transform");
-  return l;
+  return detail::parse_layout_reply(bytes, path);
 }
 
 std::vector<float> read_vdb_box(const std::string& path, const std::string& grid_name,
@@ -195,6 +112,8 @@ std::vector<float> read_vdb_box(const std::string& path, const std::string& grid
   long double count = 1;
   for (int a = 0; a < 3; ++a) {
     if (dims[a] < 1) throw Error("a box to read needs at least one voxel per axis");
+    if ((long long)first[a] + dims[a] - 1 > std::numeric_limits<int>::max())
+      throw Error("a box to read from a .vdb ends beyond OpenVDB's index range");
     count *= dims[a];
   }
   if (count > (1u << 30)) throw Error("a box to read from a .vdb holds at most 2^30 voxels");
@@ -204,9 +123,8 @@ std::vector<float> read_vdb_box(const std::string& path, const std::string& grid
         std::vector<float> values;
         raise(detail::openvdb_functions().read_box(path, grid_name, first.data(), dims.data(),
                                                    values));
-        std::string out;
-        put(out, values.data(), values.size());
-        return out;
+        return std::string(reinterpret_cast<const char*>(values.data()),
+                           values.size() * sizeof(float));
       },
       "cannot read '" + path + "' as OpenVDB", read_limits(path, std::size_t(count) * 4));
   if (bytes.size() != std::size_t(count) * sizeof(float))
@@ -221,39 +139,7 @@ std::vector<float> read_vdb_box(const std::string& path, const std::string& grid
 BlockedGrid vdb_blocked_grid(const std::string& path, const std::string& grid_name,
                              VdbLayout* layout_out) {
   const VdbLayout layout = read_vdb_layout(path, grid_name);
-  if (layout.leaf_origins.empty())
-    throw Error("grid '" + layout.grid_name + "' in '" + path + "' has no active voxels");
-  BlockedGrid grid;
-  std::array<int, 3> first;
-  // A rotated grid is contoured in its own frame, origin at voxel (0, 0, 0).
-  const Eigen::Vector3d origin =
-      vdb_world_from_grid(layout) ? Eigen::Vector3d::Zero() : layout.origin;
-  for (int a = 0; a < 3; ++a) {
-    first[a] = layout.min[a] - 1;
-    const long long n = (long long)layout.max[a] - first[a] + 2;
-    if (n > (1 << 30)) throw Error("the level set in '" + path + "' is too large a grid");
-    grid.dims[a] = int(n);
-    grid.bounds.min[a] = origin[a] + layout.voxel_size * first[a];
-    grid.bounds.max[a] = origin[a] + layout.voxel_size * (first[a] + grid.dims[a] - 1);
-  }
-  const std::string name = layout.grid_name;
-  grid.read = [path, name, first](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
-    std::array<int, 3> at, dims;
-    for (int a = 0; a < 3; ++a) at[a] = first[a] + lo[a], dims[a] = hi[a] - lo[a];
-    return read_vdb_box(path, name, at, dims);
-  };
-  // The leaves (8^3 voxels) in grid indices: outside them every voxel is inactive, its value the
-  // signed background (the band's half width), so no sign changes there.
-  std::vector<SampleBox> leaves;
-  for (const auto& o : layout.leaf_origins) {
-    SampleBox box;
-    for (std::size_t a = 0; a < 3; ++a) {
-      box.lo[a] = o[a] - first[a];
-      box.hi[a] = box.lo[a] + 8;
-    }
-    leaves.push_back(box);
-  }
-  grid.surface_boxes = std::move(leaves);
+  BlockedGrid grid = detail::blocked_grid_of(layout, path);
   if (layout_out) *layout_out = layout;
   return grid;
 }

@@ -17,9 +17,15 @@ clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/io/mesh_files.cpp
 # The OpenVDB module is linked in (openvdb_loader.cpp then uses it instead of loading it).
 clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
   -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' \
-  tests/fuzz/fuzz_vdb.cpp src/io/vdb.cpp src/io/openvdb_loader.cpp src/io/openvdb_module.cpp \
+  tests/fuzz/fuzz_vdb.cpp src/io/vdb.cpp src/io/vdb_replies.cpp src/io/openvdb_loader.cpp src/io/openvdb_module.cpp \
   src/io/isolated_call.cpp src/input/samples.cpp src/io/atomic_file.cpp src/io/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb \
   -o "$out/fuzz_vdb"
+# The reading child's replies, parsed in-process (the child's own reads are fuzz_vdb's).
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_vdb_replies.cpp src/io/vdb_replies.cpp src/io/vdb.cpp \
+  src/io/openvdb_loader.cpp src/io/isolated_call.cpp src/input/samples.cpp src/io/atomic_file.cpp \
+  src/io/file_checks.cpp -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
+  -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' src/io/openvdb_module.cpp -lopenvdb -lImath-3_1 -ltbb \
+  -o "$out/fuzz_vdb_replies"
 # Option values as text: the one number parser and every option's range.
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_options.cpp src/pipeline/option_ranges.cpp -o "$out/fuzz_options"
 # Meshes through sample's checks, union and signed distance (CGAL, TBB).
@@ -34,10 +40,10 @@ clang++ "${flags[@]}" -Isrc -DCGAL_DISABLE_ROUNDING_MATH_CHECK tests/fuzz/fuzz_m
 # a huge allocation there is the child's failure, which the parent turns into an error, so only
 # ASan's own size limit applies to it.
 declare -A extra=([npy]="" [mesh_files]="" [vdb]="-malloc_limit_mb=1000000" [mesh_sample]=""
-                  [options]="")
+                  [options]="" [vdb_replies]="")
 # Every target runs, even after one finds something; the script then fails naming them.
 failed=()
-for target in npy mesh_files vdb mesh_sample options; do
+for target in npy mesh_files vdb vdb_replies mesh_sample options; do
   corpus="$out/corpus_$target"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/$target/* "$corpus/"
