@@ -79,6 +79,20 @@ TEST(Approximate, DistancesScaledToTheEdgesOfDoublesAreRescaled) {
   }
 }
 
+// Values so small (subnormal) that the factor into distances overflows are one clear error, not
+// the message of the values it made (inf: "a NaN, infinite or too large value").
+TEST(Approximate, ValuesTooSmallToScaleAreOneClearError) {
+  Grid g = transformed("torus", 24, [](double v, double, double) { return v; });
+  g.values *= 1e-310;
+  try {
+    contour(grid_input(g), gcp_options());
+    ADD_FAILURE() << "subnormal values accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("too little to scale into distances"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Approximate, AGivenTruncationFollowsTheValuesIntoDistances) {
   // A TSDF in voxel units (distance / h, clamped at 3) with its truncation given as 3: rescaled
   // into distances, its clamp is 3 h, and its mesh is the TSDF's in distance units.

@@ -1,6 +1,8 @@
 // The field's gradient norm next to its sign changes: how far the values are from distances.
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <vector>
 
 #include "band/near_surface.h"
@@ -92,7 +94,16 @@ GradientNormSummary norm_summary_of(const std::vector<NearSurfaceValues>& slabs)
 }  // namespace detail
 
 double distance_value_scale(double slope) {
-  return std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.1 ? 1 / slope : 1.0;
+  if (!(std::isfinite(slope) && slope > 0 && std::abs(slope - 1) > 0.1)) return 1.0;
+  if (!std::isfinite(1 / slope)) {
+    // (Subnormal values: their inverse scale overflows, and unscaled they are no distances.)
+    std::ostringstream message;
+    message << std::setprecision(3) << "the values change by " << slope
+            << " per unit length near the surface, too little to scale into distances; "
+               "multiply them by a constant";
+    throw Error(message.str());
+  }
+  return 1 / slope;
 }
 
 }  // namespace sdfcontour

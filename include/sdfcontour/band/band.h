@@ -209,6 +209,7 @@ GradientNormSummary summarize_gradient_norms(CrossingNorms norms);
 
 /// The factor that turns values changing by `slope` per unit length near the surface into
 /// distances (GradientNormSummary::slope): 1 / slope where that is more than 10% from 1, else 1.
+/// Throws Error where 1 / slope overflows (subnormal values).
 double distance_value_scale(double slope);
 
 /// The band's samples proper, without the margin that only closes their stars.
