@@ -57,6 +57,11 @@ with tempfile.TemporaryDirectory() as d:
     check("input intact after link", open(p("g.npy"), "rb").read() == grid_before)
     r = run("sample", p("cube.obj"), "--res", "8", "-o", p("x"), "-q")
     check("sample writes x_mesh.ply", r.returncode == 0 and os.path.exists(p("x_mesh.ply")), r.stderr)
+    # -o y.npy names the samples' file itself, as -o y.vdb does (it wrote y.npy.npy).
+    r = run("sample", p("cube.obj"), "--res", "8", "-o", p("y.npy"), "-q")
+    check("sample -o y.npy writes y.npy and y_mesh.ply",
+          r.returncode == 0 and os.path.exists(p("y.npy")) and os.path.exists(p("y_mesh.ply")) and
+          not os.path.exists(p("y.npy.npy")), r.stderr)
     mesh_bytes = open(p("x_mesh.ply"), "rb").read()
     expect_error("sample over its own input", ["sample", p("x_mesh.ply"), "--res", "8", "-o", p("x")], "input")
     check("sample input intact", open(p("x_mesh.ply"), "rb").read() == mesh_bytes)

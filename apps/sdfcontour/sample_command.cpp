@@ -45,7 +45,8 @@ void check(const SampleArgs& a, bool vdb) {
 }
 
 // Samples the grid, writes it (.npy or .vdb) and returns the samples that carry a distance.
-Samples write_grid(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds, bool vdb) {
+Samples write_grid(const SampleArgs& a, const std::string& path, const MeshSdf& sdf,
+                   const Bounds& bounds, bool vdb) {
   // A level set needs values only inside its band: sample truncated, fast.
   const double truncate = vdb && a.truncate == 0 ? a.half_width + 1 : a.truncate;
   const double h = (bounds.max - bounds.min).maxCoeff() / (a.resolution - 1);
@@ -58,9 +59,9 @@ Samples write_grid(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds
                 "there; sample with a larger --res");
   const std::size_t n = std::size_t(a.resolution);
   if (vdb)
-    write_vdb_level_set(a.prefix, grid, a.half_width);
+    write_vdb_level_set(path, grid, a.half_width);
   else  // straight from the grid: no copy of its values (8 GB at 1024^3)
-    write_npy(a.prefix + ".npy", {n, n, n}, grid.values.data(), std::size_t(grid.values.size()),
+    write_npy(path, {n, n, n}, grid.values.data(), std::size_t(grid.values.size()),
               a.float32 ? ScalarType::Float32 : ScalarType::Float64);
   // A truncated grid's exact contact points: those of the samples inside the truncation.
   BandOptions all;
@@ -71,7 +72,8 @@ Samples write_grid(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds
   return select_band(grid, all).samples;
 }
 
-Samples write_random(const SampleArgs& a, const MeshSdf& sdf, const Bounds& bounds) {
+Samples write_random(const SampleArgs& a, const std::string& path, const MeshSdf& sdf,
+                     const Bounds& bounds) {
   const std::size_t count = std::size_t(a.random);
   Samples samples = sample_random(sdf, count, bounds, a.seed);
   std::vector<double> rows(count * 4);
@@ -79,7 +81,7 @@ Samples write_random(const SampleArgs& a, const MeshSdf& sdf, const Bounds& boun
     for (int c = 0; c < 3; ++c) rows[4 * i + std::size_t(c)] = samples.points(Eigen::Index(i), c);
     rows[4 * i + 3] = samples.values[Eigen::Index(i)];
   }
-  write_npy(a.prefix + ".npy", {count, 4}, rows);
+  write_npy(path, {count, 4}, rows);
   return samples;
 }
 
@@ -103,15 +105,18 @@ int run_sample(const SampleArgs& a) {
   RunOptions run;
   run.quiet = a.quiet;
   const Bounds bounds = parse_bounds(a.bounds);
-  // x.vdb writes x.vdb, x_mesh.ply and x_gtcp.ply; a prefix writes PREFIX.npy and the rest.
-  const std::string stem = vdb ? a.prefix.substr(0, a.prefix.size() - 4) : a.prefix;
+  // x.vdb writes x.vdb, x_mesh.ply and x_gtcp.ply; a prefix (or x.npy) writes PREFIX.npy and
+  // the rest.
+  const bool npy =
+      !vdb && a.prefix.size() > 4 && a.prefix.compare(a.prefix.size() - 4, 4, ".npy") == 0;
+  const std::string stem = vdb || npy ? a.prefix.substr(0, a.prefix.size() - 4) : a.prefix;
+  const std::string samples_path = vdb ? a.prefix : stem + ".npy";
   const std::string name = std::filesystem::path(stem).filename().string();
   std::error_code ec;
   if (name.empty() || name == "." || name == ".." || std::filesystem::is_directory(stem, ec))
     throw Error("-o '" + a.prefix +
                 "' names a folder: give a file name prefix (dir/bunny writes dir/bunny.npy, ...)");
-  const std::vector<std::string> paths = {vdb ? a.prefix : stem + ".npy", stem + "_gtcp.ply",
-                                          stem + "_mesh.ply"};
+  const std::vector<std::string> paths = {samples_path, stem + "_gtcp.ply", stem + "_mesh.ply"};
   require_distinct_files({a.mesh}, paths);
   for (const std::string& path : paths) require_writable(path);
   OutputBatch outputs;
@@ -121,18 +126,18 @@ int run_sample(const SampleArgs& a) {
   Samples samples;
   if (a.resolution > 0) {
     run.say("signed distances on a " + std::to_string(a.resolution) + "^3 grid");
-    samples = write_grid(a, sdf, bounds, vdb);
+    samples = write_grid(a, samples_path, sdf, bounds, vdb);
   } else {
     run.say("signed distances at " + std::to_string(a.random) + " random points");
-    samples = write_random(a, sdf, bounds);
+    samples = write_random(a, samples_path, sdf, bounds);
   }
   run.say("exact contact points");
   const ContactPoints gt = exact_contact_points(samples.points, sdf);
   write_oriented_points(stem + "_gtcp.ply", {gt.points, gt.normals, {}});
   write_mesh(stem + "_mesh.ply", mesh);
   outputs.commit();
-  std::cout << "samples " << samples.points.rows() << " -> " << (vdb ? a.prefix : stem + ".npy")
-            << ", " << stem << "_gtcp.ply, " << stem << "_mesh.ply" << std::endl;
+  std::cout << "samples " << samples.points.rows() << " -> " << samples_path << ", " << stem
+            << "_gtcp.ply, " << stem << "_mesh.ply" << std::endl;
   return 0;
 }
 
@@ -143,10 +148,11 @@ Command add_sample_command(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "sample", "Closed mesh -> normalised mesh, SDF samples and their exact contact points");
   c->add_option("mesh", a->mesh, "Closed triangle mesh (OBJ, PLY or OFF)")->required();
-  c->add_option("-o,--output", a->prefix,
-                "Output prefix: PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
-                "mesh), PREFIX_gtcp.ply (exact contact points with normals); or X.vdb: an "
-                "OpenVDB level set (with X_mesh.ply and X_gtcp.ply)")
+  c->add_option(
+       "-o,--output", a->prefix,
+       "Output prefix (or PREFIX.npy): PREFIX.npy (samples), PREFIX_mesh.ply (the normalised "
+       "mesh), PREFIX_gtcp.ply (exact contact points with normals); or X.vdb: an "
+       "OpenVDB level set (with X_mesh.ply and X_gtcp.ply)")
       ->required();
   c->add_option("--res", a->resolution, "Sample an N^3 grid over the bounds");
   c->add_option("--random", a->random, "Sample COUNT uniform random points in the bounds instead");
