@@ -126,6 +126,8 @@ TEST(BuiltinShapes, SpecParsing) {
   EXPECT_THROW(parse_builtin_spec("builtin:torus@x"), Error);
   EXPECT_THROW(parse_builtin_spec("builtin:torus@1"), Error);
   EXPECT_THROW(parse_builtin_spec("builtin:torus@random:2"), Error);
+  EXPECT_THROW(parse_builtin_spec("builtin:torus@random:100000000000"),
+               Error);  // not "out of memory"
 }
 
 TEST(BuiltinShapes, RandomSamplesAreReproducible) {

@@ -195,7 +195,9 @@ BuiltinSpec parse_builtin_spec(const std::string& text) {
     throw Error("built-in '" + text + "': '" + rest + "' is not a whole number");
   spec.random = random;
   if (random) {
-    if (value < 4) throw Error("built-in '" + text + "': need at least 4 random samples");
+    // (At most sample --random's 1e8: more ended as "out of memory", with advice for the band.)
+    if (value < 4 || value > 100000000)
+      throw Error("built-in '" + text + "': the random samples must number 4 to 100000000");
     spec.count = std::size_t(value);
   } else {
     if (value < 2 || value > 1024)
