@@ -143,10 +143,9 @@ BlockedGrid blocked_grid_of(const VdbLayout& layout, const std::string& path) {
   // A rotated grid is contoured in its own frame, origin at voxel (0, 0, 0).
   const Eigen::Vector3d origin =
       vdb_world_from_grid(layout) ? Eigen::Vector3d::Zero() : layout.origin;
+  // (parse_layout_reply kept the box and the leaves inside the index range: no sum below
+  // overflows.)
   for (std::size_t a = 0; a < 3; ++a) {
-    if (layout.min[a] > layout.max[a] || !within_index_range(layout.min[a], layout.max[a]))
-      throw Error("the level set in '" + path +
-                  "' has no bounding box inside OpenVDB's index range");
     first[a] = layout.min[a] - 1;
     const long long n = (long long)layout.max[a] - first[a] + 2;
     if (n > (1 << 30)) throw Error("the level set in '" + path + "' is too large a grid");
@@ -166,8 +165,6 @@ BlockedGrid blocked_grid_of(const VdbLayout& layout, const std::string& path) {
   for (const auto& o : layout.leaf_origins) {
     SampleBox box;
     for (std::size_t a = 0; a < 3; ++a) {
-      if (o[a] > layout.max[a] || o[a] < layout.min[a] - 7)
-        throw Error("the level set in '" + path + "' has a leaf outside its active voxels");
       box.lo[a] = o[a] - first[a];
       box.hi[a] = box.lo[a] + 8;
     }

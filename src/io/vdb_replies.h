@@ -33,6 +33,7 @@ std::string layout_reply(const OpenVdbLayout& l);
 VdbLayout parse_layout_reply(const std::string& bytes, const std::string& path);
 
 /// The grid of `layout` (vdb_blocked_grid's), reading its boxes from `path` when asked.
+/// `layout`: as parse_layout_reply returns it, whose checks keep this grid's sums inside int.
 BlockedGrid blocked_grid_of(const VdbLayout& layout, const std::string& path);
 
 }  // namespace sdfcontour::detail
