@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+
+#include "sdfcontour/pipeline/option_ranges.h"
 
 namespace sdfcontour {
 
@@ -194,14 +197,19 @@ BuiltinSpec parse_builtin_spec(const std::string& text) {
   if (used == 0 || used != rest.size())
     throw Error("built-in '" + text + "': '" + rest + "' is not a whole number");
   spec.random = random;
+  // The ranges of sample's --random (at most 1e8: more ended as "out of memory", with advice for
+  // the band) and --res.
   if (random) {
-    // (At most sample --random's 1e8: more ended as "out of memory", with advice for the band.)
-    if (value < 4 || value > 100000000)
-      throw Error("built-in '" + text + "': the random samples must number 4 to 100000000");
+    const long long most = (long long)option_range("--random").hi;
+    if (value < 4 || value > most)
+      throw Error("built-in '" + text + "': the random samples must number 4 to " +
+                  std::to_string(most));
     spec.count = std::size_t(value);
   } else {
-    if (value < 2 || value > 1024)
-      throw Error("built-in '" + text + "': grid resolution must be between 2 and 1024");
+    const OptionRange& res = option_range("--res");
+    if (value < (long long)res.lo || value > (long long)res.hi)
+      throw Error("built-in '" + text + "': grid resolution must be between " +
+                  std::to_string((long long)res.lo) + " and " + std::to_string((long long)res.hi));
     spec.resolution = int(value);
   }
   return spec;
