@@ -15,17 +15,13 @@ clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_npy.cpp src/io/npy.cpp src/input/sam
   -ltbb -o "$out/fuzz_npy"
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_mesh_files.cpp src/io/mesh_files.cpp -o "$out/fuzz_mesh_files"
 # The OpenVDB module is linked in (openvdb_loader.cpp then uses it instead of loading it).
-clang++ "${flags[@]}" -Isrc -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
-  -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' \
-  tests/fuzz/fuzz_vdb.cpp src/io/vdb.cpp src/io/vdb_replies.cpp src/io/openvdb_loader.cpp src/io/openvdb_module.cpp \
-  src/io/isolated_call.cpp src/input/samples.cpp src/io/atomic_file.cpp src/io/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb \
-  -o "$out/fuzz_vdb"
+vdb=(-DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""'
+     -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' src/io/vdb.cpp src/io/vdb_replies.cpp
+     src/io/openvdb_loader.cpp src/io/openvdb_module.cpp src/io/isolated_call.cpp src/input/samples.cpp
+     src/io/atomic_file.cpp src/io/file_checks.cpp -lopenvdb -lImath-3_1 -ltbb)
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_vdb.cpp "${vdb[@]}" -o "$out/fuzz_vdb"
 # The reading child's replies, parsed in-process (the child's own reads are fuzz_vdb's).
-clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_vdb_replies.cpp src/io/vdb_replies.cpp src/io/vdb.cpp \
-  src/io/openvdb_loader.cpp src/io/isolated_call.cpp src/input/samples.cpp src/io/atomic_file.cpp \
-  src/io/file_checks.cpp -DSDFCONTOUR_BUILD_MODULE_DIR='""' -DSDFCONTOUR_INSTALL_MODULE_DIR='""' \
-  -DSDFCONTOUR_INSTALL_MODULE_RELATIVE_DIR='""' src/io/openvdb_module.cpp -lopenvdb -lImath-3_1 -ltbb \
-  -o "$out/fuzz_vdb_replies"
+clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_vdb_replies.cpp "${vdb[@]}" -o "$out/fuzz_vdb_replies"
 # Option values as text: the one number parser and every option's range.
 clang++ "${flags[@]}" -Isrc tests/fuzz/fuzz_options.cpp src/pipeline/option_ranges.cpp -o "$out/fuzz_options"
 # Meshes through sample's checks, union and signed distance (CGAL, TBB).
