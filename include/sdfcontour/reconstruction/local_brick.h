@@ -32,6 +32,10 @@
 
 namespace sdfcontour {
 
+namespace detail {
+class LatticePointStore;
+}
+
 /// The bricks' side (cells) with which a callable's or a Dask grid's local reconstruction runs
 /// when no brick size is given: memory bounded by a brick and its halo.
 constexpr int kLocalBrick = 256;
@@ -150,6 +154,10 @@ struct LocalBrickOptions {
   /// When set, the bricks take their contact points from here (the caller keeps them alive);
   /// `gradient`, `lattice_points`, `contact` and `lattice_contact` are then not read.
   const GivenContactPoints* given_points = nullptr;
+  /// When set, the lattice's contact points that earlier bricks made are taken from here, and
+  /// this brick's are added (local_mesh_in_bricks: each sample's point is made once, not again
+  /// for every brick whose reach covers it). The bricks then run one at a time, in C order.
+  detail::LatticePointStore* lattice_store = nullptr;
 };
 
 /// A vertex's global name: (k, 0) for the local reconstruction's vertex k (KeyedLocalMesh), (kx,

@@ -18,6 +18,7 @@
 #include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/local/brick_reach.h"
 #include "reconstruction/local/brick_stages.h"
+#include "reconstruction/local/lattice_point_store.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/contact_points/lattice_contact_points.h"
 #include "sdfcontour/pipeline/pipeline.h"
@@ -180,24 +181,28 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
     depths = contact_depths(cp, band.samples.values);
     return cp;
   };
-  const Eigen::Vector3d flag_lo =
-      block.point(own_first[0] - reach - block.first[0], own_first[1] - reach - block.first[1],
-                  own_first[2] - reach - block.first[2]);
-  const Eigen::Vector3d flag_hi =
-      block.point(own_end[0] + reach - block.first[0], own_end[1] + reach - block.first[1],
-                  own_end[2] + reach - block.first[2]);
+  // The global samples [flag_lo, flag_hi] (inclusive).
+  const Index3 flag_lo = detail::shifted(own_first, -reach),
+               flag_hi = detail::shifted(own_end, reach);
   const Eigen::Index count = band.samples.points.rows();
   std::vector<char> flagged(std::size_t(count), 0);
   tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index i) {
-    const Eigen::Vector3d p = band.samples.points.row(i).transpose();
-    flagged[std::size_t(i)] = band.core[std::size_t(i)] && (p.array() >= flag_lo.array()).all() &&
-                              (p.array() <= flag_hi.array()).all();
+    const Index3 at = detail::global_sample(block, band, std::size_t(i));
+    bool in = band.core[std::size_t(i)];
+    for (std::size_t a = 0; a < 3; ++a) in = in && at[a] >= flag_lo[a] && at[a] <= flag_hi[a];
+    flagged[std::size_t(i)] = in;
   });
   if (local_lattice_points(options, n)) {
     require_lattice_reach(block, band, flagged, options.lattice_contact, largest);
     ContactPointOptions contact = options.lattice_contact;
     contact.exact_wedge_slopes = contact.exact_wedge_slopes && block.type == ScalarType::Float64;
-    return with_depths(lattice_contact_points(block, band, contact, &flagged));
+    if (!options.lattice_store)
+      return with_depths(lattice_contact_points(block, band, contact, &flagged));
+    const ContactPoints stored =
+        options.lattice_store->take(block, band, flag_lo, flag_hi, flagged);
+    const ContactPoints made = lattice_contact_points(block, band, contact, &flagged);
+    options.lattice_store->record(block, band, flag_lo, flag_hi, made);
+    return with_depths(detail::merged_contact_points(made, stored));
   }
   const Bounds within = certain_box(block);
   BrickOptions bricks;

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "pipeline/uninitialised_allocator.h"
+#include "reconstruction/local/lattice_point_store.h"
 #include "sdfcontour/contact_points/bricks.h"
 #include "sdfcontour/reconstruction/local_brick.h"
 
@@ -281,11 +282,15 @@ namespace {
 // is set only the bricks that meet one of them are visited at all.
 Mesh mesh_in_bricks(const BlockSource& source,
                     const std::function<bool(const Index3&, const Index3&)>& may_hold_surface,
-                    const std::vector<SampleBox>* boxes, const LocalBrickOptions& options,
-                    int brick, LocalBricksStats* stats, OrientedPoints* contact_points) {
+                    const std::vector<SampleBox>* boxes, const LocalBrickOptions& given, int brick,
+                    LocalBricksStats* stats, OrientedPoints* contact_points) {
   if (brick < 0) throw Error("the brick size must be positive (0: one brick)");
   const Index3& dims = source.dims;
-  require_nameable(dims, options);
+  require_nameable(dims, given);
+  // Each sample's lattice point made once, by the first brick that reads it.
+  detail::LatticePointStore store;
+  LocalBrickOptions options = given;
+  if (!options.given_points && local_lattice_points(options, dims)) options.lattice_store = &store;
   const int side = brick > 0 ? brick : *std::max_element(dims.begin(), dims.end());
   const std::vector<long> visit = bricks_meeting(dims, side, boxes, 1);
   const int total = int(visit.size());
