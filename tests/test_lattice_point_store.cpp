@@ -50,7 +50,7 @@ TEST(LatticePointStore, EachSampleMadeOnceAndTakenBackAsTheWholeGrids) {
   std::vector<char> first = in_box(g, band, lo1, hi1);
   EXPECT_EQ(store.take(g, band, lo1, hi1, first).size(), 0);
   const ContactPoints made1 = lattice_contact_points(g, band, o, &first);
-  store.record(g, band, lo1, hi1, made1);
+  store.record(g, band, lo1, hi1, {13, 39, 39}, made1);  // (the second box starts at 14)
 
   const std::vector<char> wanted = in_box(g, band, lo2, hi2);
   std::vector<char> second = wanted;
@@ -82,7 +82,11 @@ TEST(LatticePointStore, EachSampleMadeOnceAndTakenBackAsTheWholeGrids) {
   }
 
   // A third box past the first's end along the first axis: the second decided what it holds.
-  store.record(g, band, lo2, hi2, made2);
+  // (A box out of order, from 10, would read what the first did not keep.)
+  std::vector<char> early = in_box(g, band, {10, 0, 0}, hi2);
+  detail::LatticePointStore copy = store;
+  EXPECT_THROW(copy.take(g, band, {10, 0, 0}, hi2, early), InternalError);
+  store.record(g, band, lo2, hi2, {24, 39, 39}, made2);
   const Index3 lo3{25, 0, 0}, hi3{39, 39, 39};
   const std::vector<char> before = in_box(g, band, lo3, hi3);
   std::vector<char> third = before;

@@ -55,6 +55,8 @@ ContactPoints LatticePointStore::take(const GridGeometry& block, const BandSampl
     const Index3 at = global_sample(block, band, s);
     for (std::size_t r = 0; r < near.size(); ++r) {
       if (!inside(at, near[r]->lo, near[r]->hi)) continue;
+      if (inside(at, near[r]->lo, near[r]->unshared))
+        throw InternalError("a brick read a lattice point that an earlier one did not keep");
       const std::vector<std::uint64_t>& made = near[r]->samples;
       const auto it = std::lower_bound(made.begin(), made.end(), global_index(at, n));
       const bool has = it != made.end() && *it == global_index(at, n);
@@ -77,13 +79,20 @@ ContactPoints LatticePointStore::take(const GridGeometry& block, const BandSampl
 }
 
 void LatticePointStore::record(const GridGeometry& block, const BandSamples& band, const Index3& lo,
-                               const Index3& hi, const ContactPoints& made) {
-  Record r{lo, hi, {}, made.points, made.normals};
+                               const Index3& hi, const Index3& unshared,
+                               const ContactPoints& made) {
+  Record r{lo, hi, unshared, {}, {}, {}};
   const Index3 n = block.whole_dims();
-  r.samples.reserve(made.samples.size());
+  std::vector<Eigen::Index> rows;
   // (A block's C order is the whole grid's inside it: the indices stay ascending.)
-  for (const int s : made.samples)
-    r.samples.push_back(global_index(global_sample(block, band, std::size_t(s)), n));
+  for (std::size_t q = 0; q < made.samples.size(); ++q) {
+    const Index3 at = global_sample(block, band, std::size_t(made.samples[q]));
+    if (inside(at, lo, unshared)) continue;
+    rows.push_back(Eigen::Index(q));
+    r.samples.push_back(global_index(at, n));
+  }
+  r.points = made.points(rows, Eigen::all);
+  r.normals = made.normals(rows, Eigen::all);
   records_.push_back(std::move(r));
 }
 

@@ -29,12 +29,16 @@ class LatticePointStore {
                      std::vector<char>& flagged);
   /// Records the points `made` (of `band`'s samples) as those of the core samples in the global box
   /// [lo, hi] (inclusive) that no recorded box held: `made` must be all those samples' points.
+  /// Those with every coordinate at most `unshared`'s, which no later brick reads (its reach
+  /// begins past them along some axis), are not kept: a take that needs one throws InternalError.
   void record(const GridGeometry& block, const BandSamples& band, const std::array<int, 3>& lo,
-              const std::array<int, 3>& hi, const ContactPoints& made);
+              const std::array<int, 3>& hi, const std::array<int, 3>& unshared,
+              const ContactPoints& made);
 
  private:
   struct Record {
     std::array<int, 3> lo, hi;           ///< the global box, inclusive
+    std::array<int, 3> unshared;         ///< samples in [lo, unshared] are not kept
     std::vector<std::uint64_t> samples;  ///< its points' global C-order indices, ascending
     PointMatrix points, normals;
   };

@@ -201,7 +201,9 @@ ContactPoints owned_reach_contact_points(const GridView& block, const BandSample
     const ContactPoints stored =
         options.lattice_store->take(block, band, flag_lo, flag_hi, flagged);
     const ContactPoints made = lattice_contact_points(block, band, contact, &flagged);
-    options.lattice_store->record(block, band, flag_lo, flag_hi, made);
+    // (A later brick's reach begins reach samples before this one's owned end, along some axis.)
+    options.lattice_store->record(block, band, flag_lo, flag_hi,
+                                  detail::shifted(own_end, -reach - 1), made);
     return with_depths(detail::merged_contact_points(made, stored));
   }
   const Bounds within = certain_box(block);
