@@ -7,6 +7,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <cstring>
 #include <functional>
 #include <queue>
 #include <string>
@@ -29,7 +30,7 @@ using Index3 = std::array<int, 3>;
 // brick's block of 308^3 floats took a fortieth of a second on one thread).
 using detail::Unwritten;
 
-// The block of `grid` with global samples [lo, hi), copied out in the grid's own type (`values`
+// The block of `grid` with global samples [lo, hi), copied out in the grid's own type T (`values`
 // keeps them; float32 grids stay float32, half the memory of a brick of doubles).
 template <class T>
 GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
@@ -39,13 +40,19 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
   block.first = lo;
   block.whole = grid.dims;
   for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
+  block.type = std::is_same_v<T, float> ? ScalarType::Float32 : ScalarType::Float64;
   values.resize(block.size());
   const std::size_t plane = std::size_t(block.dims[1]) * std::size_t(block.dims[2]);
   const std::size_t item = grid.type == ScalarType::Float32 ? 4 : 8;
+  if (grid.type != block.type) throw InternalError("a block is copied in its grid's own type");
   tbb::parallel_for(lo[0], hi[0], [&](int i) {
     std::size_t at = std::size_t(i - lo[0]) * plane;
-    for (int j = lo[1]; j < hi[1]; ++j)
-      for (int k = lo[2]; k < hi[2]; ++k) values[at++] = T(grid.value(grid.index(i, j, k)));
+    const std::size_t row = std::size_t(hi[2] - lo[2]);
+    // (Row by row: element by element through value(), bricks of 64 at 512^3 spent a thirtieth
+    // of their run copying.)
+    for (int j = lo[1]; j < hi[1]; ++j, at += row)
+      std::memcpy(&values[at], static_cast<const T*>(grid.data) + grid.index(i, j, lo[2]),
+                  row * sizeof(T));
     // A file-mapped grid's pages go slab by slab, not after the whole block: mapped and copied
     // at once, a block of 567^3 floats was 1.46 GB (bunny 1024^3's peak).
     if (grid.drop_pages) {
@@ -56,7 +63,6 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
     }
   });
   block.data = values.data();
-  block.type = std::is_same_v<T, float> ? ScalarType::Float32 : ScalarType::Float64;
   block.values_checked = true;  // (local_mesh_in_bricks validated the whole grid's values)
   return block;
 }
