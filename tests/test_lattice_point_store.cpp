@@ -31,15 +31,20 @@ std::vector<char> in_box(const Grid& g, const BandSamples& band, const Index3& l
   return flags;
 }
 
+// The band of 8 spacings, untruncated, as the bricks select it.
+BandSamples band_of_eight(const Grid& g) {
+  BandOptions o;
+  o.band = 8;
+  o.truncation_mode = TruncationMode::None;
+  return select_band(g, o);
+}
+
 }  // namespace
 
 TEST(LatticePointStore, EachSampleMadeOnceAndTakenBackAsTheWholeGrids) {
   // A CSG shape (edges, corners, a hole) at 40^3: two overlapping boxes, as two bricks' reaches.
   const Grid g = sample_grid(*make_builtin_shape("csg"), 40, Bounds{});
-  BandOptions bo;
-  bo.band = 8;
-  bo.truncation_mode = TruncationMode::None;
-  const BandSamples band = select_band(g, bo);
+  const BandSamples band = band_of_eight(g);
   const ContactPointOptions o = local_brick_options(ContourOptions{}).lattice_contact;
   const ContactPoints whole = lattice_contact_points(g, band, o);
   std::map<int, int> row_of;
