@@ -5,6 +5,7 @@
 #include <array>
 #include <map>
 
+#include "reconstruction/local/brick_ownership.h"
 #include "reconstruction/local/lattice_point_store.h"
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/lattice_contact_points.h"

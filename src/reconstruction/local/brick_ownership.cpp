@@ -16,6 +16,16 @@ Index3 grid_point_of(std::uint64_t p, const Index3& n) {
   return {int(p / std::uint64_t(n[1])), int(p % std::uint64_t(n[1])), k};
 }
 
+std::uint64_t grid_index_of(const Index3& p, const Index3& n) {
+  return (std::uint64_t(p[0]) * std::uint64_t(n[1]) + std::uint64_t(p[1])) * std::uint64_t(n[2]) +
+         std::uint64_t(p[2]);
+}
+
+Index3 global_sample(const GridGeometry& block, const BandSamples& band, std::size_t s) {
+  const Index3 at = grid_point_of(std::uint64_t(band.source[s]), block.dims);
+  return {at[0] + block.first[0], at[1] + block.first[1], at[2] + block.first[2]};
+}
+
 Index3 edge_low_point(std::uint64_t edge, const Index3& n) {
   return grid_point_of(edge / 3, n);
 }
@@ -119,17 +129,10 @@ void keep_owned_contact_points(const GridView& block, const BandSamples& band,
                                const ContactPoints& cp, const Index3& own_first,
                                const Index3& own_end, LocalPiece& piece) {
   const Index3 n = block.whole_dims();
-  const Eigen::Vector3d h = block.spacing();
   std::vector<std::pair<std::uint64_t, int>> owned;
   for (int q = 0; q < cp.size(); ++q) {
-    const Eigen::Vector3d p = band.samples.points.row(cp.samples[std::size_t(q)]).transpose();
-    Index3 at;
-    for (int a = 0; a < 3; ++a) at[a] = int(std::lround((p[a] - block.bounds.min[a]) / h[a]));
-    if (!in_range(at, own_first, own_end)) continue;
-    owned.push_back(
-        {(std::uint64_t(at[0]) * std::uint64_t(n[1]) + std::uint64_t(at[1])) * std::uint64_t(n[2]) +
-             std::uint64_t(at[2]),
-         q});
+    const Index3 at = global_sample(block, band, std::size_t(cp.samples[std::size_t(q)]));
+    if (in_range(at, own_first, own_end)) owned.push_back({grid_index_of(at, n), q});
   }
   std::sort(owned.begin(), owned.end());
   piece.owned_points.resize(Eigen::Index(owned.size()), 3);

@@ -18,6 +18,10 @@ using Index3 = std::array<int, 3>;
 
 /// Grid point `index` (C order) of a grid of `n` points (or cells).
 Index3 grid_point_of(std::uint64_t index, const Index3& n);
+/// The C-order index of grid point `p` of a grid of `n` points: grid_point_of's inverse.
+std::uint64_t grid_index_of(const Index3& p, const Index3& n);
+/// The global [i, j, k] of `band`'s sample `s` (a block's band: `source` in the block's C order).
+Index3 global_sample(const GridGeometry& block, const BandSamples& band, std::size_t s);
 /// The low sample (i, j, k) of the grid edge named `edge` (3 * sample index + axis) on a grid of
 /// `n` samples.
 Index3 edge_low_point(std::uint64_t edge, const Index3& n);

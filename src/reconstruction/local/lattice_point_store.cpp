@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "reconstruction/local/brick_ownership.h"
+
 namespace sdfcontour::detail {
 
 namespace {
@@ -24,19 +26,7 @@ bool meet(const Index3& lo1, const Index3& hi1, const Index3& lo2, const Index3&
   return true;
 }
 
-std::uint64_t global_index(const Index3& at, const Index3& n) {
-  return (std::uint64_t(at[0]) * std::uint64_t(n[1]) + std::uint64_t(at[1])) * std::uint64_t(n[2]) +
-         std::uint64_t(at[2]);
-}
-
 }  // namespace
-
-Index3 global_sample(const GridGeometry& block, const BandSamples& band, std::size_t s) {
-  const long p = band.source[s];
-  const long plane = long(block.dims[1]) * block.dims[2];
-  return {int(p / plane) + block.first[0], int(p / block.dims[2] % block.dims[1]) + block.first[1],
-          int(p % block.dims[2]) + block.first[2]};
-}
 
 ContactPoints LatticePointStore::take(const GridGeometry& block, const BandSamples& band,
                                       const Index3& lo, const Index3& hi,
@@ -58,8 +48,8 @@ ContactPoints LatticePointStore::take(const GridGeometry& block, const BandSampl
       if (inside(at, near[r]->lo, near[r]->unshared))
         throw InternalError("a brick read a lattice point that an earlier one did not keep");
       const std::vector<std::uint64_t>& made = near[r]->samples;
-      const auto it = std::lower_bound(made.begin(), made.end(), global_index(at, n));
-      const bool has = it != made.end() && *it == global_index(at, n);
+      const auto it = std::lower_bound(made.begin(), made.end(), grid_index_of(at, n));
+      const bool has = it != made.end() && *it == grid_index_of(at, n);
       from[s] = {int(r), has ? long(it - made.begin()) : -1};
       flagged[s] = 0;
       return;
@@ -89,7 +79,7 @@ void LatticePointStore::record(const GridGeometry& block, const BandSamples& ban
     const Index3 at = global_sample(block, band, std::size_t(made.samples[q]));
     if (inside(at, lo, unshared)) continue;
     rows.push_back(Eigen::Index(q));
-    r.samples.push_back(global_index(at, n));
+    r.samples.push_back(grid_index_of(at, n));
   }
   r.points = made.points(rows, Eigen::all);
   r.normals = made.normals(rows, Eigen::all);

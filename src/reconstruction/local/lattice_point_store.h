@@ -45,9 +45,6 @@ class LatticePointStore {
   std::vector<Record> records_;
 };
 
-/// The global [i, j, k] of `band`'s sample `s` (a block's band: `source` in the block's C order).
-std::array<int, 3> global_sample(const GridGeometry& block, const BandSamples& band, std::size_t s);
-
 /// Two sets of one band's contact points with distinct samples, as one in band order.
 ContactPoints merged_contact_points(const ContactPoints& a, const ContactPoints& b);
 

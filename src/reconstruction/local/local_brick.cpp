@@ -135,9 +135,7 @@ void require_lattice_reach(const GridView& block, const BandSamples& band,
   }
   for (std::size_t s = 0; s < flagged.size(); ++s) {
     if (!flagged[s]) continue;
-    const long p = band.source[s];
-    const Index3 at{int(p / (long(block.dims[1]) * block.dims[2])),
-                    int(p / block.dims[2] % block.dims[1]), int(p % block.dims[2])};
+    const Index3 at = detail::grid_point_of(std::uint64_t(band.source[s]), block.dims);
     for (std::size_t a = 0; a < 3; ++a)
       if (at[a] < lo[a] || at[a] > hi[a])
         throw HaloTooSmall("a lattice contact point reads beyond its brick's block");
