@@ -1,5 +1,6 @@
 #include "huge_pages.h"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <climits>
@@ -20,6 +21,12 @@ void rerun_with_huge_pages(char** argv) {
   if (::setenv("GLIBC_TUNABLES", tunables.c_str(), 1) != 0) return;
   ::execv(self, argv);
   // Not re-run: say nothing, it is only slower. Children (the .vdb reader) keep the setting.
+}
+
+void keep_freed_heap() {
+  // (32 MB is the most glibc takes for the threshold; setting either fixes both.)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, INT_MAX);
 }
 
 }  // namespace sdfcontour::cli

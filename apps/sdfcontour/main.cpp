@@ -13,6 +13,7 @@ using namespace sdfcontour;
 
 int main(int argc, char** argv) {
   cli::rerun_with_huge_pages(argv);
+  cli::keep_freed_heap();
   CLI::App app{"sdfcontour: contour samples of a signed distance function into a triangle mesh"};
   // `contour --help-all`: the contour command's help with its tuning options listed.
   std::vector<std::string> args(argv, argv + argc);
