@@ -32,8 +32,16 @@ Eigen::Vector3d gradient_at(const GridView& grid, const std::array<int, 3>& p,
   return g;
 }
 
+// How many of the samples (i, j, k) and (i + 1, j, k) are negative, per k in [k0, k1], into out.
+template <class T>
+void negatives_in_pair(const T* row, const T* next_slab_row, int k0, int k1, unsigned char* out) {
+  for (int k = k0; k <= k1; ++k)
+    out[k - k0] = static_cast<unsigned char>((row[k] < 0) + (next_slab_row[k] < 0));
+}
+
 // The cells of slab i (cells (i, *, *)) in the box that the surface crosses, with their
-// polygons' edges. Most cells are on one side: their corners' signs alone rule them out.
+// polygons' edges. Most cells are on one side: their corners' signs alone rule them out, counted
+// per row of samples once (a cell's eight loads and tests were 3% of a 512^3 run).
 template <class T>
 void slab_cells(const SurfaceCells& cells, const T* values, int i, std::vector<ActiveCell>& out) {
   const GridView& grid = cells.grid;
@@ -41,14 +49,24 @@ void slab_cells(const SurfaceCells& cells, const T* values, int i, std::vector<A
   const std::int64_t slab = std::int64_t(i) * (n[1] - 1) * (n[2] - 1);
   const std::size_t sj = std::size_t(n[2]), si = std::size_t(n[1]) * sj;
   const std::size_t offset[8] = {0, si, sj, si + sj, 1, si + 1, sj + 1, si + sj + 1};
+  const int k0 = cells.box_lo[2], k1 = cells.box_hi[2];  // cells k0..k1 - 1, samples k0..k1
+  if (k0 >= k1) return;
+  thread_local std::vector<unsigned char> below_buffer, above_buffer;
+  below_buffer.resize(std::size_t(k1 - k0 + 1));
+  above_buffer.resize(std::size_t(k1 - k0 + 1));
+  unsigned char* below = below_buffer.data();  // row j's pair of slabs
+  unsigned char* above = above_buffer.data();  // row j + 1's
+  auto row_of = [&](int j) { return values + grid.index(i, j, 0); };
+  if (cells.box_lo[1] < cells.box_hi[1])
+    negatives_in_pair(row_of(cells.box_lo[1]), row_of(cells.box_lo[1]) + si, k0, k1, below);
   double v[8];
   for (int j = cells.box_lo[1]; j < cells.box_hi[1]; ++j) {
-    const T* row = values + grid.index(i, j, 0);
-    for (int k = cells.box_lo[2]; k < cells.box_hi[2]; ++k) {
-      const T* at = row + k;
-      int inside = 0;
-      for (int c = 0; c < 8; ++c) inside += at[offset[c]] < 0;
+    const T* row = row_of(j);
+    negatives_in_pair(row + sj, row + sj + si, k0, k1, above);
+    for (int k = k0; k < k1; ++k) {
+      const int inside = below[k - k0] + below[k - k0 + 1] + above[k - k0] + above[k - k0 + 1];
       if (inside == 0 || inside == 8) continue;
+      const T* at = row + k;
       for (int c = 0; c < 8; ++c) v[c] = double(at[offset[c]]);
       const CubeCase cube = cube_case(v);
       ActiveCell cell;
@@ -63,6 +81,7 @@ void slab_cells(const SurfaceCells& cells, const T* values, int i, std::vector<A
       });
       out.push_back(cell);
     }
+    std::swap(below, above);
   }
 }
 
