@@ -190,23 +190,27 @@ EdgeMoments edge_moments(const Mesh& mesh, const detail::VertexTriangles& around
   for (std::size_t v = 0; v < m.slot.size(); ++v) m.slot[v] = fixed && (*fixed)[v] ? -1 : moving++;
   m.sum.resize(std::size_t(moving));
   m.triangles.resize(std::size_t(moving));
-  // Each vertex sums its triangles in ascending order (the same bits as a sweep over them).
+  // Each triangle's sum once (its three vertices read it: each made it again were 2.5% of a
+  // 512^3 run), then each vertex sums its triangles' in ascending order (the same bits as a sweep
+  // over them).
+  detail::Unwritten<Eigen::Matrix3d> per_triangle(std::size_t(mesh.triangles.rows()));
+  tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
+    Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
+                                 mesh.vertices.row(mesh.triangles(t, k)))
+                                    .transpose() /
+                                spacing;
+      e2 += e * e.transpose();
+    }
+    per_triangle[std::size_t(t)] = e2;
+  });
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     const int s = m.slot[std::size_t(v)];
     if (s < 0) return;
     Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
-      const int t = around.triangles[std::size_t(o)];
-      Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
-                                   mesh.vertices.row(mesh.triangles(t, k)))
-                                      .transpose() /
-                                  spacing;
-        e2 += e * e.transpose();
-      }
-      sum += e2;
-    }
+    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
+      sum += per_triangle[std::size_t(around.triangles[std::size_t(o)])];
     m.sum[std::size_t(s)] = sum;
     m.triangles[std::size_t(s)] =
         around.offsets[std::size_t(v) + 1] - around.offsets[std::size_t(v)];
