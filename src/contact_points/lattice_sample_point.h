@@ -60,6 +60,14 @@ class SamplePoint {
     return true;
   }
 
+  // The same with the gradient that an earlier prepare() found (gradient()).
+  void prepare(const Eigen::Vector3d& found) {
+    gather_neighbours();
+    g_ = found;
+    start_ = p_ - v_ * g_.normalized();
+  }
+  const Eigen::Vector3d& gradient() const { return g_; }
+
   // Then, reading `list` for the points in its box, the slope test, the candidate, then the
   // rescues (within the options' rescue_reach): a slide, and a vertex of the sample's power cell
   // on its sphere (the triangulation's rescue). A sample across a crease has the latter, then the
