@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <string>
@@ -175,48 +176,49 @@ bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
 // Per vertex, the sum over its triangles of e e^T over their three edges e (in spacings), and
 // the number of triangles: a flat triangle with its corners on z(x, y) lies
 // sum_e Q(e) / 12 above it on average, Q the quadric's quadratic part, so the vertex's chord
-// offset is minus the mean of that over its triangles. Only for the vertices that move (not
-// `fixed`): a split's second projection moves a fifth of them.
-struct EdgeMoments {
-  std::vector<int> slot;  // per vertex: its place in sum and triangles, -1 where fixed
-  detail::Unwritten<Eigen::Matrix3d> sum;
-  detail::Unwritten<int> triangles;
-};
-EdgeMoments edge_moments(const Mesh& mesh, const detail::VertexTriangles& around, double spacing,
-                         const std::vector<char>* fixed) {
-  EdgeMoments m;
-  m.slot.resize(std::size_t(mesh.vertices.rows()));
-  int moving = 0;
-  for (std::size_t v = 0; v < m.slot.size(); ++v) m.slot[v] = fixed && (*fixed)[v] ? -1 : moving++;
-  m.sum.resize(std::size_t(moving));
-  m.triangles.resize(std::size_t(moving));
-  // Each triangle's sum once (its three vertices read it: each made it again were 2.5% of a
-  // 512^3 run), then each vertex sums its triangles' in ascending order (the same bits as a sweep
-  // over them).
-  detail::Unwritten<Eigen::Matrix3d> per_triangle(std::size_t(mesh.triangles.rows()));
-  tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
-    Eigen::Matrix3d e2 = Eigen::Matrix3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
-                                 mesh.vertices.row(mesh.triangles(t, k)))
-                                    .transpose() /
-                                spacing;
-      e2 += e * e.transpose();
+// offset is minus the mean of that over its triangles. Each triangle's sum is made once (its
+// three vertices read it: made per vertex, they were 2.5% of a 512^3 run), and a vertex's only
+// where its fit asks for it.
+class EdgeMoments {
+ public:
+  EdgeMoments() = default;
+  EdgeMoments(const Mesh& mesh, const detail::VertexTriangles& around, double spacing)
+      : around_(&around), per_triangle_(std::size_t(mesh.triangles.rows())) {
+    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
+      Symmetric e2{};
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
+                                   mesh.vertices.row(mesh.triangles(t, k)))
+                                      .transpose() /
+                                  spacing;
+        for (int u = 0; u < 6; ++u) e2[std::size_t(u)] += e[kRow[u]] * e[kColumn[u]];
+      }
+      per_triangle_[std::size_t(t)] = e2;
+    });
+  }
+
+  // Vertex v's triangles: their count, and the sum of their moments in ascending order.
+  int triangles(Eigen::Index v) const {
+    return around_->offsets[std::size_t(v) + 1] - around_->offsets[std::size_t(v)];
+  }
+  Eigen::Matrix3d sum(Eigen::Index v) const {
+    Symmetric sum{};
+    for (int o = around_->offsets[std::size_t(v)]; o < around_->offsets[std::size_t(v) + 1]; ++o) {
+      const Symmetric& t = per_triangle_[std::size_t(around_->triangles[std::size_t(o)])];
+      for (int u = 0; u < 6; ++u) sum[std::size_t(u)] += t[std::size_t(u)];
     }
-    per_triangle[std::size_t(t)] = e2;
-  });
-  tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
-    const int s = m.slot[std::size_t(v)];
-    if (s < 0) return;
-    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
-      sum += per_triangle[std::size_t(around.triangles[std::size_t(o)])];
-    m.sum[std::size_t(s)] = sum;
-    m.triangles[std::size_t(s)] =
-        around.offsets[std::size_t(v) + 1] - around.offsets[std::size_t(v)];
-  });
-  return m;
-}
+    Eigen::Matrix3d m;
+    for (int u = 0; u < 6; ++u)
+      m(kRow[u], kColumn[u]) = m(kColumn[u], kRow[u]) = sum[std::size_t(u)];
+    return m;
+  }
+
+ private:
+  using Symmetric = std::array<double, 6>;  // (0,0), (0,1), (0,2), (1,1), (1,2), (2,2)
+  static constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kColumn[6] = {0, 1, 2, 1, 2, 2};
+  const detail::VertexTriangles* around_ = nullptr;
+  detail::Unwritten<Symmetric> per_triangle_;
+};
 
 }  // namespace
 
@@ -261,8 +263,7 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
   const detail::PointCubes& cubes = *cubes_;
   const detail::VertexTriangles around(mesh);
   const PointMatrix N = detail::vertex_normals(mesh, around);
-  const EdgeMoments chords =
-      o.chord_offset ? edge_moments(mesh, around, spacing, fixed) : EdgeMoments{};
+  const EdgeMoments chords = o.chord_offset ? EdgeMoments(mesh, around, spacing) : EdgeMoments{};
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
@@ -327,11 +328,10 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
     }
     double z0 = c[0];
     const bool crease = o.crease_planes && crease_height(fit, c, inv_chord_scale2, z0);
-    const int slot = o.chord_offset && !crease ? chords.slot[std::size_t(v)] : -1;
-    if (slot >= 0 && chords.triangles[std::size_t(slot)] > 0) {
-      const Eigen::Matrix3d& m = chords.sum[std::size_t(slot)];
+    if (o.chord_offset && !crease && chords.triangles(v) > 0) {
+      const Eigen::Matrix3d m = chords.sum(v);
       const double q = c[3] * a.dot(m * a) + c[4] * a.dot(m * b) + c[5] * b.dot(m * b);
-      z0 -= q / 12 / chords.triangles[std::size_t(slot)];
+      z0 -= q / 12 / chords.triangles(v);
     }
     if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
   });
