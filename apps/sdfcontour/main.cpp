@@ -5,14 +5,13 @@
 #include <vector>
 
 #include "commands.h"
-#include "huge_pages.h"
+#include "heap.h"
 #include "io/atomic_file.h"
 #include "sdfcontour/types.h"
 
 using namespace sdfcontour;
 
 int main(int argc, char** argv) {
-  cli::rerun_with_huge_pages(argv);
   cli::keep_freed_heap();
   CLI::App app{"sdfcontour: contour samples of a signed distance function into a triangle mesh"};
   // `contour --help-all`: the contour command's help with its tuning options listed.
