@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "binding/common.h"
+#include "reconstruction/local/lattice_point_store.h"
 #include "sdfcontour/extraction/brick_marching.h"
 
 namespace sdfcontour::binding {
@@ -42,15 +43,18 @@ py::tuple run_marching_cubes_brick(const py::array& block, const std::array<int,
 // `read(first, dims)` returns the samples [first, first + dims) of a grid of `dims` over [lo, hi]
 // as an array; the brick owns the edges from samples [own_first, own_end) and reads them with
 // the core's halo, wider while its stars ask for more. `options` as contour()'s; `truncation`
-// (inside, outside; inf: none) as found on the whole grid. Returns (keys (v, 2) uint64,
-// vertices, triangles, stats). The GIL is released but while `read` runs.
+// (inside, outside; inf: none) as found on the whole grid. `store` (or None): the lattice's
+// contact points of the grid's earlier bricks, run one at a time in C order, as the core's bricks
+// share them. Returns (keys (v, 2) uint64, vertices, triangles, stats). The GIL is released but
+// while `read` runs.
 py::tuple run_local_brick(const py::function& read, const std::array<int, 3>& dims,
                           const std::array<double, 3>& lo, const std::array<double, 3>& hi,
                           const std::array<int, 3>& own_first, const std::array<int, 3>& own_end,
                           const py::dict& options, const std::array<double, 2>& truncation,
-                          double value_scale) {
+                          double value_scale, detail::LatticePointStore* store) {
   LocalBrickOptions lb =
       local_brick_options(with_edge_fans(contour_options(options), largest(dims)));
+  if (store && !lb.given_points && local_lattice_points(lb, dims)) lb.lattice_store = store;
   lb.band.truncation_mode = TruncationMode::Resolved;
   lb.band.resolved.inside = truncation[0];
   lb.band.resolved.outside = truncation[1];
@@ -272,7 +276,12 @@ void bind_bricks(py::module_& m) {
         py::arg("dims"), py::arg("lo"), py::arg("hi"));
   m.def("local_brick", &run_local_brick, py::arg("read"), py::arg("dims"), py::arg("lo"),
         py::arg("hi"), py::arg("own_first"), py::arg("own_end"), py::arg("options"),
-        py::arg("truncation"), py::arg("value_scale") = 1.0);
+        py::arg("truncation"), py::arg("value_scale") = 1.0, py::arg("store").none(true) = nullptr);
+  py::class_<detail::LatticePointStore>(
+      m, "LatticeStore",
+      "The lattice's contact points that a grid's bricks made, for local_brick's later bricks "
+      "of the same grid (run one at a time, in C order): each sample's point made once.")
+      .def(py::init<>());
   m.attr("LOCAL_BRICK") = kLocalBrick;
   m.def("crossing_gradient_norms", &run_crossing_gradient_norms, py::arg("block"), py::arg("first"),
         py::arg("dims"), py::arg("lo"), py::arg("hi"), py::arg("own_first"), py::arg("own_end"));

@@ -69,14 +69,15 @@ def _brick_error(index, first, end, error):
 
 
 def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation, value_scale=1.0,
-                    with_stats=False):
+                    with_stats=False, store=None):
     """The piece of GCP's local reconstruction (its mesh in bricks, local_brick.h) that one brick
     owns: the grid edges from the brick's samples [first, first + dims - 1) (its cells' low
     corners), read with a halo around them by ``read(first, dims)`` (a block of the grid; the
     core's brick driver widens the halo until the contact points' stars fit in it). ``options``:
     contour()'s options dict; ``truncation``: (inside, outside) found on the whole grid (inf:
     none); ``value_scale``: the factor that makes the values distances (found on the whole
-    grid).
+    grid); ``store``: a ``_sdfcontour.LatticeStore`` shared by the grid's bricks when they run
+    one at a time in C order (each sample's contact point then made once), or None.
 
     Returns (keys (v, 2) uint64 ascending, V (v, 3) float64, F (f, 3) int32 into V, the
     triangles' names (f,) uint64 ascending), with ``with_stats`` the piece's whole stats dict in
@@ -100,7 +101,8 @@ def gcp_brick_piece(read, index, first, dims, shape, lo, hi, options, truncation
         piece = _sdfcontour.local_brick(checked, tuple(int(n) for n in shape),
                                         tuple(float(x) for x in lo), tuple(float(x) for x in hi),
                                         tuple(own_first), tuple(own_end), options,
-                                        tuple(float(t) for t in truncation), float(value_scale))
+                                        tuple(float(t) for t in truncation), float(value_scale),
+                                        store)
     except ValueError as e:
         raise _brick_error(index, last[0], last[1], e) from None
     return piece if with_stats else (*piece[:3], piece[3]["triangle_names"])

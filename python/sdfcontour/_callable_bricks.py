@@ -219,10 +219,12 @@ def contour_callable_gcp(grid, scale, options, progress=False):
     todo = [(index, first, dims) for index, first, dims in bricks(grid.shape, size)
             if grid.owns_surface(first, [f0 + d - 1 for f0, d in zip(first, dims)])]
     pieces, contact_points, owned = [], 0, []
+    # (The bricks in C order, one at a time: each sample's lattice point made once.)
+    store = _sdfcontour.LatticeStore()
     for number, (index, first, dims) in enumerate(todo):
         keys, V, F, stats = gcp_brick_piece(grid.read, index, first, dims, grid.shape, grid.lo,
                                             grid.hi, options, (np.inf, np.inf), value_scale,
-                                            with_stats=True)
+                                            with_stats=True, store=store)
         contact_points += stats["contact_points"]
         pieces.append((keys, V, F, stats["triangle_names"]))
         if "owned_samples" in stats:

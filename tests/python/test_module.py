@@ -593,7 +593,7 @@ def test_callable_marching_cubes_by_bricks_is_the_full_grids_mesh():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scale,n,brick", [(1.0, 48, 24), (1.3, 64, "auto")])
+@pytest.mark.parametrize("scale,n,brick", [(1.0, 48, 24), (1.3, 64, "auto"), (1.0, 64, 24)])
 def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     # GCP's local reconstruction of a callable goes brick by brick too, from bricks sampled near
     # the surface: bit for bit the full grid's mesh; a field steeper than a distance is rescaled
@@ -615,7 +615,7 @@ def test_callable_gcp_by_bricks_is_the_full_grids_local_mesh(scale, n, brick):
     assert stats["value_scale"] == stats2["value_scale"]
     assert abs(stats["value_scale"] - 1 / scale) < 1e-3
     assert stats["reconstruction"] == "local" and stats["closed"] and stats["manifold"]
-    assert stats["local_bricks"] == (8 if brick == 24 else 1)
+    assert stats["local_bricks"] == {(48, 24): 8, (64, 24): 27}.get((n, brick), 1)
 
 
 def test_callable_gcp_says_whether_its_mesh_is_edge_fanned():
