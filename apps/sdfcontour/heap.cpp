@@ -7,7 +7,8 @@
 namespace sdfcontour::cli {
 
 void keep_freed_heap() {
-  // (32 MB is the most glibc takes for the threshold; setting either fixes both.)
+  // (32 MB is the most glibc takes for the threshold. Setting either value also stops glibc
+  // from adjusting both as blocks are freed.)
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, INT_MAX);
 }

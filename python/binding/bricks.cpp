@@ -54,7 +54,7 @@ py::tuple run_local_brick(const py::function& read, const std::array<int, 3>& di
                           double value_scale, detail::LatticePointStore* store) {
   LocalBrickOptions lb =
       local_brick_options(with_edge_fans(contour_options(options), largest(dims)));
-  if (store && !lb.given_points && local_lattice_points(lb, dims)) lb.lattice_store = store;
+  lb.lattice_store = store;  // (read only where the points come from the lattice)
   lb.band.truncation_mode = TruncationMode::Resolved;
   lb.band.resolved.inside = truncation[0];
   lb.band.resolved.outside = truncation[1];

@@ -157,6 +157,7 @@ struct LocalBrickOptions {
   /// When set, the lattice's contact points that earlier bricks made are taken from here, and
   /// this brick's are added (local_mesh_in_bricks: each sample's point is made once, not again
   /// for every brick whose reach covers it). The bricks then run one at a time, in C order.
+  /// Read only where the brick's contact points come from the lattice (local_lattice_points).
   detail::LatticePointStore* lattice_store = nullptr;
 };
 

@@ -48,8 +48,9 @@ ContactPoints LatticePointStore::take(const GridGeometry& block, const BandSampl
       if (inside(at, near[r]->lo, near[r]->unshared))
         throw InternalError("a brick read a lattice point that an earlier one did not keep");
       const std::vector<std::uint64_t>& made = near[r]->samples;
-      const auto it = std::lower_bound(made.begin(), made.end(), grid_index_of(at, n));
-      const bool has = it != made.end() && *it == grid_index_of(at, n);
+      const std::uint64_t index = grid_index_of(at, n);
+      const auto it = std::lower_bound(made.begin(), made.end(), index);
+      const bool has = it != made.end() && *it == index;
       from[s] = {int(r), has ? long(it - made.begin()) : -1};
       flagged[s] = 0;
       return;

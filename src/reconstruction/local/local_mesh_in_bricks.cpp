@@ -41,10 +41,9 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
   block.whole = grid.dims;
   for (std::size_t a = 0; a < 3; ++a) block.dims[a] = hi[a] - lo[a];
   block.type = std::is_same_v<T, float> ? ScalarType::Float32 : ScalarType::Float64;
+  if (grid.type != block.type) throw InternalError("a block is copied in its grid's own type");
   values.resize(block.size());
   const std::size_t plane = std::size_t(block.dims[1]) * std::size_t(block.dims[2]);
-  const std::size_t item = grid.type == ScalarType::Float32 ? 4 : 8;
-  if (grid.type != block.type) throw InternalError("a block is copied in its grid's own type");
   tbb::parallel_for(lo[0], hi[0], [&](int i) {
     std::size_t at = std::size_t(i - lo[0]) * plane;
     const std::size_t row = std::size_t(hi[2] - lo[2]);
@@ -58,8 +57,7 @@ GridView copy_block(const GridView& grid, const Index3& lo, const Index3& hi,
     if (grid.drop_pages) {
       const std::size_t first = grid.index(i, lo[1], lo[2]),
                         last = grid.index(i, hi[1] - 1, hi[2] - 1);
-      (*grid.drop_pages)(static_cast<const char*>(grid.data) + first * item,
-                         (last - first + 1) * item);
+      (*grid.drop_pages)(static_cast<const T*>(grid.data) + first, (last - first + 1) * sizeof(T));
     }
   });
   block.data = values.data();
@@ -296,7 +294,7 @@ Mesh mesh_in_bricks(const BlockSource& source,
   // Each sample's lattice point made once, by the first brick that reads it.
   detail::LatticePointStore store;
   LocalBrickOptions options = given;
-  if (!options.given_points && local_lattice_points(options, dims)) options.lattice_store = &store;
+  options.lattice_store = &store;
   const int side = brick > 0 ? brick : *std::max_element(dims.begin(), dims.end());
   const std::vector<long> visit = bricks_meeting(dims, side, boxes, 1);
   const int total = int(visit.size());
