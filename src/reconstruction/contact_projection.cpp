@@ -176,36 +176,32 @@ bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
 // Per vertex, the sum over its triangles of e e^T over their three edges e (in spacings), and
 // the number of triangles: a flat triangle with its corners on z(x, y) lies
 // sum_e Q(e) / 12 above it on average, Q the quadric's quadratic part, so the vertex's chord
-// offset is minus the mean of that over its triangles. Each triangle's sum is made once (its
-// three vertices read it: made per vertex, they were 2.5% of a 512^3 run), and a vertex's only
-// where its fit asks for it.
+// offset is minus the mean of that over its triangles. Made only where a vertex's fit asks for
+// it, from its own triangles: an array of every triangle's sums, made first, was 3% of a 512^3
+// run, most of it faulting its pages in.
 class EdgeMoments {
  public:
-  EdgeMoments() = default;
   EdgeMoments(const Mesh& mesh, const detail::VertexTriangles& around, double spacing)
-      : around_(&around), per_triangle_(std::size_t(mesh.triangles.rows())) {
-    tbb::parallel_for(Eigen::Index(0), mesh.triangles.rows(), [&](Eigen::Index t) {
-      Symmetric e2{};
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
-                                   mesh.vertices.row(mesh.triangles(t, k)))
-                                      .transpose() /
-                                  spacing;
-        for (int u = 0; u < 6; ++u) e2[std::size_t(u)] += e[kRow[u]] * e[kColumn[u]];
-      }
-      per_triangle_[std::size_t(t)] = e2;
-    });
-  }
+      : mesh_(mesh), around_(around), spacing_(spacing) {}
 
-  // Vertex v's triangles: their count, and the sum of their moments in ascending order.
+  // Vertex v's triangles: their count, and the sum of their moments in ascending order (each
+  // triangle's three edges summed first).
   int triangles(Eigen::Index v) const {
-    return around_->offsets[std::size_t(v) + 1] - around_->offsets[std::size_t(v)];
+    return around_.offsets[std::size_t(v) + 1] - around_.offsets[std::size_t(v)];
   }
   Eigen::Matrix3d sum(Eigen::Index v) const {
     Symmetric sum{};
-    for (int o = around_->offsets[std::size_t(v)]; o < around_->offsets[std::size_t(v) + 1]; ++o) {
-      const Symmetric& t = per_triangle_[std::size_t(around_->triangles[std::size_t(o)])];
-      for (int u = 0; u < 6; ++u) sum[std::size_t(u)] += t[std::size_t(u)];
+    for (int o = around_.offsets[std::size_t(v)]; o < around_.offsets[std::size_t(v) + 1]; ++o) {
+      const Eigen::Index t = around_.triangles[std::size_t(o)];
+      Symmetric e2{};
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d e = (mesh_.vertices.row(mesh_.triangles(t, (k + 1) % 3)) -
+                                   mesh_.vertices.row(mesh_.triangles(t, k)))
+                                      .transpose() /
+                                  spacing_;
+        for (int u = 0; u < 6; ++u) e2[std::size_t(u)] += e[kRow[u]] * e[kColumn[u]];
+      }
+      for (int u = 0; u < 6; ++u) sum[std::size_t(u)] += e2[std::size_t(u)];
     }
     Eigen::Matrix3d m;
     for (int u = 0; u < 6; ++u)
@@ -216,8 +212,9 @@ class EdgeMoments {
  private:
   using Symmetric = std::array<double, 6>;  // (0,0), (0,1), (0,2), (1,1), (1,2), (2,2)
   static constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kColumn[6] = {0, 1, 2, 1, 2, 2};
-  const detail::VertexTriangles* around_ = nullptr;
-  detail::Unwritten<Symmetric> per_triangle_;
+  const Mesh& mesh_;
+  const detail::VertexTriangles& around_;
+  double spacing_;
 };
 
 }  // namespace
@@ -263,7 +260,7 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
   const detail::PointCubes& cubes = *cubes_;
   const detail::VertexTriangles around(mesh);
   const PointMatrix N = detail::vertex_normals(mesh, around);
-  const EdgeMoments chords = o.chord_offset ? EdgeMoments(mesh, around, spacing) : EdgeMoments{};
+  const EdgeMoments chords(mesh, around, spacing);
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
