@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/uninitialised_allocator.h"
 #include "pipeline/work_counter.h"
 #include "reconstruction/carving_internal.h"
 #include "reconstruction/mesh_geometry.h"

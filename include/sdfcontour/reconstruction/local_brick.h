@@ -228,7 +228,8 @@ struct BlockSource {
   /// Views the samples [lo, hi) as a block of the whole grid (GridGeometry::first = lo, ::whole =
   /// dims); the view stays valid until the next read or release.
   std::function<GridView(const std::array<int, 3>& lo, const std::array<int, 3>& hi)> read;
-  /// Frees the last block read, once a brick has read all it needs of it; may be empty.
+  /// Called once a brick has read all it needs of the last block: frees it, or keeps its storage
+  /// for the next read; may be empty.
   std::function<void()> release;
   /// The grid itself, where it is in memory: a block that would be all of it is not read.
   const GridView* whole = nullptr;

@@ -30,9 +30,16 @@ using Index3 = std::array<int, 3>;
 // brick's block of 308^3 floats took a fortieth of a second on one thread).
 using detail::Unwritten;
 
-// A copied block up to this many bytes stays between bricks (a brick of 256 with its halo is
-// about 80 MB of floats).
+// A block's storage, released once its brick has read it, stays for the next brick up to this
+// many bytes (a brick of 256 with its halo is about 80 MB of floats): kept, the next block is not
+// zeroed and faulted in again (bunny 512^3 in bricks of 256: 0.3-0.5 s less system time).
 constexpr std::size_t kKeepBlockUpTo = std::size_t(256) << 20;
+
+template <class Vector>
+void release_if_large(Vector& values) {
+  if (values.capacity() * sizeof(typename Vector::value_type) > kKeepBlockUpTo)
+    Vector().swap(values);
+}
 
 // The block of `grid` with global samples [lo, hi), copied out in the grid's own type T (`values`
 // keeps them; float32 grids stay float32, half the memory of a brick of doubles).
@@ -366,14 +373,8 @@ Mesh local_mesh_in_bricks(const GridView& grid, const LocalBrickOptions& given, 
                                                                : copy_block(grid, lo, hi, doubles);
                      },
                      [&] {
-                       // Kept, the next brick's block is not zeroed and faulted in again
-                       // (bunny 512^3 in bricks of 256: 0.3-0.5 s less system time); only a
-                       // large one goes for the rest of its brick.
-                       if (floats.capacity() * sizeof(float) + doubles.capacity() * sizeof(double) >
-                           kKeepBlockUpTo) {
-                         Unwritten<float>().swap(floats);
-                         Unwritten<double>().swap(doubles);
-                       }
+                       release_if_large(floats);
+                       release_if_large(doubles);
                      },
                      &grid};
   return mesh_in_bricks(source, {}, nullptr, options, brick, stats, contact_points);
@@ -389,10 +390,7 @@ Mesh local_mesh_in_bricks(const BlockedGrid& grid, const LocalBrickOptions& opti
   BlockSource source{
       grid.dims,
       [&](const Index3& lo, const Index3& hi) { return read_block(grid, lo, hi, floats); },
-      [&] {
-        if (floats.capacity() * sizeof(float) > kKeepBlockUpTo) std::vector<float>().swap(floats);
-      },
-      nullptr};
+      [&] { release_if_large(floats); }, nullptr};
   return mesh_in_bricks(source, grid.may_hold_surface,
                         grid.surface_boxes ? &*grid.surface_boxes : nullptr, options, brick, stats,
                         contact_points);
