@@ -17,10 +17,11 @@ void check_ball_samples(const char* what, const PointMatrix& points, const Eigen
                         double spacing);
 
 /// The triangles around each vertex: those of vertex v are triangles[offsets[v] .. offsets[v+1]).
-/// Built once per mesh (carving moves vertices, never triangles).
+/// Built once per mesh (carving moves vertices, never triangles). With `skip`, the vertices it
+/// sets get none (a projection that fits a few vertices reads only theirs).
 struct VertexTriangles {
   std::vector<int> offsets, triangles;
-  explicit VertexTriangles(const Mesh& mesh);
+  explicit VertexTriangles(const Mesh& mesh, const std::vector<char>* skip = nullptr);
 };
 
 /// Scales each vertex's move in `moves` (per vertex, factor[v] times its row: 1, halved, then 0)

@@ -92,7 +92,7 @@ void check_ball_samples(const char* what, const PointMatrix& points, const Eigen
     throw Error(name + ": the samples must be finite");
 }
 
-VertexTriangles::VertexTriangles(const Mesh& mesh) {
+VertexTriangles::VertexTriangles(const Mesh& mesh, const std::vector<char>* skip) {
   if (mesh.vertices.rows() >= std::numeric_limits<int>::max() ||
       3 * mesh.triangles.rows() >= std::numeric_limits<int>::max())
     throw Error("too many vertices or triangles for one mesh piece (2^31 corners)");
@@ -103,8 +103,10 @@ VertexTriangles::VertexTriangles(const Mesh& mesh) {
   std::vector<std::atomic<int>> next(count);
   tbb::parallel_for(std::size_t(0), count,
                     [&](std::size_t v) { next[v].store(0, std::memory_order_relaxed); });
+  auto counted = [&](int v) { return !skip || !(*skip)[std::size_t(v)]; };
   tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index t) {
-    for (int c = 0; c < 3; ++c) next[std::size_t(F(t, c))].fetch_add(1, std::memory_order_relaxed);
+    for (int c = 0; c < 3; ++c)
+      if (counted(F(t, c))) next[std::size_t(F(t, c))].fetch_add(1, std::memory_order_relaxed);
   });
   offsets.resize(count + 1);
   offsets[0] = 0;
@@ -115,8 +117,9 @@ VertexTriangles::VertexTriangles(const Mesh& mesh) {
   triangles.resize(std::size_t(offsets.back()));
   tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index t) {
     for (int c = 0; c < 3; ++c)
-      triangles[std::size_t(next[std::size_t(F(t, c))].fetch_add(1, std::memory_order_relaxed))] =
-          int(t);
+      if (counted(F(t, c)))
+        triangles[std::size_t(next[std::size_t(F(t, c))].fetch_add(1, std::memory_order_relaxed))] =
+            int(t);
   });
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t v) {
     std::sort(triangles.begin() + offsets[v], triangles.begin() + offsets[v + 1]);

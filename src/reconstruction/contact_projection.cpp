@@ -243,9 +243,19 @@ ContactProjector::ContactProjector(const PointMatrix& points, const PointMatrix&
 ContactProjector::~ContactProjector() = default;
 
 ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed) const {
+  if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
+    throw Error("projection: one fixed flag per vertex is needed");
+  // Only the vertices it fits need their triangles (after a split, about 1% of them).
+  return project(mesh, fixed, detail::VertexTriangles(mesh, fixed));
+}
+
+ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed,
+                                                 const detail::VertexTriangles& around) const {
   if (!mesh.vertices.allFinite()) throw Error("projection: the mesh's vertices must be finite");
   if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
     throw Error("projection: one fixed flag per vertex is needed");
+  if (around.offsets.size() != std::size_t(mesh.vertices.rows()) + 1)
+    throw Error("projection: the triangles around the vertices are another mesh's");
   const PointMatrix& points = points_;
   const PointMatrix& normals = normals_;
   const Eigen::VectorXd& depths = depths_;
@@ -257,8 +267,7 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
   ContactProjectionStats stats;
   if (!cubes_ || mesh.vertices.rows() == 0) return stats;
   const detail::PointCubes& cubes = *cubes_;
-  const detail::VertexTriangles around(mesh);
-  const PointMatrix N = detail::vertex_normals(mesh, around);
+  PointMatrix N(mesh.vertices.rows(), 3);  // the fitted vertices' rows only
   const EdgeMoments chords(mesh, around, spacing);
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
@@ -267,8 +276,10 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
   detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     fitted.add();
+    if (fixed && (*fixed)[std::size_t(v)]) return;
+    N.row(v) = detail::unit_vertex_normal(mesh, around, v);
     const Eigen::Vector3d n = N.row(v).transpose();
-    if (n.squaredNorm() == 0 || (fixed && (*fixed)[std::size_t(v)])) return;
+    if (n.squaredNorm() == 0) return;
     const Eigen::Vector3d p = mesh.vertices.row(v).transpose();
     // A tangent frame (a, b, n); heights and offsets in spacings keep the system well scaled.
     const Eigen::Vector3d a =

@@ -22,20 +22,24 @@ PointMatrix vertex_normals(const Mesh& mesh) {
   return N;
 }
 
+Eigen::RowVector3d unit_vertex_normal(const Mesh& mesh, const VertexTriangles& around,
+                                      Eigen::Index v) {
+  Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+  for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
+    const int t = around.triangles[std::size_t(o)];
+    const Eigen::RowVector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
+                             b = mesh.vertices.row(mesh.triangles(t, 1)),
+                             c = mesh.vertices.row(mesh.triangles(t, 2));
+    sum += (b - a).cross(c - a);
+  }
+  const double len = sum.norm();
+  return len > 0 ? Eigen::RowVector3d(sum / len) : Eigen::RowVector3d::Zero();
+}
+
 PointMatrix vertex_normals(const Mesh& mesh, const VertexTriangles& around) {
   PointMatrix N(mesh.vertices.rows(), 3);
-  tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
-    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
-    for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
-      const int t = around.triangles[std::size_t(o)];
-      const Eigen::RowVector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
-                               b = mesh.vertices.row(mesh.triangles(t, 1)),
-                               c = mesh.vertices.row(mesh.triangles(t, 2));
-      sum += (b - a).cross(c - a);
-    }
-    const double len = sum.norm();
-    N.row(v) = len > 0 ? Eigen::RowVector3d(sum / len) : Eigen::RowVector3d::Zero();
-  });
+  tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(),
+                    [&](Eigen::Index v) { N.row(v) = unit_vertex_normal(mesh, around, v); });
   return N;
 }
 

@@ -15,6 +15,10 @@ struct VertexTriangles;
 /// ascending order, as the serial sweep does.
 PointMatrix vertex_normals(const Mesh& mesh, const VertexTriangles& around);
 
+/// Vertex v's row of vertex_normals(mesh, around), alone.
+Eigen::RowVector3d unit_vertex_normal(const Mesh& mesh, const VertexTriangles& around,
+                                      Eigen::Index v);
+
 /// Barycentric coordinates of q (in the plane of triangle t) in triangle t; zero for a degenerate
 /// triangle.
 Eigen::Vector3d barycentric(const Mesh& mesh, Eigen::Index t, const Eigen::Vector3d& q);

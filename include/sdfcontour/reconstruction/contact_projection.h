@@ -21,7 +21,8 @@ namespace sdfcontour {
 
 namespace detail {
 class PointCubes;
-}
+struct VertexTriangles;
+}  // namespace detail
 
 struct ContactProjectionOptions {
   /// Radius of the neighbourhood fitted around each vertex, in spacings (Gaussian weights of
@@ -131,6 +132,10 @@ class ContactProjector {
 
   /// project_to_contact_points(mesh, points, normals, depths, spacing, options, fixed).
   ContactProjectionStats project(Mesh& mesh, const std::vector<char>* fixed = nullptr) const;
+  /// The same with `around`, the mesh's triangles around each vertex that is not fixed, made by
+  /// the caller (who reads them again).
+  ContactProjectionStats project(Mesh& mesh, const std::vector<char>* fixed,
+                                 const detail::VertexTriangles& around) const;
 
  private:
   const PointMatrix& points_;

@@ -122,21 +122,26 @@ BrickSurface surface_on_contact_points(const BrickDual& dual, const ContactPoint
   surface.corners = shared_corners(sub);
   // (The points indexed once, for the split's vertices too.)
   std::optional<ContactProjector> projector;
-  if (options.project && cp.size() > 0) {
-    projector.emplace(cp.points, cp.normals, depths, h, options.projection);
-    projector->project(sub.mesh, &surface.fixed(options));
-  }
   const double sag = options.split_sag >= 0 ? options.split_sag : auto_split_sag(largest);
   // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
   // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
   // vertices 0.002 h off it.)
-  if (fans && sag > 0 && projector && !options.refine_zero_set) {
-    split_fan_faces(dual.near, sag * h, *projector, dual.cells, sub, surface.reconstructed);
-    surface.corners = shared_corners(sub);  // in the new numbering
+  const bool split = options.project && cp.size() > 0 && sag > 0 && !options.refine_zero_set &&
+                     (fans || levels <= 3);
+  if (options.project && cp.size() > 0) {
+    projector.emplace(cp.points, cp.normals, depths, h, options.projection);
+    // The split reads every vertex's triangles: made once for both.
+    const VertexTriangles around(sub.mesh, split ? nullptr : &surface.fixed(options));
+    projector->project(sub.mesh, &surface.fixed(options), around);
+    if (split && fans) {
+      split_fan_faces(dual.near, sag * h, *projector, dual.cells, around, sub,
+                      surface.reconstructed);
+      surface.corners = shared_corners(sub);  // in the new numbering
+    } else if (split) {
+      split_sagging_edges(dual.near, levels, sag * h, *projector, options, around, sub,
+                          surface.reconstructed, surface.corners);
+    }
   }
-  if (!fans && sag > 0 && levels <= 3 && projector && !options.refine_zero_set)
-    split_sagging_edges(dual.near, levels, sag * h, *projector, options, sub, surface.reconstructed,
-                        surface.corners);
   surface.stay = surface.fixed(options);
   return surface;
 }

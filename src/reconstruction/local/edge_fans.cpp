@@ -205,11 +205,12 @@ long keep_in_fan_regions(PointMatrix& vertices, const std::vector<VertexKey>& ke
 }
 
 void split_fan_faces(const KeyedTriangles& near, double limit, const ContactProjector& projector,
-                     const GridGeometry& grid, SubdividedMesh& sub, PointMatrix& reconstructed) {
+                     const GridGeometry& grid, const VertexTriangles& around, SubdividedMesh& sub,
+                     PointMatrix& reconstructed) {
   const std::array<int, 3> n = grid.whole_dims();
   const std::array<int, 3> cells{n[0] - 1, n[1] - 1, n[2] - 1};
   const VertexKeyBases bases = vertex_key_bases(n);
-  const PointMatrix normals = vertex_normals(sub.mesh, VertexTriangles(sub.mesh));
+  const PointMatrix normals = vertex_normals(sub.mesh, around);
   auto split = [&](int x, int y) {
     const VertexKey &kx = sub.keys[std::size_t(x)], &ky = sub.keys[std::size_t(y)];
     if (kx[1] != 0 || ky[1] != 0 || kx[0] >= bases.segments || ky[0] >= bases.segments)

@@ -64,8 +64,9 @@ std::vector<std::uint64_t> split_cells(const std::vector<std::uint64_t>& keys,
 /// length times its ends' normals' turn / 8) gets a vertex where it crosses the face between the
 /// two cells, projected by `projector` (onto the contact points) and kept on that face; each of its
 /// two triangles is cut in two, each half in one cell. `reconstructed` follows the new numbering
-/// (the new vertices at their faces' crossings).
+/// (the new vertices at their faces' crossings). `around`: sub.mesh's triangles around each vertex.
 void split_fan_faces(const KeyedTriangles& near, double limit, const ContactProjector& projector,
-                     const GridGeometry& grid, SubdividedMesh& sub, PointMatrix& reconstructed);
+                     const GridGeometry& grid, const VertexTriangles& around, SubdividedMesh& sub,
+                     PointMatrix& reconstructed);
 
 }  // namespace sdfcontour::detail

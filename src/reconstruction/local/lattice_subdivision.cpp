@@ -382,9 +382,9 @@ bool chord_sags(const SubdividedMesh& sub, const PointMatrix& normals, int x, in
 // about L t / 8.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const ContactProjector& projector, const LocalBrickOptions& options,
-                         SubdividedMesh& sub, PointMatrix& reconstructed,
-                         std::vector<char>& corners) {
-  const PointMatrix normals = vertex_normals(sub.mesh, VertexTriangles(sub.mesh));
+                         const VertexTriangles& around, SubdividedMesh& sub,
+                         PointMatrix& reconstructed, std::vector<char>& corners) {
+  const PointMatrix normals = vertex_normals(sub.mesh, around);
   auto split = [&](int x, int y) { return chord_sags(sub, normals, x, y, limit); };
   SplitMesh split_mesh = split_curved_edges(near, sub, levels, split);
   PointMatrix start(split_mesh.sub.mesh.vertices.rows(), 3);

@@ -12,6 +12,8 @@
 
 namespace sdfcontour::detail {
 
+struct VertexTriangles;
+
 /// A keyed triangle soup: vertex rows with keys, triangles with a global name each (ascending
 /// names give the whole grid's order).
 struct KeyedTriangles {
@@ -71,10 +73,10 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
 /// by more than `limit` (its length times its ends' normals' turn / 8, a circular arc's sag) is
 /// split and the new vertices projected by it; `reconstructed` (the positions the untangling
 /// returns vertices to: the new ones at their edges' midpoints) and `corners` (per vertex: a shared
-/// corner) follow the new numbering.
+/// corner) follow the new numbering. `around`: sub.mesh's triangles around each vertex.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const ContactProjector& projector, const LocalBrickOptions& options,
-                         SubdividedMesh& sub, PointMatrix& reconstructed,
-                         std::vector<char>& corners);
+                         const VertexTriangles& around, SubdividedMesh& sub,
+                         PointMatrix& reconstructed, std::vector<char>& corners);
 
 }  // namespace sdfcontour::detail
