@@ -312,6 +312,39 @@ TEST(ContactProjection, AProjectorMadeOnceProjectsAsTheCallEachTime) {
   EXPECT_THROW(projector.project(a, &short_flags), Error);
 }
 
+TEST(ContactProjection, TrianglesOfTheFittedVerticesAloneGiveTheSameBits) {
+  // project(mesh, fixed) reads only the unfixed vertices' triangles; the caller's full lists
+  // (as the split hands on) give the same bits, and a skipped vertex has none of its own.
+  const double h = 2.0 / 31;
+  const Mesh coarse = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 20, Bounds{}));
+  PointMatrix P, N;
+  sphere_points(P, N, 20000);
+  const ContactProjectionOptions o = local_projection_options();
+  std::vector<char> fixed(std::size_t(coarse.vertices.rows()), 1);
+  for (std::size_t v = 0; v < fixed.size(); v += 7) fixed[v] = 0;
+  const ContactProjector projector(P, N, {}, h, o);
+  Mesh few = coarse, full = coarse;
+  projector.project(few, &fixed);
+  const detail::VertexTriangles every(coarse);
+  projector.project(full, &fixed, every);
+  EXPECT_EQ(few.vertices, full.vertices);
+  EXPECT_NE(few.vertices, coarse.vertices);
+  const detail::VertexTriangles some(coarse, &fixed);
+  for (std::size_t v = 0; v < fixed.size(); ++v) {
+    const auto first = every.triangles.begin() + every.offsets[v],
+               last = every.triangles.begin() + every.offsets[v + 1];
+    if (fixed[v]) {
+      EXPECT_EQ(some.offsets[v], some.offsets[v + 1]);
+    } else {
+      EXPECT_TRUE(std::equal(first, last, some.triangles.begin() + some.offsets[v],
+                             some.triangles.begin() + some.offsets[v + 1]));
+    }
+  }
+  const detail::VertexTriangles other(
+      marching_cubes(sample_grid(*make_builtin_shape("sphere"), 16, Bounds{})));
+  EXPECT_THROW(projector.project(full, &fixed, other), Error);
+}
+
 TEST(ContactProjection, RejectsBadInput) {
   Mesh m = flat_patch(3, kSpacing, 0);
   PointMatrix P, N;
