@@ -278,15 +278,26 @@ TEST(ContactProjection, SameResultWhateverTheThreadCount) {
   EXPECT_NE(one.vertices, mc.vertices);
 }
 
+namespace {
+
+// The sphere's exact contact points, the local reconstruction's options and marching cubes' mesh
+// at 20^3, for the projector's own tests.
+struct SphereFit {
+  double h = 2.0 / 31;
+  PointMatrix P, N;
+  ContactProjectionOptions o = local_projection_options();
+  Mesh coarse = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 20, Bounds{}));
+  SphereFit() { sphere_points(P, N, 20000); }
+};
+
+}  // namespace
+
 TEST(ContactProjection, AProjectorMadeOnceProjectsAsTheCallEachTime) {
   // The points indexed once, then two meshes (the second with fixed vertices) and the first
   // again: each the same bits as its own call, with the local reconstruction's options.
-  const double h = 2.0 / 31;
+  const SphereFit fit;
+  const auto& [h, P, N, o, coarse] = fit;
   const Mesh mc = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 32, Bounds{}));
-  const Mesh coarse = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 20, Bounds{}));
-  PointMatrix P, N;
-  sphere_points(P, N, 20000);
-  const ContactProjectionOptions o = local_projection_options();
   std::vector<char> fixed(std::size_t(coarse.vertices.rows()), 0);
   for (std::size_t v = 0; v < fixed.size(); v += 3) fixed[v] = 1;
   const ContactProjector projector(P, N, {}, h, o);
@@ -315,11 +326,8 @@ TEST(ContactProjection, AProjectorMadeOnceProjectsAsTheCallEachTime) {
 TEST(ContactProjection, TrianglesOfTheFittedVerticesAloneGiveTheSameBits) {
   // project(mesh, fixed) reads only the unfixed vertices' triangles; the caller's full lists
   // (as the split hands on) give the same bits, and a skipped vertex has none of its own.
-  const double h = 2.0 / 31;
-  const Mesh coarse = marching_cubes(sample_grid(*make_builtin_shape("sphere"), 20, Bounds{}));
-  PointMatrix P, N;
-  sphere_points(P, N, 20000);
-  const ContactProjectionOptions o = local_projection_options();
+  const SphereFit fit;
+  const auto& [h, P, N, o, coarse] = fit;
   std::vector<char> fixed(std::size_t(coarse.vertices.rows()), 1);
   for (std::size_t v = 0; v < fixed.size(); v += 7) fixed[v] = 0;
   const ContactProjector projector(P, N, {}, h, o);
