@@ -600,7 +600,11 @@ def _contour_on(reader, shape, lo, hi, brick, client, out, progress, return_stat
         active = reader.active(brick) if isinstance(reader, _VdbReader) else None
         source = reader
         if options is not None and isinstance(reader, np.ndarray):
-            source = dask_client.scatter(reader)  # sent to each worker once, not per task
+            # Sent to each worker once, not per task, under a key of its own: by the array's
+            # hash (dask's default), a second call with the same array could take the first's
+            # key while the first's release was still on its way, and lose the data
+            # (CancelledError in test_dask on a busy machine).
+            source = dask_client.scatter(reader, hash=False)
         truncation = None
         if options is not None:
             truncation = _gcp_truncation(dask_client, reader, source, shape, brick, options)
