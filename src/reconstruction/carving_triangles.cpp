@@ -96,6 +96,8 @@ VertexTriangles::VertexTriangles(const Mesh& mesh, const std::vector<char>* skip
   if (mesh.vertices.rows() >= std::numeric_limits<int>::max() ||
       3 * mesh.triangles.rows() >= std::numeric_limits<int>::max())
     throw Error("too many vertices or triangles for one mesh piece (2^31 corners)");
+  if (skip && skip->size() != std::size_t(mesh.vertices.rows()))
+    throw Error("one skip flag per vertex is needed");
   const TriangleMatrix& F = mesh.triangles;
   const std::size_t count = std::size_t(mesh.vertices.rows());
   // A counting sort in parallel: the corners counted per vertex, each placed at its vertex's next

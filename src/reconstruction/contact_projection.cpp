@@ -242,9 +242,17 @@ ContactProjector::ContactProjector(const PointMatrix& points, const PointMatrix&
 
 ContactProjector::~ContactProjector() = default;
 
-ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed) const {
+namespace {
+
+void require_fixed_flags(const Mesh& mesh, const std::vector<char>* fixed) {
   if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
     throw Error("projection: one fixed flag per vertex is needed");
+}
+
+}  // namespace
+
+ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed) const {
+  require_fixed_flags(mesh, fixed);
   // Only the vertices it fits need their triangles (after a split, about 1% of them).
   return project(mesh, fixed, detail::VertexTriangles(mesh, fixed));
 }
@@ -252,8 +260,7 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
 ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed,
                                                  const detail::VertexTriangles& around) const {
   if (!mesh.vertices.allFinite()) throw Error("projection: the mesh's vertices must be finite");
-  if (fixed && fixed->size() != std::size_t(mesh.vertices.rows()))
-    throw Error("projection: one fixed flag per vertex is needed");
+  require_fixed_flags(mesh, fixed);
   if (around.offsets.size() != std::size_t(mesh.vertices.rows()) + 1)
     throw Error("projection: the triangles around the vertices are another mesh's");
   const PointMatrix& points = points_;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "reconstruction/carving_internal.h"
+#include "reconstruction/mesh_geometry.h"
 #include "sdfcontour/metrics/self_intersections.h"
 
 namespace sdfcontour {
@@ -59,18 +60,6 @@ std::vector<int> triangles_near(const Mesh& mesh, const Eigen::Vector3d& p, doub
   return out;
 }
 
-Eigen::Vector3d vertex_normal(const Mesh& mesh, const detail::VertexTriangles& around, int v) {
-  const PointMatrix& V = mesh.vertices;
-  const TriangleMatrix& F = mesh.triangles;
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o) {
-    const int t = around.triangles[std::size_t(o)];
-    const Eigen::Vector3d a = V.row(F(t, 0));
-    n += (V.row(F(t, 1)).transpose() - a).cross(V.row(F(t, 2)).transpose() - a);
-  }
-  return n.normalized();
-}
-
 // The vertices within geodesic distance `radius` (along edges) of the feature's point, whose
 // normals face along its normal, with their distances (ascending by vertex); Dijkstra from the
 // feature's vertices, not through a vertex that faces away.
@@ -95,7 +84,7 @@ std::vector<std::pair<int, double>> dent_patch(const Mesh& mesh,
     queue.pop();
     if (d > dist[v] || d >= radius || done.count(v)) continue;
     done.insert(v);
-    if (vertex_normal(mesh, around, v).dot(at.normal) < min_cos) continue;
+    if (detail::unit_vertex_normal(mesh, around, v).dot(at.normal) < min_cos) continue;
     out.push_back({v, d});
     for (int o = around.offsets[std::size_t(v)]; o < around.offsets[std::size_t(v) + 1]; ++o)
       for (int c = 0; c < 3; ++c) {

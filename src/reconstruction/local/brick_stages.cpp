@@ -126,9 +126,9 @@ BrickSurface surface_on_contact_points(const BrickDual& dual, const ContactPoint
   // (Not where the values are no distances: the vertices then go onto the grid's zero set, not
   // onto the contact points' fit that the split follows; the quartic torus at 64^3 had new
   // vertices 0.002 h off it.)
-  const bool split = options.project && cp.size() > 0 && sag > 0 && !options.refine_zero_set &&
-                     (fans || levels <= 3);
-  if (options.project && cp.size() > 0) {
+  const bool project = options.project && cp.size() > 0;
+  const bool split = project && sag > 0 && !options.refine_zero_set && (fans || levels <= 3);
+  if (project) {
     projector.emplace(cp.points, cp.normals, depths, h, options.projection);
     // The split reads every vertex's triangles: made once for both.
     const VertexTriangles around(sub.mesh, split ? nullptr : &surface.fixed(options));
