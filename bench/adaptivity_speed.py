@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import subprocess
+import sys
 
 from common import CLI, geomean, l1, report, scale_grid
 
@@ -41,7 +42,13 @@ def main():
     rows = []
     for res in map(int, args.res.split(",")):
         for name in args.meshes.split(","):
-            prefix = scale_grid(args.cli, args.work, name, res)
+            try:
+                prefix = scale_grid(args.cli, args.work, name, res)
+            except subprocess.CalledProcessError:
+                # (A mesh thinner than a spacing everywhere has no inside sample: the sword at 32^3.)
+                print(f"{name} at {res}^3: could not be sampled (see `sdfcontour sample`); left out",
+                      file=sys.stderr)
+                continue
             grid, gt = prefix + ".npy", prefix + "_mesh.ply"
             out, stats = os.path.join(args.work, "out_adapt.ply"), os.path.join(args.work, "out_adapt.json")
             _, _, mc_triangles = run(args.cli, grid, out, stats, "--method", "mc")
