@@ -24,8 +24,8 @@ constexpr double kPlaneHair = 1e-9;
 // field kinks between the samples and the interpolants may put a point on the wrong side.
 constexpr double kCreaseAngle = 1.0;
 
-// The rows of the contact points within `radius` of x, nearest first (ties by position, so
-// that the rows' order does not matter).
+// The rows of the contact points within `radius` of x, the nearest first (ties by position, so
+// that the rows' order does not matter); the rest in any order (only the nearest is read alone).
 void points_near(const Eigen::Vector3d& x, double radius, const PointCubes* cubes,
                  const PointMatrix& points, std::vector<std::pair<double, int>>& near) {
   near.clear();
@@ -34,13 +34,15 @@ void points_near(const Eigen::Vector3d& x, double radius, const PointCubes* cube
     const double d2 = (x - points.row(r).transpose()).squaredNorm();
     if (d2 <= radius * radius) near.push_back({d2, r});
   });
-  std::sort(near.begin(), near.end(), [&](const auto& a, const auto& b) {
+  auto closer = [&](const std::pair<double, int>& a, const std::pair<double, int>& b) {
     if (a.first != b.first) return a.first < b.first;
     for (int d = 0; d < 3; ++d)
       if (points(a.second, d) != points(b.second, d))
         return points(a.second, d) < points(b.second, d);
     return a.second < b.second;
-  });
+  };
+  if (!near.empty())
+    std::iter_swap(near.begin(), std::min_element(near.begin(), near.end(), closer));
 }
 
 // Whether the contact points `near` x put it in a thin part of the side opposite to `side` (+1:
@@ -99,7 +101,7 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
     fine.first[a] = 2 * block.first[a];
     fine.whole[a] = block.whole[0] > 0 ? 2 * whole[a] - 1 : 0;
   }
-  out.values.assign(fine.size(), 0.0);
+  out.values.resize(fine.size());
   fine.data = out.values.data();
   fine.type = ScalarType::Float64;
   fine.drop_pages = nullptr;
@@ -113,26 +115,22 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
     for (int J = 0; J < fine.dims[1]; ++J)
       for (int K = 0; K < fine.dims[2]; ++K) {
         const std::array<int, 3> at{I, J, K};
-        // The samples x lies between: both neighbours on each axis where its index is odd.
+        // The samples x lies between: both neighbours on each axis where its index is odd, in
+        // the order of their offsets' bits (i the lowest).
         std::array<std::array<int, 3>, 8> parents;
         std::array<double, 8> values;
         double sum = 0, nearest = INFINITY;
         int count = 0;
-        for (int c = 0; c < 8; ++c) {
-          std::array<int, 3> p;
-          bool skip = false;
-          for (int a = 0; a < 3; ++a) {
-            const bool odd = at[a] & 1;
-            if (!odd && (c >> a & 1)) skip = true;
-            p[a] = at[a] / 2 + (odd && (c >> a & 1) ? 1 : 0);
-          }
-          if (skip) continue;
-          const double v = block.value(block.index(p[0], p[1], p[2]));
-          sum += v;
-          nearest = std::min(nearest, std::abs(v) * value_scale);
-          parents[std::size_t(count)] = p;
-          values[std::size_t(count++)] = v;
-        }
+        const int i0 = I / 2, j0 = J / 2, k0 = K / 2;
+        for (int dk = 0; dk <= (K & 1); ++dk)
+          for (int dj = 0; dj <= (J & 1); ++dj)
+            for (int di = 0; di <= (I & 1); ++di) {
+              const double v = block.value(block.index(i0 + di, j0 + dj, k0 + dk));
+              sum += v;
+              nearest = std::min(nearest, std::abs(v) * value_scale);
+              parents[std::size_t(count)] = {i0 + di, j0 + dj, k0 + dk};
+              values[std::size_t(count++)] = v;
+            }
         double value = sum / count;
         // Between samples near the surface: the interpolant there, and a thin part may pass
         // between them.

@@ -7,6 +7,7 @@
 #include <array>
 #include <vector>
 
+#include "pipeline/uninitialised_allocator.h"
 #include "sdfcontour/input/samples.h"
 
 namespace sdfcontour::detail {
@@ -14,7 +15,7 @@ namespace sdfcontour::detail {
 /// A block at twice the resolution (2 n - 1 samples per axis over the same bounds), owning its
 /// values. Not copyable: `view` points into `values`.
 struct RefinedGrid {
-  std::vector<double> values;
+  Unwritten<double> values;  // (every one written: a zero fill first was a serial pass)
   GridView view;
   /// The points between the samples whose side the contact points decided: their global
   /// (i, j, k) on the finer grid, ascending.
