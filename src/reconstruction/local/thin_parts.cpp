@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <type_traits>
 #include <utility>
 
 #include "reconstruction/point_cubes.h"
@@ -87,6 +88,78 @@ bool on_side(const GridView& block, const std::array<int, 3>& at) {
   return false;
 }
 
+// The value of the finer grid's point `at`, between samples near the surface, whose mean (the
+// trilinear interpolant) is `value` (thin_parts.h's 1-3); a thin part's point joins `thin`.
+double value_near_surface(const GridView& block, const GridView& fine, const std::array<int, 3>& at,
+                          double value, const PointCubes* cubes, const PointMatrix& points,
+                          const PointMatrix& normals, double value_scale, double truncation,
+                          std::vector<std::pair<double, int>>& near,
+                          std::vector<std::array<int, 3>>& thin) {
+  const double h = block.spacing().maxCoeff();
+  // The samples x lies between, in the order of their offsets' bits (i the lowest).
+  std::array<std::array<int, 3>, 8> parents;
+  std::array<double, 8> values;
+  int count = 0;
+  for (int dk = 0; dk <= (at[2] & 1); ++dk)
+    for (int dj = 0; dj <= (at[1] & 1); ++dj)
+      for (int di = 0; di <= (at[0] & 1); ++di) {
+        const std::array<int, 3> p{at[0] / 2 + di, at[1] / 2 + dj, at[2] / 2 + dk};
+        parents[std::size_t(count)] = p;
+        values[std::size_t(count++)] = block.value(block.index(p[0], p[1], p[2]));
+      }
+  const Eigen::Vector3d x = fine.point(at[0], at[1], at[2]);
+  points_near(x, h, cubes ? &*cubes : nullptr, points, near);
+  // The tricubic interpolant is closer to a distance's zero set than the mean, where
+  // its stencil lies in the block and holds no truncated value; where the two disagree
+  // on the side (a surface within a hair of x, or a kink of the field in the stencil: a
+  // box's edge), the nearest contact point's tangent plane decides.
+  double cubic;
+  Eigen::Vector3d gradient;
+  if (tricubic_value(block, x, truncation, cubic, gradient)) {
+    if ((cubic < 0) == (value < 0) || near.empty())
+      value = cubic;
+    else
+      value =
+          normals.row(near[0].second).dot(x.transpose() - points.row(near[0].second)) / value_scale;
+  }
+  // At a crease, behind every tangent plane of the contact points within a spacing, or
+  // in front of every one, x is on that side whatever the interpolants say: next to a
+  // box's convex edge both put the points just inside it outside (the cube at 128^3:
+  // false crossings up to 0.15 h inside its edges, their vertices clamped to the cells'
+  // corners). (Where the surface is smooth, a curved patch's planes can all pass on one
+  // side of x when its points are sparse: blub 64^3's L-infinity 1.6x.)
+  if (!near.empty()) {
+    double least = INFINITY, most = -INFINITY;
+    for (const auto& [d2, r] : near) {
+      const double s = normals.row(r).dot(x.transpose() - points.row(r));
+      least = std::min(least, s);
+      most = std::max(most, s);
+    }
+    const double hair = kPlaneHair * h;
+    const double planes = value >= 0 && most < -hair ? most : value < 0 && least > hair ? least : 0;
+    if (planes != 0 && at_crease(near, normals)) value = planes / value_scale;
+  }
+  // A point in a sample's ball (radius |value|, which holds no surface) is on its side:
+  // an interpolant can miss that where the surface passes within a hair of x (next to
+  // a box's edge, where the field is not smooth), and the narrow cells' vertices then
+  // lie off their cells.
+  double certain = 0;
+  for (int c = 0; c < count; ++c) {
+    const double v = values[std::size_t(c)];
+    const auto& p = parents[std::size_t(c)];
+    const double margin = std::abs(v) - (x - block.point(p[0], p[1], p[2])).norm() / value_scale;
+    if (margin > std::abs(certain)) certain = v < 0 ? -margin : margin;
+  }
+  if (certain != 0 && (certain < 0) != (value < 0)) value = certain;
+  const int side = value < 0 ? -1 : 1;
+  // (Not on the grid's sides: a part marked there would leave the mesh open.)
+  if (!on_side(fine, at) && in_thin_part(x, side, near, points, normals, h / 4)) {
+    value = -side * h / 8 / value_scale;
+    thin.push_back({fine.first[0] + at[0], fine.first[1] + at[1], fine.first[2] + at[2]});
+  }
+  return value;
+}
+
 }  // namespace
 
 RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& points,
@@ -112,86 +185,38 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
   std::vector<std::vector<std::array<int, 3>>> thin(std::size_t(fine.dims[0]));
   tbb::parallel_for(0, fine.dims[0], [&](int I) {
     std::vector<std::pair<double, int>> near;
-    for (int J = 0; J < fine.dims[1]; ++J)
-      for (int K = 0; K < fine.dims[2]; ++K) {
-        const std::array<int, 3> at{I, J, K};
-        // The samples x lies between: both neighbours on each axis where its index is odd, in
-        // the order of their offsets' bits (i the lowest).
-        std::array<std::array<int, 3>, 8> parents;
-        std::array<double, 8> values;
-        double sum = 0, nearest = INFINITY;
-        int count = 0;
-        const int i0 = I / 2, j0 = J / 2, k0 = K / 2;
-        for (int dk = 0; dk <= (K & 1); ++dk)
-          for (int dj = 0; dj <= (J & 1); ++dj)
-            for (int di = 0; di <= (I & 1); ++di) {
-              const double v = block.value(block.index(i0 + di, j0 + dj, k0 + dk));
+    block.visit([&](const auto* f) {
+      using T = std::remove_const_t<std::remove_pointer_t<decltype(f)>>;
+      for (int J = 0; J < fine.dims[1]; ++J) {
+        // The rows of samples that the row's points lie between: both neighbours on each axis
+        // where the index is odd, in the order of their offsets' bits (i the lowest), the same
+        // order as value_near_surface's.
+        std::array<const T*, 4> rows;
+        int row_count = 0;
+        for (int dj = 0; dj <= (J & 1); ++dj)
+          for (int di = 0; di <= (I & 1); ++di)
+            rows[std::size_t(row_count++)] = f + block.index(I / 2 + di, J / 2 + dj, 0);
+        double* const out_row = out.values.data() + fine.index(I, J, 0);
+        for (int K = 0; K < fine.dims[2]; ++K) {
+          double sum = 0, nearest = INFINITY;
+          for (int dk = 0; dk <= (K & 1); ++dk)
+            for (int r = 0; r < row_count; ++r) {
+              const double v = double(rows[std::size_t(r)][K / 2 + dk]);
               sum += v;
               nearest = std::min(nearest, std::abs(v) * value_scale);
-              parents[std::size_t(count)] = {i0 + di, j0 + dj, k0 + dk};
-              values[std::size_t(count++)] = v;
             }
-        double value = sum / count;
-        // Between samples near the surface: the interpolant there, and a thin part may pass
-        // between them.
-        if (count > 1 && nearest < h) {
-          const Eigen::Vector3d x = fine.point(I, J, K);
-          points_near(x, h, cubes ? &*cubes : nullptr, points, near);
-          // The tricubic interpolant is closer to a distance's zero set than the mean, where
-          // its stencil lies in the block and holds no truncated value; where the two disagree
-          // on the side (a surface within a hair of x, or a kink of the field in the stencil: a
-          // box's edge), the nearest contact point's tangent plane decides.
-          double cubic;
-          Eigen::Vector3d gradient;
-          if (tricubic_value(block, x, truncation, cubic, gradient)) {
-            if ((cubic < 0) == (value < 0) || near.empty())
-              value = cubic;
-            else
-              value = normals.row(near[0].second).dot(x.transpose() - points.row(near[0].second)) /
-                      value_scale;
-          }
-          // At a crease, behind every tangent plane of the contact points within a spacing, or
-          // in front of every one, x is on that side whatever the interpolants say: next to a
-          // box's convex edge both put the points just inside it outside (the cube at 128^3:
-          // false crossings up to 0.15 h inside its edges, their vertices clamped to the cells'
-          // corners). (Where the surface is smooth, a curved patch's planes can all pass on one
-          // side of x when its points are sparse: blub 64^3's L-infinity 1.6x.)
-          if (!near.empty()) {
-            double least = INFINITY, most = -INFINITY;
-            for (const auto& [d2, r] : near) {
-              const double s = normals.row(r).dot(x.transpose() - points.row(r));
-              least = std::min(least, s);
-              most = std::max(most, s);
-            }
-            const double hair = kPlaneHair * h;
-            const double planes = value >= 0 && most < -hair  ? most
-                                  : value < 0 && least > hair ? least
-                                                              : 0;
-            if (planes != 0 && at_crease(near, normals)) value = planes / value_scale;
-          }
-          // A point in a sample's ball (radius |value|, which holds no surface) is on its side:
-          // an interpolant can miss that where the surface passes within a hair of x (next to
-          // a box's edge, where the field is not smooth), and the narrow cells' vertices then
-          // lie off their cells.
-          double certain = 0;
-          for (int c = 0; c < count; ++c) {
-            const double v = values[std::size_t(c)];
-            const auto& p = parents[std::size_t(c)];
-            const double margin =
-                std::abs(v) - (x - block.point(p[0], p[1], p[2])).norm() / value_scale;
-            if (margin > std::abs(certain)) certain = v < 0 ? -margin : margin;
-          }
-          if (certain != 0 && (certain < 0) != (value < 0)) value = certain;
-          const int side = value < 0 ? -1 : 1;
-          // (Not on the grid's sides: a part marked there would leave the mesh open.)
-          if (!on_side(fine, at) && in_thin_part(x, side, near, points, normals, h / 4)) {
-            value = -side * h / 8 / value_scale;
-            thin[std::size_t(I)].push_back(
-                {fine.first[0] + I, fine.first[1] + J, fine.first[2] + K});
-          }
+          const int count = row_count * (1 + (K & 1));
+          double value = sum / count;
+          // Between samples near the surface: the interpolant there, and a thin part may pass
+          // between them.
+          if (count > 1 && nearest < h)
+            value =
+                value_near_surface(block, fine, {I, J, K}, value, cubes ? &*cubes : nullptr, points,
+                                   normals, value_scale, truncation, near, thin[std::size_t(I)]);
+          out_row[K] = value;
         }
-        out.values[fine.index(I, J, K)] = value;
       }
+    });
   });
   for (const auto& t : thin) out.thin_points.insert(out.thin_points.end(), t.begin(), t.end());
   return out;
