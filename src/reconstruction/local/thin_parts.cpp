@@ -25,22 +25,33 @@ constexpr double kPlaneHair = 1e-9;
 // field kinks between the samples and the interpolants may put a point on the wrong side.
 constexpr double kCreaseAngle = 1.0;
 
+// A contact point near a point of the finer grid: its squared distance and its row.
+struct Near {
+  double d2;
+  int row;
+};
+// (Unwritten: the list is filled past its end and cut back, so that keeping a point is no branch.)
+using NearList = Unwritten<Near>;
+
 // The rows of the contact points within `radius` of x, the nearest first (ties by position, so
 // that the rows' order does not matter); the rest in any order (only the nearest is read alone).
 void points_near(const Eigen::Vector3d& x, double radius, const PointCubes* cubes,
-                 const PointMatrix& points, std::vector<std::pair<double, int>>& near) {
+                 const PointMatrix& points, NearList& near) {
   near.clear();
   if (!cubes) return;
+  std::size_t count = 0;
   cubes->for_each_near(x, [&](int r) {
+    if (count == near.size()) near.resize(std::max<std::size_t>(64, 2 * count));
     const double d2 = (x - points.row(r).transpose()).squaredNorm();
-    if (d2 <= radius * radius) near.push_back({d2, r});
+    near[count] = {d2, r};
+    count += d2 <= radius * radius;
   });
-  auto closer = [&](const std::pair<double, int>& a, const std::pair<double, int>& b) {
-    if (a.first != b.first) return a.first < b.first;
+  near.resize(count);
+  auto closer = [&](const Near& a, const Near& b) {
+    if (a.d2 != b.d2) return a.d2 < b.d2;
     for (int d = 0; d < 3; ++d)
-      if (points(a.second, d) != points(b.second, d))
-        return points(a.second, d) < points(b.second, d);
-    return a.second < b.second;
+      if (points(a.row, d) != points(b.row, d)) return points(a.row, d) < points(b.row, d);
+    return a.row < b.row;
   };
   if (!near.empty())
     std::iter_swap(near.begin(), std::min_element(near.begin(), near.end(), closer));
@@ -50,20 +61,19 @@ void points_near(const Eigen::Vector3d& x, double radius, const PointCubes* cube
 // outside, -1: inside): two tangent planes with x within `slack` of the slab between them, facing
 // away from each other (side +1: a sheet of inside) or toward each other (side -1: a gap), and
 // no plane with x more than `slack` in front of it (seen from `side`).
-bool in_thin_part(const Eigen::Vector3d& x, int side,
-                  const std::vector<std::pair<double, int>>& near, const PointMatrix& points,
-                  const PointMatrix& normals, double slack) {
+bool in_thin_part(const Eigen::Vector3d& x, int side, const NearList& near,
+                  const PointMatrix& points, const PointMatrix& normals, double slack) {
   // Normals as seen from the side x is on: a part of the other side is then a slab behind two
   // planes that face away from each other.
   for (const auto& [d2, r] : near)
     if (side * normals.row(r).dot(x.transpose() - points.row(r)) > slack) return false;
   for (std::size_t a = 0; a < near.size(); ++a) {
-    const Eigen::Vector3d ca = points.row(near[a].second).transpose();
-    const Eigen::Vector3d na = side * normals.row(near[a].second).transpose();
+    const Eigen::Vector3d ca = points.row(near[a].row).transpose();
+    const Eigen::Vector3d na = side * normals.row(near[a].row).transpose();
     for (std::size_t b = a + 1; b < near.size(); ++b) {
-      const Eigen::Vector3d nb = side * normals.row(near[b].second).transpose();
+      const Eigen::Vector3d nb = side * normals.row(near[b].row).transpose();
       if (na.dot(nb) > -0.5) continue;
-      const Eigen::Vector3d cb = points.row(near[b].second).transpose();
+      const Eigen::Vector3d cb = points.row(near[b].row).transpose();
       // Each point behind the other's plane: the slab between them is the other side's.
       if (na.dot(cb - ca) <= 0 && nb.dot(ca - cb) <= 0) return true;
     }
@@ -72,11 +82,11 @@ bool in_thin_part(const Eigen::Vector3d& x, int side,
 }
 
 // Whether two of the contact points `near` have normals more than kCreaseAngle apart.
-bool at_crease(const std::vector<std::pair<double, int>>& near, const PointMatrix& normals) {
+bool at_crease(const NearList& near, const PointMatrix& normals) {
   const double cos_crease = std::cos(kCreaseAngle);
   for (std::size_t a = 0; a < near.size(); ++a)
     for (std::size_t b = a + 1; b < near.size(); ++b)
-      if (normals.row(near[a].second).dot(normals.row(near[b].second)) < cos_crease) return true;
+      if (normals.row(near[a].row).dot(normals.row(near[b].row)) < cos_crease) return true;
   return false;
 }
 
@@ -93,8 +103,7 @@ bool on_side(const GridView& block, const std::array<int, 3>& at) {
 double value_near_surface(const GridView& block, const GridView& fine, const std::array<int, 3>& at,
                           double value, const PointCubes* cubes, const PointMatrix& points,
                           const PointMatrix& normals, double value_scale, double truncation,
-                          std::vector<std::pair<double, int>>& near,
-                          std::vector<std::array<int, 3>>& thin) {
+                          NearList& near, std::vector<std::array<int, 3>>& thin) {
   const double h = block.spacing().maxCoeff();
   // The samples x lies between, in the order of their offsets' bits (i the lowest).
   std::array<std::array<int, 3>, 8> parents;
@@ -119,8 +128,7 @@ double value_near_surface(const GridView& block, const GridView& fine, const std
     if ((cubic < 0) == (value < 0) || near.empty())
       value = cubic;
     else
-      value =
-          normals.row(near[0].second).dot(x.transpose() - points.row(near[0].second)) / value_scale;
+      value = normals.row(near[0].row).dot(x.transpose() - points.row(near[0].row)) / value_scale;
   }
   // At a crease, behind every tangent plane of the contact points within a spacing, or
   // in front of every one, x is on that side whatever the interpolants say: next to a
@@ -184,7 +192,7 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
       points.rows() > 0 ? std::optional<PointCubes>(std::in_place, points, h) : std::nullopt;
   std::vector<std::vector<std::array<int, 3>>> thin(std::size_t(fine.dims[0]));
   tbb::parallel_for(0, fine.dims[0], [&](int I) {
-    std::vector<std::pair<double, int>> near;
+    NearList near;
     block.visit([&](const auto* f) {
       using T = std::remove_const_t<std::remove_pointer_t<decltype(f)>>;
       for (int J = 0; J < fine.dims[1]; ++J) {
