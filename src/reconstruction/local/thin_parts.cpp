@@ -30,23 +30,20 @@ struct Near {
   double d2;
   int row;
 };
-// (Unwritten: the list is filled past its end and cut back, so that keeping a point is no branch.)
-using NearList = Unwritten<Near>;
+using NearList = std::vector<Near>;
 
 // The rows of the contact points within `radius` of x, the nearest first (ties by position, so
 // that the rows' order does not matter); the rest in any order (only the nearest is read alone).
+// `rows` is PointCubes::collect_within's buffer.
 void points_near(const Eigen::Vector3d& x, double radius, const PointCubes* cubes,
-                 const PointMatrix& points, NearList& near) {
+                 const PointMatrix& points, std::vector<int>& rows, NearList& near) {
   near.clear();
   if (!cubes) return;
-  std::size_t count = 0;
-  cubes->for_each_near(x, [&](int r) {
-    if (count == near.size()) near.resize(std::max<std::size_t>(64, 2 * count));
-    const double d2 = (x - points.row(r).transpose()).squaredNorm();
-    near[count] = {d2, r};
-    count += d2 <= radius * radius;
-  });
-  near.resize(count);
+  const int count = cubes->collect_within(points, x, radius * radius, 1, rows);
+  for (int e = 0; e < count; ++e) {
+    const int r = rows[std::size_t(e)];
+    near.push_back({(x - points.row(r).transpose()).squaredNorm(), r});
+  }
   auto closer = [&](const Near& a, const Near& b) {
     if (a.d2 != b.d2) return a.d2 < b.d2;
     for (int d = 0; d < 3; ++d)
@@ -103,7 +100,8 @@ bool on_side(const GridView& block, const std::array<int, 3>& at) {
 double value_near_surface(const GridView& block, const GridView& fine, const std::array<int, 3>& at,
                           double value, const PointCubes* cubes, const PointMatrix& points,
                           const PointMatrix& normals, double value_scale, double truncation,
-                          NearList& near, std::vector<std::array<int, 3>>& thin) {
+                          std::vector<int>& rows, NearList& near,
+                          std::vector<std::array<int, 3>>& thin) {
   const double h = block.spacing().maxCoeff();
   // The samples x lies between, in the order of their offsets' bits (i the lowest).
   std::array<std::array<int, 3>, 8> parents;
@@ -117,7 +115,7 @@ double value_near_surface(const GridView& block, const GridView& fine, const std
         values[std::size_t(count++)] = block.value(block.index(p[0], p[1], p[2]));
       }
   const Eigen::Vector3d x = fine.point(at[0], at[1], at[2]);
-  points_near(x, h, cubes ? &*cubes : nullptr, points, near);
+  points_near(x, h, cubes ? &*cubes : nullptr, points, rows, near);
   // The tricubic interpolant is closer to a distance's zero set than the mean, where
   // its stencil lies in the block and holds no truncated value; where the two disagree
   // on the side (a surface within a hair of x, or a kink of the field in the stencil: a
@@ -192,6 +190,7 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
       points.rows() > 0 ? std::optional<PointCubes>(std::in_place, points, h) : std::nullopt;
   std::vector<std::vector<std::array<int, 3>>> thin(std::size_t(fine.dims[0]));
   tbb::parallel_for(0, fine.dims[0], [&](int I) {
+    std::vector<int> near_rows;
     NearList near;
     block.visit([&](const auto* f) {
       using T = std::remove_const_t<std::remove_pointer_t<decltype(f)>>;
@@ -218,9 +217,9 @@ RefinedGrid refine_for_thin_parts(const GridView& block, const PointMatrix& poin
           // Between samples near the surface: the interpolant there, and a thin part may pass
           // between them.
           if (count > 1 && nearest < h)
-            value =
-                value_near_surface(block, fine, {I, J, K}, value, cubes ? &*cubes : nullptr, points,
-                                   normals, value_scale, truncation, near, thin[std::size_t(I)]);
+            value = value_near_surface(block, fine, {I, J, K}, value, cubes ? &*cubes : nullptr,
+                                       points, normals, value_scale, truncation, near_rows, near,
+                                       thin[std::size_t(I)]);
           out_row[K] = value;
         }
       }
