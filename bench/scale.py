@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 
-from common import CLI, MESHES, geomean, l1, scale_grid, timed
+from common import CLI, MESHES, evaluate, geomean, l1, scale_grid, timed
 
 
 def write_ply(path, v, f):
@@ -155,8 +155,13 @@ def main():
                     rss = max(rss or 0, r)
                 # The median of the runs: one run's time moves by 10-30% with the machine's load.
                 seconds = float(np.median(times)) if times and err is None else None
+                e = evaluate(args.cli, out, gt) if seconds is not None else None
+                topo = e["recon_mesh"] if e else {}
                 row = {"mesh": name, "res": res, "method": method, "seconds": seconds, "runs": times, "rss_mb": rss,
-                       "L1": l1(args.cli, out, gt) if seconds is not None else None, "error": err}
+                       "L1": e["L1"] if e else None, "L_inf": e["L_inf"] if e else None,
+                       "triangles": topo.get("triangles"),
+                       "closed": bool(topo.get("closed") and topo.get("manifold")
+                                      and topo.get("self_intersections") == 0) if e else None, "error": err}
                 rows.append(row)
                 print(json.dumps(row), flush=True)
     vdb_rows = []
@@ -182,8 +187,9 @@ def main():
 
 def report(args, rows, vdb_rows):
     methods = args.methods.split(",")
-    lines = ["| grid | method | time (s, mean) | time / scikit-image | peak RSS (MB, max) | L1 / MC's |",
-             "|---|---|---|---|---|---|"]
+    lines = ["| grid | method | time (s, mean) | time / scikit-image | peak RSS (MB, max) | L1 / MC's | "
+             "L∞ / MC's | triangles / MC's |",
+             "|---|---|---|---|---|---|---|---|"]
     for res in sorted({r["res"] for r in rows}):
         ref = {r["mesh"]: r for r in rows if r["res"] == res and r["method"] == "skimage"}
         mc = {r["mesh"]: r for r in rows if r["res"] == res and r["method"] == "mc"}
@@ -192,12 +198,15 @@ def report(args, rows, vdb_rows):
             if not sel:
                 failed = [r for r in rows if r["res"] == res and r["method"] == method]
                 if failed:
-                    lines.append(f"| {res}³ | {method} | failed: {failed[0]['error']} | | | |")
+                    lines.append(f"| {res}³ | {method} | failed: {failed[0]['error']} | | | | | |")
                 continue
             t = np.mean([r["seconds"] for r in sel])
             tr = geomean([r["seconds"] / ref[r["mesh"]]["seconds"] for r in sel if r["mesh"] in ref])
-            lr = geomean([r["L1"] / mc[r["mesh"]]["L1"] for r in sel if r["mesh"] in mc and r["L1"]])
-            lines.append(f"| {res}³ | {method} | {t:.2f} | {tr:.2f} | {max(r['rss_mb'] for r in sel):.0f} | {lr:.3f} |")
+            def over_mc(key):
+                return geomean([r[key] / mc[r["mesh"]][key] for r in sel
+                                if r["mesh"] in mc and r.get(key) and mc[r["mesh"]].get(key)])
+            lines.append(f"| {res}³ | {method} | {t:.2f} | {tr:.2f} | {max(r['rss_mb'] for r in sel):.0f} | "
+                         f"{over_mc('L1'):.3f} | {over_mc('L_inf'):.3f} | {over_mc('triangles'):.2f} |")
     text = "\n".join(lines)
     if vdb_rows:
         text += ("\n\n| .vdb level set (half width 3) | GCP s | GCP MB | GCP L1 | OpenVDB s | OpenVDB MB | OpenVDB L1 | "
@@ -213,12 +222,14 @@ def report(args, rows, vdb_rows):
             f.write("# GCP at scale: one run of the bench\n\n`/usr/bin/python3 bench/scale.py " + " ".join(sys.argv[1:]).replace(
                 "--out " + args.out, "").strip() + "` on 2 cores; see the script's docstring for what is timed. "
                 "Ratios are geometric means over the meshes; `docs/scale.md` reads them against the targets.\n\n" + text + "\n\n## Rows\n\n")
-            f.write("| mesh | grid | method | s | MB | L1 |\n|---|---|---|---|---|---|\n")
+            f.write("| mesh | grid | method | s | MB | L1 | L∞ | triangles | closed |\n"
+                    "|---|---|---|---|---|---|---|---|---|\n")
             for r in rows:
-                f.write(f"| {r['mesh']} | {r['res']}³ | {r['method']} | "
-                        f"{'-' if r['seconds'] is None else format(r['seconds'], '.3f')} | "
-                        f"{'-' if r['rss_mb'] is None else format(r['rss_mb'], '.0f')} | "
-                        f"{'-' if r['L1'] is None else format(r['L1'], '.3e')} |\n")
+                def cell(key, spec):
+                    return "-" if r.get(key) is None else format(r[key], spec)
+                f.write(f"| {r['mesh']} | {r['res']}³ | {r['method']} | {cell('seconds', '.3f')} | "
+                        f"{cell('rss_mb', '.0f')} | {cell('L1', '.3e')} | {cell('L_inf', '.3e')} | "
+                        f"{cell('triangles', ',')} | {'-' if r.get('closed') is None else r['closed']} |\n")
 
 
 if __name__ == "__main__":
