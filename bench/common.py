@@ -67,6 +67,14 @@ def geomean(values):
     return math.exp(sum(math.log(x) for x in v) / len(v)) if v else float("nan")
 
 
+def over_peer(rows, res, method, key, peer):
+    """The geometric mean over the meshes of `method`'s row[key] over `peer`'s (bench/scale.py's
+    rows at res^3), leaving out the meshes where either is missing or zero; nan if none is left."""
+    theirs = {r["mesh"]: r.get(key) for r in rows if r["res"] == res and r["method"] == peer}
+    return geomean([r[key] / theirs[r["mesh"]] for r in rows
+                    if r["res"] == res and r["method"] == method and r.get(key) and theirs.get(r["mesh"])])
+
+
 def report(text, out):
     """Prints a benchmark's markdown and writes it to `out` (if given)."""
     print(text)

@@ -16,26 +16,19 @@ import matplotlib.ticker
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from common import geomean  # noqa: E402
+from common import over_peer  # noqa: E402
 
 
 def means(rows, res):
     """{method: (time / scikit-image, L1 / MC, triangles / MC)} at res^3, geometric means over the
-    meshes that have all three."""
-    by = {(r["mesh"], r["method"]): r for r in rows if r["res"] == res and r.get("seconds")}
-    meshes = sorted({mesh for mesh, _ in by})
+    meshes (common.over_peer)."""
+    methods = dict.fromkeys(r["method"] for r in rows if r["res"] == res and r.get("seconds"))
     out = {}
-    for method in dict.fromkeys(m for _, m in by):
-        t, e, n = [], [], []
-        for mesh in meshes:
-            r, sk, mc = by.get((mesh, method)), by.get((mesh, "skimage")), by.get((mesh, "mc"))
-            if not (r and sk and mc and r.get("L1") and mc.get("L1")):
-                continue
-            t.append(r["seconds"] / sk["seconds"])
-            e.append(r["L1"] / mc["L1"])
-            n.append(r["triangles"] / mc["triangles"])
-        if t:
-            out[method] = (geomean(t), geomean(e), geomean(n))
+    for method in methods:
+        t = over_peer(rows, res, method, "seconds", "skimage")
+        if t == t:  # (nan: no mesh with scikit-image's time)
+            out[method] = (t, over_peer(rows, res, method, "L1", "mc"),
+                           over_peer(rows, res, method, "triangles", "mc"))
     return out
 
 

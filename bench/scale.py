@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 
-from common import CLI, MESHES, evaluate, geomean, l1, scale_grid, timed
+from common import CLI, MESHES, evaluate, geomean, l1, over_peer, scale_grid, timed
 
 
 def write_ply(path, v, f):
@@ -191,8 +191,6 @@ def report(args, rows, vdb_rows):
              "L∞ / MC's | triangles / MC's |",
              "|---|---|---|---|---|---|---|---|"]
     for res in sorted({r["res"] for r in rows}):
-        ref = {r["mesh"]: r for r in rows if r["res"] == res and r["method"] == "skimage"}
-        mc = {r["mesh"]: r for r in rows if r["res"] == res and r["method"] == "mc"}
         for method in methods:
             sel = [r for r in rows if r["res"] == res and r["method"] == method and r["seconds"] is not None]
             if not sel:
@@ -201,12 +199,10 @@ def report(args, rows, vdb_rows):
                     lines.append(f"| {res}³ | {method} | failed: {failed[0]['error']} | | | | | |")
                 continue
             t = np.mean([r["seconds"] for r in sel])
-            tr = geomean([r["seconds"] / ref[r["mesh"]]["seconds"] for r in sel if r["mesh"] in ref])
-            def over_mc(key):
-                return geomean([r[key] / mc[r["mesh"]][key] for r in sel
-                                if r["mesh"] in mc and r.get(key) and mc[r["mesh"]].get(key)])
+            tr = over_peer(rows, res, method, "seconds", "skimage")
+            l1r, linfr, trir = (over_peer(rows, res, method, key, "mc") for key in ("L1", "L_inf", "triangles"))
             lines.append(f"| {res}³ | {method} | {t:.2f} | {tr:.2f} | {max(r['rss_mb'] for r in sel):.0f} | "
-                         f"{over_mc('L1'):.3f} | {over_mc('L_inf'):.3f} | {over_mc('triangles'):.2f} |")
+                         f"{l1r:.3f} | {linfr:.3f} | {trir:.2f} |")
     text = "\n".join(lines)
     if vdb_rows:
         text += ("\n\n| .vdb level set (half width 3) | GCP s | GCP MB | GCP L1 | OpenVDB s | OpenVDB MB | OpenVDB L1 | "
