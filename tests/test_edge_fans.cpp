@@ -162,19 +162,26 @@ TEST(EdgeFans, APlaneIsExact) {
   EXPECT_TRUE(self_intersecting_triangles(m).empty());
 }
 
-// The projection's robust rounds left to the local reconstruction: one for edge fans on the grid
-// itself, two otherwise (the default, fans on the finer grid); a number given is kept.
+// The projection's and the cells' robust rounds left to the local reconstruction: none for edge
+// fans on the grid itself; two (projection) and three (cells) otherwise (the default, fans on the
+// finer grid); a number given is kept.
 TEST(EdgeFans, RobustRoundsAreChosenOnlyWhenLeftToTheReconstruction) {
   ContourOptions c;
   EXPECT_EQ(c.local_projection.robust_rounds, kAutoRobustRounds);
+  EXPECT_EQ(c.local.robust_rounds, kAutoRobustRounds);
   EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+  EXPECT_EQ(local_brick_options(c).local.robust_rounds, 3);
   c.local.edge_fans = true;
-  EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 1);
+  EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 0);
+  EXPECT_EQ(local_brick_options(c).local.robust_rounds, 0);
   c.thin_parts = Switch::On;
   EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+  EXPECT_EQ(local_brick_options(c).local.robust_rounds, 3);
   c.thin_parts = Switch::Auto;
   c.local_projection.robust_rounds = 2;
+  c.local.robust_rounds = 1;
   EXPECT_EQ(local_brick_options(c).projection.robust_rounds, 2);
+  EXPECT_EQ(local_brick_options(c).local.robust_rounds, 1);
   // The fans run no carving round (their regions need no repair); the repaired mesh runs three.
   EXPECT_EQ(local_brick_options(c).carve_passes, 0);
   EXPECT_TRUE(local_brick_options(c).carve);  // (the spheres still bound the edges' vertices)

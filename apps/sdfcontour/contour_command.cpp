@@ -165,11 +165,14 @@ ContourOptions contour_options(const ContourArgs& a) {
   opt.adaptivity.fit_rounds = a.adaptivity_fit;
   require_range("--local-reach", a.local.reach, 0, 1);
   require_range("--local-feature-ratio", a.local.feature_ratio, 0, 1);
-  require_range("--local-robust-rounds", a.local.robust_rounds, 0, 100);
   require_range("--local-min-points", a.local.min_points, 1, 1000);
   require_range("--local-depth-scale", a.local.depth_scale, 0, 1e6);
   require_range("--local-max-field-miss", a.local.max_field_miss, 0, 1e6);
   opt.local = a.local;
+  opt.local.robust_rounds =
+      parse_count_or_auto("--local-robust-rounds", a.local_robust_rounds,
+                          int(option_range("--local-robust-rounds").hi), "a whole number of rounds")
+          .value_or(kAutoRobustRounds);
   opt.edge_fans = parse_switch("--edge-fans", a.edge_fans);
   opt.project = parse_switch("--projection", a.projection);
   opt.zero_set = parse_switch("--zero-set", a.zero_set);

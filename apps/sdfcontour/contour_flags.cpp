@@ -173,9 +173,9 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                     "quadric's smaller eigenvalues exceed this fraction of its largest")
           ->capture_default_str());
   a.local_options.push_back(
-      c->add_option("--local-robust-rounds", a.local.robust_rounds,
+      c->add_option("--local-robust-rounds", a.local_robust_rounds,
                     "GCP local reconstruction: reweighting rounds that discount planes missing the "
-                    "vertex")
+                    "vertex (auto: 3, none with edge fans on the grid itself)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option("--local-min-points", a.local.min_points,

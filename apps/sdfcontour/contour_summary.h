@@ -18,7 +18,7 @@ struct ContourArgs {
       method = "gcp", bounds = "-1,1", gradient = "auto", weights = "james", band = "auto",
       truncation = "auto", grid, brick_size = "auto", side_passes = "auto", projection = "auto",
       edge_fans = "auto", reconstruction = "auto", subdivisions = "auto", split_sag = "auto",
-      zero_set = "auto", thin_parts = "auto";
+      zero_set = "auto", thin_parts = "auto", local_robust_rounds = "auto";
   double zero_set_mismatch = ZeroSetRefinementOptions{}.mismatch;
   int knn = 18;
   double brick_halo = BrickOptions{}.halo, margin = BandOptions{}.margin;

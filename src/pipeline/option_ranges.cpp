@@ -33,6 +33,7 @@ const std::vector<OptionRange>& option_ranges() {
       {"--adaptivity-bricks", "", 0, 4096},
       {"--adaptivity-fit", "", 0, 100},
       {"--side-passes", "side_passes", 0, 100},
+      {"--local-robust-rounds", "", 0, 100},
       {"--res", "resolution", 2, 1024},
       {"--random", "", 1, 1e8},  // sample's random points: 3.2 GB of rows at the top
       {"--threads", "", 0, 4096},

@@ -172,13 +172,21 @@ bool auto_carve_sides(double samples_per_axis);
 /// Coarser grids, mostly kinks, are not judged (false).
 bool auto_approximate_distances(const GradientNormSummary& norms);
 
-/// ContourOptions::local_projection's robust_rounds when the local reconstruction chooses them.
+/// ContourOptions::local_projection's and local's robust_rounds when the local reconstruction
+/// chooses them.
 constexpr int kAutoRobustRounds = -1;
 /// local_projection_options() with its robust rounds left to the local reconstruction.
 inline ContactProjectionOptions auto_local_projection() {
   ContactProjectionOptions p = local_projection_options();
   p.robust_rounds = kAutoRobustRounds;
   return p;
+}
+
+/// LocalReconstructionOptions with the cells' robust rounds left to the local reconstruction.
+inline LocalReconstructionOptions auto_local_options() {
+  LocalReconstructionOptions o;
+  o.robust_rounds = kAutoRobustRounds;
+  return o;
 }
 
 struct ContourOptions {
@@ -200,7 +208,10 @@ struct ContourOptions {
   /// block (BlockedGridInput: a .vdb level set), which takes it or marching cubes. Local needs a
   /// grid's cells: scattered samples always take Poisson.
   Reconstruction reconstruction = Reconstruction::Auto;
-  LocalReconstructionOptions local;
+  /// The local reconstruction's cells. Their robust_rounds is kAutoRobustRounds here: three, and
+  /// none for edge fans on the grid itself (local_stage.cpp says why); any other value is taken
+  /// as given.
+  LocalReconstructionOptions local = auto_local_options();
   /// The local reconstruction's projection: a tighter neighbourhood than the Poisson path's and no
   /// residual limit (the subdivided mesh's new vertices are chords, not a smooth surface). Measured
   /// on bunny at 32^3 with 2 subdivisions: L1 2.14e-3 with the Poisson path's options, 1.37e-3.
@@ -212,7 +223,7 @@ struct ContourOptions {
   /// 64^3 0.00086 h -> 0.00039 h, the sphere 0.00041 h -> 0.00016 h (bench/smooth_shapes.py).
   /// Crease planes (a vertex whose points lie on two facets goes onto their crease): bunny at
   /// 256^3 / 512^3 0.81x / 0.86x the L1, the shared meshes at 64^3 0.97x (docs/projection.md).
-  /// Its robust_rounds is kAutoRobustRounds here: two, and one for edge fans on the grid itself
+  /// Its robust_rounds is kAutoRobustRounds here: two, and none for edge fans on the grid itself
   /// (local_stage.cpp says why); any other value is taken as given.
   ContactProjectionOptions local_projection = auto_local_projection();
   /// The local reconstruction's lattice subdivisions (LocalBrickOptions::subdivisions) before its

@@ -39,11 +39,19 @@ constexpr int kLatticeSlideRounds = 10;
 // at 64^3 / 128^3 / 256^3 (worst 1.027x, 1.010x, 1.019x; 4 spacings: 1.009x, 1.008x, 1.019x) and
 // bunny's contact points take 0.52x / 0.84x / 0.92x the time (docs/results/speed_s53.md).
 constexpr double kLatticeRescueReach = 5;
-// Edge fans on the grid itself refit their projection once, not twice, unless asked otherwise:
-// the second refit moved the shared meshes' L1 at 32^3 and 64^3 by 0.1-0.2% on average (at most
-// 1% on any mesh, either way) for a fifth of the projection's time at bunny 256^3. On the finer
-// grid, as in the default, it pays: the torus at 64^3 lost 4% with one.
-constexpr int kFanRobustRounds = 1;
+// Edge fans on the grid itself fit their projection once, with no refit: a refit moved the L1 of
+// bunny, spot and armadillo with fans at band 3 by 0.2-1.5% either way at 64^3-256^3 (0.995x on
+// average) and bunny's at 512^3 by 0.5%, for a fifth of the projection's time each. On the finer
+// grid, as in the default, two pay: the torus at 64^3 lost 4% with one.
+constexpr int kFanRobustRounds = 0;
+// Edge fans on the grid itself place their cells' vertices without reweighting the planes: the
+// reweighting, at 0.01 spacings, pulls a smooth patch's vertex along its plane towards the points
+// that agree most, and the fans keep that layout (projection moves a vertex along its normal
+// only). L1 without it, fans at band 3: bunny, spot, armadillo at 128^3 0.89x / 0.97x / 0.96x,
+// 256^3 0.82x / 0.91x / 0.91x, 512^3 0.78x / 0.85x / 0.82x; hammer, wingnut, boot at 256^3
+// 0.95x / 0.94x / 0.99x, their sharp-edge distances 1.01-1.03x. The default's subdivided mesh
+// moves by 1-3% either way, so it keeps three rounds.
+constexpr int kFanCellRobustRounds = 0;
 // Edge fans carve no vertex (the samples' spheres still bound their edges' vertices as those are
 // placed): carving is a repair the fans' regions do not need. Bunny 512^3 0.92x the time (the
 // stage 0.98 -> 0.18 s), L1 +1.4% (spot +0.9%, armadillo +2.2%, every L-inf under marching
@@ -68,6 +76,8 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
   lb.lattice_contact.rescue_reach = kLatticeRescueReach;
   lb.lattice_contact.tie_tolerance = options.lattice_tie_tolerance;
   lb.local = options.local;
+  if (lb.local.robust_rounds == kAutoRobustRounds)
+    lb.local.robust_rounds = LocalReconstructionOptions{}.robust_rounds;
   lb.subdivisions = options.subdivisions;
   lb.split_sag = options.split_sag;
   lb.thin_parts = options.thin_parts == Switch::On ? 1 : options.thin_parts == Switch::Off ? 0 : -1;
@@ -87,6 +97,8 @@ LocalBrickOptions local_brick_options(const ContourOptions& options) {
     if (options.thin_parts != Switch::On) lb.thin_parts = 0;
     if (lb.thin_parts == 0 && options.local_projection.robust_rounds == kAutoRobustRounds)
       lb.projection.robust_rounds = kFanRobustRounds;
+    if (lb.thin_parts == 0 && options.local.robust_rounds == kAutoRobustRounds)
+      lb.local.robust_rounds = kFanCellRobustRounds;
     lb.carve_passes = kFanCarvePasses;
   }
   return lb;
