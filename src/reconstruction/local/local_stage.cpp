@@ -40,17 +40,18 @@ constexpr int kLatticeSlideRounds = 10;
 // bunny's contact points take 0.52x / 0.84x / 0.92x the time (docs/results/speed_s53.md).
 constexpr double kLatticeRescueReach = 5;
 // Edge fans on the grid itself fit their projection once, with no refit: a refit moved the L1 of
-// bunny, spot and armadillo with fans at band 3 by 0.2-1.5% either way at 64^3-256^3 (0.995x on
-// average) and bunny's at 512^3 by 0.5%, for a fifth of the projection's time each. On the finer
-// grid, as in the default, two pay: the torus at 64^3 lost 4% with one.
+// bunny, spot and armadillo with fans at band 3 by 0.1-1.6% either way at 64^3-256^3, bunny's at
+// 512^3 by 0.5%, and the shared meshes' at 32^3 and 64^3 by 0.2% on average (the torus at 64^3
+// 11%), for a fifth of the projection's time (docs/results/fan_rounds_s69.md). On the finer grid,
+// as in the default, two pay: the torus at 64^3 lost 4% with one.
 constexpr int kFanRobustRounds = 0;
 // Edge fans on the grid itself place their cells' vertices without reweighting the planes: the
 // reweighting, at 0.01 spacings, pulls a smooth patch's vertex along its plane towards the points
 // that agree most, and the fans keep that layout (projection moves a vertex along its normal
 // only). L1 without it, fans at band 3: bunny, spot, armadillo at 128^3 0.89x / 0.97x / 0.96x,
-// 256^3 0.82x / 0.91x / 0.91x, 512^3 0.78x / 0.85x / 0.82x; hammer, wingnut, boot at 256^3
-// 0.95x / 0.94x / 0.99x, their sharp-edge distances 1.01-1.03x. The default's subdivided mesh
-// moves by 1-3% either way, so it keeps three rounds.
+// 256^3 0.82x / 0.91x / 0.91x, 512^3 0.78x / 0.85x / 0.82x; with the single fit, the shared
+// meshes at 384^3 0.84x (none worse by 0.3%; the torus 0.61x), their sharp-edge distances 1.02x
+// (penguin 1.07x). The default's subdivided mesh moves by 1-3% either way: it keeps three rounds.
 constexpr int kFanCellRobustRounds = 0;
 // Edge fans carve no vertex (the samples' spheres still bound their edges' vertices as those are
 // placed): carving is a repair the fans' regions do not need. Bunny 512^3 0.92x the time (the
