@@ -160,7 +160,7 @@ void add_reconstruction_options(CLI::App* c, ContourArgs& a) {
                     "that the mesh cannot cross itself or leave a sample on the wrong side without "
                     "any repair (about 2-3.5x marching cubes' triangles; no subdivision, side "
                     "rounds or untangling; on, off; auto: on from 384 samples per axis, where it "
-                    "takes about 0.4x the time for 1.35x the L1)")
+                    "takes about 0.4x the time for 1.4x the L1)")
           ->capture_default_str());
   a.local_options.push_back(
       c->add_option("--local-reach", a.local.reach,

@@ -165,12 +165,12 @@ def contour(sdf, bounds=None, method="gcp", *, resolution=None, band="auto", mar
         Local reconstruction on grids: fan each grid edge's polygon from a vertex where the
         surface crosses the edge, every vertex kept in its cell, edge or face, so that the mesh
         cannot cross itself or leave a sample on the wrong side with no repair stage (about 3x
-        marching cubes' triangles; no subdivision, side rounds or untangling; the shared meshes'
-        L1 0.34x marching cubes' at 64^3, the default's 0.20x, in 0.42x the default's time;
-        with ``thin_parts=True``, on the finer grid: 0.22x at 11x its triangles;
-        docs/edge_fans.md). "auto": from 384 samples per axis (at 512^3 about 0.4x the
-        time for 1.35x the L1). ``stats["local_edge_fans"]`` says which ran. CLI
-        ``--edge-fans``.
+        marching cubes' triangles; no subdivision, side rounds or untangling; with ``band=3``,
+        bunny, spot and armadillo at 64^3: L1 0.37x marching cubes', the default's 0.23x, in
+        0.15x the default's time, docs/choosing.md; with ``thin_parts=True``, on the finer
+        grid: 0.22x at 11x its triangles, docs/edge_fans.md). "auto": from 384 samples per axis
+        (there about 0.4x the time for 1.4x the L1). ``stats["local_edge_fans"]`` says which
+        ran. CLI ``--edge-fans``.
     zero_set : bool or "auto"
         Local reconstruction: move the vertices onto the zero set of the grid's tricubic
         interpolant, uncarved. "auto" (default): where the values are found no exact distances
