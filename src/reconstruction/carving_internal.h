@@ -92,8 +92,11 @@ class Lattice;
 /// one flag per sample, the flagged alone): each box of vertices reads the balls that meet it,
 /// gathered once, in place of each ball reading the vertices near it. The same pushes, bit for
 /// bit.
+/// With `allowance` (per vertex, a length), a vertex counts as inside a ball only when deeper than
+/// its allowance, and goes back only to that depth.
 PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
-                           const Lattice& balls, const std::vector<char>* use, double spacing);
+                           const Lattice& balls, const std::vector<char>* use, double spacing,
+                           const std::vector<double>* allowance = nullptr);
 
 /// Up to `passes` rounds of each vertex of V pushed onto the sphere of the ball it enters
 /// deepest (the balls on a grid's lattice, `use` as in deepest_pushes), every vertex on its own
@@ -101,8 +104,10 @@ PointMatrix deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
 /// alone, as bricks need. A push that would take a vertex more than `max_move` spacings from
 /// where it started is not made (a long one meets a part the mesh lacks, or the other side of a
 /// thin part), which also bounds how far apart two triangles that come to cross can have started.
+/// `allowance` as in deepest_pushes.
 void carve_vertices_alone(PointMatrix& V, const Lattice& balls, const std::vector<char>* use,
                           double spacing, int passes, double max_move,
-                          const std::vector<char>* fixed = nullptr);
+                          const std::vector<char>* fixed = nullptr,
+                          const std::vector<double>* allowance = nullptr);
 
 }  // namespace sdfcontour::detail

@@ -13,6 +13,7 @@
 
 #include "pipeline/work_counter.h"
 #include "reconstruction/carving_internal.h"
+#include "reconstruction/chord_offsets.h"
 #include "reconstruction/mesh_geometry.h"
 #include "reconstruction/point_cubes.h"
 #include "reconstruction/quadric_fit.h"
@@ -216,6 +217,17 @@ class EdgeMoments {
   double spacing_;
 };
 
+// Whether the fitted points lie on the quadric c to within kSmoothFitRms spacings, weighted RMS.
+bool smooth_fit(const std::vector<FitRow>& fit, const Coefficients& c) {
+  double weights = 0, misses = 0;
+  for (const FitRow& f : fit) {
+    const double miss = f.z - f.row.dot(c);
+    weights += f.w;
+    misses += f.w * miss * miss;
+  }
+  return misses < detail::kSmoothFitRms * detail::kSmoothFitRms * weights;
+}
+
 }  // namespace
 
 ContactProjectionStats project_to_contact_points(Mesh& mesh, const PointMatrix& points,
@@ -251,14 +263,16 @@ void require_fixed_flags(const Mesh& mesh, const std::vector<char>* fixed) {
 
 }  // namespace
 
-ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed) const {
+ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed,
+                                                 detail::ChordOffsets* chords) const {
   require_fixed_flags(mesh, fixed);
   // Only the vertices it fits need their triangles (after a split, about 1% of them).
-  return project(mesh, fixed, detail::VertexTriangles(mesh, fixed));
+  return project(mesh, fixed, detail::VertexTriangles(mesh, fixed), chords);
 }
 
 ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<char>* fixed,
-                                                 const detail::VertexTriangles& around) const {
+                                                 const detail::VertexTriangles& around,
+                                                 detail::ChordOffsets* chords) const {
   if (!mesh.vertices.allFinite()) throw Error("projection: the mesh's vertices must be finite");
   require_fixed_flags(mesh, fixed);
   if (around.offsets.size() != std::size_t(mesh.vertices.rows()) + 1)
@@ -275,11 +289,13 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
   if (!cubes_ || mesh.vertices.rows() == 0) return stats;
   const detail::PointCubes& cubes = *cubes_;
   PointMatrix N(mesh.vertices.rows(), 3);  // the fitted vertices' rows only
-  const EdgeMoments chords(mesh, around, spacing);
+  const EdgeMoments edges(mesh, around, spacing);
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);
   const double inv_chord_scale2 = detail::inverse_turn_chord2(o);
+  if (chords && chords->size() != std::size_t(mesh.vertices.rows()))
+    chords->resize(std::size_t(mesh.vertices.rows()));
   detail::WorkCounter fitted(o.progress, long(mesh.vertices.rows()));
   tbb::parallel_for(Eigen::Index(0), mesh.vertices.rows(), [&](Eigen::Index v) {
     fitted.add();
@@ -340,14 +356,25 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
       gather(radii[1], reaches[1]);
       if (!detail::fit_quadric(fit, o, inv_chord_scale2, c)) return;
     }
-    double z0 = c[0];
+    double z0 = c[0], offset = 0;
     const bool crease = o.crease_planes && crease_height(fit, c, inv_chord_scale2, z0);
-    if (o.chord_offset && !crease && chords.triangles(v) > 0) {
-      const Eigen::Matrix3d m = chords.sum(v);
+    if (o.chord_offset && !crease && edges.triangles(v) > 0) {
+      const Eigen::Matrix3d m = edges.sum(v);
       const double q = c[3] * a.dot(m * a) + c[4] * a.dot(m * b) + c[5] * b.dot(m * b);
-      z0 -= q / 12 / chords.triangles(v);
+      offset = -q / 12 / edges.triangles(v);
+      z0 += offset;
     }
-    if (std::isfinite(z0) && std::abs(z0) <= o.max_move) height[std::size_t(v)] = z0 * spacing;
+    if (!std::isfinite(z0) || !(std::abs(z0) <= o.max_move)) return;
+    height[std::size_t(v)] = z0 * spacing;
+    if (chords && offset != 0 && smooth_fit(fit, c)) {
+      // The quadric's second-order part c3 x^2 + c4 xy + c5 y^2 over (a, b), as a form on edges.
+      const Eigen::Matrix3d q = c[3] * a * a.transpose() +
+                                c[4] / 2 * (a * b.transpose() + b * a.transpose()) +
+                                c[5] * b * b.transpose();
+      chords->offset[std::size_t(v)] = offset;
+      chords->normal[std::size_t(v)] = n;
+      chords->form[std::size_t(v)] = {q(0, 0), q(0, 1), q(0, 2), q(1, 1), q(1, 2), q(2, 2)};
+    }
   });
   for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
     const double z = height[std::size_t(v)];

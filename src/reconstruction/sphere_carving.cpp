@@ -215,7 +215,8 @@ Pushes no_pushes(Eigen::Index vertices) {
 
 // Per vertex with a push (best[v].vertex >= 0), the move onto its ball's sphere; zero elsewhere.
 PointMatrix pushes_onto_spheres(const PointMatrix& V, const Pushes& best, const PointMatrix& points,
-                                const Eigen::VectorXd& values) {
+                                const Eigen::VectorXd& values,
+                                const std::vector<double>* allowance = nullptr) {
   PointMatrix moves(V.rows(), 3);
   tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) {
     const Push& b = best[std::size_t(v)];
@@ -223,7 +224,8 @@ PointMatrix pushes_onto_spheres(const PointMatrix& V, const Pushes& best, const 
     if (b.vertex < 0) return;
     const Eigen::Vector3d p = points.row(b.sample).transpose();
     const Eigen::Vector3d from = V.row(v).transpose() - p;
-    const double r = std::abs(values[b.sample]);
+    double r = std::abs(values[b.sample]);
+    if (allowance) r -= std::min((*allowance)[std::size_t(v)], r / 2);
     moves.row(v) = (p + from * (r / from.norm()) - V.row(v).transpose()).transpose();
   });
   return moves;
@@ -270,7 +272,7 @@ constexpr double kBallListBox = 2;
 
 PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>& which,
                                    const Lattice& balls, const std::vector<char>* use,
-                                   double spacing) {
+                                   double spacing, const std::vector<double>* allowance) {
   const double inside = kInside * spacing, cell = kBallListBox * spacing;
   struct Keyed {  // (not a std::pair, whose constructor would zero the list on one thread)
     std::array<long, 3> box;
@@ -305,6 +307,8 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
       const int v = keyed[q].vertex;
       const Eigen::Vector3d x = V.row(v).transpose();
       Push& found = best[std::size_t(v)];
+      const double deeper_than =
+          allowance ? std::max(inside, (*allowance)[std::size_t(v)]) : inside;
       // (The spheres that may hold x found by the list's vectorised scan: a superset of those
       // that the test below takes.)
       for (std::size_t t = list.next_near(x, 0.0, 0); t < list.r.size();
@@ -321,18 +325,19 @@ PointMatrix detail::deepest_pushes(const PointMatrix& V, const std::vector<int>&
         const double d2 = (x - points.row(s).transpose()).squaredNorm();
         if (!(d2 < r * r && d2 > 0)) continue;
         const double depth = r - std::sqrt(d2);
-        if (!(depth > inside)) continue;
+        if (!(depth > deeper_than)) continue;
         if (found.vertex < 0 || depth > found.depth || (depth == found.depth && s < found.sample))
           found = {v, int(s), depth};
       }
     }
   });
-  return pushes_onto_spheres(V, best, points, balls.values());
+  return pushes_onto_spheres(V, best, points, balls.values(), allowance);
 }
 
 void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls,
                                   const std::vector<char>* use, double spacing, int passes,
-                                  double max_move, const std::vector<char>* fixed) {
+                                  double max_move, const std::vector<char>* fixed,
+                                  const std::vector<double>* allowance) {
   PointMatrix start(V.rows(), 3);
   tbb::parallel_for(Eigen::Index(0), V.rows(), [&](Eigen::Index v) { start.row(v) = V.row(v); });
   std::vector<int> candidates;
@@ -340,7 +345,7 @@ void detail::carve_vertices_alone(PointMatrix& V, const Lattice& balls,
     if (!fixed || !(*fixed)[std::size_t(v)]) candidates.push_back(int(v));
   const double limit2 = max_move * max_move * spacing * spacing;
   for (int round = 0; round < passes && !candidates.empty(); ++round) {
-    const PointMatrix moves = deepest_pushes(V, candidates, balls, use, spacing);
+    const PointMatrix moves = deepest_pushes(V, candidates, balls, use, spacing, allowance);
     candidates.clear();
     for (Eigen::Index v = 0; v < V.rows(); ++v) {
       if (!(moves.row(v).squaredNorm() > 0)) continue;

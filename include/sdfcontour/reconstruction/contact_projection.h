@@ -22,6 +22,7 @@ namespace sdfcontour {
 namespace detail {
 class PointCubes;
 struct VertexTriangles;
+struct ChordOffsets;
 }  // namespace detail
 
 struct ContactProjectionOptions {
@@ -130,12 +131,19 @@ class ContactProjector {
   ContactProjector(const ContactProjector&) = delete;
   ContactProjector& operator=(const ContactProjector&) = delete;
 
-  /// project_to_contact_points(mesh, points, normals, depths, spacing, options, fixed).
-  ContactProjectionStats project(Mesh& mesh, const std::vector<char>* fixed = nullptr) const;
+  /// project_to_contact_points(mesh, points, normals, depths, spacing, options, fixed). With
+  /// `chords` (internal: the local reconstruction's), each vertex it fits where the surface is
+  /// smooth at the spacing's scale has its chord offset recorded there (sized to the mesh's
+  /// vertices if it is not already; other entries are left as they are).
+  ContactProjectionStats project(Mesh& mesh, const std::vector<char>* fixed = nullptr,
+                                 detail::ChordOffsets* chords = nullptr) const;
   /// The same with `around`, the mesh's triangles around each vertex that is not fixed, made by
   /// the caller (who reads them again).
   ContactProjectionStats project(Mesh& mesh, const std::vector<char>* fixed,
-                                 const detail::VertexTriangles& around) const;
+                                 const detail::VertexTriangles& around,
+                                 detail::ChordOffsets* chords = nullptr) const;
+  /// The samples' spacing it was made with.
+  double spacing() const { return spacing_; }
 
  private:
   const PointMatrix& points_;

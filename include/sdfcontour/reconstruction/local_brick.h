@@ -116,6 +116,10 @@ struct LocalBrickOptions {
   bool project = true;  ///< onto the contact points' local fit (contact_projection.h)
   /// ContourOptions::local_projection's: a tight neighbourhood, no residual limit, robust.
   ContactProjectionOptions projection = local_projection_options();
+  /// Where the contact points lie on their fit's quadric (a surface smooth at the spacing's
+  /// scale), each vertex keeps its chord offset: set again for its smaller triangles after the
+  /// sag split, and left in place by the carving (not with edge fans, which do not carve).
+  bool keep_chord_offsets = true;
   /// Carving, vertex by vertex: up to `carve_passes` rounds of each vertex pushed onto the sphere
   /// of the band sample's ball it enters deepest (sphere_carving.h without its triangle checks
   /// and rounds, which are whole-mesh stages).

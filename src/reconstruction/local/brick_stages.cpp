@@ -132,14 +132,15 @@ BrickSurface surface_on_contact_points(const BrickDual& dual, const ContactPoint
     projector.emplace(cp.points, cp.normals, depths, h, options.projection);
     // The split reads every vertex's triangles: made once for both.
     const VertexTriangles around(sub.mesh, split ? nullptr : &surface.fixed(options));
-    projector->project(sub.mesh, &surface.fixed(options), around);
+    ChordOffsets* chords = fans || !options.keep_chord_offsets ? nullptr : &surface.chords;
+    projector->project(sub.mesh, &surface.fixed(options), around, chords);
     if (split && fans) {
       split_fan_faces(dual.near, sag * h, *projector, dual.cells, around, sub,
                       surface.reconstructed);
       surface.corners = shared_corners(sub);  // in the new numbering
     } else if (split) {
       split_sagging_edges(dual.near, levels, sag * h, *projector, options, around, sub,
-                          surface.reconstructed, surface.corners);
+                          surface.reconstructed, surface.corners, chords);
     }
   }
   surface.stay = surface.fixed(options);
@@ -160,8 +161,17 @@ void settle_vertices(const GridGeometry& block_geometry, const BandSamples& band
     std::optional<Lattice> wider_lattice;
     const Lattice& lattice = wider ? wider_lattice.emplace(block_geometry, balls)
                                    : band_lattice.emplace(block_geometry, band);
+    // (A vertex may lie inside a ball by its chord offset: the offset puts it off a smooth
+    // surface on purpose, so that its flat triangles straddle it.)
+    std::vector<double> allowance;
+    if (surface.chords.size() == std::size_t(mesh.vertices.rows())) {
+      allowance.resize(surface.chords.size());
+      for (std::size_t v = 0; v < allowance.size(); ++v)
+        allowance[v] = std::abs(surface.chords.offset[v]) * h;
+    }
     carve_vertices_alone(mesh.vertices, lattice, &balls.core, h, options.carve_passes,
-                         kMaxCarveMove, surface.stay.empty() ? nullptr : &surface.stay);
+                         kMaxCarveMove, surface.stay.empty() ? nullptr : &surface.stay,
+                         allowance.empty() ? nullptr : &allowance);
   }
   wider.reset();
   if (!fans) band_lattice.reset();

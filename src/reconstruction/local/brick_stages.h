@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "reconstruction/chord_offsets.h"
 #include "reconstruction/local/lattice_subdivision.h"
 #include "sdfcontour/band/band.h"
 #include "sdfcontour/contact_points/contact_points.h"
@@ -60,6 +61,9 @@ struct BrickSurface {
   PointMatrix reconstructed;  ///< per vertex: where the reconstruction put it (before any move)
   std::vector<char> corners;  ///< per vertex: a corner that the samples around it share
   std::vector<char> stay;     ///< per vertex: not carved (those the fit kept; empty: none)
+  /// Per vertex: the chord offset the projection gave it where the surface is smooth at the
+  /// spacing's scale (not with edge fans), which the carving leaves in place.
+  ChordOffsets chords;
 
   /// Per vertex: left where the reconstruction put it by the fit (with keep_features every
   /// feature vertex, else the shared corners).

@@ -13,6 +13,7 @@
 namespace sdfcontour::detail {
 
 struct VertexTriangles;
+struct ChordOffsets;
 
 /// A keyed triangle soup: vertex rows with keys, triangles with a global name each (ascending
 /// names give the whole grid's order).
@@ -73,10 +74,13 @@ SplitMesh split_curved_edges(const KeyedTriangles& in, const SubdividedMesh& fin
 /// by more than `limit` (its length times its ends' normals' turn / 8, a circular arc's sag) is
 /// split and the new vertices projected by it; `reconstructed` (the positions the untangling
 /// returns vertices to: the new ones at their edges' midpoints) and `corners` (per vertex: a shared
-/// corner) follow the new numbering. `around`: sub.mesh's triangles around each vertex.
+/// corner) follow the new numbering. `around`: sub.mesh's triangles around each vertex. With
+/// `chords` (the first projection's), the vertices kept from before the split have their chord
+/// offsets set again for their new, smaller triangles, and `chords` follows the new numbering.
 void split_sagging_edges(const KeyedTriangles& near, int levels, double limit,
                          const ContactProjector& projector, const LocalBrickOptions& options,
                          const VertexTriangles& around, SubdividedMesh& sub,
-                         PointMatrix& reconstructed, std::vector<char>& corners);
+                         PointMatrix& reconstructed, std::vector<char>& corners,
+                         ChordOffsets* chords = nullptr);
 
 }  // namespace sdfcontour::detail
