@@ -220,23 +220,11 @@ TEST(EdgeFans, VerticesHeldInTheirCellsStayOnTheSurface) {
 TEST(EdgeFans, CellsWithoutRobustRoundsLieCloserToASmoothSurface) {
   const auto torus = make_builtin_shape("torus");
   const Grid g = sample_grid(*torus, 64, Bounds{});
-  auto centroids_off = [&](const Mesh& m) {
-    double sum = 0;
-    for (Eigen::Index t = 0; t < m.triangles.rows(); ++t) {
-      const Eigen::Vector3d c =
-          (m.vertices.row(m.triangles(t, 0)) + m.vertices.row(m.triangles(t, 1)) +
-           m.vertices.row(m.triangles(t, 2)))
-              .transpose() /
-          3;
-      sum += std::abs(torus->distance(c));
-    }
-    return sum / double(m.triangles.rows());
-  };
   LocalBrickOptions o = fan_options(true, 2, true);
   ASSERT_EQ(o.local.robust_rounds, 0);
-  const double plain = centroids_off(bricked(g, o));
+  const double plain = test::mean_centroid_distance(bricked(g, o), *torus);
   o.local.robust_rounds = 3;
-  const double reweighed = centroids_off(bricked(g, o));
+  const double reweighed = test::mean_centroid_distance(bricked(g, o), *torus);
   std::cout << "centroids' mean distance: " << plain << " without rounds, " << reweighed
             << " with three\n";
   EXPECT_LT(plain, 0.9 * reweighed);

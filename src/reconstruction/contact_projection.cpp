@@ -173,50 +173,6 @@ bool crease_height(const std::vector<FitRow>& fit, const Coefficients& quadric,
   return true;
 }
 
-// Per vertex, the sum over its triangles of e e^T over their three edges e (in spacings), and
-// the number of triangles: a flat triangle with its corners on z(x, y) lies
-// sum_e Q(e) / 12 above it on average, Q the quadric's quadratic part, so the vertex's chord
-// offset is minus the mean of that over its triangles. Made only where a vertex's fit asks for
-// it, from its own triangles: an array of every triangle's sums, made first, was 3% of a 512^3
-// run, most of it faulting its pages in.
-class EdgeMoments {
- public:
-  EdgeMoments(const Mesh& mesh, const detail::VertexTriangles& around, double spacing)
-      : mesh_(mesh), around_(around), spacing_(spacing) {}
-
-  // Vertex v's triangles: their count, and the sum of their moments in ascending order (each
-  // triangle's three edges summed first).
-  int triangles(Eigen::Index v) const {
-    return around_.offsets[std::size_t(v) + 1] - around_.offsets[std::size_t(v)];
-  }
-  Eigen::Matrix3d sum(Eigen::Index v) const {
-    Symmetric sum{};
-    for (int o = around_.offsets[std::size_t(v)]; o < around_.offsets[std::size_t(v) + 1]; ++o) {
-      const Eigen::Index t = around_.triangles[std::size_t(o)];
-      Symmetric e2{};
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d e = (mesh_.vertices.row(mesh_.triangles(t, (k + 1) % 3)) -
-                                   mesh_.vertices.row(mesh_.triangles(t, k)))
-                                      .transpose() /
-                                  spacing_;
-        for (int u = 0; u < 6; ++u) e2[std::size_t(u)] += e[kRow[u]] * e[kColumn[u]];
-      }
-      for (int u = 0; u < 6; ++u) sum[std::size_t(u)] += e2[std::size_t(u)];
-    }
-    Eigen::Matrix3d m;
-    for (int u = 0; u < 6; ++u)
-      m(kRow[u], kColumn[u]) = m(kColumn[u], kRow[u]) = sum[std::size_t(u)];
-    return m;
-  }
-
- private:
-  using Symmetric = std::array<double, 6>;  // (0,0), (0,1), (0,2), (1,1), (1,2), (2,2)
-  static constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kColumn[6] = {0, 1, 2, 1, 2, 2};
-  const Mesh& mesh_;
-  const detail::VertexTriangles& around_;
-  double spacing_;
-};
-
 // Whether the fitted points lie on the quadric c to within kSmoothFitRms spacings, weighted RMS.
 bool smooth_fit(const std::vector<FitRow>& fit, const Coefficients& c) {
   double weights = 0, misses = 0;
@@ -289,7 +245,7 @@ ContactProjectionStats ContactProjector::project(Mesh& mesh, const std::vector<c
   if (!cubes_ || mesh.vertices.rows() == 0) return stats;
   const detail::PointCubes& cubes = *cubes_;
   PointMatrix N(mesh.vertices.rows(), 3);  // the fitted vertices' rows only
-  const EdgeMoments edges(mesh, around, spacing);
+  const detail::EdgeMoments edges(mesh, around, spacing);
   const double radii[2] = {o.radius * spacing, o.wide_radius * spacing};
   const long reaches[2] = {1, std::max(1L, long(std::ceil(radii[1] / cubes.cell())))};
   std::vector<double> height(std::size_t(mesh.vertices.rows()), 0.0);

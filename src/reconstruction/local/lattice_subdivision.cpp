@@ -393,21 +393,11 @@ void offset_again(const std::vector<char>& kept, double spacing, Mesh& mesh, Cho
   for (std::size_t v = 0; v < kept.size(); ++v) skip[v] = !kept[v] || chords.offset[v] == 0;
   const VertexTriangles around(mesh, &skip);
   std::vector<double> next(kept.size(), 0.0);
+  const EdgeMoments edges(mesh, around, spacing);
   tbb::parallel_for(std::size_t(0), kept.size(), [&](std::size_t v) {
-    const int first = around.offsets[v], end = around.offsets[v + 1];
-    if (skip[v] || end <= first) return;
-    Eigen::Matrix3d moments = Eigen::Matrix3d::Zero();
-    for (int o = first; o < end; ++o) {
-      const Eigen::Index t = around.triangles[std::size_t(o)];
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d e = (mesh.vertices.row(mesh.triangles(t, (k + 1) % 3)) -
-                                   mesh.vertices.row(mesh.triangles(t, k)))
-                                      .transpose() /
-                                  spacing;
-        moments += e * e.transpose();
-      }
-    }
-    next[v] = chord_offset(chords.form[v], moments, end - first);
+    const Eigen::Index at = Eigen::Index(v);
+    if (skip[v] || edges.triangles(at) == 0) return;
+    next[v] = chord_offset(chords.form[v], edges.sum(at), edges.triangles(at));
   });
   for (std::size_t v = 0; v < kept.size(); ++v) {
     if (skip[v] || next[v] == chords.offset[v]) continue;
