@@ -146,7 +146,8 @@ def main():
         METHODS[label] = METHODS["gcp-local"] + options.split()
     names = [m for m in args.meshes.split(",") if m] or sorted(
         f[:-4] for f in os.listdir(MESHES) if f.endswith(".obj"))
-    methods = args.methods.split(",") + [v.partition(":")[0] for v in args.variant]
+    methods = [m for m in args.methods.split(",") if m]  # --methods "": the variants alone
+    methods += [v.partition(":")[0] for v in args.variant]
     os.makedirs(args.work, exist_ok=True)
     rows = []
     for res in [int(r) for r in args.res.split(",")]:
