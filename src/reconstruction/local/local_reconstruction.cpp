@@ -247,6 +247,11 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
           if (!w.clamped) v = w;
         }
       }
+      // The clamped vertex or the one among the cell's crossings, whichever the grid's values
+      // put nearer the surface (vertex_placement.h's within_crossings).
+      if (v.within_crossings &&
+          trilinear_miss(cells, at, *v.within_crossings) < trilinear_miss(cells, at, v.position))
+        v.position = *v.within_crossings;
       // (A narrow cell's smooth patch whose plane misses it: narrow_cells.)
       if (options.narrow_cells && v.clamped && !v.feature && !v.from_crossings)
         v = place_vertex({}, crossings, lo, hi, h, options);

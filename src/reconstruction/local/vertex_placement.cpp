@@ -105,6 +105,19 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
       out.clamped = false;
     }
   }
+  if (options.edge_fans && out.clamped && !in_cell && !out.corner && !out.from_crossings &&
+      !crossings.empty()) {
+    // No minimum lies in the cell, a feature beyond it whose planes reach in: the cell may hold
+    // only slivers of the feature's faces. The quadric's least point where the cell's surface is,
+    // the box of its edge crossings.
+    Eigen::Vector3d box_lo = crossings[0].point, box_hi = box_lo;
+    for (const TangentPlane& c : crossings)
+      box_lo = box_lo.cwiseMin(c.point), box_hi = box_hi.cwiseMax(c.point);
+    box_lo = box_lo.cwiseMax(inner_lo).cwiseMin(inner_hi);
+    box_hi = box_hi.cwiseMax(box_lo).cwiseMin(inner_hi);
+    out.within_crossings = minimise_quadric_in_box(planes, box_lo, box_hi, options.robust_rounds,
+                                                   options.robust_scale * h);
+  }
   if (out.corner && out.position != s.position) out.corner_beyond = s.position;
   out.corner = out.corner && out.position == s.position;
   return out;
