@@ -21,12 +21,13 @@ struct VertexResult {
   // The minimiser moved into the cell along the directions the planes leave free, if it gets
   // there (the quadric's value unchanged).
   std::optional<Eigen::Vector3d> fitted;
-  // Where no minimiser lies in the cell: the quadric's least point within the box of the cell's
-  // edge crossings, where the cell's own surface is. Clamped straight, the
-  // vertex stays level with the feature beyond the cell: right where the feature's face runs
-  // along the clamp (a box's edge just outside), 0.11 h off where the cell holds only slivers of
-  // the faces (a polyhedral torus at 384^3, a crease 0.07-0.16 h outside). The caller keeps the
-  // one that the grid's values put nearer the surface.
+  // Edge fans, where no minimiser lies in the cell: the quadric's least point within the box of
+  // the cell's edge crossings, where the cell's own surface is. Clamped straight, the vertex
+  // stays level with the feature beyond the cell: right where the feature's face runs along the
+  // clamp (a box's edge just outside), 0.11 h off where the cell holds only slivers of the faces
+  // (a polyhedral torus at 384^3, a crease 0.07-0.16 h outside). The caller keeps the one that
+  // the grid's values put nearer the surface. (The repaired mesh keeps the clamp: its sharp-edge
+  // distances would grow 1-3%.)
   std::optional<Eigen::Vector3d> within_crossings;
 };
 
