@@ -152,8 +152,8 @@ TEST(VertexPlacement, AVertexWhoseMinimumLiesBeyondItsCellIsOfferedOneAmongItsCr
     if (!misses_the_cell(minimum)) continue;
     ++beyond_cell;
     const detail::VertexResult v = detail::place_vertex(planes, crossings, lo, hi, 1.0, options);
-    ASSERT_TRUE(v.within_crossings) << "trial " << trial;
-    const Eigen::Vector3d w = *v.within_crossings;
+    ASSERT_TRUE(v.crossings_box) << "trial " << trial;
+    const Eigen::Vector3d w = detail::within_crossings(planes, *v.crossings_box, 1.0, options);
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (const TangentPlane& c : crossings) mean += c.point;
     mean /= double(crossings.size());

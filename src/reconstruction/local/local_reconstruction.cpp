@@ -196,6 +196,7 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       }
       crossing_means.row(cell.first_vertex + q) = (mean / double(crossings.size())).transpose();
       VertexResult v = place_vertex(planes[std::size_t(q)], crossings, lo, hi, h, options);
+      const std::vector<TangentPlane>* placed_from = &planes[std::size_t(q)];  // v's planes
       // The vertex from the planes gathered farther (empty_cell_reach) where those planes meet
       // at a corner beyond the cell: on the corner's edges that cross the cell, if any.
       const bool gather_wide = options.empty_cell_reach > options.reach;
@@ -221,6 +222,7 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
             crossings_turn(crossings)) {
           v = w;
           v.position = *w.fitted;
+          placed_from = &wide_planes();
         } else if (auto e = corner_edge(w)) {
           v = *e;
         }
@@ -249,9 +251,10 @@ PointMatrix cell_vertices(const SurfaceCells& cells, const PointMatrix& points,
       }
       // The clamped vertex or the one among the cell's crossings, whichever the grid's values
       // put nearer the surface (vertex_placement.h's within_crossings).
-      if (v.within_crossings &&
-          trilinear_miss(cells, at, *v.within_crossings) < trilinear_miss(cells, at, v.position))
-        v.position = *v.within_crossings;
+      if (v.crossings_box) {
+        const Eigen::Vector3d w = within_crossings(*placed_from, *v.crossings_box, h, options);
+        if (trilinear_miss(cells, at, w) < trilinear_miss(cells, at, v.position)) v.position = w;
+      }
       // (A narrow cell's smooth patch whose plane misses it: narrow_cells.)
       if (options.narrow_cells && v.clamped && !v.feature && !v.from_crossings)
         v = place_vertex({}, crossings, lo, hi, h, options);

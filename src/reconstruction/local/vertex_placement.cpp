@@ -109,18 +109,23 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
       !crossings.empty()) {
     // No minimum lies in the cell, a feature beyond it whose planes reach in: the cell may hold
     // only slivers of the feature's faces. The quadric's least point where the cell's surface is,
-    // the box of its edge crossings.
+    // the box of its edge crossings (within_crossings).
     Eigen::Vector3d box_lo = crossings[0].point, box_hi = box_lo;
     for (const TangentPlane& c : crossings)
       box_lo = box_lo.cwiseMin(c.point), box_hi = box_hi.cwiseMax(c.point);
     box_lo = box_lo.cwiseMax(inner_lo).cwiseMin(inner_hi);
     box_hi = box_hi.cwiseMax(box_lo).cwiseMin(inner_hi);
-    out.within_crossings = minimise_quadric_in_box(planes, box_lo, box_hi, options.robust_rounds,
-                                                   options.robust_scale * h);
+    out.crossings_box = CrossingsBox{box_lo, box_hi};
   }
   if (out.corner && out.position != s.position) out.corner_beyond = s.position;
   out.corner = out.corner && out.position == s.position;
   return out;
+}
+
+Eigen::Vector3d within_crossings(const std::vector<TangentPlane>& planes, const CrossingsBox& box,
+                                 double h, const LocalReconstructionOptions& options) {
+  return minimise_quadric_in_box(planes, box.lo, box.hi, options.robust_rounds,
+                                 options.robust_scale * h);
 }
 
 std::optional<VertexResult> corner_edge_vertex(const std::vector<TangentPlane>& wide,

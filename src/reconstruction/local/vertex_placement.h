@@ -12,6 +12,11 @@
 
 namespace sdfcontour::detail {
 
+/// A box within a cell: its edge crossings' bounding box, within the cell shrunk by its margin.
+struct CrossingsBox {
+  Eigen::Vector3d lo, hi;
+};
+
 /// One polygon's vertex and how it was placed.
 struct VertexResult {
   Eigen::Vector3d position;
@@ -21,14 +26,13 @@ struct VertexResult {
   // The minimiser moved into the cell along the directions the planes leave free, if it gets
   // there (the quadric's value unchanged).
   std::optional<Eigen::Vector3d> fitted;
-  // Edge fans, where no minimiser lies in the cell: the quadric's least point within the box of
-  // the cell's edge crossings, where the cell's own surface is. Clamped straight, the vertex
-  // stays level with the feature beyond the cell: right where the feature's face runs along the
-  // clamp (a box's edge just outside), 0.11 h off where the cell holds only slivers of the faces
-  // (a polyhedral torus at 384^3, a crease 0.07-0.16 h outside). The caller keeps the one that
-  // the grid's values put nearer the surface. (The repaired mesh keeps the clamp: its sharp-edge
-  // distances would grow 1-3%.)
-  std::optional<Eigen::Vector3d> within_crossings;
+  // Edge fans, where no minimiser lies in the cell: the box of the cell's edge crossings, where
+  // the cell's own surface is, for within_crossings. Clamped straight, the vertex stays level
+  // with the feature beyond the cell: right where the feature's face runs along the clamp (a
+  // box's edge just outside), 0.11 h off where the cell holds only slivers of the faces (a
+  // polyhedral torus at 384^3, a crease 0.07-0.16 h outside). (The repaired mesh keeps the
+  // clamp: its sharp-edge distances would grow 1-3%.)
+  std::optional<CrossingsBox> crossings_box;
 };
 
 /// A feature from fewer planes than this may be no feature: a point at a corner has a normal
@@ -39,11 +43,18 @@ constexpr std::size_t kFewFeaturePlanes = 3;
 /// points' tangent planes, or from its grid edges' `crossings` where the planes are fewer than
 /// options.min_points: the corner that samples share if they do, else the quadric's
 /// rank-truncated robust minimiser, kept a thousandth of the cell inside it (for edge fans, with
-/// `within_crossings` where no minimiser lies in the cell).
+/// `crossings_box` where no minimiser lies in the cell).
 VertexResult place_vertex(const std::vector<TangentPlane>& planes,
                           const std::vector<TangentPlane>& crossings, const Eigen::Vector3d& lo,
                           const Eigen::Vector3d& hi, double h,
                           const LocalReconstructionOptions& options);
+
+/// The least point within `box` (a VertexResult's crossings_box) of the quadric of `planes` (the
+/// planes that vertex was placed from): the caller keeps it or the clamped vertex, whichever the
+/// grid's values put nearer the surface. Solved only for the vertex kept (place_vertex may run
+/// several times for one cell; solved in each, it cost bunny 512^3 a twentieth of its time).
+Eigen::Vector3d within_crossings(const std::vector<TangentPlane>& planes, const CrossingsBox& box,
+                                 double h, const LocalReconstructionOptions& options);
 
 /// A cell next to a corner whose own points are too few (the exact cube at 256^3: the samples
 /// near its edges give the corner their contact points) gathers the corner's points from farther
