@@ -51,8 +51,8 @@ VertexResult place_vertex(const std::vector<TangentPlane>& planes,
 
 /// The least point within `box` (a VertexResult's crossings_box) of the quadric of `planes` (the
 /// planes that vertex was placed from): the caller keeps it or the clamped vertex, whichever the
-/// grid's values put nearer the surface. Solved only for the vertex kept (place_vertex may run
-/// several times for one cell; solved in each, it cost bunny 512^3 a twentieth of its time).
+/// grid's values put nearer the surface. Solved only for the vertex kept: place_vertex may run
+/// several times for one cell, and the solve tries 27 sets of the box's faces.
 Eigen::Vector3d within_crossings(const std::vector<TangentPlane>& planes, const CrossingsBox& box,
                                  double h, const LocalReconstructionOptions& options);
 
