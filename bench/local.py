@@ -100,10 +100,11 @@ def sharp_edges(V, F, angle=30.0):
             if len(faces) == 2 and n[faces[0]] @ n[faces[1]] < cos], n
 
 
-def sharp_edge_points(V, F, step, angle=30.0):
-    """Points every `step` along the mesh's edges whose faces meet at more than `angle` degrees."""
+def sharp_edge_points(V, F, step, angle=30.0, edges=None):
+    """Points every `step` along the mesh's edges whose faces meet at more than `angle` degrees
+    (`edges`: sharp_edges(V, F, angle)[0], if already made)."""
     pts = []
-    for a, b, _, _ in sharp_edges(V, F, angle)[0]:
+    for a, b, _, _ in sharp_edges(V, F, angle)[0] if edges is None else edges:
         length = np.linalg.norm(V[b] - V[a])
         m = max(1, int(np.ceil(length / step)))
         for s in (np.arange(m) + 0.5) / m:

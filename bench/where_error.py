@@ -14,18 +14,17 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from local import area_samples, mean_distance, read_ply, sharp_edge_points  # noqa: E402
+from local import (area_samples, mean_distance, read_ply, sharp_edge_points,  # noqa: E402
+                   sharp_edges)
 
 EDGE_BINS = [(0, 0.5), (0.5, 1), (1, 2), (2, 4)]  # spacings from the nearest sharp edge
 TURN_BINS = [(0, 3), (3, 10), (10, 30), (30, 180)]  # degrees, beyond 4 spacings from any edge
 SAMPLES = 100000
 
 
-def facet_turn(points, V, F, h):
+def facet_turn(points, V, F, n, h):
     """Per point: the largest turn (degrees) between the ground truth's facet nearest it and the
-    facets among its 16 nearest (by centroid) within two spacings."""
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    facets among its 16 nearest (by centroid) within two spacings; `n`: the facets' unit normals."""
     dist, idx = cKDTree(V[F].mean(axis=1)).query(points, k=min(16, len(F)))
     cos = np.einsum("ij,ikj->ik", n[idx[:, 0]], n[idx])
     cos[dist > 2 * h] = 1
@@ -38,12 +37,13 @@ def main():
         sys.exit(__doc__)
     h = 2.0 / (res - 1)
     GV, GF = read_ply(gt)
-    edges = sharp_edge_points(GV, GF, step=h / 8)
+    sharp, normals = sharp_edges(GV, GF)
+    edges = sharp_edge_points(GV, GF, step=h / 8, edges=sharp)
     tree = cKDTree(edges) if len(edges) else None
     for path in meshes:
         P = area_samples(*read_ply(path), count=SAMPLES)
         to_edge = tree.query(P)[0] / h if tree else np.full(len(P), np.inf)
-        turn = facet_turn(P, GV, GF, h)
+        turn = facet_turn(P, GV, GF, normals, h)
         bins = [(f"edge {lo}-{hi} h", (to_edge >= lo) & (to_edge < hi)) for lo, hi in EDGE_BINS]
         bins += [(f"far, turn {lo}-{hi} deg", (to_edge >= 4) & (turn >= lo) & (turn < hi))
                  for lo, hi in TURN_BINS]
